@@ -1,0 +1,19 @@
+# The two commands: `make demo` sets up and runs the main job, `make test` sets up and runs
+# the tests. Both work on a fresh machine with only Python 3.11 (see scripts/setup.sh).
+.PHONY: setup demo test bench lint
+
+setup:
+	bash scripts/setup.sh
+
+demo: setup
+	MUJOCO_GL=$${MUJOCO_GL:-egl} .venv/bin/rnnpb demo $(ARGS)
+
+test:
+	WITH_BROWSER=1 bash scripts/setup.sh
+	MUJOCO_GL=$${MUJOCO_GL:-egl} MPLBACKEND=Agg .venv/bin/python -m pytest -n 2 $(ARGS)
+
+bench: setup
+	.venv/bin/rnnpb bench
+
+lint: setup
+	.venv/bin/ruff check src tests benchmarks
