@@ -1,0 +1,82 @@
+"""The ``rnnpb`` command.
+
+Each subcommand lives in ``rnnpb/commands/<name>.py`` and defines ``NAME``, ``HELP``,
+``DESCRIPTION``, ``add_arguments(parser)`` and ``run(args) -> int``. Command modules import
+heavy libraries (JAX, MuJoCo, OpenCV) inside ``run`` only, so ``rnnpb --help`` stays fast.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from collections.abc import Sequence
+
+from rnnpb import __version__
+from rnnpb.errors import RnnpbError
+
+# The order here is the order in `rnnpb --help`.
+COMMAND_MODULES: tuple[str, ...] = (
+    "rnnpb.commands.demo",
+    "rnnpb.commands.train",
+    "rnnpb.commands.generate",
+    "rnnpb.commands.interact",
+    "rnnpb.commands.data",
+    "rnnpb.commands.track",
+    "rnnpb.commands.calibrate",
+    "rnnpb.commands.serve",
+    "rnnpb.commands.bench",
+)
+
+
+def _available_commands():
+    for name in COMMAND_MODULES:
+        try:
+            yield importlib.import_module(name)
+        except ModuleNotFoundError as error:
+            if error.name != name:
+                raise
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="rnnpb",
+        description=(
+            "A humanoid robot learns movement patterns from demonstrations with a recurrent "
+            "neural network with parametric bias (RNNPB), then imitates a person on-line: it "
+            "recognises the person's movement and moves in synchrony with it (Ito & Tani 2004)."
+        ),
+        epilog="Run `rnnpb COMMAND --help` for a command's options.",
+    )
+    parser.add_argument("--version", action="version", version=f"rnnpb {__version__}")
+    parser.add_argument("--debug", action="store_true",
+                        help="show the full traceback of an error instead of one line")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for module in _available_commands():
+        command = sub.add_parser(module.NAME, help=module.HELP, description=module.DESCRIPTION,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+        module.add_arguments(command)
+        command.set_defaults(_run=module.run)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "_run", None):
+        parser.print_help()
+        return 2
+    try:
+        return int(args._run(args) or 0)
+    except RnnpbError as error:
+        if args.debug:
+            raise
+        print(f"rnnpb: error: {error}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("rnnpb: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())
