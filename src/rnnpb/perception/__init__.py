@@ -1,0 +1,96 @@
+"""Perception: camera sources (webcam, video file, image folder, synthetic render) and the
+colour-ball tracker that turns the user's hands into the sensory vector ``lhy lhz rhy rhz``.
+
+Open a source from a spec string (``webcam:0``, ``video:clip.mp4``, ``images:frames/``,
+``synthetic:1``) with :func:`open_camera_source`; it is a
+:class:`rnnpb.interaction.source.UserSource` yielding one observation per frame.
+"""
+
+from rnnpb.perception._bench import center_errors, tracking_benchmark
+from rnnpb.perception._calibrate import (
+    BROAD_BLUE,
+    BROAD_RED,
+    BallCalibration,
+    calibrate_automatically,
+    calibrate_from_pixel,
+    calibration_preview,
+    fit_color,
+)
+from rnnpb.perception._colors import (
+    BLUE,
+    RED,
+    BallColor,
+    BallColors,
+    ball_colors_from_json,
+    load_ball_colors,
+    save_ball_colors,
+)
+from rnnpb.perception._sources import (
+    ArraySource,
+    FrameSource,
+    ImageFolderSource,
+    LimitedSource,
+    VideoFileSource,
+    VideoWriter,
+    WebcamSource,
+    call_with_timeout,
+)
+from rnnpb.perception._synthetic import SceneConfig, SyntheticCamera, oscillating_hands
+from rnnpb.perception._tracker import (
+    LOST,
+    TRACKED,
+    BallMeasurement,
+    BallTracker,
+    TrackerConfig,
+    TrackingResult,
+    draw_tracking,
+)
+from rnnpb.perception._user_source import (
+    TrackedUserSource,
+    open_camera_source,
+    open_frame_source,
+    parse_source_spec,
+    synthetic_user_hands,
+)
+
+__all__ = [
+    "BLUE",
+    "BROAD_BLUE",
+    "BROAD_RED",
+    "LOST",
+    "RED",
+    "TRACKED",
+    "ArraySource",
+    "BallCalibration",
+    "BallColor",
+    "BallColors",
+    "BallMeasurement",
+    "BallTracker",
+    "FrameSource",
+    "ImageFolderSource",
+    "LimitedSource",
+    "SceneConfig",
+    "SyntheticCamera",
+    "TrackedUserSource",
+    "TrackerConfig",
+    "TrackingResult",
+    "VideoFileSource",
+    "VideoWriter",
+    "WebcamSource",
+    "ball_colors_from_json",
+    "calibrate_automatically",
+    "calibrate_from_pixel",
+    "calibration_preview",
+    "call_with_timeout",
+    "center_errors",
+    "draw_tracking",
+    "fit_color",
+    "load_ball_colors",
+    "oscillating_hands",
+    "open_camera_source",
+    "open_frame_source",
+    "parse_source_spec",
+    "save_ball_colors",
+    "synthetic_user_hands",
+    "tracking_benchmark",
+]
