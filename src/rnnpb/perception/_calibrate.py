@@ -53,12 +53,23 @@ def _hue_stats(hue: np.ndarray) -> tuple[int, int]:
     return int(round(centre * 180.0 / (2 * math.pi))) % 180, int(math.ceil(spread))
 
 
-def fit_color(hsv_pixels: np.ndarray, name: str) -> BallColor:
+def color_name(hue: int) -> str:
+    """A colour's everyday name from its OpenCV hue (0…179)."""
+    for upper, name in ((8, "red"), (22, "orange"), (35, "yellow"), (85, "green"),
+                        (100, "cyan"), (130, "blue"), (160, "magenta"), (180, "red")):
+        if hue < upper:
+            return name
+    return "red"
+
+
+def fit_color(hsv_pixels: np.ndarray, name: str | None = None) -> BallColor:
     """An HSV range that holds most of the given pixels, shape (n, 3), and little else."""
     hsv_pixels = np.asarray(hsv_pixels).reshape(-1, 3)
     if len(hsv_pixels) < 5:
-        raise RnnpbError(f"calibration ({name} ball): too few pixels to fit a colour range")
+        raise RnnpbError(f"calibration ({name or 'a'} ball): too few pixels to fit a colour "
+                         "range")
     centre, spread = _hue_stats(hsv_pixels[:, 0])
+    name = name or color_name(centre)
     half = int(np.clip(spread + HUE_MARGIN, 5, 30))
     low, high = (centre - half) % 180, (centre + half) % 180
     s_low = int(np.clip(np.percentile(hsv_pixels[:, 1], 5) - SATURATION_MARGIN, 40, 230))
@@ -77,7 +88,7 @@ def _blob_at(mask: np.ndarray, xy: tuple[int, int]) -> np.ndarray | None:
     return labels == np.bincount(ids).argmax()
 
 
-def _calibration(frame_hsv: np.ndarray, blob: np.ndarray, name: str) -> BallCalibration:
+def _calibration(frame_hsv: np.ndarray, blob: np.ndarray, name: str | None) -> BallCalibration:
     color = fit_color(frame_hsv[blob], name)
     ys, xs = np.nonzero(blob)
     n = int(blob.sum())
@@ -85,9 +96,12 @@ def _calibration(frame_hsv: np.ndarray, blob: np.ndarray, name: str) -> BallCali
                            math.sqrt(n / math.pi), n)
 
 
-def calibrate_from_pixel(frame: np.ndarray, xy: tuple[int, int], name: str,
+def calibrate_from_pixel(frame: np.ndarray, xy: tuple[int, int], name: str | None = None,
                          neighbourhood_px: int = 5) -> BallCalibration:
-    """Fit a ball's colour range from the ball at pixel ``xy`` = (column, row) of a BGR frame."""
+    """Fit a ball's colour range from the ball at pixel ``xy`` = (column, row) of a BGR frame.
+
+    ``name`` defaults to the everyday name of the fitted hue ("red", "blue", …).
+    """
     h, w = frame.shape[:2]
     x, y = int(xy[0]), int(xy[1])
     if not (0 <= x < w and 0 <= y < h):
@@ -104,9 +118,12 @@ def calibrate_from_pixel(frame: np.ndarray, xy: tuple[int, int], name: str,
                          "at the middle of a coloured ball")
     samples = samples[samples[:, 1] >= np.median(samples[:, 1]) * 0.6]
     first = fit_color(samples, name)
+    name = first.name
+    # The middle of the ball is its brightest, most saturated part; relax the first range so
+    # that the blob reaches the ball's darker rim before fitting the final range to it.
     mask = BallTracker(TrackerConfig(opening_px=0)).mask(hsv, BallColor(
-        name, ((first.hue[0] - 6) % 180, (first.hue[1] + 6) % 180),
-        (max(30, first.saturation[0] - 20), 255), (max(20, first.value[0] - 20), 255)))
+        name, ((first.hue[0] - 8) % 180, (first.hue[1] + 8) % 180),
+        (max(40, first.saturation[0] - 50), 255), (max(20, first.value[0] - 60), 255)))
     blob = _blob_at(mask, (x, y))
     if blob is None:
         raise RnnpbError(f"calibration ({name} ball): found no ball-coloured blob at {x},{y}")

@@ -202,6 +202,10 @@ def load_ball_colors(path: str | os.PathLike[str]) -> BallColors:
 
 def save_ball_colors(path: str | os.PathLike[str], colors: BallColors) -> None:
     """Write a colour file atomically."""
+    data = colors.to_json()
+    lines = [f'  "format": {json.dumps(data["format"])},', f'  "version": {data["version"]},']
+    for side in ("left", "right"):
+        fields = ", ".join(f"{json.dumps(k)}: {json.dumps(v)}" for k, v in data[side].items())
+        lines.append(f'  "{side}": {{{fields}}}')
     with atomic_write(path, "w", encoding="utf-8") as handle:
-        json.dump(colors.to_json(), handle, indent=2)
-        handle.write("\n")
+        handle.write("{\n" + "\n".join(lines[:-1]) + ",\n" + lines[-1] + "\n}\n")

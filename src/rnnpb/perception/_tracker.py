@@ -13,8 +13,8 @@ Per frame and per ball:
 4. pick the blob with the best score: large, round, and near where the ball was last seen
    (a Gaussian gate of width ``search_radius_px`` around the previous centre, extrapolated by
    the last velocity);
-5. centre = the centroid of the chosen blob's pixels (``cv2.moments``, sub-pixel), radius = ``sqrt(area / pi)``, depth =
-   ``focal_px * ball_radius_m / radius``.
+5. centre = the centroid of the chosen blob's pixels (``cv2.moments``, sub-pixel),
+   radius = ``sqrt(area / pi)``, depth = ``focal_px * ball_radius_m / radius``.
 
 Pixel convention: pixel ``(i, j)`` covers columns ``[i, i + 1)`` and rows ``[j, j + 1)``, so a
 centroid of pixel indices is shifted by +0.5 to continuous image coordinates, the coordinates
