@@ -176,8 +176,11 @@ def _closed_form(target: np.ndarray, side: int) -> list[np.ndarray]:
         yaw_abs = np.arccos(np.clip(w[:, 0] / v_x, -1.0, 1.0))
     m = _MIRROR[side]
     candidates = []
-    for yaw_sign in (1.0, -1.0):
-        yaw = yaw_sign * yaw_abs  # the angle R_z turns by (m * shy)
+    # The branch with the forearm turned outwards (negative yaw) comes first: it is the
+    # posture people use for hands in front of the chest, and ties go to the first branch,
+    # which keeps trajectories on one branch instead of jumping between equal solutions.
+    for yaw_sign in (-1.0, 1.0):
+        yaw = m * yaw_sign * yaw_abs  # the angle R_z turns by (m * shy), so shy = yaw_sign * |.|
         a = v_x * np.sin(yaw)
         roll = np.arctan2(w[:, 2], w[:, 1]) - np.arctan2(v_z, a)  # the angle R_x turns by
         roll = (roll + np.pi) % (2 * np.pi) - np.pi
@@ -197,23 +200,30 @@ def _refine(q: np.ndarray, target: np.ndarray, side: int, iterations: int) -> np
         full = np.concatenate([x3, coupled_elbow(x3[:, :1])], axis=-1)
         return _arm_points(full, side)[1]
 
+    lam = np.full(x.shape[0], 1e-3)
+    h = hand(x)
+    cost = np.sum((h - target) ** 2, -1)
     for _ in range(iterations):
-        h = hand(x)
         r = h - target
         jac = np.stack([(hand(x + eps * np.eye(3)[k]) - h) / eps for k in range(3)], axis=-1)
         jtj = np.swapaxes(jac, -1, -2) @ jac
         jtr = (np.swapaxes(jac, -1, -2) @ r[..., None])[..., 0]
-        # Levenberg-Marquardt damping keeps steps finite at the straight-arm singularity.
-        damping = (1e-4 * np.trace(jtj, axis1=-2, axis2=-1) + 1e-12)[:, None, None]
-        step = np.linalg.solve(jtj + damping * np.eye(3), jtr[..., None])[..., 0]
+        # Levenberg-Marquardt: damping grows after a failed step and shrinks after a good one.
+        scale = lam * (np.trace(jtj, axis1=-2, axis2=-1) + 1e-12)
+        step = np.linalg.solve(jtj + scale[:, None, None] * np.eye(3), jtr[..., None])[..., 0]
         x_new = np.clip(x - step, lo, hi)
-        better = np.sum((hand(x_new) - target) ** 2, -1) < np.sum(r**2, -1)
+        h_new = hand(x_new)
+        cost_new = np.sum((h_new - target) ** 2, -1)
+        better = cost_new < cost
         x = np.where(better[:, None], x_new, x)
+        h = np.where(better[:, None], h_new, h)
+        cost = np.where(better, cost_new, cost)
+        lam = np.clip(np.where(better, lam * 0.3, lam * 10.0), 1e-9, 1e6)
     return np.concatenate([x, coupled_elbow(x[:, :1])], axis=-1)
 
 
 def inverse_kinematics(hands: np.ndarray, tolerance: float = 1e-4,
-                       iterations: int = 30) -> IKResult:
+                       iterations: int = 40) -> IKResult:
     """Joint angles that put both hands at 3-D targets, with the elbow coupled to the shoulder.
 
     Parameters
@@ -251,14 +261,19 @@ def inverse_kinematics(hands: np.ndarray, tolerance: float = 1e-4,
             if best_q is None:
                 best_q, best_err = cand, err
             else:
-                take = err < best_err
+                take = err < best_err - tolerance * 1e-3
                 best_q = np.where(take[:, None], cand, best_q)
                 best_err = np.where(take, err, best_err)
         todo = ~(best_err < tolerance * 1e-2)
         if np.any(todo):
             starts = list(_closed_form(target[todo], side))
-            p_mid = np.mean(coupled_pitch_range())
-            starts.append(np.tile([p_mid, 0.3, 0.0, 0.0], (int(todo.sum()), 1)))
+            # A coarse grid of postures as further starts: the nearest reachable point of a
+            # far target need not lie near either closed-form branch.
+            p_lo, p_hi = coupled_pitch_range()
+            for pitch in (p_lo + 0.25 * (p_hi - p_lo), p_hi - 0.25 * (p_hi - p_lo)):
+                for roll in (0.0, 1.2):
+                    for yaw in (-1.0, 1.0):
+                        starts.append(np.tile([pitch, roll, yaw, 0.0], (int(todo.sum()), 1)))
             refined_q, refined_err = None, None
             for start in starts:
                 q = _refine(np.nan_to_num(start), target[todo], side, iterations)

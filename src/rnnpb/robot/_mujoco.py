@@ -152,6 +152,7 @@ class MujocoRobot(Robot):
     def hand_positions(self) -> np.ndarray:
         """The simulated hands (left, right) in the robot frame, shape (2, 3)."""
         model, data = self._require()
+        mujoco.mj_kinematics(model, data)  # after mj_step, xpos lags qpos by one substep
         return np.stack([data.site("left_hand").xpos, data.site("right_hand").xpos]).copy()
 
     def set_user_hands(self, user_hands: np.ndarray | None) -> None:
