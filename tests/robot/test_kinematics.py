@@ -16,6 +16,10 @@ from rnnpb.robot import (
 from rnnpb.vectors import MOTOR_NAMES
 
 
+def within_limits(joints):
+    return bool(np.all(joints >= JOINT_LIMITS[:, 0]) and np.all(joints <= JOINT_LIMITS[:, 1]))
+
+
 def coupled_postures(n, rng):
     lo, hi = coupled_pitch_range()
     q = np.empty((n, 8))
@@ -70,7 +74,7 @@ def test_ik_returns_to_the_target_over_the_reachable_workspace():
     assert error.max() < 1e-3  # stated: < 1 mm; measured ~1e-15 m (closed form)
     assert result.all_reachable
     assert np.all(result.residual < 1e-4)
-    assert np.all(result.joints >= JOINT_LIMITS[:, 0]) and np.all(result.joints <= JOINT_LIMITS[:, 1])
+    assert within_limits(result.joints)
     # The coupling holds exactly.
     np.testing.assert_allclose(result.joints[:, [3, 7]], coupled_elbow(result.joints[:, [0, 4]]))
 
@@ -79,7 +83,7 @@ def test_ik_unreachable_target_gives_the_nearest_reachable_posture_and_says_so()
     far = SHOULDERS + [[0.5, 0.1, 0.0], [0.0, -0.1, 0.6]]   # beyond the 0.21 m reach
     result = inverse_kinematics(far)
     assert not result.reachable.any()
-    assert np.all(result.joints >= JOINT_LIMITS[:, 0]) and np.all(result.joints <= JOINT_LIMITS[:, 1])
+    assert within_limits(result.joints)
     reached, _ = forward_kinematics(result.joints)
     # The residual is what it says, and no random coupled posture gets closer.
     np.testing.assert_allclose(np.linalg.norm(reached - far, axis=-1), result.residual,
@@ -93,7 +97,7 @@ def test_ik_random_targets_always_respect_limits():
     rng = np.random.default_rng(5)
     targets = SHOULDERS + rng.uniform(-0.25, 0.25, size=(300, 2, 3))
     result = inverse_kinematics(targets)
-    assert np.all(result.joints >= JOINT_LIMITS[:, 0]) and np.all(result.joints <= JOINT_LIMITS[:, 1])
+    assert within_limits(result.joints)
     reached, _ = forward_kinematics(result.joints)
     np.testing.assert_allclose(np.linalg.norm(reached - targets, axis=-1), result.residual,
                                atol=1e-9)
