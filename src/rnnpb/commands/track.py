@@ -43,6 +43,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from dataclasses import replace
+
     import numpy as np
 
     from rnnpb.perception import (
@@ -56,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
 
     config = TrackerConfig(smoothing=args.smoothing)
     if args.colors:
-        config = TrackerConfig(colors=load_ball_colors(args.colors), smoothing=args.smoothing)
+        config = replace(config, colors=load_ball_colors(args.colors))
     source = open_camera_source(args.source, tracker_config=config, steps=args.steps,
                                 seed=args.seed)
     rows = []

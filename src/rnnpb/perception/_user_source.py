@@ -13,6 +13,7 @@ Spec strings::
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -162,6 +163,6 @@ def open_camera_source(spec: str, *, colors: BallColors | str | os.PathLike[str]
     if colors is not None:
         if not isinstance(colors, BallColors):
             colors = load_ball_colors(colors)
-        config = TrackerConfig(**{**config.__dict__, "colors": colors})
+        config = replace(config, colors=colors)
     frames = open_frame_source(spec, steps=steps, seed=seed, **synthetic)
     return TrackedUserSource(frames, BallTracker(config))
