@@ -1,0 +1,257 @@
+"""A straightforward NumPy implementation of the RNNPB with hand-written back-propagation
+through time, in float64.
+
+It is the reference the JAX implementation is held to (tests/model/test_gradients.py and
+test_online_parity.py) and the baseline ``rnnpb bench`` compares the compiled on-line step
+with. It is written for clarity, not speed: plain loops over time, one matrix product at a time.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rnnpb.model.network import Params
+from rnnpb.model.online import OnlineConfig
+from rnnpb.model.parametric_bias import PBUpdateConfig
+
+
+def sigmoid(z: np.ndarray) -> np.ndarray:
+    return 1.0 / (1.0 + np.exp(-z))
+
+
+def logit(p: np.ndarray) -> np.ndarray:
+    p = np.clip(p, 1e-4, 1 - 1e-4)
+    return np.log(p) - np.log1p(-p)
+
+
+def as_numpy(params: Params) -> dict[str, np.ndarray]:
+    return {k: np.asarray(v, dtype=np.float64) for k, v in params._asdict().items()}
+
+
+def _layer(w: dict[str, np.ndarray], a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    h = sigmoid(a @ w["w_in"] + w["b_h"])
+    o = sigmoid(h @ w["w_out"] + w["b_out"])
+    return h, o
+
+
+def _layer_backward(w: dict[str, np.ndarray], a: np.ndarray, h: np.ndarray, o: np.ndarray,
+                    d_o: np.ndarray, grads: dict[str, np.ndarray] | None) -> np.ndarray:
+    """Back through one step; accumulate weight gradients into ``grads``; return dE/da."""
+    dz_o = d_o * o * (1.0 - o)
+    dh = dz_o @ w["w_out"].T
+    dz_h = dh * h * (1.0 - h)
+    if grads is not None:
+        grads["w_out"] += np.einsum("...h,...o->ho", h, dz_o)
+        grads["b_out"] += dz_o.reshape(-1, dz_o.shape[-1]).sum(0)
+        grads["w_in"] += np.einsum("...a,...h->ah", a, dz_h)
+        grads["b_h"] += dz_h.reshape(-1, dz_h.shape[-1]).sum(0)
+    return dz_h @ w["w_in"].T
+
+
+def training_error_and_gradients(params: Params, rho: np.ndarray, context_logit: np.ndarray,
+                                 inputs: np.ndarray, valid: np.ndarray
+                                 ) -> tuple[float, dict[str, np.ndarray], np.ndarray, np.ndarray]:
+    """The learning phase's error ``E = 0.5 Σ (x̂_{t+1} - x_{t+1})²`` and its gradients.
+
+    Parameters
+    ----------
+    rho : array, shape (S, T-1, P)
+    context_logit : array, shape (S, C)
+    inputs : array, shape (S, T, I)
+        Normalized sequences (teacher-forced inputs and targets).
+    valid : array of bool, shape (S, T-1)
+
+    Returns
+    -------
+    error, weight gradients (dict like Params), dE/drho (S, T-1, P), dE/dcontext_logit (S, C)
+    """
+    w = as_numpy(params)
+    n_io = inputs.shape[-1]
+    n_pb = rho.shape[-1]
+    n_steps = rho.shape[1]
+    pb = sigmoid(rho)
+    context = sigmoid(context_logit)
+    acts, hs, os_ = [], [], []
+    c = context
+    error = 0.0
+    for t in range(n_steps):
+        a = np.concatenate([inputs[:, t], pb[:, t], c], axis=-1)
+        h, o = _layer(w, a)
+        acts.append(a)
+        hs.append(h)
+        os_.append(o)
+        c = o[:, n_io:]
+        e = (o[:, :n_io] - inputs[:, t + 1]) * valid[:, t, None]
+        error += 0.5 * float(np.sum(e ** 2))
+    grads = {k: np.zeros_like(v) for k, v in w.items()}
+    d_rho = np.zeros_like(rho)
+    d_c_next = np.zeros_like(context)
+    for t in reversed(range(n_steps)):
+        o = os_[t]
+        e = (o[:, :n_io] - inputs[:, t + 1]) * valid[:, t, None]
+        d_o = np.concatenate([e, d_c_next], axis=-1)
+        d_a = _layer_backward(w, acts[t], hs[t], o, d_o, grads)
+        d_rho[:, t] = d_a[:, n_io:n_io + n_pb] * pb[:, t] * (1.0 - pb[:, t])
+        d_c_next = d_a[:, n_io + n_pb:]
+    d_context_logit = d_c_next * context * (1.0 - context)
+    return error, grads, d_rho, d_context_logit
+
+
+def window_error_and_gradients(params: Params, sensory: np.ndarray, seen: np.ndarray,
+                               n: int, rho: np.ndarray, onset_context_logit: np.ndarray,
+                               onset_motor_logit: np.ndarray,
+                               motor_inputs: np.ndarray | None = None):
+    """The interaction phase's window error and its gradients (mixed mode, hand-written BPTT).
+
+    Parameters
+    ----------
+    sensory, seen : arrays, shape (L, S)
+        The window's observations (normalized) and which were seen; steps ``>= n`` are empty.
+    rho : array, shape (L, P)
+    onset_context_logit : array, shape (C,)
+    onset_motor_logit : array, shape (M,)
+    motor_inputs : array, shape (L, M), optional
+        Recorded motor inputs (else the network's own motor predictions, closed loop).
+
+    Returns
+    -------
+    error, dE/drho (L, P), dE/donset_context_logit (C,), dE/donset_motor_logit (M,),
+    predictions (L, I), contexts (L, C)
+    """
+    w = as_numpy(params)
+    length, n_s = sensory.shape
+    n_pb = rho.shape[-1]
+    n_m = onset_motor_logit.shape[0]
+    n_io = n_s + n_m
+    seen = seen & (np.arange(length) < n)[:, None]
+    pb = sigmoid(rho)
+    c = sigmoid(onset_context_logit)
+    motor0 = sigmoid(onset_motor_logit)
+    motor = motor0
+    predicted_sensory = np.where(seen[0], sensory[0], 0.5)
+    acts, hs, os_ = [], [], []
+    for t in range(length):
+        u_in = np.where(seen[t], sensory[t], predicted_sensory)
+        m_in = motor_inputs[t] if motor_inputs is not None else motor
+        a = np.concatenate([u_in, m_in, pb[t], c])
+        h, o = _layer(w, a)
+        acts.append(a)
+        hs.append(h)
+        os_.append(o)
+        c = o[n_io:]
+        motor = o[n_s:n_io]
+        predicted_sensory = o[:n_s]
+    predictions = np.array([o[:n_io] for o in os_])
+    contexts = np.array([o[n_io:] for o in os_])
+    has_target = np.zeros((length, n_s), bool)
+    has_target[:-1] = (np.arange(length - 1) < n - 1)[:, None] & seen[1:]
+    errors = np.zeros((length, n_s))
+    errors[:-1] = np.where(has_target[:-1], predictions[:-1, :n_s] - sensory[1:], 0.0)
+    error = 0.5 * float(np.sum(errors ** 2))
+    d_rho = np.zeros_like(rho)
+    d_c_next = np.zeros(c.shape)
+    d_u_in_next = np.zeros(n_s)  # dE/d(sensory input of step t+1)
+    d_m_in_next = np.zeros(n_m)  # dE/d(motor input of step t+1)
+    for t in reversed(range(length)):
+        o = os_[t]
+        d_y = errors[t].copy()
+        if t + 1 < length:
+            # The next step's sensory input is this step's prediction where not seen.
+            d_y += np.where(seen[t + 1], 0.0, d_u_in_next)
+        d_m = d_m_in_next if motor_inputs is None else np.zeros(n_m)
+        d_o = np.concatenate([d_y, d_m, d_c_next])
+        d_a = _layer_backward(w, acts[t], hs[t], o, d_o, None)
+        d_u_in_next = d_a[:n_s]
+        d_m_in_next = d_a[n_s:n_io]
+        d_rho[t] = d_a[n_io:n_io + n_pb] * pb[t] * (1.0 - pb[t])
+        d_c_next = d_a[n_io + n_pb:]
+    onset_c = sigmoid(onset_context_logit)
+    d_context = d_c_next * onset_c * (1.0 - onset_c)
+    d_motor = (d_m_in_next * motor0 * (1.0 - motor0) if motor_inputs is None
+               else np.zeros(n_m))
+    return error, d_rho, d_context, d_motor, predictions, contexts
+
+
+def pb_update(rho: np.ndarray, velocity: np.ndarray, grad: np.ndarray, config: PBUpdateConfig,
+              n_valid: int) -> tuple[np.ndarray, np.ndarray]:
+    """Eqs. 1–2 on the first ``n_valid`` steps of a (T, P) profile, written out step by step."""
+    length = rho.shape[0]
+    half = config.integration_length // 2
+    new_rho = rho.copy()
+    new_velocity = np.zeros_like(velocity)
+    for t in range(n_valid):
+        lo, hi = max(t - half, 0), min(t + half + 1, n_valid)
+        summed = -grad[lo:hi].sum(axis=0)
+        previous = rho[t - 1] if t > 0 else rho[t]
+        following = rho[t + 1] if t + 1 < min(n_valid, length) else rho[t]
+        delta = config.k_bp * summed + config.k_nb * (following - 2 * rho[t] + previous)
+        new_velocity[t] = config.learning_rate * delta + config.momentum * velocity[t]
+        new_rho[t] = rho[t] + new_velocity[t]
+    return new_rho, new_velocity
+
+
+class ReferenceMirrorSystem:
+    """The on-line step of :class:`rnnpb.model.online.MirrorSystem`, in plain NumPy.
+
+    Works in normalized units; same algorithm and same state, float64.
+    """
+
+    def __init__(self, params: Params, initial_context: np.ndarray, initial_pb: np.ndarray,
+                 sensory_size: int, motor_size: int, config: OnlineConfig) -> None:
+        self.params = params
+        self.config = config
+        length = config.window
+        self.sensory = np.zeros((length, sensory_size))
+        self.seen = np.zeros((length, sensory_size), bool)
+        self.motor_sent = np.full((length, motor_size), 0.5)
+        self.n = 0
+        self.rho = np.tile(logit(np.asarray(initial_pb, dtype=np.float64)), (length, 1))
+        self.velocity = np.zeros_like(self.rho)
+        self.onset_context = logit(np.asarray(initial_context, dtype=np.float64))
+        self.onset_motor = np.zeros(motor_size)
+        self.next_onset_context = self.onset_context.copy()
+        self.next_onset_motor = self.onset_motor.copy()
+
+    def step(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Observe normalized hands ``u`` (NaN = not seen); return (motor, predicted, pb)."""
+        cfg = self.config
+        length = cfg.window
+        seen = np.isfinite(u)
+        u = np.where(seen, u, 0.0)
+        last = max(min(self.n, length) - 1, 0)
+        if self.n >= length:
+            for name in ("sensory", "seen", "motor_sent", "rho", "velocity"):
+                buffer = getattr(self, name)
+                buffer[:-1] = buffer[1:].copy()
+            self.sensory[-1], self.seen[-1] = u, seen
+            self.motor_sent[-1] = self.motor_sent[-2]
+            self.rho[-1] = self.rho[-2]
+            self.velocity[-1] = 0.0
+            self.onset_context = self.next_onset_context
+            self.onset_motor = self.next_onset_motor
+        else:
+            i = self.n
+            self.sensory[i], self.seen[i] = u, seen
+            self.motor_sent[i] = self.motor_sent[last]
+            self.rho[i] = self.rho[last]
+            self.velocity[i] = 0.0
+        self.n = min(self.n + 1, length)
+        motor_inputs = self.motor_sent if cfg.motor_input == "recorded" else None
+        for _ in range(cfg.iterations):
+            _, g_rho, g_c, g_m, _, _ = window_error_and_gradients(
+                self.params, self.sensory, self.seen, self.n, self.rho, self.onset_context,
+                self.onset_motor, motor_inputs)
+            self.rho, self.velocity = pb_update(self.rho, self.velocity, g_rho, cfg.pb, self.n)
+            if cfg.optimize_onset:
+                self.onset_context = self.onset_context - cfg.onset_learning_rate * g_c
+                self.onset_motor = self.onset_motor - cfg.onset_learning_rate * g_m
+        _, _, _, _, predictions, contexts = window_error_and_gradients(
+            self.params, self.sensory, self.seen, self.n, self.rho, self.onset_context,
+            self.onset_motor, motor_inputs)
+        s = self.sensory.shape[1]
+        n = self.n
+        motor = predictions[n - 2, s:] if n >= 2 else sigmoid(self.onset_motor)
+        self.motor_sent[n - 1] = motor
+        self.next_onset_context = logit(contexts[0])
+        self.next_onset_motor = logit(predictions[0, s:])
+        return motor, predictions[n - 1, :s], sigmoid(self.rho[n - 1])
