@@ -53,7 +53,7 @@ class TrainConfig:
     learning_rate: float = 0.1
     momentum: float = 0.9
     pb: PBUpdateConfig = field(default_factory=lambda: PBUpdateConfig(
-        learning_rate=0.05, momentum=0.9, k_bp=1.0, k_nb=0.1, integration_length=20))
+        learning_rate=2.0, momentum=0.9, k_bp=1.0, k_nb=0.05, integration_length=20))
     input_noise: float = 0.0
     learn_initial_context: bool = True
     seed: int = 0
@@ -83,9 +83,7 @@ class TrainConfig:
     def fast(cls, **changes: Any) -> TrainConfig:
         """Adam with noise on the teacher-forced inputs: reaches the paper's error in far
         fewer iterations and gives a network that is easier to entrain (docs/model.md)."""
-        base = cls(iterations=3_000, optimizer="adam", learning_rate=0.01, input_noise=0.02,
-                   pb=PBUpdateConfig(learning_rate=0.05, momentum=0.9, k_bp=1.0, k_nb=0.1,
-                                     integration_length=20))
+        base = cls(iterations=3_000, optimizer="adam", learning_rate=0.01, input_noise=0.02)
         return replace(base, **changes)
 
     def to_dict(self) -> dict[str, Any]:

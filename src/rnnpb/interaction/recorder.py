@@ -1,0 +1,121 @@
+"""Session recordings: one CSV row per step of the interaction loop, flushed as it goes.
+
+Columns: ``step``, ``time_s``, the observed hands ``lhy lhz rhy rhz`` (empty where the hand was
+not seen), the hands the network predicted for this step one step before (``pred_lhy`` …), the
+motor command sent (``lshp`` … ``relp``, radians), the PB (``pb0`` …), ``prediction_error``
+(mean squared error of that prediction), ``window_error`` (after the PB regression),
+``lost_left``/``lost_right`` (1 where the hand was not seen), ``held`` (1 where the regression
+failed numerically and the last good state was kept) and, when the source knows it, the ground
+truth ``truth_pattern``.
+
+Every row is flushed to the operating system when written, so a session interrupted by Ctrl-C
+or a crash keeps every step up to the last one written.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+
+from rnnpb.errors import DataFileError
+from rnnpb.vectors import MOTOR_NAMES, PREDICTED_PREFIX, SENSORY_NAMES, STEP_COLUMN
+
+PB_COLUMNS_PREFIX = "pb"
+
+
+def session_columns(pb_size: int) -> list[str]:
+    return [STEP_COLUMN, "time_s", *SENSORY_NAMES,
+            *(PREDICTED_PREFIX + name for name in SENSORY_NAMES), *MOTOR_NAMES,
+            *(f"{PB_COLUMNS_PREFIX}{i}" for i in range(pb_size)),
+            "prediction_error", "window_error", "lost_left", "lost_right", "held",
+            "truth_pattern"]
+
+
+def _fmt(value: float) -> str:
+    return "" if not math.isfinite(value) else f"{value:.6g}"
+
+
+class SessionRecorder:
+    """Writes a session recording row by row (a context manager)."""
+
+    def __init__(self, path: str | os.PathLike[str], pb_size: int = 4) -> None:
+        self.path = Path(path)
+        self.columns = session_columns(pb_size)
+        self._handle = None
+        self._writer = None
+        self.rows = 0
+
+    def open(self) -> None:
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._handle = open(self.path, "w", newline="", encoding="utf-8")
+        self._writer = csv.writer(self._handle)
+        self._writer.writerow(self.columns)
+        self._handle.flush()
+
+    def write(self, record) -> None:
+        """Append one :class:`rnnpb.interaction.loop.StepRecord`."""
+        if self._writer is None:
+            self.open()
+        seen = np.isfinite(record.observed)
+        row = [record.step, f"{record.time_s:.4f}", *(_fmt(v) for v in record.observed),
+               *(_fmt(v) for v in record.predicted), *(f"{v:.6f}" for v in record.motor),
+               *(f"{v:.6f}" for v in record.pb), _fmt(record.prediction_error),
+               _fmt(record.window_error), int(not seen[:2].all()), int(not seen[2:].all()),
+               int(record.held), record.truth.get("pattern", "")]
+        self._writer.writerow(row)
+        self._handle.flush()
+        self.rows += 1
+
+    def close(self) -> None:
+        if self._handle is not None:
+            self._handle.flush()
+            os.fsync(self._handle.fileno())
+            self._handle.close()
+            self._handle = None
+            self._writer = None
+
+    def __enter__(self) -> SessionRecorder:
+        self.open()
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()
+
+
+def read_session(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
+    """Read a session recording into arrays by column (empty cells → NaN; strings kept)."""
+    path = Path(path)
+    if not path.exists():
+        raise DataFileError(f"{path}: no such file")
+    try:
+        with open(path, newline="", encoding="utf-8") as handle:
+            reader = csv.reader(handle)
+            header = next(reader, None)
+            if not header:
+                raise DataFileError(f"{path}: empty file, expected a session recording header")
+            required = [STEP_COLUMN, *SENSORY_NAMES, *MOTOR_NAMES]
+            missing = [c for c in required if c not in header]
+            if missing:
+                raise DataFileError(f"{path}: not a session recording: missing column(s) "
+                                    f"{', '.join(missing)}")
+            rows = [row for row in reader if row]
+    except UnicodeDecodeError:
+        raise DataFileError(f"{path}: not a text CSV file") from None
+    except csv.Error as error:
+        raise DataFileError(f"{path}: malformed CSV: {error}") from None
+    out: dict[str, np.ndarray] = {}
+    for j, name in enumerate(header):
+        values = [row[j] if j < len(row) else "" for row in rows]
+        if name == "truth_pattern":
+            out[name] = np.array(values, dtype=object)
+            continue
+        try:
+            out[name] = np.array([float(v) if v != "" else math.nan for v in values])
+        except ValueError:
+            raise DataFileError(f"{path}: column {name!r} holds a value that is not a "
+                                "number") from None
+    return out
