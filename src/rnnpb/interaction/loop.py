@@ -185,8 +185,10 @@ class InteractionLoop:
         stats = {}
         for name, values in self._timings.items():
             array = np.asarray(values[1:] if len(values) > 1 else values) * 1e3
-            stats[name] = ({"median": float(np.median(array)), "p99": float(np.percentile(array, 99)),
-                            "max": float(array.max())} if array.size else
-                           {"median": math.nan, "p99": math.nan, "max": math.nan})
+            if array.size:
+                stats[name] = {"median": float(np.median(array)),
+                               "p99": float(np.percentile(array, 99)), "max": float(array.max())}
+            else:
+                stats[name] = {"median": math.nan, "p99": math.nan, "max": math.nan}
         return LoopSummary(self.steps, self.missed_deadlines, stats, self.lost_steps,
                            self.held_steps)

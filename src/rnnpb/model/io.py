@@ -22,7 +22,13 @@ import numpy as np
 from rnnpb import __version__
 from rnnpb._atomic import atomic_write
 from rnnpb.errors import ModelFileError
-from rnnpb.model.network import NetworkConfig, Params, param_shapes, params_from_numpy, params_to_numpy
+from rnnpb.model.network import (
+    NetworkConfig,
+    Params,
+    param_shapes,
+    params_from_numpy,
+    params_to_numpy,
+)
 
 MODEL_FORMAT = "rnnpb-model"
 MODEL_FORMAT_VERSION = 1

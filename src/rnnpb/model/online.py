@@ -40,7 +40,7 @@ import numpy as np
 
 from rnnpb.errors import ConfigError
 from rnnpb.model.io import TrainedModel
-from rnnpb.model.network import Params, mixed_loop
+from rnnpb.model.network import Params
 from rnnpb.model.parametric_bias import PBUpdateConfig, pb_update
 
 
@@ -172,12 +172,45 @@ def _shift_in(state: OnlineState, u: jax.Array, seen: jax.Array) -> OnlineState:
 
 def _window_run(params: Params, state: OnlineState, rho: jax.Array, onset_context: jax.Array,
                 onset_motor: jax.Array, config: OnlineConfig) -> tuple[jax.Array, jax.Array]:
-    length = state.sensory.shape[0]
+    """:func:`rnnpb.model.network.mixed_loop` over the window, rearranged for speed.
+
+    The terms of the hidden layer's input that do not depend on the recurrence — the observed
+    sensory values, the PB (and recorded motor inputs) — are multiplied for all steps at once
+    outside the time loop; inside it only ``[unseen sensory prediction, motor, context]``
+    meets its weights. Same function as ``mixed_loop`` (tests/model/test_online.py holds them
+    together), about a third less work per step.
+    """
+    length, n_s = state.sensory.shape
+    n_m = onset_motor.shape[0]
+    n_io = n_s + n_m
+    n_pb = rho.shape[1]
     valid = jnp.arange(length) < state.n
-    motor_inputs = state.motor_sent if config.motor_input == "recorded" else None
-    return mixed_loop(params, jax.nn.sigmoid(onset_context), jax.nn.sigmoid(onset_motor),
-                      state.sensory, jax.nn.sigmoid(rho), state.seen & valid[:, None],
-                      motor_inputs=motor_inputs, unroll=_UNROLL)
+    seen = state.seen & valid[:, None]
+    w_in = params.w_in
+    w_u, w_m = w_in[:n_s], w_in[n_s:n_io]
+    w_p, w_c = w_in[n_io:n_io + n_pb], w_in[n_io + n_pb:]
+    recorded = config.motor_input == "recorded"
+    pre = (jnp.where(seen, state.sensory, 0.0) @ w_u + jax.nn.sigmoid(rho) @ w_p + params.b_h)
+    if recorded:
+        pre = pre + state.motor_sent @ w_m
+    w_loop = jnp.concatenate([w_u, w_c] if recorded else [w_u, w_m, w_c], axis=0)
+
+    def body(carry, xs):
+        context, motor, predicted_sensory = carry
+        pre_t, seen_t = xs
+        parts = [jnp.where(seen_t, 0.0, predicted_sensory)]
+        if not recorded:
+            parts.append(motor)
+        parts.append(context)
+        hidden = jax.nn.sigmoid(pre_t + jnp.concatenate(parts) @ w_loop)
+        output = jax.nn.sigmoid(hidden @ params.w_out + params.b_out)
+        return (output[n_io:], output[n_s:n_io], output[:n_s]), output
+
+    first_sensory = jnp.full((n_s,), 0.5, state.sensory.dtype)
+    _, outputs = jax.lax.scan(
+        body, (jax.nn.sigmoid(onset_context), jax.nn.sigmoid(onset_motor), first_sensory),
+        (pre, seen), unroll=_UNROLL)
+    return outputs[:, :n_io], outputs[:, n_io:]
 
 
 def _window_error(params: Params, state: OnlineState, rho: jax.Array, onset_context: jax.Array,

@@ -18,7 +18,8 @@ import hashlib
 import math
 import os
 import time
-from collections.abc import Callable, Sequence as SequenceABC
+from collections.abc import Callable
+from collections.abc import Sequence as SequenceABC
 from dataclasses import asdict, dataclass, field, replace
 from typing import Any, Literal, NamedTuple
 
@@ -50,7 +51,7 @@ class TrainConfig:
 
     iterations: int = 50_000
     optimizer: Literal["momentum", "adam"] = "momentum"
-    learning_rate: float = 0.1
+    learning_rate: float = 1.0
     momentum: float = 0.9
     pb: PBUpdateConfig = field(default_factory=lambda: PBUpdateConfig(
         learning_rate=2.0, momentum=0.9, k_bp=1.0, k_nb=0.05, integration_length=20))

@@ -1,0 +1,166 @@
+"""rnnpb bench: how fast learning, the on-line step and tracking run on this machine."""
+
+from __future__ import annotations
+
+import argparse
+
+NAME = "bench"
+HELP = "time learning, the on-line step and tracking (single-threaded)"
+DESCRIPTION = """\
+Print the speed of the parts that must keep up with real time, at the paper's sizes
+(12 inputs/outputs, 4 PB, 40 hidden, 30 context units), pinned to one CPU core and
+single-threaded, after warm-up:
+
+  - one learning iteration on 6 sequences x 50 steps (BPTT + weight and PB updates);
+  - one on-line step (PB regression over a window of L = 30 steps, 100 iterations,
+    then the motor command): median and 99th percentile;
+  - the same on-line step in a straightforward NumPy implementation (the reference the
+    tests hold the compiled one to), and the ratio;
+  - colour-ball tracking of 640x480 frames.
+
+--json FILE writes the same figures (keys train_iteration_ms_median,
+online_step_ms_median, online_step_ms_p99, ...) with the machine and versions.
+"""
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--json", metavar="FILE", help="also write the figures as JSON")
+    parser.add_argument("--steps", type=int, default=300,
+                        help="timed on-line steps (default 300)")
+    parser.add_argument("--reference-steps", type=int, default=5,
+                        help="timed NumPy reference steps (default 5)")
+    parser.add_argument("--no-tracking", action="store_true", help="skip the tracking bench")
+
+
+def _single_core() -> str:
+    """Pin this process to one core and make XLA single-threaded (before JAX starts)."""
+    import os
+    import sys
+
+    flags = os.environ.get("XLA_FLAGS", "")
+    for flag in ("--xla_cpu_multi_thread_eigen=false", "intra_op_parallelism_threads=1"):
+        if flag not in flags:
+            flags += " " + flag
+    os.environ["XLA_FLAGS"] = flags.strip()
+    note = "single core"
+    if hasattr(os, "sched_setaffinity"):
+        cores = sorted(os.sched_getaffinity(0))
+        os.sched_setaffinity(0, {cores[0]})
+        note = f"pinned to core {cores[0]}"
+    if "jax" in sys.modules:
+        note += " (JAX was already loaded: XLA may use more threads)"
+    return note
+
+
+def run(args: argparse.Namespace) -> int:
+    note = _single_core()
+    import json
+    import platform
+    import time
+
+    import jax
+    import numpy as np
+
+    from rnnpb import __version__
+    from rnnpb._atomic import atomic_write
+    from rnnpb.demonstrator import learning_set
+    from rnnpb.model import MirrorSystem, NetworkConfig, OnlineConfig, TrainConfig, TrainedModel
+    from rnnpb.model import training as training_module
+    from rnnpb.model.network import init_params
+    from rnnpb.model.reference import ReferenceMirrorSystem
+    from rnnpb.robot import JOINT_LIMITS
+
+    network = NetworkConfig()
+    sequences = learning_set("1", seed=0)
+    data = training_module.prepare_data(sequences, JOINT_LIMITS)
+    config = TrainConfig.paper()
+    state = training_module.init_state(data, network, config)
+    run_chunk = training_module._make_chunk_runner(config, training_module._optimizer(config))
+    inputs = jax.numpy.asarray(data.inputs, jax.numpy.float32)
+    valid = jax.numpy.asarray(data.valid)
+    chunk = 200
+    state = jax.block_until_ready(run_chunk(state, inputs, valid, chunk))
+    chunk_times = []
+    for _ in range(7):
+        t0 = time.perf_counter()
+        state = jax.block_until_ready(run_chunk(state, inputs, valid, chunk))
+        chunk_times.append((time.perf_counter() - t0) / chunk * 1e3)
+    train_ms = float(np.median(chunk_times))
+
+    # The on-line step costs the same for any weights: time it with a fresh network.
+    params = init_params(network, jax.random.PRNGKey(0))
+    rng = np.random.default_rng(0)
+    model = TrainedModel(network=network, params=params, lower=data.lower, upper=data.upper,
+                         sequence_pb=rng.uniform(0.2, 0.8, (len(sequences), network.pb_size)),
+                         sequence_patterns=data.patterns,
+                         initial_context=np.full((len(sequences), network.context_size), 0.5))
+    online = OnlineConfig()
+    mirror = MirrorSystem(model, online)
+    stream = np.concatenate([s.sensory for s in sequences])
+    for t in range(40):
+        mirror.step(stream[t])
+    step_times = []
+    for t in range(args.steps):
+        u = stream[(40 + t) % len(stream)]
+        t0 = time.perf_counter()
+        mirror.step(u)
+        step_times.append((time.perf_counter() - t0) * 1e3)
+    step_times = np.asarray(step_times)
+
+    reference = ReferenceMirrorSystem(params, model.mean_initial_context,
+                                      np.mean(model.sequence_pb, axis=0), network.sensory_size,
+                                      network.motor_size, online)
+    for t in range(online.window):
+        if t == online.window - 1:
+            break
+        # Fill the window without timing (a full window is the steady-state cost).
+        reference.n = t + 1
+        reference.sensory[t] = stream[t]
+        reference.seen[t] = True
+    reference_times = []
+    for t in range(args.reference_steps):
+        t0 = time.perf_counter()
+        reference.step(stream[online.window + t])
+        reference_times.append((time.perf_counter() - t0) * 1e3)
+    reference_ms = float(np.median(reference_times))
+
+    figures = {
+        "train_iteration_ms_median": train_ms,
+        "train_50k_iterations_s_estimate": train_ms * 50.0,
+        "online_step_ms_median": float(np.median(step_times)),
+        "online_step_ms_p99": float(np.percentile(step_times, 99)),
+        "online_step_reference_numpy_ms_median": reference_ms,
+        "online_speedup_vs_numpy": reference_ms / float(np.median(step_times)),
+    }
+    if not args.no_tracking:
+        from rnnpb.perception import tracking_benchmark
+
+        tracking = tracking_benchmark()
+        figures["tracking_frames_per_s"] = float(tracking["fps"])
+        figures["tracking_ms_median"] = float(tracking["median_ms"])
+        figures["tracking_clean_error_px"] = float(tracking["clean_error_px"])
+        figures["tracking_noisy_error_px"] = float(tracking["noisy_error_px"])
+
+    print(f"rnnpb {__version__} bench — {note}, jax {jax.__version__}, "
+          f"{platform.processor() or platform.machine()}")
+    print(f"  learning iteration (6 seq x 50 steps):   {train_ms:8.3f} ms median "
+          f"(50,000 iterations ~ {train_ms * 50:.0f} s)")
+    print(f"  on-line step (L={online.window}, {online.iterations} it.): "
+          f"{figures['online_step_ms_median']:8.3f} ms median, "
+          f"{figures['online_step_ms_p99']:.3f} ms p99 (over {args.steps} steps)")
+    print(f"  on-line step, NumPy reference:           {reference_ms:8.1f} ms median "
+          f"(over {args.reference_steps} steps) — compiled is "
+          f"{figures['online_speedup_vs_numpy']:.0f}x faster")
+    if "tracking_frames_per_s" in figures:
+        print(f"  colour-ball tracking 640x480:            {figures['tracking_ms_median']:8.3f} "
+              f"ms median ({figures['tracking_frames_per_s']:.0f} frames/s); centre error "
+              f"{figures['tracking_clean_error_px']:.2f} px clean, "
+              f"{figures['tracking_noisy_error_px']:.2f} px noisy")
+    if args.json:
+        document = {**figures, "rnnpb_version": __version__, "jax_version": jax.__version__,
+                    "machine": platform.machine(), "python": platform.python_version(),
+                    "note": note, "online_config": online.to_dict()}
+        with atomic_write(args.json, "w", encoding="utf-8") as handle:
+            json.dump(document, handle, indent=2)
+        print(f"wrote {args.json}")
+    return 0

@@ -1,0 +1,103 @@
+"""rnnpb train: learn movement patterns from sequence files."""
+
+from __future__ import annotations
+
+import argparse
+
+NAME = "train"
+HELP = "learn movement patterns from sequence CSV files"
+DESCRIPTION = """\
+Learn movement patterns from demonstrations: paired user-hand / robot-joint sequences.
+
+Each CSV file has a header row and one row per step with the columns
+  step, lhy lhz rhy rhz (user hands in the camera view plane, 0..1),
+  lshp lshr lshy lelp rshp rshr rshy relp (robot joints, radians)
+and optionally `pattern` (the pattern's name). Without a `pattern` column the file name
+names it: wave_1.csv and wave_2.csv are two samples of pattern `wave`.
+Motor values are normalized by the robot's joint limits (they must lie within them).
+
+Presets: `paper` is the paper's algorithm (gradient descent with momentum, 50,000
+iterations); `fast` uses Adam with noise on the inputs and needs about 3,000 iterations.
+Options given explicitly override the preset.
+
+A checkpoint is written next to the model (MODEL.checkpoint.npz) every
+--checkpoint-every iterations; --resume continues from it.
+
+Example:
+  rnnpb data --out data/
+  rnnpb train --data data/patterns --out model.npz --preset fast
+"""
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--data", nargs="+", required=True, metavar="FILE_OR_DIR",
+                        help="sequence CSV files, or directories of them")
+    parser.add_argument("--out", required=True, metavar="MODEL",
+                        help="where to write the trained model (.npz)")
+    parser.add_argument("--preset", choices=("paper", "fast"), default="paper",
+                        help="training algorithm preset (default: paper)")
+    parser.add_argument("--iterations", type=int, help="learning iterations")
+    parser.add_argument("--optimizer", choices=("momentum", "adam"),
+                        help="weight update rule")
+    parser.add_argument("--learning-rate", type=float, help="weight learning rate")
+    parser.add_argument("--pb-learning-rate", type=float, help="PB learning rate (eq. 2's ε)")
+    parser.add_argument("--integration-length", type=int,
+                        help="PB integration length l of eq. 1 (steps)")
+    parser.add_argument("--input-noise", type=float,
+                        help="std. dev. of noise on the teacher-forced inputs")
+    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    parser.add_argument("--hidden", type=int, default=40, help="hidden units (default 40)")
+    parser.add_argument("--context", type=int, default=30, help="context units (default 30)")
+    parser.add_argument("--pb-size", type=int, default=4, help="PB units (default 4)")
+    parser.add_argument("--checkpoint-every", type=int, default=5000, metavar="N",
+                        help="write a checkpoint every N iterations (default 5000)")
+    parser.add_argument("--resume", action="store_true",
+                        help="continue from MODEL.checkpoint.npz if it exists")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def checkpoint_path_for(model_path: str) -> str:
+    base = model_path[:-4] if model_path.endswith(".npz") else model_path
+    return base + ".checkpoint.npz"
+
+
+def run(args: argparse.Namespace) -> int:
+    from dataclasses import replace
+
+    import numpy as np
+
+    from rnnpb.model import NetworkConfig, TrainConfig, train
+    from rnnpb.robot import JOINT_LIMITS
+    from rnnpb.sequences import read_sequence_files
+    from rnnpb.vectors import MOTOR_NAMES, SENSORY_NAMES
+
+    sequences = read_sequence_files(args.data)
+    config = TrainConfig.paper() if args.preset == "paper" else TrainConfig.fast()
+    changes = {k: v for k, v in {
+        "iterations": args.iterations, "optimizer": args.optimizer,
+        "learning_rate": args.learning_rate, "input_noise": args.input_noise}.items()
+        if v is not None}
+    pb_changes = {k: v for k, v in {"learning_rate": args.pb_learning_rate,
+                                    "integration_length": args.integration_length}.items()
+                  if v is not None}
+    if pb_changes:
+        changes["pb"] = replace(config.pb, **pb_changes)
+    config = replace(config, seed=args.seed, checkpoint_every=args.checkpoint_every, **changes)
+    network = NetworkConfig(pb_size=args.pb_size, hidden_size=args.hidden,
+                            context_size=args.context)
+    patterns = sorted({s.pattern for s in sequences})
+    print(f"training on {len(sequences)} sequences of {len(patterns)} pattern(s): "
+          f"{', '.join(patterns)}; {config.iterations} iterations ({args.preset} preset, "
+          f"{config.optimizer})")
+    model = train(sequences, JOINT_LIMITS, network, config, progress=not args.no_progress,
+                  checkpoint_path=checkpoint_path_for(args.out), resume=args.resume)
+    model.save(args.out)
+    info = model.meta["training"]
+    mse = np.asarray(info["mse_per_output"])
+    names = (*SENSORY_NAMES, *MOTOR_NAMES)
+    print(f"wrote {args.out} after {info['iterations']} iterations in {info['seconds']:.1f} s")
+    print(f"final mean squared error per output: max {mse.max():.2e}, mean {mse.mean():.2e} "
+          f"(RMS max {np.sqrt(mse.max()):.2e}); worst output: {names[int(mse.argmax())]}")
+    for name, pb in model.pattern_pb.items():
+        print(f"  pattern {name}: PB = {np.array2string(pb, precision=3)}")
+    return 0
