@@ -1,0 +1,21 @@
+"""The live dashboard (``rnnpb serve``): a local web page that shows the simulated humanoid
+imitating the demonstrator, the mouse or the webcam, with live plots of the hands, the joint
+angles and the parametric bias (docs/dashboard.md)."""
+
+from rnnpb.web._protocol import MAX_MESSAGE_BYTES, ProtocolError, parse_client_message
+from rnnpb.web._server import STATIC_DIR, DashboardServer, create_app
+from rnnpb.web._session import Session, find_models
+from rnnpb.web._sources import DemonstratorSource, PointerSource
+
+__all__ = [
+    "MAX_MESSAGE_BYTES",
+    "STATIC_DIR",
+    "DashboardServer",
+    "DemonstratorSource",
+    "PointerSource",
+    "ProtocolError",
+    "Session",
+    "create_app",
+    "find_models",
+    "parse_client_message",
+]

@@ -1,0 +1,131 @@
+"""The dashboard's WebSocket message protocol: what a browser may send, checked strictly.
+
+Every client message is one JSON object in a text frame of at most :data:`MAX_MESSAGE_BYTES`
+bytes with a ``type`` field; anything else is rejected with a :class:`ProtocolError` whose
+text goes back to the client as ``{"type": "error", "message": ...}`` (docs/dashboard.md).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from typing import Any
+
+from rnnpb.errors import RnnpbError
+
+MAX_MESSAGE_BYTES = 4096
+"""Longest client message accepted (the longest valid one is well under 200 bytes)."""
+MIN_DT, MAX_DT = 0.02, 5.0
+"""Range of the loop's step, seconds."""
+MODES = ("demonstrator", "pointer", "webcam")
+ACTIONS = ("start", "stop", "reset")
+PATTERN_CHOICES = ("1", "2", "3", "4", "pause")
+MAX_CAMERA_INDEX = 16
+
+
+class ProtocolError(RnnpbError):
+    """A client message that is not valid; the text says what is wrong with it."""
+
+
+def _number(value: Any, name: str, low: float, high: float) -> float:
+    # bool is an int in Python; a JSON true is not a number here.
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ProtocolError(f"{name} must be a number, got {type(value).__name__}")
+    value = float(value)
+    if not math.isfinite(value) or not low <= value <= high:
+        raise ProtocolError(f"{name} must be in [{low:g}, {high:g}], got {value:g}")
+    return value
+
+
+def _keys(message: dict[str, Any], allowed: tuple[str, ...]) -> None:
+    extra = sorted(set(message) - {"type", *allowed})
+    if extra:
+        raise ProtocolError(f"message {message['type']!r} has unknown field(s) "
+                            f"{', '.join(extra)}")
+    missing = [k for k in allowed if k not in message]
+    if missing:
+        raise ProtocolError(f"message {message['type']!r} needs field(s) {', '.join(missing)}")
+
+
+def parse_client_message(text: str | bytes | None) -> dict[str, Any]:
+    """Validate one client message; returns it with values normalized.
+
+    =============================================  ===========================================
+    ``{"type": "hands", "hands": [a, b, c, d]}``   pointer positions ``lhy lhz rhy rhz`` in
+                                                   [0, 1]; ``null`` for a hand not placed
+    ``{"type": "mode", "mode": M}``                ``demonstrator``, ``pointer`` or ``webcam``
+    ``{"type": "camera", "index": N}``             webcam index 0-16 (takes effect on the
+                                                   next switch to ``webcam``)
+    ``{"type": "pattern", "pattern": P}``          demonstrator: ``"1"``-``"4"`` or ``"pause"``
+    ``{"type": "control", "action": A}``           ``start``, ``stop`` or ``reset``
+    ``{"type": "dt", "dt": S}``                    seconds per step in [0.02, 5]
+    ``{"type": "model", "name": NAME}``            one of the models the server offers
+    ``{"type": "ping"}``                           answered with ``pong``
+    =============================================  ===========================================
+    """
+    if text is None:
+        raise ProtocolError("messages must be JSON text, got a binary frame")
+    if isinstance(text, bytes):
+        raise ProtocolError("messages must be JSON text, got a binary frame")
+    size = len(text.encode("utf-8"))
+    if size > MAX_MESSAGE_BYTES:
+        raise ProtocolError(f"message too large: {size} bytes (at most {MAX_MESSAGE_BYTES})")
+    try:
+        message = json.loads(text)
+    except (json.JSONDecodeError, RecursionError) as error:
+        raise ProtocolError(f"malformed JSON: {error}") from None
+    if not isinstance(message, dict):
+        raise ProtocolError(f"a message must be a JSON object, got {type(message).__name__}")
+    kind = message.get("type")
+    if not isinstance(kind, str):
+        raise ProtocolError("a message needs a string field 'type'")
+    if kind == "hands":
+        _keys(message, ("hands",))
+        hands = message["hands"]
+        if not isinstance(hands, list) or len(hands) != 4:
+            raise ProtocolError("hands must be a list of 4 values (lhy lhz rhy rhz)")
+        values = []
+        for name, value in zip(("lhy", "lhz", "rhy", "rhz"), hands, strict=True):
+            values.append(math.nan if value is None else _number(value, name, 0.0, 1.0))
+        return {"type": "hands", "hands": values}
+    if kind == "mode":
+        _keys(message, ("mode",))
+        if message["mode"] not in MODES:
+            raise ProtocolError(f"mode must be one of {', '.join(MODES)}, got "
+                                f"{message['mode']!r}")
+        return {"type": "mode", "mode": message["mode"]}
+    if kind == "camera":
+        _keys(message, ("index",))
+        index = message["index"]
+        if isinstance(index, bool) or not isinstance(index, int) or \
+                not 0 <= index <= MAX_CAMERA_INDEX:
+            raise ProtocolError(f"camera index must be an integer in [0, {MAX_CAMERA_INDEX}]")
+        return {"type": "camera", "index": index}
+    if kind == "pattern":
+        _keys(message, ("pattern",))
+        pattern = message["pattern"]
+        if isinstance(pattern, int) and not isinstance(pattern, bool):
+            pattern = str(pattern)
+        if pattern not in PATTERN_CHOICES:
+            raise ProtocolError(f"pattern must be one of {', '.join(PATTERN_CHOICES)}, got "
+                                f"{message['pattern']!r}")
+        return {"type": "pattern", "pattern": pattern}
+    if kind == "control":
+        _keys(message, ("action",))
+        if message["action"] not in ACTIONS:
+            raise ProtocolError(f"action must be one of {', '.join(ACTIONS)}, got "
+                                f"{message['action']!r}")
+        return {"type": "control", "action": message["action"]}
+    if kind == "dt":
+        _keys(message, ("dt",))
+        return {"type": "dt", "dt": _number(message["dt"], "dt", MIN_DT, MAX_DT)}
+    if kind == "model":
+        _keys(message, ("name",))
+        name = message["name"]
+        if not isinstance(name, str) or not 0 < len(name) <= 255:
+            raise ProtocolError("model name must be a non-empty string")
+        return {"type": "model", "name": name}
+    if kind == "ping":
+        _keys(message, ())
+        return {"type": "ping"}
+    raise ProtocolError(f"unknown message type {kind!r}")

@@ -1,0 +1,181 @@
+"""The dashboard's web server: a Starlette app served by uvicorn.
+
+Routes: ``/`` the page, ``/static/…`` its files (all vendored, nothing is fetched from the
+internet), ``/api/state`` the session state as JSON, ``/api/recording.csv`` the current
+session recording, and ``/ws`` the WebSocket every tab opens (docs/dashboard.md).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import logging
+import threading
+from pathlib import Path
+
+from starlette.applications import Starlette
+from starlette.requests import Request
+from starlette.responses import FileResponse, JSONResponse, PlainTextResponse, Response
+from starlette.routing import Mount, Route, WebSocketRoute
+from starlette.staticfiles import StaticFiles
+from starlette.websockets import WebSocket, WebSocketDisconnect
+
+from rnnpb.web._protocol import ProtocolError, parse_client_message
+from rnnpb.web._session import Session
+
+log = logging.getLogger("rnnpb.web")
+
+STATIC_DIR = Path(__file__).parent / "static"
+SEND_QUEUE = 256
+"""Messages kept for a slow client; beyond that its oldest are dropped, never the robot's
+steps slowed down."""
+WS_MAX_SIZE = 65536
+"""WebSocket frames larger than this are refused by the protocol layer itself (close code
+1009); smaller ones over the message limit get an error reply."""
+
+
+def create_app(session: Session) -> Starlette:
+    """The ASGI app serving ``session`` (already started)."""
+
+    async def index(request: Request) -> Response:
+        return FileResponse(STATIC_DIR / "index.html", media_type="text/html")
+
+    async def state(request: Request) -> Response:
+        return JSONResponse(session.state())
+
+    async def recording(request: Request) -> Response:
+        path = session.recording_path
+        if path is None or not path.exists():
+            return PlainTextResponse("no session recorded yet: start the robot first",
+                                     status_code=404)
+        name = f"rnnpb-{(session.model_name or 'session').replace('/', '_')}-{path.name}"
+        return FileResponse(path, media_type="text/csv", filename=name)
+
+    async def websocket(ws: WebSocket) -> None:
+        await ws.accept()
+        loop = asyncio.get_running_loop()
+        outbox: asyncio.Queue[str] = asyncio.Queue(maxsize=SEND_QUEUE)
+        client = f"{ws.client.host}:{ws.client.port}" if ws.client else "client"
+
+        def put(text: str) -> None:
+            if outbox.full():
+                outbox.get_nowait()
+            outbox.put_nowait(text)
+
+        def from_session(text: str) -> None:
+            with contextlib.suppress(RuntimeError):  # the event loop is closing
+                loop.call_soon_threadsafe(put, text)
+
+        async def sender() -> None:
+            while True:
+                await ws.send_text(await outbox.get())
+
+        put(json.dumps(session.state()))
+        unsubscribe = session.subscribe(from_session)
+        sending = asyncio.create_task(sender())
+        log.info("%s connected (%d watching)", client, session.subscriber_count)
+        try:
+            while True:
+                event = await ws.receive()
+                if event["type"] == "websocket.disconnect":
+                    break
+                try:
+                    message = parse_client_message(event.get("text", event.get("bytes")))
+                except ProtocolError as error:
+                    log.warning("%s: rejected message: %s", client, error)
+                    put(json.dumps({"type": "error", "message": f"rejected: {error}"}))
+                    continue
+                if message["type"] == "hands":
+                    session.pointer.set_hands(message["hands"])
+                elif message["type"] == "ping":
+                    put('{"type":"pong"}')
+                else:
+                    session.submit(message)
+        except WebSocketDisconnect:
+            pass
+        finally:
+            unsubscribe()
+            sending.cancel()
+            with contextlib.suppress(asyncio.CancelledError, WebSocketDisconnect, RuntimeError):
+                await sending
+            log.info("%s disconnected", client)
+
+    routes = [
+        Route("/", index),
+        Route("/api/state", state),
+        Route("/api/recording.csv", recording),
+        WebSocketRoute("/ws", websocket),
+        Mount("/static", StaticFiles(directory=STATIC_DIR), name="static"),
+    ]
+    return Starlette(routes=routes)
+
+
+class DashboardServer:
+    """The session and its web server on ``host:port``, run in a background thread.
+
+    >>> with DashboardServer(models, port=0) as server:    # doctest: +SKIP
+    ...     print(server.url)
+    """
+
+    def __init__(self, models: dict[str, Path], host: str = "127.0.0.1", port: int = 8765,
+                 dt: float = 0.4, model: str | None = None, workdir: str | Path | None = None,
+                 log_level: str = "warning") -> None:
+        import uvicorn
+
+        self.session = Session(models, dt=dt, workdir=workdir)
+        self._first_model = model
+        self.app = create_app(self.session)
+        config = uvicorn.Config(self.app, host=host, port=port, log_level=log_level,
+                                ws="websockets-sansio", ws_max_size=WS_MAX_SIZE,
+                                lifespan="off")
+        self.server = uvicorn.Server(config)
+        self.host = host
+        self._thread: threading.Thread | None = None
+
+    @property
+    def port(self) -> int:
+        servers = getattr(self.server, "servers", None)
+        if servers:
+            return servers[0].sockets[0].getsockname()[1]
+        return self.server.config.port
+
+    @property
+    def url(self) -> str:
+        host = f"[{self.host}]" if ":" in self.host else self.host
+        return f"http://{host}:{self.port}/"
+
+    def start(self) -> DashboardServer:
+        import time
+
+        from rnnpb.errors import RnnpbError
+
+        self.session.start(self._first_model)
+        self._thread = threading.Thread(target=self.server.run, name="rnnpb-web", daemon=True)
+        self._thread.start()
+        deadline = time.monotonic() + 10
+        while not self.server.started:
+            if not self._thread.is_alive() or time.monotonic() > deadline:
+                self.session.close()
+                raise RnnpbError(f"cannot serve on {self.host}:{self.server.config.port} "
+                                 "(is the port in use?)")
+            time.sleep(0.02)
+        return self
+
+    def stop(self) -> None:
+        self.server.should_exit = True
+        if self._thread is not None:
+            self._thread.join(timeout=10)
+        self.session.close()
+
+    def wait(self) -> None:
+        """Block until the server stops (Ctrl-C stops it)."""
+        if self._thread is not None:
+            while self._thread.is_alive():
+                self._thread.join(timeout=0.5)
+
+    def __enter__(self) -> DashboardServer:
+        return self.start()
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.stop()
