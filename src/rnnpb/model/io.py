@@ -173,7 +173,7 @@ def load_archive(path: str | os.PathLike[str], fmt: str, version: int
     if path.is_dir():
         raise ModelFileError(f"{path}: is a directory, expected an rnnpb {fmt} file (.npz)")
     try:
-        with np.load(path, allow_pickle=False) as archive:
+        with open(path, "rb") as handle, np.load(handle, allow_pickle=False) as archive:
             arrays = {name: archive[name] for name in archive.files}
     except (zipfile.BadZipFile, EOFError, OSError, ValueError) as error:
         raise ModelFileError(f"{path}: not a readable rnnpb {fmt} file (truncated or not an "

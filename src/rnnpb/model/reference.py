@@ -41,10 +41,12 @@ def _layer_backward(w: dict[str, np.ndarray], a: np.ndarray, h: np.ndarray, o: n
     dh = dz_o @ w["w_out"].T
     dz_h = dh * h * (1.0 - h)
     if grads is not None:
-        grads["w_out"] += np.einsum("...h,...o->ho", h, dz_o)
-        grads["b_out"] += dz_o.reshape(-1, dz_o.shape[-1]).sum(0)
-        grads["w_in"] += np.einsum("...a,...h->ah", a, dz_h)
-        grads["b_h"] += dz_h.reshape(-1, dz_h.shape[-1]).sum(0)
+        h2, dz_o2 = h.reshape(-1, h.shape[-1]), dz_o.reshape(-1, dz_o.shape[-1])
+        a2, dz_h2 = a.reshape(-1, a.shape[-1]), dz_h.reshape(-1, dz_h.shape[-1])
+        grads["w_out"] += h2.T @ dz_o2
+        grads["b_out"] += dz_o2.sum(0)
+        grads["w_in"] += a2.T @ dz_h2
+        grads["b_h"] += dz_h2.sum(0)
     return dz_h @ w["w_in"].T
 
 

@@ -14,6 +14,7 @@ sequences (:class:`rnnpb.model.io.TrainedModel`).
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import math
 import os
@@ -183,6 +184,15 @@ def _squared_error(trainable: tuple[Params, jax.Array], rho: jax.Array, inputs: 
 
 
 def _make_chunk_runner(config: TrainConfig, optimizer: optax.GradientTransformation):
+    # Settings that do not enter the compiled update are normalized away so that runs that
+    # differ only in them share one compiled function.
+    return _chunk_runner(replace(config, iterations=0, seed=0, chunk_iterations=1,
+                                 checkpoint_every=1))
+
+
+@functools.lru_cache(maxsize=16)
+def _chunk_runner(config: TrainConfig):
+    optimizer = _optimizer(config)
     grad_fn = jax.grad(_squared_error, argnums=(0, 1))
 
     def one_iteration(state: TrainState, inputs: jax.Array, valid: jax.Array) -> TrainState:
@@ -288,6 +298,9 @@ def train(sequences: SequenceABC[Sequence], joint_limits: np.ndarray,
     start = time.perf_counter()
     done = int(state.iteration)
     history: list[tuple[int, float]] = []
+    if done == 0:
+        history.append((0, float(jnp.mean(_per_output_mse(
+            (state.params, state.initial_context_logit), state.rho, inputs, valid)))))
     try:
         while done < config.iterations:
             n = min(config.chunk_iterations, config.iterations - done)

@@ -1,0 +1,102 @@
+"""The on-line mirror system: recognition by PB regression, synchronous generation."""
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from rnnpb.errors import ConfigError
+from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel
+from rnnpb.model.reference import ReferenceMirrorSystem
+
+from .synthetic import LIMITS, make_sequences
+
+LOCK_STEPS = 10  # the motor command must be locked on within this many steps
+SPAN = LIMITS[:, 1] - LIMITS[:, 0]
+
+
+def _motor_error(result_motor, true_motor):
+    return float(np.sqrt(np.mean(((result_motor - true_motor) / SPAN) ** 2)))
+
+
+@pytest.mark.parametrize("pattern", [0, 1, 2])
+def test_pb_converges_to_the_pattern_and_motor_locks_on(trained, pattern):
+    # A new demonstration (other seed, other phase) of a learned pattern.
+    demo = make_sequences(n_samples=1, n_steps=60, seed=11 + pattern, kinds=(pattern,))[0]
+    mirror = MirrorSystem(trained)
+    errors, pbs = [], []
+    for t in range(demo.n_steps):
+        result = mirror.step(demo.sensory[t])
+        errors.append(_motor_error(result.motor, demo.motor[t]))
+        pbs.append(result.pb)
+        assert np.all(result.motor >= LIMITS[:, 0]) and np.all(result.motor <= LIMITS[:, 1])
+    # Locked within LOCK_STEPS steps: normalized motor error below 0.05 from then on.
+    assert max(errors[LOCK_STEPS:]) < 0.05, np.round(errors, 3)
+    # The PB ends nearest to the pattern's learned PB.
+    name, _ = trained.nearest_pattern(pbs[-1])
+    assert name == str(pattern)
+
+
+def test_lost_hands_are_filled_by_prediction(trained):
+    demo = make_sequences(n_samples=1, n_steps=50, seed=21, kinds=(0,))[0]
+    mirror = MirrorSystem(trained)
+    for t in range(30):
+        mirror.step(demo.sensory[t])
+    for t in range(30, 36):  # both hands lost for 6 steps
+        result = mirror.step([np.nan] * 4)
+        assert not result.seen.any()
+        assert np.all(np.isfinite(result.motor)) and np.all(np.isfinite(result.pb))
+        # Still moving with the pattern: the prediction carries it.
+        assert _motor_error(result.motor, demo.motor[t]) < 0.1
+    for t in range(36, 50):
+        result = mirror.step(demo.sensory[t])
+    assert _motor_error(result.motor, demo.motor[49]) < 0.05
+
+
+def test_reset_repeats_exactly(trained):
+    demo = make_sequences(n_samples=1, n_steps=12, seed=5, kinds=(1,))[0]
+    mirror = MirrorSystem(trained)
+    first = [mirror.step(u).motor for u in demo.sensory]
+    mirror.reset()
+    second = [mirror.step(u).motor for u in demo.sensory]
+    np.testing.assert_array_equal(np.array(first), np.array(second))
+
+
+def test_wrong_shape_is_a_clear_error(trained):
+    mirror = MirrorSystem(trained)
+    with pytest.raises(ConfigError, match="4 values"):
+        mirror.step([0.5, 0.5, 0.5])
+
+
+def test_numerical_failure_holds_the_last_good_state(trained):
+    broken = TrainedModel(
+        network=trained.network,
+        params=trained.params._replace(w_out=jnp.full_like(trained.params.w_out, jnp.nan)),
+        lower=trained.lower, upper=trained.upper, sequence_pb=trained.sequence_pb,
+        sequence_patterns=trained.sequence_patterns, initial_context=trained.initial_context)
+    mirror = MirrorSystem(broken)
+    for _ in range(3):
+        result = mirror.step([0.5, 0.5, 0.5, 0.5])
+        assert result.held
+        assert np.all(np.isfinite(result.motor)) and np.all(np.isfinite(result.pb))
+
+
+@pytest.mark.parametrize("motor_input", ["closed_loop", "recorded"])
+@pytest.mark.parametrize("optimize_onset", [True, False])
+def test_compiled_step_matches_numpy_reference(trained, motor_input, optimize_onset):
+    config = OnlineConfig(window=8, iterations=5, motor_input=motor_input,
+                          optimize_onset=optimize_onset)
+    demo = make_sequences(n_samples=1, n_steps=14, seed=3, kinds=(2,))[0]
+    mirror = MirrorSystem(trained, config)
+    net = trained.network
+    pb0 = np.mean(list(trained.pattern_pb.values()), axis=0)
+    ref = ReferenceMirrorSystem(trained.params, trained.mean_initial_context, pb0,
+                                net.sensory_size, net.motor_size, config)
+    sensory = demo.sensory.copy()
+    sensory[5, :2] = np.nan  # a lost hand inside the window
+    for t in range(14):  # fills the window, then shifts it
+        result = mirror.step(sensory[t])
+        motor, predicted, pb = ref.step(sensory[t])
+        np.testing.assert_allclose(result.pb, pb, atol=2e-4)
+        np.testing.assert_allclose(result.predicted_hands, predicted, atol=2e-4)
+        np.testing.assert_allclose(trained.normalize(np.r_[predicted, result.motor])[4:],
+                                   motor, atol=2e-4)
