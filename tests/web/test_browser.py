@@ -129,12 +129,14 @@ def test_mouse_tracing_a_learned_pattern_is_recognised(page, server, model):
                 page.mouse.move(x, y)
                 page.mouse.up()
                 where[hand] = (x, y)
+        # The robot perceived the traced markers, not something else.
+        handle = page.wait_for_function(f"rnnpbDashboard.lastStep.step > {last} && "
+                                        "rnnpbDashboard.lastStep.observed", timeout=10000)
+        np.testing.assert_allclose(np.array(handle.json_value(), dtype=float), sensory[-1],
+                                   atol=0.01)
     finally:
         page.click("#stop")
     elapsed = time.monotonic() - started
-    # The PB recorded by the page came from the traced markers, not from somewhere else.
-    observed = np.array(page.evaluate("rnnpbDashboard.lastStep.observed"), dtype=float)
-    np.testing.assert_allclose(observed, sensory[-1], atol=0.01)
     first = next((i for i, name in enumerate(nearest) if name == pattern), None)
     assert first is not None and first <= RECOGNISED_WITHIN, (
         f"pattern {pattern} not recognised within {RECOGNISED_WITHIN} samples: {nearest} "

@@ -1,0 +1,221 @@
+"""The dashboard server over real HTTP and WebSocket connections: state, recordings, bad
+messages rejected (and logged) while the server keeps running, two clients, disconnects."""
+
+from __future__ import annotations
+
+import json
+import logging
+import socket
+import time
+import urllib.error
+import urllib.request
+
+import numpy as np
+import pytest
+from websockets.exceptions import ConnectionClosed
+from websockets.sync.client import connect
+
+from rnnpb.errors import ConfigError
+from rnnpb.web import MAX_MESSAGE_BYTES, DemonstratorSource, PointerSource, find_models
+from rnnpb.web._server import WS_MAX_SIZE
+
+
+def _ws(server):
+    return connect(server.url.replace("http", "ws") + "ws", open_timeout=10)
+
+
+def _next(ws, kind: str, timeout: float = 10.0, where=lambda m: True) -> dict:
+    deadline = time.monotonic() + timeout
+    while True:
+        message = json.loads(ws.recv(timeout=max(0.01, deadline - time.monotonic())))
+        if message["type"] == kind and where(message):
+            return message
+
+
+def _control(ws, **message) -> None:
+    ws.send(json.dumps(message))
+
+
+def _get(server, path: str) -> tuple[int, bytes, str]:
+    try:
+        with urllib.request.urlopen(server.url + path.lstrip("/"), timeout=10) as response:
+            return response.status, response.read(), response.headers.get("content-type", "")
+    except urllib.error.HTTPError as error:
+        return error.code, error.read(), ""
+
+
+def test_page_and_vendored_assets_are_served_with_no_internet_reference(server):
+    status, body, kind = _get(server, "/")
+    assert status == 200 and "text/html" in kind
+    html = body.decode()
+    assert "/static/app.js" in html
+    for path in ("/static/app.js", "/static/style.css", "/static/vendor/three.module.min.js",
+                 "/static/vendor/three-LICENSE.txt"):
+        assert _get(server, path)[0] == 200, path
+    app = _get(server, "/static/app.js")[1].decode()
+    for text in (html, app):
+        assert "http://" not in text and "https://" not in text  # nothing from the internet
+
+
+def test_state_names_the_models_and_the_learned_pbs(server, model):
+    status, body, _ = _get(server, "/api/state")
+    state = json.loads(body)
+    assert status == 200 and state["models"] == ["set1.npz"] and state["model"] == "set1.npz"
+    assert state["patterns"] == list(model.patterns)
+    assert state["novel_patterns"] == ["4"]
+    np.testing.assert_allclose(state["pattern_pb"]["1"], model.pattern_pb["1"])
+
+
+BAD_MESSAGES = [
+    ("{not json", "malformed JSON"),
+    ("[1, 2]", "JSON object"),
+    ('{"type": "dance"}', "unknown message type"),
+    ('{"hands": [0.1, 0.2, 0.3, 0.4]}', "'type'"),
+    ('{"type": "hands", "hands": [0.1, 0.2, 0.3]}', "4 values"),
+    ('{"type": "hands", "hands": [0.1, "0.2", 0.3, 0.4]}', "must be a number"),
+    ('{"type": "hands", "hands": [0.1, 1.5, 0.3, 0.4]}', "must be in [0, 1]"),
+    ('{"type": "hands", "hands": [true, 0.2, 0.3, 0.4]}', "must be a number"),
+    ('{"type": "dt", "dt": 0}', "dt must be in"),
+    ('{"type": "dt", "dt": "fast"}', "must be a number"),
+    ('{"type": "mode", "mode": "telepathy"}', "mode must be one of"),
+    ('{"type": "pattern", "pattern": "7"}', "pattern must be one of"),
+    ('{"type": "control", "action": "explode"}', "action must be one of"),
+    ('{"type": "control", "action": "start", "extra": 1}', "unknown field"),
+    ('{"type": "camera", "index": -1}', "camera index"),
+    ('{"type": "model"}', "needs field"),
+    (json.dumps({"type": "ping", "pad": "x" * MAX_MESSAGE_BYTES}), "too large"),
+]
+
+
+@pytest.mark.parametrize(("text", "reason"), BAD_MESSAGES, ids=[r for _, r in BAD_MESSAGES])
+def test_a_bad_message_is_rejected_and_logged_and_the_server_keeps_running(
+        server, caplog, text, reason):
+    with caplog.at_level(logging.WARNING, logger="rnnpb.web"), _ws(server) as ws:
+        _next(ws, "state")
+        ws.send(text)
+        error = _next(ws, "error")
+        assert error["message"].startswith("rejected:") and reason in error["message"]
+        _control(ws, type="ping")
+        _next(ws, "pong")
+    assert any(reason in record.getMessage() for record in caplog.records)
+
+
+def test_binary_and_oversized_frames_are_refused_without_harm(server):
+    with _ws(server) as ws:
+        _next(ws, "state")
+        ws.send(b"\x00\x01")
+        assert "binary" in _next(ws, "error")["message"]
+        ws.send("x" * (WS_MAX_SIZE + 1))  # beyond the protocol limit: the connection closes
+        with pytest.raises(ConnectionClosed):
+            for _ in range(100):
+                ws.recv(timeout=5)
+    with _ws(server) as ws:  # the server still serves
+        assert _next(ws, "state")["model"] == "set1.npz"
+
+
+def test_unknown_model_is_an_error_and_the_current_one_stays(server):
+    with _ws(server) as ws:
+        _next(ws, "state")
+        _control(ws, type="model", name="nope.npz")
+        assert "no model 'nope.npz'" in _next(ws, "error")["message"]
+    assert server.session.model_name == "set1.npz"
+
+
+def test_two_clients_share_one_session_and_a_disconnect_mid_stream_is_harmless(server, model):
+    with _ws(server) as a, _ws(server) as b:
+        _next(a, "state")
+        _next(b, "state")
+        _control(a, type="mode", mode="demonstrator")
+        _control(a, type="pattern", pattern="2")
+        _control(b, type="dt", dt=0.05)
+        _control(b, type="control", action="reset")
+        _control(a, type="control", action="start")
+        steps_a = [_next(a, "step") for _ in range(5)]
+        steps_b = [_next(b, "step", where=lambda m, s=steps_a[-1]["step"]: m["step"] >= s)
+                   for _ in range(2)]
+        assert steps_b[0]["step"] == steps_a[-1]["step"]  # one session, both see it
+        assert steps_a[-1]["truth"] == "2"
+        # Control from either tab is applied in turn and both see the result.
+        _control(b, type="pattern", pattern="pause")
+        _next(a, "state", where=lambda m: m["demonstrator_pattern"] == "pause")
+        _control(a, type="pattern", pattern="2")
+        _next(b, "state", where=lambda m: m["demonstrator_pattern"] == "2")
+
+        # A tab that vanishes without a closing handshake mid-stream.
+        with _ws(server) as c:
+            _next(c, "step")
+            c.socket.shutdown(socket.SHUT_RDWR)  # gone, with no closing handshake
+        before = _next(a, "step")["step"]
+        # The demonstrator performing pattern 2 is recognised and the loop goes on.
+        recognised = _next(a, "step", timeout=30, where=lambda m: m["nearest"] == "2")
+        assert recognised["step"] > before
+        assert model.nearest_pattern(np.array(recognised["pb"]))[0] == "2"
+        assert set(recognised["timings_ms"]) == {"perceive", "mirror", "act", "record"}
+        assert len(recognised["arms"]["hands"]) == 2
+        _control(a, type="control", action="stop")
+        _next(b, "state", where=lambda m: not m["running"])
+    deadline = time.monotonic() + 5
+    while server.session.subscriber_count and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert server.session.subscriber_count == 0
+
+
+def test_the_recording_downloads_as_a_session_csv(server, tmp_path):
+    from rnnpb.interaction import read_session
+
+    with _ws(server) as ws:
+        _next(ws, "state")
+        _control(ws, type="control", action="reset")
+        _control(ws, type="mode", mode="pointer")
+        _control(ws, type="hands", hands=[0.3, 0.6, None, None])
+        _control(ws, type="control", action="start")
+        _next(ws, "step", where=lambda m: m["step"] >= 4 and m["observed"][0] is not None)
+        _control(ws, type="control", action="stop")
+        _next(ws, "state", where=lambda m: not m["running"])
+    status, body, kind = _get(server, "/api/recording.csv")
+    assert status == 200 and "text/csv" in kind
+    path = tmp_path / "session.csv"
+    path.write_bytes(body)
+    session = read_session(path)
+    assert len(session["step"]) >= 5
+    assert session["lhy"][-1] == pytest.approx(0.3) and np.isnan(session["rhy"][-1])
+    assert session["lost_right"][-1] == 1
+
+
+def test_pointer_source_reads_not_seen_until_placed_then_the_latest():
+    source = PointerSource()
+    assert np.isnan(source.read().sensory).all()
+    source.set_hands(np.array([0.2, 0.3, 0.7, 0.8]))
+    source.set_hands(np.array([0.25, 0.3, 0.7, 0.8]))
+    np.testing.assert_allclose(source.read().sensory, [0.25, 0.3, 0.7, 0.8])
+
+
+def test_demonstrator_switch_keeps_the_phase_and_pause_holds_the_hands():
+    source = DemonstratorSource(patterns=("1", "2"), n_steps=120)
+    for _ in range(17):
+        source.read()
+    phase_before = source._phase["1"][source._position]  # noqa: SLF001
+    source.perform("2")
+    phase_after = source._phase["2"][source._position]  # noqa: SLF001
+    assert abs(np.angle(np.exp(1j * (phase_after - phase_before)))) < 0.4
+    moving = source.read()
+    assert moving.truth["pattern"] == "2"
+    source.perform("pause")
+    held = [source.read().sensory for _ in range(3)]
+    np.testing.assert_allclose(held[0], moving.sensory)
+    np.testing.assert_allclose(held[2], moving.sensory)
+    with pytest.raises(ConfigError, match="no pattern '5'"):
+        source.perform("5")
+
+
+def test_find_models_and_the_command_line(model_dir, tmp_path, capsys):
+    from rnnpb.cli import main
+
+    assert list(find_models(model_dir)) == ["set1.npz"]
+    assert list(find_models(model_dir / "set1.npz")) == ["set1.npz"]
+    with pytest.raises(ConfigError, match="no model files"):
+        find_models(tmp_path)
+    assert main(["serve", "--model", str(tmp_path / "missing")]) == 2
+    assert "no such model file or folder" in capsys.readouterr().err
+    assert main(["serve", "--model", str(model_dir), "--dt", "0"]) == 2
+    assert "--dt must be in" in capsys.readouterr().err
