@@ -225,8 +225,8 @@ const robotView = (() => {
   }
 
   // Orbit: drag turns, wheel zooms (no controls library needed for this much).
-  let azimuth = 0.95, elevation = 0.28, distance = 1.25;
-  const target = new THREE.Vector3(0, 0.45, 0.32);
+  let azimuth = 0.85, elevation = 0.22, distance = 1.55;
+  const target = new THREE.Vector3(0, 0.5, 0.36);  // between the robot and the hands
   function placeCamera() {
     camera.position.set(
       target.x + distance * Math.cos(elevation) * Math.sin(azimuth),
