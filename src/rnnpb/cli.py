@@ -73,6 +73,14 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise
         print(f"rnnpb: error: {error}", file=sys.stderr)
         return 2
+    except OSError as error:
+        # The system refused a file or device (permissions, a full disk): the user can act on
+        # that, so it is reported like an RnnpbError.
+        if args.debug:
+            raise
+        where = f"{error.filename}: " if error.filename else ""
+        print(f"rnnpb: error: {where}{error.strerror or error}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print("rnnpb: interrupted", file=sys.stderr)
         return 130

@@ -6,6 +6,10 @@ An optional ``pattern`` column names the movement pattern; without it the patter
 the file name (``wave_1.csv`` and ``wave-2.csv`` are both pattern ``wave``). Extra columns are
 ignored. A sensory stream (the input of the interaction phase) needs only ``step`` and the
 sensory columns.
+
+Files are read as UTF-8, with or without a byte-order mark, with any line endings. Every problem
+with a file raises :class:`rnnpb.errors.DataFileError` naming the file (and the line and column
+where there is one); see docs/robustness.md.
 """
 
 from __future__ import annotations
@@ -92,7 +96,8 @@ def _read_rows(path: Path, required: SequenceABC[str]) -> tuple[list[str], list[
     if path.is_dir():
         raise DataFileError(f"{path}: is a directory, expected a CSV file")
     try:
-        with open(path, newline="", encoding="utf-8") as handle:
+        # utf-8-sig: a byte-order mark (spreadsheet programs write one) is not part of the header.
+        with open(path, newline="", encoding="utf-8-sig") as handle:
             reader = csv.DictReader(handle)
             header = reader.fieldnames
             if not header:
@@ -106,7 +111,8 @@ def _read_rows(path: Path, required: SequenceABC[str]) -> tuple[list[str], list[
                                     f"(header has {', '.join(header)})")
             rows = []
             for row in reader:
-                if None in row or any(row.get(name) is None for name in required):
+                # DictReader puts surplus fields under None and fills missing ones with None.
+                if None in row or None in row.values():
                     raise DataFileError(f"{path}: line {reader.line_num}: expected "
                                         f"{len(header)} fields")
                 rows.append(row)
@@ -114,6 +120,8 @@ def _read_rows(path: Path, required: SequenceABC[str]) -> tuple[list[str], list[
         raise DataFileError(f"{path}: not a text CSV file (cannot decode as UTF-8)") from None
     except csv.Error as error:
         raise DataFileError(f"{path}: malformed CSV: {error}") from None
+    except OSError as error:
+        raise DataFileError(f"{path}: cannot read: {error.strerror or error}") from None
     return header, rows
 
 
@@ -132,8 +140,10 @@ def _matrix(path: Path, rows: list[dict[str, str]], columns: SequenceABC[str],
 
 def _check_steps(path: Path, rows: list[dict[str, str]]) -> None:
     steps = _matrix(path, rows, [STEP_COLUMN])[:, 0]
-    if len(steps) > 1 and np.any(np.diff(steps) <= 0):
-        bad = int(np.argmax(np.diff(steps) <= 0)) + 3
+    # Compare neighbours rather than take differences: those overflow for huge step numbers.
+    decreasing = steps[1:] <= steps[:-1]
+    if np.any(decreasing):
+        bad = int(np.argmax(decreasing)) + 3
         raise DataFileError(f"{path}: line {bad}: column 'step' must increase row by row")
 
 
@@ -207,8 +217,11 @@ def write_sequence(path: str | os.PathLike[str], sequence: Sequence,
 def read_sensory_stream(path: str | os.PathLike[str]) -> np.ndarray:
     """Read a sensory stream CSV (``step lhy lhz rhy rhz``), shape (n_steps, 4).
 
-    Empty cells and ``nan`` are kept as NaN: the interaction loop treats them as steps where the
-    hands were not seen (it runs on its own prediction there).
+    A value that is not a finite number — an empty cell, ``nan``, ``inf`` or ``-inf`` — means
+    the hand was not seen at that step and is returned as NaN, as :meth:`MirrorSystem.step
+    <rnnpb.model.MirrorSystem.step>` treats any non-finite value (the network runs on its own
+    prediction there). Finite values outside [0, 1] are kept; the mirror system clips them to
+    the view plane. Text that is not a number is an error.
     """
     path = Path(path)
     _, rows = _read_rows(path, (STEP_COLUMN, *SENSORY_NAMES))
@@ -220,9 +233,7 @@ def read_sensory_stream(path: str | os.PathLike[str]) -> np.ndarray:
             if row[name].strip() == "":
                 row[name] = "nan"
     values = _matrix(path, rows, SENSORY_NAMES, allow_nan=True)
-    if np.any(np.isinf(values)):
-        i, j = np.argwhere(np.isinf(values))[0]
-        raise DataFileError(f"{path}: line {i + 2}, column {SENSORY_NAMES[j]!r}: infinite value")
+    values[~np.isfinite(values)] = np.nan
     return values
 
 

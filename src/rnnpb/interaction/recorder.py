@@ -9,12 +9,15 @@ failed numerically and the last good state was kept) and, when the source knows 
 truth ``truth_pattern``.
 
 Every row is flushed to the operating system when written, so a session interrupted by Ctrl-C
-or a crash keeps every step up to the last one written.
+or a crash keeps every step up to the last one written. A row is complete only with its line
+break: :func:`read_session` ignores a last line that does not end with one (the row being
+written when the process died); anything else malformed is an error naming the file and line.
 """
 
 from __future__ import annotations
 
 import csv
+import io
 import math
 import os
 from pathlib import Path
@@ -87,35 +90,63 @@ class SessionRecorder:
 
 
 def read_session(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
-    """Read a session recording into arrays by column (empty cells → NaN; strings kept)."""
+    """Read a session recording into arrays by column (empty cells → NaN; strings kept).
+
+    A last line without its line break is a row cut short by an interrupted write and is left
+    out; every other row must have one field per column and numbers (or nothing) in the numeric
+    columns, else :class:`DataFileError` names the file, line and column.
+    """
     path = Path(path)
     if not path.exists():
         raise DataFileError(f"{path}: no such file")
+    if path.is_dir():
+        raise DataFileError(f"{path}: is a directory, expected a session recording (.csv)")
     try:
-        with open(path, newline="", encoding="utf-8") as handle:
-            reader = csv.reader(handle)
-            header = next(reader, None)
-            if not header:
-                raise DataFileError(f"{path}: empty file, expected a session recording header")
-            required = [STEP_COLUMN, *SENSORY_NAMES, *MOTOR_NAMES]
-            missing = [c for c in required if c not in header]
-            if missing:
-                raise DataFileError(f"{path}: not a session recording: missing column(s) "
-                                    f"{', '.join(missing)}")
-            rows = [row for row in reader if row]
+        data = path.read_bytes()
+    except OSError as error:
+        raise DataFileError(f"{path}: cannot read: {error.strerror or error}") from None
+    header_end = data.find(b"\n")
+    last_break = data.rfind(b"\n")
+    if header_end != -1 and last_break != len(data) - 1:
+        data = data[:last_break + 1]
+    try:
+        text = data.decode("utf-8-sig")
     except UnicodeDecodeError:
-        raise DataFileError(f"{path}: not a text CSV file") from None
+        raise DataFileError(f"{path}: not a text CSV file (cannot decode as UTF-8)") from None
+    try:
+        reader = csv.reader(io.StringIO(text, newline=""))
+        header = next(reader, None)
+        if not header:
+            raise DataFileError(f"{path}: empty file, expected a session recording header")
+        header = [name.strip() for name in header]
+        required = [STEP_COLUMN, *SENSORY_NAMES, *MOTOR_NAMES]
+        missing = [c for c in required if c not in header]
+        if missing:
+            raise DataFileError(f"{path}: not a session recording: missing column(s) "
+                                f"{', '.join(missing)}")
+        rows, lines = [], []
+        for row in reader:
+            if not row:
+                continue
+            if len(row) != len(header):
+                raise DataFileError(f"{path}: line {reader.line_num}: expected {len(header)} "
+                                    f"fields, found {len(row)}")
+            rows.append(row)
+            lines.append(reader.line_num)
     except csv.Error as error:
         raise DataFileError(f"{path}: malformed CSV: {error}") from None
     out: dict[str, np.ndarray] = {}
     for j, name in enumerate(header):
-        values = [row[j] if j < len(row) else "" for row in rows]
+        values = [row[j] for row in rows]
         if name == "truth_pattern":
             out[name] = np.array(values, dtype=object)
             continue
-        try:
-            out[name] = np.array([float(v) if v != "" else math.nan for v in values])
-        except ValueError:
-            raise DataFileError(f"{path}: column {name!r} holds a value that is not a "
-                                "number") from None
+        column = np.empty(len(values))
+        for i, value in enumerate(values):
+            try:
+                column[i] = float(value) if value.strip() else math.nan
+            except ValueError:
+                raise DataFileError(f"{path}: line {lines[i]}, column {name!r}: {value!r} is "
+                                    "not a number") from None
+        out[name] = column
     return out

@@ -12,7 +12,9 @@ from __future__ import annotations
 import io
 import json
 import os
+import struct
 import zipfile
+import zlib
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -138,8 +140,7 @@ class TrainedModel:
             if arrays[name].shape != shape:
                 raise ModelFileError(f"{path}: array {name!r} has shape {arrays[name].shape}, "
                                      f"expected {shape} for the network config in the file")
-            if not np.all(np.isfinite(arrays[name])):
-                raise ModelFileError(f"{path}: array {name!r} contains NaN or infinite values")
+            check_numeric(path, name, arrays[name])
         if np.any(arrays["upper"] <= arrays["lower"]):
             raise ModelFileError(f"{path}: normalization has upper <= lower")
         params = params_from_numpy({k[len("params/"):]: v for k, v in arrays.items()
@@ -175,15 +176,25 @@ def load_archive(path: str | os.PathLike[str], fmt: str, version: int
     try:
         with open(path, "rb") as handle, np.load(handle, allow_pickle=False) as archive:
             arrays = {name: archive[name] for name in archive.files}
-    except (zipfile.BadZipFile, EOFError, OSError, ValueError) as error:
+    except MemoryError:
+        raise ModelFileError(f"{path}: not a readable rnnpb {fmt} file (an array in it claims "
+                             "more memory than there is)") from None
+    # A damaged zip or .npy header surfaces as any of these, depending on where the damage is
+    # (zlib.error, an encrypted or oddly compressed member, a header numpy cannot parse).
+    except (zipfile.BadZipFile, zipfile.LargeZipFile, zlib.error, EOFError, OSError, ValueError,
+            RuntimeError, NotImplementedError, KeyError, TypeError, OverflowError,
+            struct.error, SyntaxError) as error:
         raise ModelFileError(f"{path}: not a readable rnnpb {fmt} file (truncated or not an "
-                             f".npz archive: {error})") from None
+                             f".npz archive: {_one_line(error)})") from None
     if "meta.json" not in arrays:
         raise ModelFileError(f"{path}: not an rnnpb {fmt} file (no meta.json inside)")
     try:
         meta = json.loads(arrays.pop("meta.json").tobytes().decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise ModelFileError(f"{path}: meta.json is not valid JSON ({error})") from None
+    # ValueError covers bad UTF-8, bad JSON and integers too long to convert; RecursionError
+    # a document nested too deeply.
+    except (ValueError, RecursionError) as error:
+        raise ModelFileError(f"{path}: meta.json is not valid JSON "
+                             f"({_one_line(error)})") from None
     if not isinstance(meta, dict) or meta.get("format") != fmt:
         found = meta.get("format") if isinstance(meta, dict) else None
         raise ModelFileError(f"{path}: not an rnnpb {fmt} file (format is {found!r})")
@@ -191,3 +202,17 @@ def load_archive(path: str | os.PathLike[str], fmt: str, version: int
         raise ModelFileError(f"{path}: {fmt} format version {meta.get('format_version')!r} is "
                              f"not supported by rnnpb {__version__} (expects {version})")
     return meta, arrays
+
+
+def _one_line(error: BaseException) -> str:
+    text = " ".join(str(error).split())
+    return text if len(text) <= 200 else text[:200] + "…"
+
+
+def check_numeric(path: Path, name: str, array: np.ndarray) -> None:
+    """Raise :class:`ModelFileError` unless ``array`` holds finite real numbers."""
+    if array.dtype.kind not in "fiu":
+        raise ModelFileError(f"{path}: array {name!r} has dtype {array.dtype}, expected real "
+                             "numbers")
+    if not np.all(np.isfinite(array)):
+        raise ModelFileError(f"{path}: array {name!r} contains NaN or infinite values")

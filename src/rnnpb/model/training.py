@@ -22,6 +22,7 @@ import time
 from collections.abc import Callable
 from collections.abc import Sequence as SequenceABC
 from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
 from typing import Any, Literal, NamedTuple
 
 import jax
@@ -31,7 +32,7 @@ import optax
 
 from rnnpb import __version__
 from rnnpb.errors import ConfigError, DataFileError, ModelFileError
-from rnnpb.model.io import TrainedModel, load_archive, save_archive
+from rnnpb.model.io import TrainedModel, check_numeric, load_archive, save_archive
 from rnnpb.model.network import NetworkConfig, Params, init_params, open_loop
 from rnnpb.model.parametric_bias import PBUpdateConfig, pb_update
 from rnnpb.sequences import Sequence
@@ -381,7 +382,10 @@ def load_checkpoint(path: str | os.PathLike[str], template: TrainState, data: Tr
         raise ModelFileError(f"{path}: checkpoint was made with other training data")
     if meta.get("network") != asdict(network):
         raise ModelFileError(f"{path}: checkpoint was made with another network config")
-    saved = dict(meta.get("train_config", {}))
+    saved = meta.get("train_config")
+    if not isinstance(saved, dict):
+        raise ModelFileError(f"{path}: checkpoint has no training config")
+    saved = dict(saved)
     current = config.to_dict()
     for key in ("iterations", "chunk_iterations", "checkpoint_every"):
         saved.pop(key, None)
@@ -396,5 +400,6 @@ def load_checkpoint(path: str | os.PathLike[str], template: TrainState, data: Tr
         value = arrays.get(f"state/{i:04d}")
         if value is None or value.shape != np.shape(leaf):
             raise ModelFileError(f"{path}: checkpoint array {i} is missing or has the wrong shape")
+        check_numeric(Path(path), f"state/{i:04d}", value)
         restored.append(jnp.asarray(value, dtype=jnp.asarray(leaf).dtype))
     return jax.tree_util.tree_unflatten(treedef, restored)

@@ -191,8 +191,13 @@ def load_ball_colors(path: str | os.PathLike[str]) -> BallColors:
     if not path.is_file():
         raise ConfigError(f"{path}: no such colour file")
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as error:
+        # utf-8-sig: editors on Windows may start the file with a byte-order mark.
+        data = json.loads(path.read_text(encoding="utf-8-sig"))
+    except OSError as error:
+        raise ConfigError(f"{path}: cannot read: {error.strerror or error}") from None
+    # ValueError covers bad UTF-8, bad JSON and integers too long to convert; RecursionError
+    # a document nested too deeply.
+    except (ValueError, RecursionError) as error:
         raise ConfigError(f"{path}: not valid JSON: {error}") from None
     try:
         return ball_colors_from_json(data, str(path))
