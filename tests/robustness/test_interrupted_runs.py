@@ -1,0 +1,98 @@
+"""Interrupted commands lose nothing: `rnnpb train` resumes from its last checkpoint to the same
+model; `rnnpb interact` stopped by Ctrl-C or killed keeps every flushed step, readable."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from rnnpb.interaction import read_session
+from rnnpb.model import TrainedModel
+
+from .conftest import CHECKPOINT_EVERY, TRAIN_ITERATIONS
+
+
+def _rnnpb(*args):
+    env = {**os.environ, "MUJOCO_GL": "egl", "MPLBACKEND": "Agg"}
+    return subprocess.Popen([sys.executable, "-m", "rnnpb.cli", *map(str, args)], env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def _wait_for(condition, process, timeout=120.0):
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if condition():
+            return True
+        if process.poll() is not None:
+            return condition()
+        time.sleep(0.01)
+    return False
+
+
+def _session_rows(path):
+    try:
+        return max(path.read_bytes().count(b"\n") - 1, 0)
+    except FileNotFoundError:
+        return 0
+
+
+@pytest.mark.slow
+def test_train_interrupted_then_resumed_matches_uninterrupted(data_dir, model, tmp_path):
+    out = tmp_path / "model.npz"
+    checkpoint = tmp_path / "model.checkpoint.npz"
+    command = ["train", "--data", data_dir, "--out", out, "--preset", "fast", "--iterations",
+               TRAIN_ITERATIONS, "--checkpoint-every", CHECKPOINT_EVERY, "--seed", 0,
+               "--no-progress"]
+    first = _rnnpb(*command)
+    assert _wait_for(checkpoint.exists, first), first.communicate()
+    first.send_signal(signal.SIGINT)
+    stdout, stderr = first.communicate(timeout=120)
+    assert first.returncode == 130, stderr
+    assert stderr.strip().splitlines()[-1] == "rnnpb: interrupted"
+    assert "Traceback" not in stderr
+    assert not out.exists()  # no half-finished model
+    # The checkpoint is a complete archive, not a half-written one.
+    assert not list(tmp_path.glob(".*.tmp"))
+
+    second = _rnnpb(*command, "--resume")
+    stdout, stderr = second.communicate(timeout=300)
+    assert second.returncode == 0, stderr
+    resumed = TrainedModel.load(out)
+    assert resumed.meta["training"]["iterations"] == TRAIN_ITERATIONS
+    # Resuming continues the same computation: the result is the uninterrupted run's.
+    for name, value in resumed.params._asdict().items():
+        np.testing.assert_allclose(value, getattr(model.params, name), rtol=1e-5, atol=1e-6,
+                                   err_msg=name)
+    np.testing.assert_allclose(resumed.sequence_pb, model.sequence_pb, atol=1e-5)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("how", ["SIGINT", "SIGKILL"])
+def test_interact_interrupted_keeps_every_flushed_step(model_file, tmp_path, how):
+    out = tmp_path / "run"
+    session = out / "session.csv"
+    process = _rnnpb("interact", "--model", model_file, "--source", "scenario:held:1",
+                     "--out", out, "--paced", "--dt", "0.02")
+    assert _wait_for(lambda: _session_rows(session) >= 15, process), process.communicate()
+    before = _session_rows(session)
+    process.send_signal(getattr(signal, how))
+    stdout, stderr = process.communicate(timeout=120)
+    recorded = read_session(session)
+    steps = recorded["step"].tolist()
+    assert steps == list(range(len(steps))) and len(steps) >= before
+    assert np.all(np.isfinite(recorded["lshp"]))
+    if how == "SIGINT":
+        assert process.returncode == 0, stderr
+        assert "interrupted: the recording keeps every step so far" in stdout
+        assert (out / "summary.json").exists() and (out / "session.png").exists()
+        import json
+
+        summary = json.loads((out / "summary.json").read_text())
+        assert summary["loop"]["steps"] == len(steps)
+    else:
+        assert process.returncode == -signal.SIGKILL
+        assert len(steps) < 150  # it really was stopped part-way
