@@ -52,6 +52,23 @@ def test_truncated_model(tmp_path, model_bytes, fraction):
 
 
 @FUZZ
+@given(fraction=st.floats(min_value=0, max_value=1, exclude_max=True))
+def test_damaged_compressed_model(tmp_path, model_file, fraction):
+    # Users may re-save a model with np.savez_compressed; damage then also hits zlib.
+    with np.load(model_file) as archive:
+        arrays = {name: archive[name] for name in archive.files}
+    buffer = io.BytesIO()
+    np.savez_compressed(buffer, **arrays)
+    data = bytearray(buffer.getvalue())
+    data[int(fraction * len(data))] ^= 0x5A
+    path = tmp_path / "model.npz"
+    path.write_bytes(bytes(data))
+    model = _load_or_clear_error(path)
+    if model is not None:
+        assert np.all(model.upper > model.lower)
+
+
+@FUZZ
 @given(flips=st.lists(st.tuples(st.floats(0, 1, exclude_max=True), st.integers(1, 255)),
                       min_size=1, max_size=8))
 def test_corrupted_bytes(tmp_path, model_bytes, flips):
