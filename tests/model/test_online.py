@@ -80,17 +80,20 @@ def test_numerical_failure_holds_the_last_good_state(trained):
         assert np.all(np.isfinite(result.motor)) and np.all(np.isfinite(result.pb))
 
 
-@pytest.mark.parametrize("motor_input", ["closed_loop", "recorded"])
-@pytest.mark.parametrize("optimize_onset", [True, False])
-def test_compiled_step_matches_numpy_reference(trained, motor_input, optimize_onset):
+@pytest.mark.parametrize("motor_input, optimize_onset, restart_span", [
+    ("closed_loop", True, 6), ("closed_loop", False, 0), ("recorded", True, 3),
+    ("recorded", False, 6)])
+def test_compiled_step_matches_numpy_reference(trained, motor_input, optimize_onset,
+                                               restart_span):
     config = OnlineConfig(window=8, iterations=5, motor_input=motor_input,
-                          optimize_onset=optimize_onset)
+                          optimize_onset=optimize_onset, restart_span=restart_span)
     demo = make_sequences(n_samples=1, n_steps=14, seed=3, kinds=(2,))[0]
     mirror = MirrorSystem(trained, config)
     net = trained.network
     pb0 = np.mean(list(trained.pattern_pb.values()), axis=0)
     ref = ReferenceMirrorSystem(trained.params, trained.mean_initial_context, pb0,
-                                net.sensory_size, net.motor_size, config)
+                                net.sensory_size, net.motor_size, config,
+                                np.array(list(trained.pattern_pb.values())))
     sensory = demo.sensory.copy()
     sensory[5, :2] = np.nan  # a lost hand inside the window
     for t in range(14):  # fills the window, then shifts it

@@ -109,7 +109,8 @@ def run(args: argparse.Namespace) -> int:
 
     reference = ReferenceMirrorSystem(params, model.mean_initial_context,
                                       np.mean(model.sequence_pb, axis=0), network.sensory_size,
-                                      network.motor_size, online)
+                                      network.motor_size, online,
+                                      np.array(list(model.pattern_pb.values())))
     for t in range(online.window):
         if t == online.window - 1:
             break

@@ -49,15 +49,19 @@ class OnlineConfig:
     """How the PB is regressed on-line.
 
     ``OnlineConfig.paper()``: L = 30, 100 iterations, l = 20, the onset state carried over and
-    not optimised. ``OnlineConfig()`` (the default) is the best measured (docs/model.md).
+    not optimised. ``OnlineConfig()`` (the default) is the best measured (docs/model.md):
+    the onset state optimised with the PB, l = 4 without the low-pass term, and restarts —
+    before each regression, the last ``restart_span`` steps of the PB profile are also tried
+    at each learned pattern's PB, and the regression starts from the profile that fits best.
     """
 
     window: int = 30  # L
     iterations: int = 100
     pb: PBUpdateConfig = field(default_factory=lambda: PBUpdateConfig(
-        learning_rate=0.5, momentum=0.9, k_bp=1.0, k_nb=0.2, integration_length=10))
+        learning_rate=1.0, momentum=0.9, k_bp=1.0, k_nb=0.0, integration_length=4))
     optimize_onset: bool = True
     onset_learning_rate: float = 0.5
+    restart_span: int = 6
     motor_input: Literal["closed_loop", "recorded"] = "closed_loop"
 
     def __post_init__(self) -> None:
@@ -67,6 +71,8 @@ class OnlineConfig:
             raise ConfigError(f"iterations must be >= 0, got {self.iterations}")
         if self.onset_learning_rate < 0:
             raise ConfigError("onset_learning_rate must be >= 0")
+        if not 0 <= self.restart_span <= self.window:
+            raise ConfigError(f"restart_span must be in [0, window], got {self.restart_span}")
         if self.motor_input not in ("closed_loop", "recorded"):
             raise ConfigError(f"motor_input must be 'closed_loop' or 'recorded', got "
                               f"{self.motor_input!r}")
@@ -76,7 +82,7 @@ class OnlineConfig:
         """The paper's regression: L = 30, 100 iterations, l = 20, no onset optimisation."""
         base = cls(pb=PBUpdateConfig(learning_rate=0.5, momentum=0.9, k_bp=1.0, k_nb=0.2,
                                      integration_length=20),
-                   optimize_onset=False)
+                   optimize_onset=False, restart_span=0)
         return replace(base, **changes)
 
     def to_dict(self) -> dict[str, Any]:
@@ -114,6 +120,7 @@ class StepOutputs(NamedTuple):
     pb: jax.Array  # (P,) current PB
     window_error: jax.Array  # () mean squared sensory error over the window after regression
     held: jax.Array  # () bool: the regression failed numerically, the last state was kept
+    context: jax.Array  # (C,) the context after the current step (for phase-space plots)
 
 
 # Unrolling the window's time loop by 5 runs as fast as unrolling it fully (measured) and
@@ -226,7 +233,8 @@ def _window_error(params: Params, state: OnlineState, rho: jax.Array, onset_cont
 
 @partial(jax.jit, static_argnames=("config",))
 def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Array,
-                config: OnlineConfig) -> tuple[OnlineState, StepOutputs]:
+                config: OnlineConfig, candidates: jax.Array | None = None
+                ) -> tuple[OnlineState, StepOutputs]:
     """One step of the mirror system, compiled as one call.
 
     Parameters
@@ -234,6 +242,10 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
     u : array, shape (S,)
         The observed hands, normalized (entries where ``seen`` is False are ignored).
     seen : array of bool, shape (S,)
+    candidates : array, shape (K, P), optional
+        PB values (logits) to try as restarts for the recent end of the window
+        (``config.restart_span`` steps) before the regression: the regression starts from
+        whichever profile — the current one or a restart — fits the window best.
 
     Returns
     -------
@@ -245,6 +257,15 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
     length = state.sensory.shape[0]
     valid = jnp.arange(length) < state.n
     grad_fn = jax.grad(_window_error, argnums=(2, 3, 4))
+    if candidates is not None and config.restart_span > 0:
+        recent = (jnp.arange(length) >= state.n - config.restart_span) & valid
+        profiles = jnp.concatenate([state.rho[None], jnp.where(
+            recent[None, :, None], candidates[:, None, :], state.rho[None])])
+        errors = jax.vmap(lambda r: _window_error(params, state, r, state.onset_context,
+                                                  state.onset_motor, config))(profiles)
+        best = jnp.argmin(errors)
+        state = state._replace(rho=profiles[best], rho_velocity=jnp.where(
+            best > 0, jnp.zeros_like(state.rho_velocity), state.rho_velocity))
 
     def iteration(_, carry):
         rho, velocity, context, motor = carry
@@ -274,7 +295,7 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
         predicted_sensory=predicted_next)
     outputs = StepOutputs(motor=motor_now, predicted_sensory=predicted_next,
                           pb=jax.nn.sigmoid(rho[n - 1]), window_error=window_error,
-                          held=jnp.asarray(False))
+                          held=jnp.asarray(False), context=contexts[n - 1])
     # Numerical safety: never hand out NaN. Keep the last good state and repeat its command.
     finite = (jnp.all(jnp.isfinite(rho)) & jnp.all(jnp.isfinite(motor_now))
               & jnp.all(jnp.isfinite(context)) & jnp.all(jnp.isfinite(predicted_next)))
@@ -284,7 +305,8 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
         motor=previous.motor_sent[jnp.maximum(jnp.minimum(previous.n, length) - 1, 0)],
         predicted_sensory=previous.predicted_sensory,
         pb=jax.nn.sigmoid(previous.rho[jnp.maximum(previous.n - 1, 0)]),
-        window_error=jnp.asarray(jnp.nan, jnp.float32), held=jnp.asarray(True))
+        window_error=jnp.asarray(jnp.nan, jnp.float32), held=jnp.asarray(True),
+        context=jax.nn.sigmoid(previous.next_onset_context))
     pick = partial(jax.tree_util.tree_map, lambda a, b: jnp.where(finite, a, b))
     return pick(new_state, held_state), pick(outputs, held_outputs)
 
@@ -310,6 +332,8 @@ class StepResult:
         Which sensory values were observed (False where the input was NaN).
     held : bool
         The regression failed numerically this step and the last good state was kept.
+    context : array, shape (C,)
+        The context units after the current step (for phase-space analysis).
     """
 
     motor: np.ndarray
@@ -319,6 +343,7 @@ class StepResult:
     window_error: float
     seen: np.ndarray
     held: bool = False
+    context: np.ndarray | None = None
 
 
 class MirrorSystem:
@@ -339,6 +364,10 @@ class MirrorSystem:
         self._params = jax.tree_util.tree_map(lambda a: jnp.asarray(a, jnp.float32),
                                               model.params)
         self._state = initial_state(model, self.config)
+        self._candidates = None
+        if self.config.restart_span > 0:
+            learned = np.clip(np.array(list(model.pattern_pb.values())), 1e-4, 1 - 1e-4)
+            self._candidates = jnp.asarray(np.log(learned) - np.log1p(-learned), jnp.float32)
         self.steps = 0
 
     def reset(self, initial_pb: np.ndarray | None = None) -> None:
@@ -378,7 +407,7 @@ class MirrorSystem:
         first = int(self._state.n) == 0
         self._state, out = online_step(self._params, self._state,
                                        jnp.asarray(u_norm, jnp.float32), jnp.asarray(seen),
-                                       self.config)
+                                       self.config, self._candidates)
         self.steps += 1
         if first or not seen.any():
             prediction_error = math.nan
@@ -395,4 +424,5 @@ class MirrorSystem:
             window_error=float(out.window_error),
             seen=seen,
             held=bool(out.held),
+            context=np.asarray(out.context, dtype=np.float64),
         )

@@ -199,9 +199,12 @@ class ReferenceMirrorSystem:
     """
 
     def __init__(self, params: Params, initial_context: np.ndarray, initial_pb: np.ndarray,
-                 sensory_size: int, motor_size: int, config: OnlineConfig) -> None:
+                 sensory_size: int, motor_size: int, config: OnlineConfig,
+                 learned_pbs: np.ndarray | None = None) -> None:
         self.params = params
         self.config = config
+        self.candidates = (None if learned_pbs is None or config.restart_span == 0
+                           else logit(np.asarray(learned_pbs, dtype=np.float64)))
         length = config.window
         self.sensory = np.zeros((length, sensory_size))
         self.seen = np.zeros((length, sensory_size), bool)
@@ -239,6 +242,23 @@ class ReferenceMirrorSystem:
             self.velocity[i] = 0.0
         self.n = min(self.n + 1, length)
         motor_inputs = self.motor_sent if cfg.motor_input == "recorded" else None
+        if self.candidates is not None:
+            # Restarts: the recent end of the profile at each learned PB; keep the best fit.
+            recent = np.arange(length) >= self.n - cfg.restart_span
+            recent &= np.arange(length) < self.n
+            best_error, best = None, None
+            for k, candidate in enumerate([None, *self.candidates]):
+                profile = self.rho.copy()
+                if candidate is not None:
+                    profile[recent] = candidate
+                error = window_error_and_gradients(
+                    self.params, self.sensory, self.seen, self.n, profile, self.onset_context,
+                    self.onset_motor, motor_inputs)[0]
+                if best_error is None or error < best_error:
+                    best_error, best = error, (k, profile)
+            if best[0] > 0:
+                self.rho = best[1]
+                self.velocity = np.zeros_like(self.velocity)
         for _ in range(cfg.iterations):
             _, g_rho, g_c, g_m, _, _ = window_error_and_gradients(
                 self.params, self.sensory, self.seen, self.n, self.rho, self.onset_context,
