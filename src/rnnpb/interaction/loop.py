@@ -68,6 +68,7 @@ class StepRecord:
     truth: dict[str, Any] = field(default_factory=dict)
     timings: dict[str, float] = field(default_factory=dict)
     frame: np.ndarray | None = None
+    context: np.ndarray | None = None
 
 
 @dataclass
@@ -145,15 +146,17 @@ class InteractionLoop:
             predicted=self._predicted.copy(), predicted_next=result.predicted_hands,
             motor=result.motor, pb=result.pb, prediction_error=result.prediction_error,
             window_error=result.window_error, held=result.held, truth=observation.truth,
-            frame=observation.frame)
+            frame=observation.frame, context=result.context)
         self._predicted = result.predicted_hands.copy()
+        # Subscribers see this step's timings so far; "record" is filled in after them.
+        record.timings = {"perceive": t1 - t0, "mirror": t2 - t1, "act": t3 - t2,
+                          "record": 0.0}
         if self.recorder is not None:
             self.recorder.write(record)
         for callback in list(self._subscribers):
             callback(record)
         t4 = time.perf_counter()
-        record.timings = {"perceive": t1 - t0, "mirror": t2 - t1, "act": t3 - t2,
-                          "record": t4 - t3}
+        record.timings["record"] = t4 - t3
         for name, value in record.timings.items():
             self._timings[name].append(value)
         self.steps += 1
