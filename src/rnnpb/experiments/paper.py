@@ -1,0 +1,313 @@
+"""The experiments of Ito & Tani (2004), section 3, as functions over the library.
+
+Each experiment takes a trained model and returns plain results (numbers and the arrays its
+figure needs); :mod:`rnnpb.experiments.report` draws the figures and writes the report.
+The measures and their definitions are in :mod:`rnnpb.analysis.metrics`.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field, replace
+from itertools import permutations
+from typing import Any
+
+import numpy as np
+
+from rnnpb.analysis import metrics
+from rnnpb.model import MirrorSystem, OnlineConfig, TrainConfig, TrainedModel, generate, train
+
+SWITCH_LIMIT = 15  # steps: "follows the new pattern" within this many steps of a switch
+LOCK_LIMIT = 10
+RELOCK_LIMIT = 5
+SETTLE_LIMIT = 20
+
+
+@dataclass(frozen=True)
+class ExperimentConfig:
+    """What ``rnnpb demo`` runs. ``quick`` keeps the lock-on and switching experiments whole
+    and shortens the rest (fewer seeds for the larger set, shorter attractor runs, no paper
+    comparison)."""
+
+    quick: bool = False
+    train: TrainConfig = field(default_factory=lambda: TrainConfig.fast(iterations=4000))
+    online: OnlineConfig = field(default_factory=OnlineConfig)
+    paper_train: TrainConfig = field(default_factory=TrainConfig.paper)
+    paper_online: OnlineConfig = field(default_factory=OnlineConfig.paper)
+    data_seed: int = 0
+    scenario_seed: int = 100
+    larger_set_seeds: int = 10
+    attractor_steps: int = 1000
+    attractor_transient: int = 300
+    novel_amplitudes: tuple[float, ...] = (1.0, 0.7, 1.3)
+    compare_paper: bool = True
+    workers: int = 2
+
+    @classmethod
+    def quick_run(cls) -> ExperimentConfig:
+        return cls(quick=True, larger_set_seeds=3, attractor_steps=400, attractor_transient=150,
+                   novel_amplitudes=(1.0,), compare_paper=False)
+
+
+# --- running a scenario ------------------------------------------------------------------
+
+@dataclass
+class Run:
+    """One interaction with a scenario: what the robot saw, predicted and did."""
+
+    name: str
+    labels: list[str]
+    switch_steps: list[int]
+    observed: np.ndarray  # (T, 4)
+    predicted: np.ndarray  # (T, 4) prediction of this step made one step before
+    motor: np.ndarray  # (T, 8) rad
+    truth_motor: np.ndarray  # (T, 8) rad: the joints that imitate the user
+    pb: np.ndarray  # (T, P)
+    context: np.ndarray  # (T, C)
+    motor_error: np.ndarray  # (T,)
+    sensory_error: np.ndarray  # (T,)
+
+    def session(self) -> dict[str, np.ndarray]:
+        """The run as the columns of a session recording (for the plots)."""
+        from rnnpb.vectors import MOTOR_NAMES, SENSORY_NAMES
+
+        out: dict[str, Any] = {"step": np.arange(len(self.labels)),
+                               "truth_pattern": np.array(self.labels, dtype=object)}
+        for j, name in enumerate(SENSORY_NAMES):
+            out[name] = self.observed[:, j]
+            out["pred_" + name] = self.predicted[:, j]
+        for j, name in enumerate(MOTOR_NAMES):
+            out[name] = self.motor[:, j]
+        for j in range(self.pb.shape[1]):
+            out[f"pb{j}"] = self.pb[:, j]
+        return out
+
+
+def run_scenario(model: TrainedModel, scenario, online: OnlineConfig,
+                 joint_limits: np.ndarray) -> Run:
+    """Drive the mirror system with a demonstrator scenario through the interaction loop."""
+    from rnnpb.demonstrator import ScenarioSource
+    from rnnpb.interaction import InteractionLoop, LoopConfig
+
+    records = []
+    mirror = MirrorSystem(model, online)
+    with ScenarioSource(scenario) as source:
+        InteractionLoop(mirror, source, config=LoopConfig(dt=scenario.dt)).run(
+            on_step=records.append)
+    observed = np.array([r.observed for r in records])
+    predicted = np.array([r.predicted for r in records])
+    motor = np.array([r.motor for r in records])
+    return Run(
+        name=scenario.name, labels=list(scenario.labels),
+        switch_steps=list(scenario.switch_steps), observed=observed, predicted=predicted,
+        motor=motor, truth_motor=scenario.motor, pb=np.array([r.pb for r in records]),
+        context=np.array([r.context for r in records]),
+        motor_error=metrics.motor_error(motor, scenario.motor, joint_limits),
+        sensory_error=metrics.sensory_error(predicted, observed))
+
+
+def _normalized_motor(model: TrainedModel, motor: np.ndarray) -> np.ndarray:
+    s = model.network.sensory_size
+    return (motor - model.lower[s:]) / (model.upper[s:] - model.lower[s:])
+
+
+# --- 3.1 synchronization and pause ---------------------------------------------------------
+
+def synchronization(model: TrainedModel, pattern: str, online: OnlineConfig,
+                    joint_limits: np.ndarray, seed: int = 0, before: int = 75,
+                    pause: int = 5, after: int = 45) -> dict[str, Any]:
+    """The user performs ``pattern``, pauses, and goes on (paper Figure 5)."""
+    from rnnpb.demonstrator import pause_scenario
+
+    scenario = pause_scenario(pattern, before=before, pause=pause, after=after, seed=seed)
+    run = run_scenario(model, scenario, online, joint_limits)
+    lock = metrics.steps_to_lock(run.motor_error, run.sensory_error, 0, before)
+    settle = metrics.pb_settle_step(run.pb[:before])
+    lag = math.nan
+    if lock is not None and before - lock >= 18:
+        segment = slice(lock, before)
+        lag = metrics.phase_lag(_normalized_motor(model, run.motor[segment]),
+                                _normalized_motor(model, run.truth_motor[segment]), max_lag=5)
+    pause_end = before + pause
+    window = slice(before, pause_end)
+    preceding = slice(before - pause, before)
+    moving = np.ptp(run.motor[preceding], axis=0)
+    during = np.ptp(run.motor[window], axis=0)
+    relative_motion = float(np.sum(during) / max(np.sum(moving), 1e-9))
+    relock = metrics.steps_to_lock(run.motor_error, run.sensory_error, pause_end)
+    recognized, distance = model.nearest_pattern(run.pb[before - 1])
+    return {
+        "pattern": pattern,
+        "steps_to_lock": lock,
+        "pb_settle_steps": settle,
+        "phase_lag_steps": lag,
+        "recognized_pattern": recognized,
+        "pb_distance_to_learned": distance,
+        "pause_relative_motion": relative_motion,
+        "pause_steps_to_relock": relock,
+        "run": run,
+        "pause_start": before,
+        "pause_end": pause_end,
+    }
+
+
+# --- 3.2 switching ---------------------------------------------------------------------------
+
+def switching(model: TrainedModel, online: OnlineConfig, joint_limits: np.ndarray,
+              seed: int = 0, steps_each: int = 50) -> dict[str, Any]:
+    """Every ordered pair of learned patterns: steps from the switch until the robot follows
+    the new pattern (locked on it)."""
+    from rnnpb.demonstrator import switch_scenario
+
+    pairs = {}
+    for a, b in permutations(model.patterns, 2):
+        run = run_scenario(model, switch_scenario((a, b), steps_each=steps_each, seed=seed),
+                           online, joint_limits)
+        pairs[f"{a}->{b}"] = metrics.steps_to_lock(run.motor_error, run.sensory_error,
+                                                   steps_each)
+    return {"pairs": pairs}
+
+
+def switching_sequence(model: TrainedModel, online: OnlineConfig, joint_limits: np.ndarray,
+                       seed: int = 0, steps_each: int = 55) -> dict[str, Any]:
+    """The paper's Figure 6: the user performs the learned patterns one after another."""
+    from rnnpb.demonstrator import switch_scenario
+
+    run = run_scenario(model, switch_scenario(tuple(model.patterns), steps_each=steps_each,
+                                              seed=seed), online, joint_limits)
+    follow = [metrics.steps_to_lock(run.motor_error, run.sensory_error, s, s + steps_each)
+              for s in run.switch_steps]
+    return {"run": run, "steps_to_follow": follow}
+
+
+# --- 3.3 novel patterns and attractors -----------------------------------------------------
+
+def learned_attractors(model: TrainedModel, n_steps: int, transient: int
+                       ) -> dict[str, dict[str, np.ndarray]]:
+    """Closed-loop run (no input) from each learned pattern's PB: motor and context after
+    the transient, and one cycle of the motor trajectory."""
+    out = {}
+    for name, pb in model.pattern_pb.items():
+        generated = generate(model, pb, n_steps,
+                             initial_context=model.pattern_initial_context(name))
+        motor = _normalized_motor(model, generated.motor[transient:])
+        found = metrics.periodicity(motor)
+        period = found.period or found.best_period
+        out[name] = {"motor": motor, "context": generated.context[transient:],
+                     "cycle": motor[-period:], "period": found.period,
+                     "return_error": found.return_error}
+    return out
+
+
+def novel_response(model: TrainedModel, learning_set: str, online: OnlineConfig,
+                   joint_limits: np.ndarray, attractors: dict[str, dict[str, np.ndarray]],
+                   n_steps: int, transient: int, amplitude: float = 1.0) -> dict[str, Any]:
+    """One cycle of the novel pattern, repeated for ``n_steps`` with on-line PB regression
+    (the paper's open-loop attractor analysis); the response is classified."""
+    from rnnpb.demonstrator import Imperfection, PatternConfig, make_scenario, novel_pattern
+
+    pattern = novel_pattern(learning_set)
+    base = PatternConfig(imperfection=Imperfection.none())
+    config = replace(base, horizontal_amplitude=base.horizontal_amplitude * amplitude,
+                     vertical_amplitude=base.vertical_amplitude * amplitude,
+                     rotation_radius=base.rotation_radius * amplitude)
+    period = int(round(config.period_steps))
+    cycle = make_scenario([(pattern, period)], seed=0, config=config, novel=(pattern,))
+    repeats = int(math.ceil(n_steps / period))
+    sensory = np.tile(cycle.sensory, (repeats, 1))[:n_steps]
+    mirror = MirrorSystem(model, online)
+    motor, pbs, contexts = [], [], []
+    for u in sensory:
+        result = mirror.step(u)
+        motor.append(result.motor)
+        pbs.append(result.pb)
+        contexts.append(result.context)
+    motor = np.array(motor)
+    normalized = _normalized_motor(model, motor)
+    learned_cycles = {name: a["cycle"] for name, a in attractors.items()}
+    case = metrics.classify_response(normalized[transient:], learned_cycles)
+    return {"learning_set": learning_set, "novel_pattern": pattern, "amplitude": amplitude,
+            "case": case.case, "description": case.describe(), "period": case.period,
+            "nearest_pattern": case.nearest_pattern, "distance": case.distance,
+            "return_error": case.return_error,
+            "motor": motor, "pb": np.array(pbs), "context": np.array(contexts)}
+
+
+# --- 3.4 the larger set ----------------------------------------------------------------------
+
+def follows_every_pattern(model: TrainedModel, online: OnlineConfig, joint_limits: np.ndarray,
+                          seed: int = 0, steps_each: int = 50) -> dict[str, Any]:
+    """The user switches through all learned patterns; does the robot follow each within
+    ``SWITCH_LIMIT`` steps? Also: does closed-loop generation from each PB cycle?"""
+    from rnnpb.demonstrator import switch_scenario
+
+    order = list(model.patterns)
+    run = run_scenario(model, switch_scenario(tuple(order), steps_each=steps_each, seed=seed),
+                       online, joint_limits)
+    starts = [0, *run.switch_steps]
+    follow = {p: metrics.steps_to_lock(run.motor_error, run.sensory_error, s, s + steps_each)
+              for p, s in zip(order, starts, strict=True)}
+    ok = all(v is not None and v <= SWITCH_LIMIT for v in follow.values())
+    return {"steps_to_follow": follow, "follows_all": ok}
+
+
+# --- one job per model (run in worker processes) -------------------------------------------
+
+def _limits() -> np.ndarray:
+    from rnnpb.robot import JOINT_LIMITS
+
+    return JOINT_LIMITS
+
+
+def learning_set_job(set_name: str, train_config: TrainConfig, online: OnlineConfig,
+                     config: ExperimentConfig, model_path: str, data_dir: str | None,
+                     label: str, full: bool = True) -> dict[str, Any]:
+    """Train on one learning set and run experiments 3.1–3.3 on it."""
+    from rnnpb.demonstrator import learning_set
+    from rnnpb.sequences import write_sequence
+
+    limits = _limits()
+    sequences = learning_set(set_name, seed=config.data_seed)
+    if data_dir is not None:
+        for i, seq in enumerate(sequences):
+            write_sequence(os.path.join(data_dir, f"{seq.pattern}_{i % 2 + 1}.csv"), seq)
+    model = train(sequences, limits, config=train_config)
+    model.save(model_path)
+    info = model.meta["training"]
+    result: dict[str, Any] = {
+        "label": label, "learning_set": set_name, "model": model_path,
+        "patterns": list(model.patterns), "pattern_pb": {k: v.tolist() for k, v in
+                                                         model.pattern_pb.items()},
+        "train_mse_per_output": info["mse_per_output"], "train_mse_max": info["mse_max"],
+        "train_rms_max": math.sqrt(info["mse_max"]), "train_seconds": info["seconds"],
+        "train_history": info["history"],
+    }
+    result["synchronization"] = [synchronization(model, p, online, limits,
+                                                 seed=config.scenario_seed)
+                                 for p in model.patterns]
+    result["switching"] = switching(model, online, limits, seed=config.scenario_seed)
+    if full:
+        result["sequence"] = switching_sequence(model, online, limits, seed=config.scenario_seed)
+        attractors = learned_attractors(model, config.attractor_steps,
+                                        config.attractor_transient)
+        result["attractors"] = attractors
+        result["novel"] = [novel_response(model, set_name, online, limits, attractors,
+                                          config.attractor_steps, config.attractor_transient,
+                                          amplitude)
+                           for amplitude in config.novel_amplitudes]
+    return result
+
+
+def larger_set_job(seed: int, train_config: TrainConfig, online: OnlineConfig,
+                   config: ExperimentConfig, model_path: str) -> dict[str, Any]:
+    """Train the 4-pattern set with one seed; does the robot follow every pattern?"""
+    from rnnpb.demonstrator import learning_set
+
+    limits = _limits()
+    model = train(learning_set("full", seed=config.data_seed), limits,
+                  config=replace(train_config, seed=seed))
+    model.save(model_path)
+    follow = follows_every_pattern(model, online, limits, seed=config.scenario_seed + seed)
+    return {"seed": seed, "model": model_path, "train_mse_max": model.meta["training"]["mse_max"],
+            **follow}

@@ -1,0 +1,440 @@
+"""Run every experiment of the paper's section 3 and write ``report.md`` and ``results.json``.
+
+The jobs (one per trained model) run in ``workers`` processes; every job is seeded, so a run
+repeats. Outputs under the chosen directory::
+
+    data/            the learning sets as sequence CSVs (set1/ … set4/, full/)
+    models/          every trained model (setK.npz, full_seedN.npz, paper_setK.npz)
+    figures/         the figures the report embeds
+    report.md        measure | paper | ours, with the figures
+    results.json     every measure, the config, versions and which file is which
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import multiprocessing
+import os
+import platform
+import time
+from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rnnpb import __version__
+from rnnpb._atomic import atomic_write
+from rnnpb.experiments.paper import (
+    LOCK_LIMIT,
+    RELOCK_LIMIT,
+    SETTLE_LIMIT,
+    SWITCH_LIMIT,
+    ExperimentConfig,
+    larger_set_job,
+    learning_set_job,
+)
+
+LEARNING_SETS = ("1", "2", "3", "4")
+
+
+def _worker_init() -> None:
+    # Each worker keeps to one core; the pool provides the parallelism.
+    flags = os.environ.get("XLA_FLAGS", "")
+    if "intra_op_parallelism_threads" not in flags:
+        os.environ["XLA_FLAGS"] = (flags + " --xla_cpu_multi_thread_eigen=false "
+                                   "intra_op_parallelism_threads=1").strip()
+
+
+def run_jobs(out: Path, config: ExperimentConfig,
+             log: Callable[[str], None]) -> tuple[dict, list, dict]:
+    models, data = out / "models", out / "data"
+    models.mkdir(parents=True, exist_ok=True)
+    jobs: dict[Any, tuple[str, Any]] = {}
+    default: dict[str, dict] = {}
+    paper: dict[str, dict] = {}
+    larger: list[dict] = []
+    _worker_init()
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=config.workers, mp_context=context,
+                             initializer=_worker_init) as pool:
+        if config.compare_paper:  # the longest jobs first
+            for name in LEARNING_SETS:
+                future = pool.submit(learning_set_job, name, config.paper_train,
+                                     config.paper_online, config,
+                                     str(models / f"paper_set{name}.npz"), None, "paper", False)
+                jobs[future] = ("paper", name)
+        for name in LEARNING_SETS:
+            data_dir = data / f"set{name}"
+            data_dir.mkdir(parents=True, exist_ok=True)
+            future = pool.submit(learning_set_job, name, config.train, config.online, config,
+                                 str(models / f"set{name}.npz"), str(data_dir), "default", True)
+            jobs[future] = ("default", name)
+        for seed in range(config.larger_set_seeds):
+            future = pool.submit(larger_set_job, seed, config.train, config.online, config,
+                                 str(models / f"full_seed{seed}.npz"))
+            jobs[future] = ("larger", seed)
+        for done, future in enumerate(as_completed(jobs), start=1):
+            kind, key = jobs[future]
+            result = future.result()
+            if kind == "default":
+                default[key] = result
+            elif kind == "paper":
+                paper[key] = result
+            else:
+                larger.append(result)
+            log(f"  [{done}/{len(jobs)}] {kind} {'seed ' if kind == 'larger' else 'set '}"
+                f"{key} done")
+    larger.sort(key=lambda r: r["seed"])
+    return default, larger, paper
+
+
+def _values(results: dict[str, dict], key: str) -> dict[str, dict[str, Any]]:
+    return {name: {s["pattern"]: s[key] for s in r["synchronization"]}
+            for name, r in results.items()}
+
+
+def _flat(nested: dict[str, dict[str, Any]]) -> list[Any]:
+    return [v for inner in nested.values() for v in inner.values()]
+
+
+def _max_or_none(values: list[Any]) -> Any:
+    """The largest value; None (never) counts as the worst."""
+    if any(v is None for v in values):
+        return None
+    return max(values) if values else None
+
+
+def summarize(results: dict[str, dict]) -> dict[str, Any]:
+    """The measures of one configuration (default or paper) as JSON-ready values."""
+    ordered = {k: results[k] for k in sorted(results)}
+    summary = {
+        "train_mse": {k: r["train_mse_max"] for k, r in ordered.items()},
+        "train_rms": {k: r["train_rms_max"] for k, r in ordered.items()},
+        "train_mse_per_output": {k: r["train_mse_per_output"] for k, r in ordered.items()},
+        "train_seconds": {k: r["train_seconds"] for k, r in ordered.items()},
+        "sync_steps_to_lock": _values(ordered, "steps_to_lock"),
+        "pb_settle_steps": _values(ordered, "pb_settle_steps"),
+        "phase_lag_steps": _values(ordered, "phase_lag_steps"),
+        "recognized_pattern": _values(ordered, "recognized_pattern"),
+        "pause_relative_motion": _values(ordered, "pause_relative_motion"),
+        "pause_steps_to_relock": _values(ordered, "pause_steps_to_relock"),
+        "switch_steps": {k: r["switching"]["pairs"] for k, r in ordered.items()},
+    }
+    recognized = _flat(_values(ordered, "recognized_pattern"))
+    patterns = [p for r in ordered.values() for p in r["patterns"]]
+    summary["recognized_correctly"] = int(sum(a == b for a, b in zip(recognized, patterns,
+                                                                     strict=True)))
+    summary["recognition_runs"] = len(patterns)
+    return summary
+
+
+def _fmt(value: Any, digits: int = 1) -> str:
+    if value is None:
+        return "never"
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "–"
+        return f"{value:.{digits}f}"
+    return str(value)
+
+
+def _range(values: list[Any]) -> str:
+    if not values:
+        return "–"
+    if any(v is None for v in values):
+        finite = [v for v in values if v is not None]
+        worst = "never"
+    else:
+        finite = values
+        worst = _fmt(max(values))
+    median = _fmt(float(np.median(finite))) if finite else "–"
+    return f"median {median}, worst {worst}"
+
+
+def _target(values: list[Any], limit: float) -> tuple[bool, str]:
+    worst = _max_or_none(values)
+    met = worst is not None and worst <= limit
+    n_ok = sum(v is not None and v <= limit for v in values)
+    return met, f"{n_ok}/{len(values)} within {limit:g}"
+
+
+def targets(summary: dict[str, Any], larger: list[dict], novel_cases: list[int]
+            ) -> dict[str, dict[str, Any]]:
+    out = {}
+    mse = list(summary["train_mse"].values())
+    out["train_mse_below_3e-4"] = {"met": all(v < 3e-4 for v in mse),
+                                   "detail": f"max {max(mse):.2e}"}
+    for key, values, limit in (
+            ("lock_within_10", _flat(summary["sync_steps_to_lock"]), LOCK_LIMIT),
+            ("pb_settles_within_20", _flat(summary["pb_settle_steps"]), SETTLE_LIMIT),
+            ("relock_within_5", _flat(summary["pause_steps_to_relock"]), RELOCK_LIMIT),
+            ("switch_within_15", _flat(summary["switch_steps"]), SWITCH_LIMIT)):
+        met, detail = _target(values, limit)
+        out[key] = {"met": met, "detail": detail}
+    if novel_cases:
+        out["all_three_novel_cases"] = {"met": set(novel_cases) == {1, 2, 3},
+                                        "detail": f"cases seen: {sorted(set(novel_cases))}"}
+    if larger:
+        success = sum(r["follows_all"] for r in larger)
+        out["larger_set_9_of_10"] = {"met": success >= math.ceil(0.9 * len(larger)),
+                                     "detail": f"{success}/{len(larger)}"}
+    return out
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, (np.floating, float)):
+        return None if not math.isfinite(float(value)) else float(value)
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
+
+
+def run_demo(out_dir: str | os.PathLike[str], config: ExperimentConfig,
+             log: Callable[[str], None] = print) -> dict[str, Any]:
+    """Run everything; write the report, the results and the figures; return the results."""
+    from rnnpb.analysis import figures
+    from rnnpb.demonstrator import learning_set
+    from rnnpb.demonstrator._figure import figure4
+    from rnnpb.robot import JOINT_LIMITS
+    from rnnpb.sequences import write_sequence
+
+    start = time.perf_counter()
+    out = Path(out_dir)
+    figure_dir = out / "figures"
+    figure_dir.mkdir(parents=True, exist_ok=True)
+    full_dir = out / "data" / "full"
+    full = learning_set("full", seed=config.data_seed)
+    for i, seq in enumerate(full):
+        write_sequence(full_dir / f"{seq.pattern}_{i % 2 + 1}.csv", seq)
+    log(f"training and running the experiments ({'quick' if config.quick else 'full'} run, "
+        f"{config.workers} workers) …")
+    default, larger, paper = run_jobs(out, config, log)
+    log("drawing the figures …")
+    figure4(full, figure_dir / "figure4_patterns.png")
+
+    set1 = default["1"]
+    sync = set1["synchronization"][0]
+    figures.plot_session(sync["run"].session(), figure_dir / "figure5_synchronization.png",
+                         title=f"Learning set 1: the user performs pattern {sync['pattern']}, "
+                         f"pauses (shaded) and goes on", joint_limits=JOINT_LIMITS,
+                         marks=[(sync["steps_to_lock"] or 0, "locked")])
+    sequence = set1["sequence"]
+    session = sequence["run"].session()
+    switches = sequence["run"].switch_steps
+    figures.plot_session(session, figure_dir / "figure6_switching.png",
+                         title="Learning set 1: the user switches among the learned patterns",
+                         joint_limits=JOINT_LIMITS,
+                         marks=[(s, "switch") for s in switches])
+    figures.plot_switch_zoom(session, [(s - 10, s + 30) for s in switches],
+                             figure_dir / "figure7_switching_zoom.png", JOINT_LIMITS, switches)
+    figures.plot_switch_matrix({k: default[k]["switching"]["pairs"] for k in sorted(default)},
+                               figure_dir / "switching_matrix.png", SWITCH_LIMIT)
+    novel_runs = [(run, default[k]["attractors"]) for k in sorted(default)
+                  for run in default[k]["novel"]]
+    shown: list[tuple[dict, dict]] = []
+    for case in (1, 2, 3):  # one example of each case, as the paper shows
+        for run, attractors in novel_runs:
+            if run["case"] == case:
+                shown.append((run, attractors))
+                break
+    for run, attractors in novel_runs:
+        if len(shown) >= 3:
+            break
+        if all(run is not s for s, _ in shown):
+            shown.append((run, attractors))
+    figures.plot_novel_responses([r for r, _ in shown], figure_dir / "figure8_novel.png",
+                                 JOINT_LIMITS)
+    figures.plot_attractors(shown, figure_dir / "figure9_attractors.png",
+                            config.attractor_transient)
+    histories = {f"set {k} (default)": default[k]["train_history"] for k in sorted(default)}
+    histories.update({f"set {k} (paper)": paper[k]["train_history"] for k in sorted(paper)})
+    figures.plot_training(histories, figure_dir / "training.png")
+
+    summary = summarize(default)
+    novel = [{k: run[k] for k in ("learning_set", "novel_pattern", "amplitude", "case",
+                                  "description", "period", "nearest_pattern", "distance",
+                                  "return_error")} for run, _ in novel_runs]
+    results: dict[str, Any] = {
+        "rnnpb_version": __version__,
+        "versions": _versions(),
+        "config": asdict(config),
+        **summary,
+        "novel_case": novel,
+        "novel_cases_seen": sorted({r["case"] for r in novel}),
+        "closed_loop_periods": {k: {p: a["period"] for p, a in default[k]["attractors"].items()}
+                                for k in sorted(default)},
+        "switch_sequence_steps_to_follow": sequence["steps_to_follow"],
+        "larger_set_success": int(sum(r["follows_all"] for r in larger)),
+        "larger_set_runs": [{k: r[k] for k in ("seed", "model", "train_mse_max",
+                                               "steps_to_follow", "follows_all")}
+                            for r in larger],
+        "targets": targets(summary, larger, [r["case"] for r in novel]),
+        "files": {
+            "models": {**{f"set{k}": f"models/set{k}.npz" for k in sorted(default)},
+                       **{f"full_seed{r['seed']}": f"models/full_seed{r['seed']}.npz"
+                          for r in larger},
+                       **{f"paper_set{k}": f"models/paper_set{k}.npz" for k in sorted(paper)}},
+            "learning_sets": {**{f"set{k}": {"patterns": default[k]["patterns"],
+                                             "data": f"data/set{k}/"} for k in sorted(default)},
+                              "full": {"patterns": ["1", "2", "3", "4"], "data": "data/full/"}},
+            "figures": sorted(p.name for p in figure_dir.glob("*.png")),
+        },
+    }
+    if paper:
+        results["paper_algorithm"] = summarize(paper)
+        results["paper_algorithm"]["targets"] = targets(results["paper_algorithm"], [], [])
+    results["runtime_s"] = time.perf_counter() - start
+    with atomic_write(out / "results.json", "w", encoding="utf-8") as handle:
+        json.dump(_jsonable(results), handle, indent=1)
+    write_report(out / "report.md", results, config)
+    return results
+
+
+def _versions() -> dict[str, str]:
+    import jax
+    import mujoco
+
+    return {"python": platform.python_version(), "jax": jax.__version__,
+            "numpy": np.__version__, "mujoco": mujoco.__version__,
+            "machine": platform.machine(), "cpus": str(os.cpu_count())}
+
+
+def write_report(path: Path, results: dict[str, Any], config: ExperimentConfig) -> None:
+    ours = results
+    theirs = results.get("paper_algorithm")
+    lines = [
+        "# rnnpb — the experiments of Ito & Tani (2004), reproduced",
+        "",
+        f"rnnpb {results['rnnpb_version']}, {'quick' if config.quick else 'full'} run, "
+        f"{results['runtime_s']:.0f} s on {results['versions']['cpus']} CPU(s) "
+        f"(jax {results['versions']['jax']}, mujoco {results['versions']['mujoco']}). "
+        "Every number below is in `results.json`; the definitions of the measures are in "
+        "`rnnpb.analysis.metrics` and docs/experiments.md.",
+        "",
+        "**default** is rnnpb's default configuration (learning: Adam with noise on the "
+        "teacher-forced inputs; on-line: onset state optimised with the PB, integration "
+        "length 4, no low-pass term). **paper algorithm** is the paper's (learning: gradient "
+        "descent with momentum, 50,000 iterations; on-line: L = 30, l = 20, 100 iterations, "
+        "onset state carried over).",
+        "",
+        "## Summary",
+        "",
+        "| measure | paper | ours (default) | ours (paper algorithm) |",
+        "|---|---|---|---|",
+    ]
+
+    def row(name: str, paper_text: str, key: str, flatten: bool = True,
+            kind: str = "range") -> None:
+        def cell(summary: dict | None) -> str:
+            if summary is None:
+                return "not run (quick)" if config.quick else "–"
+            value = summary[key]
+            values = _flat(value) if flatten else list(value.values())
+            if kind == "max":
+                return f"max {max(values):.2e}"
+            return _range(values)
+        lines.append(f"| {name} | {paper_text} | {cell(ours)} | {cell(theirs)} |")
+
+    row("final training error (MSE per output, worst of sets 1–4)", "< 3e-4 (RMS, read as MSE)",
+        "train_mse", flatten=False, kind="max")
+    lines.append(f"| final training error as RMS (worst) | < 3e-4 | "
+                 f"{max(ours['train_rms'].values()):.2e} | "
+                 + (f"{max(theirs['train_rms'].values()):.2e}" if theirs else "–") + " |")
+    row("steps until locked on a learned pattern", "about 10", "sync_steps_to_lock")
+    row("steps until the PB settles", "about 20", "pb_settle_steps")
+    row("phase lag once locked (steps; + = robot behind)", "mostly synchronous",
+        "phase_lag_steps")
+    row("robot motion during a 5-step pause (relative to before)", "keeps moving",
+        "pause_relative_motion")
+    row("steps to re-lock after the pause", "a few", "pause_steps_to_relock")
+    row("steps until the robot follows a switch (every ordered pair, sets 1–4)",
+        "several", "switch_steps")
+    lines.append(f"| learned pattern recognised (nearest learned PB) | all | "
+                 f"{ours['recognized_correctly']}/{ours['recognition_runs']} | "
+                 + (f"{theirs['recognized_correctly']}/{theirs['recognition_runs']}"
+                    if theirs else "–") + " |")
+    cases = [r["case"] for r in ours["novel_case"]]
+    lines.append(f"| novel-pattern responses (case 1 / 2 / 3) | all three occur | "
+                 f"{cases.count(1)} / {cases.count(2)} / {cases.count(3)} | – |")
+    lines.append(f"| larger set: runs that follow every pattern | 9 of 10 | "
+                 f"{ours['larger_set_success']} of {len(ours['larger_set_runs'])} | – |")
+    lines += ["", "### Targets", "", "| target | default | paper algorithm |", "|---|---|---|"]
+    for key, value in ours["targets"].items():
+        other = theirs["targets"].get(key) if theirs else None
+        lines.append(f"| {key} | {'met' if value['met'] else 'NOT met'} ({value['detail']}) | "
+                     + (f"{'met' if other['met'] else 'NOT met'} ({other['detail']})"
+                        if other else "–") + " |")
+    lines += [
+        "",
+        "## The four movement patterns (Figure 4)",
+        "",
+        "![patterns](figures/figure4_patterns.png)",
+        "",
+        "## Learning",
+        "",
+        "| learning set | MSE (worst output) | RMS | seconds |",
+        "|---|---|---|---|",
+    ]
+    for k in sorted(ours["train_mse"]):
+        lines.append(f"| {k} (default) | {ours['train_mse'][k]:.2e} | {ours['train_rms'][k]:.2e}"
+                     f" | {ours['train_seconds'][k]:.0f} |")
+        if theirs and k in theirs["train_mse"]:
+            lines.append(f"| {k} (paper algorithm) | {theirs['train_mse'][k]:.2e} | "
+                         f"{theirs['train_rms'][k]:.2e} | {theirs['train_seconds'][k]:.0f} |")
+    lines += ["", "![training](figures/training.png)", "",
+              "## 3.1 Synchronization and pause (Figure 5)", "",
+              "| set | pattern | steps to lock | PB settles | phase lag | recognised | "
+              "motion in pause | re-lock |", "|---|---|---|---|---|---|---|---|"]
+    for k in sorted(ours["sync_steps_to_lock"]):
+        for p in ours["sync_steps_to_lock"][k]:
+            lines.append(
+                f"| {k} | {p} | {_fmt(ours['sync_steps_to_lock'][k][p])} | "
+                f"{_fmt(ours['pb_settle_steps'][k][p])} | "
+                f"{_fmt(ours['phase_lag_steps'][k][p], 2)} | "
+                f"{ours['recognized_pattern'][k][p]} | "
+                f"{_fmt(ours['pause_relative_motion'][k][p], 2)} | "
+                f"{_fmt(ours['pause_steps_to_relock'][k][p])} |")
+    lines += ["", "![synchronization](figures/figure5_synchronization.png)", "",
+              "## 3.2 Switching (Figures 6 and 7)", "",
+              "Steps from the user's switch until the robot follows the new pattern, for "
+              "every ordered pair of learned patterns in every learning set (the user performs "
+              "50 steps of the first pattern, then the second):", "",
+              "![switching matrix](figures/switching_matrix.png)", "",
+              "![switching](figures/figure6_switching.png)", "",
+              "![switching zoom](figures/figure7_switching_zoom.png)", "",
+              "## 3.3 Novel patterns and attractors (Figures 8 and 9)", "",
+              "One cycle of the pattern a learning set left out is repeated while the PB is "
+              "regressed on-line; the robot's response after the transient is classified "
+              "(case 1: a limit cycle like a learned one; 2: a new limit cycle; 3: unsteady).",
+              "", "| set | novel pattern | size | response |", "|---|---|---|---|"]
+    for run in ours["novel_case"]:
+        lines.append(f"| {run['learning_set']} | {run['novel_pattern']} | "
+                     f"x{run['amplitude']:g} | {run['description']} |")
+    lines += ["", "![novel](figures/figure8_novel.png)", "",
+              "![attractors](figures/figure9_attractors.png)", "",
+              "Closed-loop periods of the learned patterns (steps; none = not periodic): "
+              + "; ".join(f"set {k}: " + ", ".join(f"{p}→{_fmt(v)}" for p, v in periods.items())
+                          for k, periods in ours["closed_loop_periods"].items()),
+              "", "## 3.4 The larger set", "",
+              "| seed | training MSE | steps to follow 1 / 2 / 3 / 4 | follows all |",
+              "|---|---|---|---|"]
+    for run in ours["larger_set_runs"]:
+        steps = " / ".join(_fmt(v) for v in run["steps_to_follow"].values())
+        lines.append(f"| {run['seed']} | {run['train_mse_max']:.2e} | {steps} | "
+                     f"{'yes' if run['follows_all'] else 'no'} |")
+    lines += ["", "## Files", "",
+              "Models (reuse them with `rnnpb interact --model …`): "
+              + ", ".join(f"`{v}`" for v in ours["files"]["models"].values()) + ".",
+              "Learning sets as sequence CSVs: `data/set1/` … `data/set4/`, `data/full/`.", ""]
+    with atomic_write(path, "w", encoding="utf-8") as handle:
+        handle.write("\n".join(lines))
