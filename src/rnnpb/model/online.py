@@ -299,12 +299,17 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
     # Numerical safety: never hand out NaN. Keep the last good state and repeat its command.
     finite = (jnp.all(jnp.isfinite(rho)) & jnp.all(jnp.isfinite(motor_now))
               & jnp.all(jnp.isfinite(context)) & jnp.all(jnp.isfinite(predicted_next)))
-    held_state = previous._replace(
-        sensory=state.sensory, seen=state.seen, n=state.n, motor_sent=state.motor_sent)
+    # The held state is the window after the shift (every value in it is an old, finite one):
+    # the PB and the command of the step before, carried into the new slot.
+    held_motor = previous.motor_sent[jnp.maximum(jnp.minimum(previous.n, length) - 1, 0)]
+    held_state = state._replace(
+        rho_velocity=jnp.zeros_like(state.rho_velocity),
+        motor_sent=state.motor_sent.at[n - 1].set(held_motor),
+        predicted_sensory=previous.predicted_sensory)
     held_outputs = StepOutputs(
-        motor=previous.motor_sent[jnp.maximum(jnp.minimum(previous.n, length) - 1, 0)],
+        motor=held_motor,
         predicted_sensory=previous.predicted_sensory,
-        pb=jax.nn.sigmoid(previous.rho[jnp.maximum(previous.n - 1, 0)]),
+        pb=jax.nn.sigmoid(state.rho[n - 1]),
         window_error=jnp.asarray(jnp.nan, jnp.float32), held=jnp.asarray(True),
         context=jax.nn.sigmoid(previous.next_onset_context))
     pick = partial(jax.tree_util.tree_map, lambda a, b: jnp.where(finite, a, b))
