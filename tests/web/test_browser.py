@@ -129,8 +129,10 @@ def test_mouse_tracing_a_learned_pattern_is_recognised(page, server, model):
                 page.mouse.move(x, y)
                 page.mouse.up()
                 where[hand] = (x, y)
-        # The robot perceived the traced markers, not something else.
-        handle = page.wait_for_function(f"rnnpbDashboard.lastStep.step > {last} && "
+        # The robot perceived the traced markers, not something else: a step that began after
+        # the last drag had ended sees both markers where they were left.
+        done = page.evaluate("rnnpbDashboard.lastStep.step")
+        handle = page.wait_for_function(f"rnnpbDashboard.lastStep.step > {done} && "
                                         "rnnpbDashboard.lastStep.observed", timeout=10000)
         np.testing.assert_allclose(np.array(handle.json_value(), dtype=float), sensory[-1],
                                    atol=0.01)
