@@ -1,0 +1,121 @@
+"""The interaction loop and `rnnpb interact`: recordings, lost hands, timings, sources."""
+
+import json
+
+import numpy as np
+import pytest
+
+from rnnpb.cli import main
+from rnnpb.demonstrator import learning_set
+from rnnpb.errors import ConfigError
+from rnnpb.interaction import (
+    ArraySensorySource,
+    FrameStepSource,
+    InteractionLoop,
+    LoopConfig,
+    SessionRecorder,
+    open_source,
+    read_session,
+)
+from rnnpb.model import MirrorSystem, TrainConfig, train
+from rnnpb.robot import JOINT_LIMITS, KinematicRobot
+from rnnpb.sequences import write_sensory_stream
+from rnnpb.vectors import MOTOR_NAMES, SENSORY_NAMES
+
+
+@pytest.fixture(scope="module")
+def model_path(tmp_path_factory):
+    path = tmp_path_factory.mktemp("model") / "set1.npz"
+    train(learning_set("1"), JOINT_LIMITS, config=TrainConfig.fast(iterations=1500)).save(path)
+    return path
+
+
+def test_interact_writes_recording_plot_and_summary(model_path, tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["interact", "--model", str(model_path), "--source", "scenario:switch:1,2",
+                 "--out", str(out), "--steps", "60"]) == 0
+    session = read_session(out / "session.csv")
+    assert len(session["step"]) == 60
+    for column in (*SENSORY_NAMES, *MOTOR_NAMES, "pred_lhy", "pb0", "pb3", "prediction_error"):
+        assert column in session
+    assert list(session["truth_pattern"][:2]) == ["1", "1"]
+    assert session["truth_pattern"][-1] == "2"
+    # Motor commands within the joint limits; the prediction error falls once locked.
+    motor = np.stack([session[name] for name in MOTOR_NAMES], axis=1)
+    assert np.all(motor >= JOINT_LIMITS[:, 0]) and np.all(motor <= JOINT_LIMITS[:, 1])
+    assert np.nanmean(session["prediction_error"][30:50]) < np.nanmean(
+        session["prediction_error"][1:6])
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["loop"]["steps"] == 60
+    assert set(summary["loop"]["section_ms"]) == {"perceive", "mirror", "act", "record"}
+    assert (out / "session.png").stat().st_size > 20_000
+    assert "mirror" in capsys.readouterr().out
+
+
+def test_lost_hands_from_a_csv_stream_are_marked_and_bridged(model_path, tmp_path):
+    sensory = learning_set("1")[0].sensory[:40].copy()
+    sensory[20:24, :2] = np.nan  # the left hand is lost for 4 steps
+    stream = tmp_path / "stream.csv"
+    write_sensory_stream(stream, sensory)
+    out = tmp_path / "run"
+    assert main(["interact", "--model", str(model_path), "--source", f"csv:{stream}",
+                 "--out", str(out)]) == 0
+    session = read_session(out / "session.csv")
+    np.testing.assert_array_equal(session["lost_left"], np.isnan(sensory[:, 0]).astype(float))
+    assert np.all(session["lost_right"] == 0)
+    assert np.all(np.isfinite(session["pb0"])) and np.all(np.isfinite(session["lshp"]))
+
+
+def test_loop_sections_subscribers_and_pacing(model_path, tmp_path):
+    from rnnpb.model import TrainedModel
+
+    model = TrainedModel.load(model_path)
+    sensory = learning_set("1")[2].sensory[:8]
+    seen = []
+    with ArraySensorySource(sensory) as source, KinematicRobot() as robot, \
+            SessionRecorder(tmp_path / "s.csv") as recorder:
+        loop = InteractionLoop(MirrorSystem(model), source, robot, recorder,
+                               LoopConfig(dt=0.05, paced=True))
+        loop.subscribe(seen.append)
+        summary = loop.run()
+    assert summary.steps == 8 and len(seen) == 8
+    assert seen[-1].timings["mirror"] > 0
+    np.testing.assert_array_equal(robot.read(), seen[-1].motor)
+    assert len(read_session(tmp_path / "s.csv")["step"]) == 8
+
+
+def test_frame_step_keeps_every_nth_observation():
+    source = FrameStepSource(ArraySensorySource(np.arange(40.0).reshape(10, 4) / 40), 3)
+    with source:
+        values = []
+        while (observation := source.read()) is not None:
+            values.append(observation.sensory[0])
+    np.testing.assert_allclose(values, np.array([0, 12, 24, 36]) / 40)
+
+
+@pytest.mark.parametrize("spec, message", [
+    ("nothing", "expected KIND:ARGUMENT"),
+    ("scenario:dance:1", "unknown scenario"),
+    ("scenario:held:9", "unknown movement pattern .9."),
+    ("ftp:x", "unknown kind"),
+    ("scenario:held", "needs an argument"),
+])
+def test_bad_source_specifications(spec, message):
+    with pytest.raises(ConfigError, match=message):
+        open_source(spec)
+
+
+def test_side_by_side_video(model_path, tmp_path):
+    out = tmp_path / "run"
+    assert main(["interact", "--model", str(model_path), "--source", "scenario:held:2",
+                 "--out", str(out), "--steps", "6", "--render", "--robot", "mujoco"]) == 0
+    import cv2
+
+    capture = cv2.VideoCapture(str(out / "session.mp4"))
+    frames = int(capture.get(cv2.CAP_PROP_FRAME_COUNT))
+    ok, frame = capture.read()
+    capture.release()
+    assert ok and frames == 6
+    assert frame.shape == (480, 1280, 3)
+    # The right half shows the rendered robot, not a blank image.
+    assert frame[:, 640:].std() > 20
