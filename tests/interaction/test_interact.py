@@ -119,3 +119,18 @@ def test_side_by_side_video(model_path, tmp_path):
     assert frame.shape == (480, 1280, 3)
     # The right half shows the rendered robot, not a blank image.
     assert frame[:, 640:].std() > 20
+
+
+def test_long_runs_keep_bounded_histories(model_path):
+    from rnnpb.interaction.loop import TIMING_WINDOW
+    from rnnpb.model import TrainedModel
+
+    robot = KinematicRobot(history_length=5)
+    with robot:
+        for _ in range(12):
+            robot.send(np.zeros(8))
+    assert robot.history.shape == (5, 8)
+    model = TrainedModel.load(model_path)
+    loop = InteractionLoop(MirrorSystem(model), ArraySensorySource(learning_set("1")[0].sensory))
+    for name in loop._timings:
+        assert loop._timings[name].maxlen == TIMING_WINDOW

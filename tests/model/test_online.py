@@ -65,6 +65,8 @@ def test_wrong_shape_is_a_clear_error(trained):
     mirror = MirrorSystem(trained)
     with pytest.raises(ConfigError, match="4 values"):
         mirror.step([0.5, 0.5, 0.5])
+    with pytest.raises(ConfigError, match="must be 4 numbers"):
+        mirror.step(["a", "b", "c", "d"])
 
 
 def test_numerical_failure_holds_the_last_good_state(trained):

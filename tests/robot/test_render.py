@@ -96,3 +96,10 @@ def test_write_video(tmp_path, renderer):
     assert count == 5
     with pytest.raises(ConfigError, match="no frames"):
         write_video(tmp_path / "empty.mp4", [])
+
+
+def test_failed_video_leaves_nothing(tmp_path):
+    good = np.zeros((48, 64, 3), np.uint8)
+    with pytest.raises(ConfigError):
+        write_video(tmp_path / "bad.mp4", [good, np.zeros((48, 64), np.uint8)])
+    assert list(tmp_path.iterdir()) == []

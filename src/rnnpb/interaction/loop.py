@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -27,6 +28,7 @@ from rnnpb.interaction.source import UserSource
 from rnnpb.model.online import MirrorSystem
 
 SECTIONS = ("perceive", "mirror", "act", "record")
+TIMING_WINDOW = 10_000
 
 
 @dataclass(frozen=True)
@@ -113,7 +115,9 @@ class InteractionLoop:
         self.recorder = recorder
         self.config = config or LoopConfig()
         self._subscribers: list[Callable[[StepRecord], None]] = []
-        self._timings: dict[str, list[float]] = {name: [] for name in SECTIONS}
+        # Bounded: the summary covers the last TIMING_WINDOW steps of a long run.
+        self._timings: dict[str, deque[float]] = {name: deque(maxlen=TIMING_WINDOW)
+                                                  for name in SECTIONS}
         self._predicted = np.full(mirror.model.network.sensory_size, math.nan)
         self.steps = 0
         self.missed_deadlines = 0
@@ -187,7 +191,10 @@ class InteractionLoop:
     def summary(self) -> LoopSummary:
         stats = {}
         for name, values in self._timings.items():
-            array = np.asarray(values[1:] if len(values) > 1 else values) * 1e3
+            values = list(values)
+            if len(values) > 1 and len(values) == self.steps:
+                values = values[1:]  # the first step includes compilation
+            array = np.asarray(values) * 1e3
             if array.size:
                 stats[name] = {"median": float(np.median(array)),
                                "p99": float(np.percentile(array, 99)), "max": float(array.max())}

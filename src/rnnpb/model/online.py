@@ -402,7 +402,11 @@ class MirrorSystem:
             tracker): the network uses its own prediction there. Values outside [0, 1] are
             clipped to it (the view plane ends there).
         """
-        u = np.asarray(observed_hands, dtype=np.float64).reshape(-1)
+        try:
+            u = np.asarray(observed_hands, dtype=np.float64).reshape(-1)
+        except (TypeError, ValueError):
+            raise ConfigError(f"observed hands must be {self._sensory_size} numbers (lhy lhz "
+                              f"rhy rhz), got {observed_hands!r:.80}") from None
         if u.shape != (self._sensory_size,):
             raise ConfigError(f"observed hands must have {self._sensory_size} values "
                               f"(lhy lhz rhy rhz), got {np.shape(observed_hands)}")

@@ -15,6 +15,8 @@ control is what the paper used; ``send`` should not block longer than one step (
 
 from __future__ import annotations
 
+from collections import deque
+
 import numpy as np
 
 from rnnpb.errors import ConfigError
@@ -62,16 +64,20 @@ class Robot:
 class KinematicRobot(Robot):
     """A robot without dynamics: each command is reached at once (clipped to the limits).
 
-    For tests and fast runs. ``history`` holds every joint state sent, shape (n_sent, 8).
+    For tests and fast runs. ``history`` holds the joint states sent, shape (n, 8): the last
+    ``history_length`` of them, so that a long-running loop keeps a bounded footprint.
     """
 
-    def __init__(self, initial: np.ndarray | None = None, dt: float = 0.4) -> None:
+    def __init__(self, initial: np.ndarray | None = None, dt: float = 0.4,
+                 history_length: int = 10_000) -> None:
         if dt <= 0:
             raise ConfigError(f"dt must be > 0, got {dt}")
+        if history_length < 0:
+            raise ConfigError(f"history_length must be >= 0, got {history_length}")
         self.dt = float(dt)
         start = np.zeros(MOTOR_SIZE) if initial is None else as_joint_vector(initial, "initial")
         self._joints = clip_to_limits(start)
-        self._history: list[np.ndarray] = []
+        self._history: deque[np.ndarray] = deque(maxlen=history_length)
         self._connected = False
 
     def connect(self) -> None:

@@ -109,6 +109,8 @@ def write_video(path: str | os.PathLike[str], frames: Iterable[np.ndarray],
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    # Written under a temporary name and renamed when complete: never a half-written video.
+    partial = path.with_name(f".{path.stem}.partial{path.suffix}")
     writer = None
     count = 0
     try:
@@ -119,14 +121,20 @@ def write_video(path: str | os.PathLike[str], frames: Iterable[np.ndarray],
                                   f"{frame.shape} {frame.dtype}")
             if writer is None:
                 size = (frame.shape[1], frame.shape[0])
-                writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), fps, size)
+                writer = cv2.VideoWriter(str(partial), cv2.VideoWriter_fourcc(*"mp4v"), fps,
+                                         size)
                 if not writer.isOpened():
                     raise ConfigError(f"{path}: cannot open a video writer")
             writer.write(np.ascontiguousarray(frame[..., ::-1]))
             count += 1
-    finally:
+    except BaseException:
         if writer is not None:
             writer.release()
+        partial.unlink(missing_ok=True)
+        raise
+    if writer is not None:
+        writer.release()
     if count == 0:
         raise ConfigError(f"{path}: no frames to write")
+    os.replace(partial, path)
     return path
