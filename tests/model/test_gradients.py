@@ -126,6 +126,12 @@ def test_window_gradients_match_numpy_reference_and_finite_differences(motor_inp
         _close(g_context, r_context, rtol=1e-8)
         _close(g_motor, r_motor, rtol=1e-8)
         assert np.abs(r_rho[:n]).max() > 1e-6  # the comparison is not of zeros
+        # The hand-written back-propagation the on-line step uses agrees too.
+        m_rho, m_context, m_motor = online_module._window_gradients(
+            params, state, jnp.asarray(rho), jnp.asarray(context), jnp.asarray(motor), config)
+        _close(m_rho, r_rho, rtol=1e-8)
+        _close(m_context, r_context, rtol=1e-8)
+        _close(m_motor, r_motor, rtol=1e-8)
 
         # The fast window run equals the plain mixed loop of network.py.
         fast_predictions, fast_contexts = online_module._window_run(
