@@ -209,12 +209,12 @@ def plot_training(histories: dict[str, SequenceABC[tuple[int, float]]],
     fig, ax = plt.subplots(figsize=(7, 4))
     for label, history in histories.items():
         history = np.asarray(history, dtype=np.float64)
-        ax.plot(np.maximum(history[:, 0], 1), history[:, 1], label=label)
+        ax.plot(history[:, 0], history[:, 1], label=label)
     ax.axhline(target, color="k", ls="--", lw=0.8, label=f"paper's final error {target:g}")
-    ax.set_xscale("log")
+    ax.set_xscale("symlog", linthresh=1000)
     ax.set_yscale("log")
-    ax.set_xlabel("iteration")
-    ax.set_ylabel("mean squared error (all outputs)")
+    ax.set_xlabel("iteration (linear to 1,000, then logarithmic)")
+    ax.set_ylabel("mean squared error\n(mean over the 12 outputs)")
     ax.legend(fontsize=7)
     save(fig, path)
 
@@ -230,8 +230,11 @@ def plot_switch_matrix(matrices: dict[str, dict[str, int | None]], path: str | o
         for pair, steps in pairs.items():
             a, b = pair.split("->")
             grid[patterns.index(a), patterns.index(b)] = np.nan if steps is None else steps
-        ax.imshow(np.where(np.isnan(grid), limit * 2, grid), cmap="RdYlGn_r", vmin=0,
-                  vmax=limit * 2)
+        shown = np.where(np.isnan(grid), limit * 2, grid)
+        cmap = plt.get_cmap("RdYlGn_r").copy()
+        cmap.set_bad("#dddddd")  # a pattern to itself: no switch
+        diagonal = np.eye(len(patterns), dtype=bool)
+        ax.imshow(np.ma.masked_array(shown, diagonal), cmap=cmap, vmin=0, vmax=limit * 2)
         for (a, b), value in np.ndenumerate(grid):
             if a != b:
                 text = "never" if np.isnan(value) else f"{int(value)}"

@@ -60,7 +60,7 @@ class TrainConfig:
     input_noise: float = 0.0
     learn_initial_context: bool = True
     seed: int = 0
-    chunk_iterations: int = 500
+    chunk_iterations: int = 100
     checkpoint_every: int = 5_000
 
     def __post_init__(self) -> None:
