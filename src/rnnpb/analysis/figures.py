@@ -207,13 +207,19 @@ def plot_training(histories: dict[str, SequenceABC[tuple[int, float]]],
                   path: str | os.PathLike[str], target: float = 3e-4) -> None:
     """Mean squared error during learning, one line per model."""
     fig, ax = plt.subplots(figsize=(7, 4))
+    cmap = plt.get_cmap("tab10")
+    groups = list(dict.fromkeys(label.split(" (")[0] for label in histories))
     for label, history in histories.items():
         history = np.asarray(history, dtype=np.float64)
-        ax.plot(history[:, 0], history[:, 1], label=label)
+        history = history[history[:, 0] > 0]  # the starting error has no place on a log axis
+        # One colour per learning set; the paper's algorithm dashed.
+        ax.plot(history[:, 0], history[:, 1], label=label,
+                color=cmap(groups.index(label.split(" (")[0]) % 10),
+                ls="--" if "paper" in label else "-")
     ax.axhline(target, color="k", ls="--", lw=0.8, label=f"paper's final error {target:g}")
-    ax.set_xscale("symlog", linthresh=1000)
+    ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("iteration (linear to 1,000, then logarithmic)")
+    ax.set_xlabel("iteration")
     ax.set_ylabel("mean squared error\n(mean over the 12 outputs)")
     ax.legend(fontsize=7)
     save(fig, path)
