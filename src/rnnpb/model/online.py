@@ -216,19 +216,26 @@ def _window_run(params: Params, state: OnlineState, rho: jax.Array, onset_contex
     motor only in closed loop). Same function as ``mixed_loop`` (tests/model/test_gradients.py
     holds them together).
     """
-    n_s = state.sensory.shape[1]
-    n_io = n_s + onset_motor.shape[0]
+    n_io = state.sensory.shape[1] + onset_motor.shape[0]
+    _, outputs = _window_forward(params, state, rho, onset_context, onset_motor, config)
+    return outputs[:, :n_io], outputs[:, n_io:]
+
+
+def _window_forward(params: Params, state: OnlineState, rho: jax.Array,
+                    onset_context: jax.Array, onset_motor: jax.Array, config: OnlineConfig
+                    ) -> tuple[jax.Array, jax.Array]:
+    """The window's forward pass: hidden (L, H) and outputs (L, I + C) of every step."""
     pre, w_loop, mask, _ = _window_terms(params, state, rho, config)
 
-    def body(previous_output, xs):
+    def step_(previous_output, xs):
         pre_t, mask_t = xs
         hidden = jax.nn.sigmoid(pre_t + (previous_output * mask_t) @ w_loop)
         output = jax.nn.sigmoid(hidden @ params.w_out + params.b_out)
-        return output, output
+        return output, (hidden, output)
 
-    _, outputs = jax.lax.scan(body, _first_input(onset_context, onset_motor, n_s), (pre, mask),
-                              unroll=_UNROLL)
-    return outputs[:, :n_io], outputs[:, n_io:]
+    first = _first_input(onset_context, onset_motor, state.sensory.shape[1])
+    _, (hidden, outputs) = jax.lax.scan(step_, first, (pre, mask), unroll=_UNROLL)
+    return hidden, outputs
 
 
 def _window_gradients(params: Params, state: OnlineState, rho: jax.Array,
@@ -242,16 +249,9 @@ def _window_gradients(params: Params, state: OnlineState, rho: jax.Array,
     """
     length, n_s = state.sensory.shape
     n_m = onset_motor.shape[0]
-    pre, w_loop, mask, w_p = _window_terms(params, state, rho, config)
+    _, w_loop, mask, w_p = _window_terms(params, state, rho, config)
     first = _first_input(onset_context, onset_motor, n_s)
-
-    def forward(previous_output, xs):
-        pre_t, mask_t = xs
-        hidden = jax.nn.sigmoid(pre_t + (previous_output * mask_t) @ w_loop)
-        output = jax.nn.sigmoid(hidden @ params.w_out + params.b_out)
-        return output, (hidden, output)
-
-    _, (hidden, outputs) = jax.lax.scan(forward, first, (pre, mask), unroll=_UNROLL)
+    hidden, outputs = _window_forward(params, state, rho, onset_context, onset_motor, config)
     has_target = (jnp.arange(length - 1) < state.n - 1)[:, None] & state.seen[1:]
     error = jnp.where(has_target, outputs[:-1, :n_s] - state.sensory[1:], 0.0)
     d_output_direct = jnp.zeros_like(outputs).at[:-1, :n_s].set(error)
