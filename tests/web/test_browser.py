@@ -87,10 +87,11 @@ def test_missing_camera_gives_a_message_on_the_page(page, server):
     page.click(".tab[data-mode=webcam]")
     page.fill("#camera", "15")
     page.click("#camera-open")
+    # The page says "opening the camera…" first; wait for the server's answer, not that.
     page.wait_for_function("document.querySelector('#camera-message').textContent"
-                           ".includes('camera')", timeout=15000)
+                           ".includes('still driven by')", timeout=15000)
     text = page.text_content("#camera-message")
-    assert "still driven by" in text
+    assert "no such camera" in text
     assert server.session.mode != "webcam"
     assert page.evaluate("rnnpbDashboard.connected")
 
