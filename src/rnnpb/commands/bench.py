@@ -38,9 +38,8 @@ def _single_core() -> str:
     import sys
 
     flags = os.environ.get("XLA_FLAGS", "")
-    for flag in ("--xla_cpu_multi_thread_eigen=false", "intra_op_parallelism_threads=1"):
-        if flag not in flags:
-            flags += " " + flag
+    if "--xla_cpu_multi_thread_eigen=false" not in flags:
+        flags += " --xla_cpu_multi_thread_eigen=false"
     os.environ["XLA_FLAGS"] = flags.strip()
     note = "single core"
     if hasattr(os, "sched_setaffinity"):
@@ -49,6 +48,9 @@ def _single_core() -> str:
         note = f"pinned to core {cores[0]}"
     if "jax" in sys.modules:
         note += " (JAX was already loaded: XLA may use more threads)"
+    from rnnpb import _xla
+
+    note += ", loops compiled whole" if _xla.active() else ", XLA's default loop compilation"
     return note
 
 

@@ -44,9 +44,8 @@ LEARNING_SETS = ("1", "2", "3", "4")
 def _worker_init() -> None:
     # Each worker keeps to one core; the pool provides the parallelism.
     flags = os.environ.get("XLA_FLAGS", "")
-    if "intra_op_parallelism_threads" not in flags:
-        os.environ["XLA_FLAGS"] = (flags + " --xla_cpu_multi_thread_eigen=false "
-                                   "intra_op_parallelism_threads=1").strip()
+    if "--xla_cpu_multi_thread_eigen=false" not in flags:
+        os.environ["XLA_FLAGS"] = (flags + " --xla_cpu_multi_thread_eigen=false").strip()
 
 
 def run_jobs(out: Path, config: ExperimentConfig,

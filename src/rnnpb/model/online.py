@@ -128,6 +128,17 @@ class StepOutputs(NamedTuple):
 _UNROLL = 5
 
 
+def _small_matmul(a: jax.Array, b: jax.Array) -> jax.Array:
+    """``a @ b`` for the window's small matrices, (L, n) @ (n, m), written as ``n`` products
+    and sums of whole rows: element-wise operations that XLA compiles into the surrounding
+    regression loop, where a matrix product or a reduction would be handed to a matrix
+    library and keep the loop from being compiled as one function (see :mod:`rnnpb._xla`)."""
+    total = a[:, 0, None] * b[0][None, :]
+    for k in range(1, a.shape[1]):
+        total = total + a[:, k, None] * b[k][None, :]
+    return total
+
+
 def _logit(p: jax.Array) -> jax.Array:
     p = jnp.clip(p, 1e-4, 1 - 1e-4)
     return jnp.log(p) - jnp.log1p(-p)
@@ -190,9 +201,10 @@ def _window_terms(params: Params, state: OnlineState, rho: jax.Array,
     w_u, w_m = w_in[:n_s], w_in[n_s:n_io]
     w_p, w_c = w_in[n_io:n_io + n_pb], w_in[n_io + n_pb:]
     recorded = config.motor_input == "recorded"
-    pre = (jnp.where(seen, state.sensory, 0.0) @ w_u + jax.nn.sigmoid(rho) @ w_p + params.b_h)
+    pre = (_small_matmul(jnp.where(seen, state.sensory, 0.0), w_u)
+           + _small_matmul(jax.nn.sigmoid(rho), w_p) + params.b_h)
     if recorded:
-        pre = pre + state.motor_sent @ w_m
+        pre = pre + _small_matmul(state.motor_sent, w_m)
     w_loop = jnp.concatenate([w_u, w_m, w_c], axis=0)
     motor_mask = jnp.zeros if recorded else jnp.ones
     mask = jnp.concatenate([(~seen).astype(pre.dtype), motor_mask((length, n_m), pre.dtype),
@@ -270,7 +282,7 @@ def _window_gradients(params: Params, state: OnlineState, rho: jax.Array,
                                   reverse=True, unroll=_UNROLL)
     d_first = d_first * mask[0]
     pb = jax.nn.sigmoid(rho)
-    d_rho = (d_pre @ w_p.T) * pb * (1.0 - pb)
+    d_rho = _small_matmul(d_pre, w_p.T) * pb * (1.0 - pb)
     motor0 = first[n_s:n_s + n_m]
     context0 = first[n_s + n_m:]
     d_motor = d_first[n_s:n_s + n_m] * motor0 * (1.0 - motor0)
@@ -427,6 +439,9 @@ class MirrorSystem:
         self._params = jax.tree_util.tree_map(lambda a: jnp.asarray(a, jnp.float32),
                                               model.params)
         self._state = initial_state(model, self.config)
+        # The last prediction of the hands, kept on the host: the next step's prediction error
+        # is measured against it without a transfer from the device.
+        self._predicted: np.ndarray | None = None
         self._candidates = None
         if self.config.restart_span > 0:
             learned = np.clip(np.array(list(model.pattern_pb.values())), 1e-4, 1 - 1e-4)
@@ -436,6 +451,7 @@ class MirrorSystem:
     def reset(self, initial_pb: np.ndarray | None = None) -> None:
         """Forget the window: the next step starts a new interaction."""
         self._state = initial_state(self.model, self.config, initial_pb)
+        self._predicted = None
         self.steps = 0
 
     @property
@@ -470,22 +486,24 @@ class MirrorSystem:
                               f"(lhy lhz rhy rhz), got {np.shape(observed_hands)}")
         seen = np.isfinite(u)
         u_norm = np.where(seen, np.clip(u, 0.0, 1.0), 0.0)
-        predicted_before = np.asarray(self._state.predicted_sensory, dtype=np.float64)
-        first = int(self._state.n) == 0
-        self._state, out = online_step(self._params, self._state,
-                                       jnp.asarray(u_norm, jnp.float32), jnp.asarray(seen),
-                                       self.config, self._candidates)
+        # NumPy inputs go to the compiled step as they are and all outputs come back in one
+        # transfer: at a few milliseconds a step, per-array round trips are worth avoiding.
+        self._state, out = online_step(self._params, self._state, u_norm.astype(np.float32),
+                                       seen, self.config, self._candidates)
+        out = jax.device_get(out)
         self.steps += 1
-        if first or not seen.any():
+        if self._predicted is None or not seen.any():
             prediction_error = math.nan
         else:
-            prediction_error = float(np.mean((predicted_before[seen] - u_norm[seen]) ** 2))
+            prediction_error = float(np.mean((self._predicted[seen] - u_norm[seen]) ** 2))
+        predicted = np.asarray(out.predicted_sensory, dtype=np.float64)
+        self._predicted = predicted
         s = self._sensory_size
         motor = np.asarray(out.motor, dtype=np.float64)
         motor = np.clip(motor, 0.0, 1.0) * (self._upper[s:] - self._lower[s:]) + self._lower[s:]
         return StepResult(
             motor=motor,
-            predicted_hands=np.asarray(out.predicted_sensory, dtype=np.float64),
+            predicted_hands=predicted,
             pb=np.asarray(out.pb, dtype=np.float64),
             prediction_error=prediction_error,
             window_error=float(out.window_error),
