@@ -12,6 +12,7 @@ from __future__ import annotations
 import io
 import json
 import os
+import tokenize
 import zipfile
 import zlib
 from dataclasses import asdict, dataclass, field
@@ -180,9 +181,10 @@ def load_archive(path: str | os.PathLike[str], fmt: str, version: int
                              "more memory than there is)") from None
     # Damage inside a zip surfaces, besides BadZipFile, as zlib.error (a compressed member),
     # NotImplementedError (a flipped compression method) or RuntimeError (a flipped
-    # "encrypted" flag); all three were found by fuzzing.
+    # "encrypted" flag); all three were found by fuzzing. A damaged .npy header inside can
+    # also stop NumPy's header parser with tokenize.TokenError or SyntaxError (fuzzing too).
     except (zipfile.BadZipFile, zlib.error, NotImplementedError, RuntimeError, EOFError, OSError,
-            ValueError) as error:
+            ValueError, tokenize.TokenError, SyntaxError) as error:
         raise ModelFileError(f"{path}: not a readable rnnpb {fmt} file (truncated or not an "
                              f".npz archive: {_one_line(error)})") from None
     if "meta.json" not in arrays:
