@@ -330,8 +330,10 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
         recent = (jnp.arange(length) >= state.n - config.restart_span) & valid
         profiles = jnp.concatenate([state.rho[None], jnp.where(
             recent[None, :, None], candidates[:, None, :], state.rho[None])])
-        errors = jax.vmap(lambda r: _window_error(params, state, r, state.onset_context,
-                                                  state.onset_motor, config))(profiles)
+        # One profile after the other (not vmapped): batched products would keep XLA from
+        # compiling the loop as one function (rnnpb._xla).
+        errors = jax.lax.map(lambda r: _window_error(params, state, r, state.onset_context,
+                                                     state.onset_motor, config), profiles)
         best = jnp.argmin(errors)
         state = state._replace(rho=profiles[best], rho_velocity=jnp.where(
             best > 0, jnp.zeros_like(state.rho_velocity), state.rho_velocity))
@@ -386,6 +388,18 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
     return pick(new_state, held_state), pick(outputs, held_outputs)
 
 
+@partial(jax.jit, static_argnames=("config",))
+def _online_step_packed(params: Params, state: OnlineState, u: jax.Array, seen: jax.Array,
+                        config: OnlineConfig, candidates: jax.Array | None = None
+                        ) -> tuple[OnlineState, jax.Array]:
+    """:func:`online_step` with its outputs packed into one vector — ``motor, predicted
+    sensory, pb, window error, held, context`` — so that they come back in one transfer."""
+    state, out = online_step(params, state, u, seen, config, candidates)
+    return state, jnp.concatenate([out.motor, out.predicted_sensory, out.pb,
+                                   out.window_error[None], out.held[None].astype(jnp.float32),
+                                   out.context])
+
+
 @dataclass(frozen=True)
 class StepResult:
     """What the mirror system returns each step (raw units).
@@ -434,6 +448,8 @@ class MirrorSystem:
         self.config = config or OnlineConfig()
         net = model.network
         self._sensory_size = net.sensory_size
+        self._motor_size = net.motor_size
+        self._pb_size = net.pb_size
         self._lower = np.asarray(model.lower, dtype=np.float64)
         self._upper = np.asarray(model.upper, dtype=np.float64)
         self._params = jax.tree_util.tree_map(lambda a: jnp.asarray(a, jnp.float32),
@@ -488,26 +504,28 @@ class MirrorSystem:
         u_norm = np.where(seen, np.clip(u, 0.0, 1.0), 0.0)
         # NumPy inputs go to the compiled step as they are and all outputs come back in one
         # transfer: at a few milliseconds a step, per-array round trips are worth avoiding.
-        self._state, out = online_step(self._params, self._state, u_norm.astype(np.float32),
-                                       seen, self.config, self._candidates)
-        out = jax.device_get(out)
+        self._state, packed = _online_step_packed(
+            self._params, self._state, u_norm.astype(np.float32), seen, self.config,
+            self._candidates)
+        packed = np.asarray(packed, dtype=np.float64)
+        s, m, p = self._sensory_size, self._motor_size, self._pb_size
+        motor, predicted = packed[:m], packed[m:m + s]
+        pb, (window_error, held) = packed[m + s:m + s + p], packed[m + s + p:m + s + p + 2]
+        context = packed[m + s + p + 2:]
         self.steps += 1
         if self._predicted is None or not seen.any():
             prediction_error = math.nan
         else:
             prediction_error = float(np.mean((self._predicted[seen] - u_norm[seen]) ** 2))
-        predicted = np.asarray(out.predicted_sensory, dtype=np.float64)
         self._predicted = predicted
-        s = self._sensory_size
-        motor = np.asarray(out.motor, dtype=np.float64)
         motor = np.clip(motor, 0.0, 1.0) * (self._upper[s:] - self._lower[s:]) + self._lower[s:]
         return StepResult(
             motor=motor,
             predicted_hands=predicted,
-            pb=np.asarray(out.pb, dtype=np.float64),
+            pb=pb,
             prediction_error=prediction_error,
-            window_error=float(out.window_error),
+            window_error=float(window_error),
             seen=seen,
-            held=bool(out.held),
-            context=np.asarray(out.context, dtype=np.float64),
+            held=bool(held),
+            context=context,
         )
