@@ -107,8 +107,11 @@ def _read_rows(path: Path, required: SequenceABC[str]) -> tuple[list[str], list[
             reader.fieldnames = header
             missing = [name for name in required if name not in header]
             if missing:
+                # A quoted header cell may hold a line break: show such names escaped so the
+                # message stays on one line (found by fuzzing).
+                shown = ", ".join(name if name.isprintable() else repr(name) for name in header)
                 raise DataFileError(f"{path}: missing column(s) {', '.join(missing)} "
-                                    f"(header has {', '.join(header)})")
+                                    f"(header has {shown[:200]})")
             rows = []
             for row in reader:
                 # DictReader puts surplus fields under None and fills missing ones with None.

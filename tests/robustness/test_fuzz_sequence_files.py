@@ -6,7 +6,7 @@ import string
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from rnnpb.errors import DataFileError
@@ -103,6 +103,7 @@ def test_random_sequence_grids(tmp_path, text):
 
 @FUZZ
 @given(text=stream_grids())
+@example(text='"0\n0.0\n')  # a quoted header cell holding a line break: message on one line
 def test_random_stream_grids(tmp_path, text):
     path = tmp_path / "stream.csv"
     path.write_text(text, encoding="utf-8", newline="")
