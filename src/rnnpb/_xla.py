@@ -51,6 +51,17 @@ def configure(environ: MutableMapping[str, str] | None = None) -> bool:
     return True
 
 
+def single_threaded(environ: MutableMapping[str, str] | None = None) -> None:
+    """Ask XLA for single-threaded matrix products (``rnnpb bench``, the demo's workers).
+
+    Only real flags go into ``XLA_FLAGS``: XLA stops reading at the first word that is not one.
+    """
+    environ = os.environ if environ is None else environ
+    flags = environ.get("XLA_FLAGS", "")
+    if "--xla_cpu_multi_thread_eigen=false" not in flags:
+        environ["XLA_FLAGS"] = f"{flags} --xla_cpu_multi_thread_eigen=false".strip()
+
+
 def backend_started() -> bool:
     """Whether JAX has already created its backends (and so read ``XLA_FLAGS``)."""
     if "jax" not in sys.modules:

@@ -25,6 +25,14 @@ def test_configure_adds_the_flag_once_and_respects_the_user():
     assert not _xla.configure(off) and "XLA_FLAGS" not in off
 
 
+def test_single_threaded_adds_only_real_flags_once():
+    env = {"XLA_FLAGS": _xla.FLAG}
+    _xla.single_threaded(env)
+    _xla.single_threaded(env)
+    assert env["XLA_FLAGS"] == f"{_xla.FLAG} --xla_cpu_multi_thread_eigen=false"
+    assert all(word.startswith("--") for word in env["XLA_FLAGS"].split())
+
+
 @pytest.mark.skipif("xla_backend_extra_options" in os.environ.get("XLA_FLAGS", "")
                     and not _xla.active(), reason="XLA_FLAGS sets its own backend options")
 @pytest.mark.parametrize("config", [OnlineConfig(), OnlineConfig.paper()],

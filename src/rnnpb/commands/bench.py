@@ -37,10 +37,9 @@ def _single_core() -> str:
     import os
     import sys
 
-    flags = os.environ.get("XLA_FLAGS", "")
-    if "--xla_cpu_multi_thread_eigen=false" not in flags:
-        flags += " --xla_cpu_multi_thread_eigen=false"
-    os.environ["XLA_FLAGS"] = flags.strip()
+    from rnnpb import _xla
+
+    _xla.single_threaded()
     note = "single core"
     if hasattr(os, "sched_setaffinity"):
         cores = sorted(os.sched_getaffinity(0))
@@ -48,8 +47,6 @@ def _single_core() -> str:
         note = f"pinned to core {cores[0]}"
     if "jax" in sys.modules:
         note += " (JAX was already loaded: XLA may use more threads)"
-    from rnnpb import _xla
-
     note += ", loops compiled whole" if _xla.active() else ", XLA's default loop compilation"
     return note
 

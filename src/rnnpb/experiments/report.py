@@ -43,9 +43,9 @@ LEARNING_SETS = ("1", "2", "3", "4")
 
 def _worker_init() -> None:
     # Each worker keeps to one core; the pool provides the parallelism.
-    flags = os.environ.get("XLA_FLAGS", "")
-    if "--xla_cpu_multi_thread_eigen=false" not in flags:
-        os.environ["XLA_FLAGS"] = (flags + " --xla_cpu_multi_thread_eigen=false").strip()
+    from rnnpb import _xla
+
+    _xla.single_threaded()
 
 
 def run_jobs(out: Path, config: ExperimentConfig,
