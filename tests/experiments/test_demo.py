@@ -45,6 +45,17 @@ def test_report_results_and_files(demo):
             expected = results["files"]["learning_sets"][key]["patterns"]
             assert list(model.patterns) == expected
     assert len(list((out / "data" / "set1").glob("*.csv"))) == 6
+    # The lock-on, pause, switching and larger-set measures are repeated with another draw of
+    # the user's imperfection, and the report shows both draws.
+    draws = results["draws"]
+    assert draws["scenario_seeds"] == [100, 200]
+    for draw in draws["by_seed"].values():
+        assert len(_values(draw["sync_steps_to_lock"])) == 12
+        assert len(_values(draw["switch_steps"])) == 24
+        assert len(draw["larger_set_steps_to_follow"]) == 3
+    assert draws["by_seed"]["100"]["sync_steps_to_lock"] == results["sync_steps_to_lock"]
+    assert "## Other draws of the user's imperfection" in report
+    assert "| 200 |" in report
     assert "wrote" in stdout
 
 
