@@ -13,8 +13,8 @@ set) and write OUT/report.md (measure | paper | ours, figures embedded), OUT/res
 (every measure, the config and versions), OUT/figures/, OUT/models/ and OUT/data/.
 
 The full run also repeats learning and interaction with the paper's own algorithm for
-comparison (about 10 minutes on 2 cores). --quick keeps the lock-on and switching
-experiments whole and shortens the rest (about 3 minutes).
+comparison (about 6 minutes on 2 cores). --quick keeps the lock-on and switching
+experiments whole and shortens the rest (about 2 minutes).
 
 Example:
   rnnpb demo --quick --out results/quick
@@ -25,9 +25,12 @@ Example:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", default="results/demo", metavar="DIR",
                         help="output directory (default results/demo)")
-    parser.add_argument("--quick", action="store_true", help="the short run (about 3 minutes)")
+    parser.add_argument("--quick", action="store_true", help="the short run (about 2 minutes)")
     parser.add_argument("--workers", type=int, default=2,
                         help="parallel worker processes (default 2)")
+    parser.add_argument("--samples-per-pattern", type=int, default=2, metavar="N",
+                        help="demonstrations of each pattern in every learning set (default 2, "
+                        "as in the paper)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -41,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
     if args.workers < 1:
         raise ConfigError(f"--workers must be >= 1, got {args.workers}")
     config = ExperimentConfig.quick_run() if args.quick else ExperimentConfig()
-    config = replace(config, workers=args.workers)
+    config = replace(config, workers=args.workers, samples_per_pattern=args.samples_per_pattern)
     results = run_demo(args.out, config)
     print(f"wrote {args.out}/report.md and {args.out}/results.json in "
           f"{results['runtime_s']:.0f} s")

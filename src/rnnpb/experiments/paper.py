@@ -43,6 +43,8 @@ class ExperimentConfig:
     paper_train: TrainConfig = field(default_factory=TrainConfig.paper)
     paper_online: OnlineConfig = field(default_factory=OnlineConfig.paper)
     data_seed: int = 0
+    # Demonstrations of each pattern in every learning set (paper: 2).
+    samples_per_pattern: int = 2
     scenario_seed: int = 100
     # More draws of the user's imperfection: the lock-on, pause, switching and larger-set
     # measures are repeated with each (no figures), because they depend on the draw.
@@ -55,6 +57,8 @@ class ExperimentConfig:
     workers: int = 2
 
     def __post_init__(self) -> None:
+        if self.samples_per_pattern < 1:
+            raise ConfigError(f"samples_per_pattern must be >= 1, got {self.samples_per_pattern}")
         seeds = (self.scenario_seed, *self.extra_scenario_seeds)
         if len(set(seeds)) != len(seeds):
             raise ConfigError(f"scenario seeds must differ from each other, got {seeds}")
@@ -269,6 +273,11 @@ def follows_every_pattern(model: TrainedModel, online: OnlineConfig, joint_limit
 
 # --- one job per model (run in worker processes) -------------------------------------------
 
+def sequence_file_name(sequence) -> str:
+    """``P_K.csv``: pattern P, demonstration K (from 1), as ``data/`` keeps the learning sets."""
+    return f"{sequence.pattern}_{sequence.meta['sample']}.csv"
+
+
 def _limits() -> np.ndarray:
     from rnnpb.robot import JOINT_LIMITS
 
@@ -283,10 +292,11 @@ def learning_set_job(set_name: str, train_config: TrainConfig, online: OnlineCon
     from rnnpb.sequences import write_sequence
 
     limits = _limits()
-    sequences = learning_set(set_name, seed=config.data_seed)
+    sequences = learning_set(set_name, seed=config.data_seed,
+                             samples_per_pattern=config.samples_per_pattern)
     if data_dir is not None:
-        for i, seq in enumerate(sequences):
-            write_sequence(os.path.join(data_dir, f"{seq.pattern}_{i % 2 + 1}.csv"), seq)
+        for seq in sequences:
+            write_sequence(os.path.join(data_dir, sequence_file_name(seq)), seq)
     model = train(sequences, limits, config=train_config)
     model.save(model_path)
     info = model.meta["training"]
@@ -326,7 +336,8 @@ def larger_set_job(seed: int, train_config: TrainConfig, online: OnlineConfig,
     from rnnpb.demonstrator import learning_set
 
     limits = _limits()
-    model = train(learning_set("full", seed=config.data_seed), limits,
+    model = train(learning_set("full", seed=config.data_seed,
+                               samples_per_pattern=config.samples_per_pattern), limits,
                   config=replace(train_config, seed=seed))
     model.save(model_path)
     follow = follows_every_pattern(model, online, limits, seed=config.scenario_seed + seed)

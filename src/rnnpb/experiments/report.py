@@ -36,6 +36,7 @@ from rnnpb.experiments.paper import (
     ExperimentConfig,
     larger_set_job,
     learning_set_job,
+    sequence_file_name,
 )
 
 LEARNING_SETS = ("1", "2", "3", "4")
@@ -267,9 +268,10 @@ def run_demo(out_dir: str | os.PathLike[str], config: ExperimentConfig,
     figure_dir = out / "figures"
     figure_dir.mkdir(parents=True, exist_ok=True)
     full_dir = out / "data" / "full"
-    full = learning_set("full", seed=config.data_seed)
-    for i, seq in enumerate(full):
-        write_sequence(full_dir / f"{seq.pattern}_{i % 2 + 1}.csv", seq)
+    full = learning_set("full", seed=config.data_seed,
+                        samples_per_pattern=config.samples_per_pattern)
+    for seq in full:
+        write_sequence(full_dir / sequence_file_name(seq), seq)
     log(f"training and running the experiments ({'quick' if config.quick else 'full'} run, "
         f"{config.workers} workers) …")
     default, larger, paper = run_jobs(out, config, log)
@@ -411,6 +413,10 @@ def write_report(path: Path, results: dict[str, Any], config: ExperimentConfig) 
         "length 4, no low-pass term). **paper algorithm** is the paper's (learning: gradient "
         "descent with momentum, 50,000 iterations; on-line: L = 30, l = 20, 100 iterations, "
         "onset state carried over).",
+        "",
+        f"Every learning set holds {config.samples_per_pattern} demonstrations of each of its "
+        f"patterns (the paper: 2), from the synthetic demonstrator with data seed "
+        f"{config.data_seed}.",
         "",
         "## Summary",
         "",
