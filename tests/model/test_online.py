@@ -82,13 +82,14 @@ def test_numerical_failure_holds_the_last_good_state(trained):
         assert np.all(np.isfinite(result.motor)) and np.all(np.isfinite(result.pb))
 
 
-@pytest.mark.parametrize("motor_input, optimize_onset, restart_span", [
-    ("closed_loop", True, 6), ("closed_loop", False, 0), ("recorded", True, 3),
-    ("recorded", False, 6)])
+@pytest.mark.parametrize("motor_input, optimize_onset, restart_span, surprise_gate", [
+    ("closed_loop", True, 6, 0.0), ("closed_loop", False, 0, 0.0), ("recorded", True, 3, 0.0),
+    ("recorded", False, 6, 0.0), ("closed_loop", True, 6, 0.05)])
 def test_compiled_step_matches_numpy_reference(trained, motor_input, optimize_onset,
-                                               restart_span):
+                                               restart_span, surprise_gate):
     config = OnlineConfig(window=8, iterations=5, motor_input=motor_input,
-                          optimize_onset=optimize_onset, restart_span=restart_span)
+                          optimize_onset=optimize_onset, restart_span=restart_span,
+                          surprise_gate=surprise_gate)
     demo = make_sequences(n_samples=1, n_steps=14, seed=3, kinds=(2,))[0]
     mirror = MirrorSystem(trained, config)
     net = trained.network
@@ -105,3 +106,35 @@ def test_compiled_step_matches_numpy_reference(trained, motor_input, optimize_on
         np.testing.assert_allclose(result.predicted_hands, predicted, atol=2e-4)
         np.testing.assert_allclose(trained.normalize(np.r_[predicted, result.motor])[4:],
                                    motor, atol=2e-4)
+
+
+def test_surprise_gate_steadies_the_pb_and_keeps_the_lock(trained):
+    # A learned pattern, performed anew: once locked, the gated PB barely moves from step to
+    # step, while the ungated one keeps fitting the demonstration's noise.
+    demo = make_sequences(n_samples=1, n_steps=60, seed=12, kinds=(1,))[0]
+    moves = {}
+    for name, config in (("default", OnlineConfig()), ("steady", OnlineConfig.steady())):
+        mirror = MirrorSystem(trained, config)
+        pbs, errors = [], []
+        for t in range(demo.n_steps):
+            result = mirror.step(demo.sensory[t])
+            pbs.append(result.pb)
+            errors.append(_motor_error(result.motor, demo.motor[t]))
+        assert max(errors[LOCK_STEPS:]) < 0.05, (name, np.round(errors, 3))
+        assert trained.nearest_pattern(pbs[-1])[0] == "1"
+        moves[name] = np.median(np.abs(np.diff(np.array(pbs[30:]), axis=0)).max(axis=1))
+    assert moves["steady"] < 0.5 * moves["default"], moves
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"surprise_gate": -0.1}, "surprise_gate"), ({"gate_power": 0}, "gate_power"),
+    ({"gate_floor": 0}, "gate_floor"), ({"gate_steps": 0}, "gate_steps")])
+def test_bad_surprise_gate_settings_are_refused(change, message):
+    with pytest.raises(ConfigError, match=message):
+        OnlineConfig(**change)
+
+
+def test_steady_preset_round_trips():
+    config = OnlineConfig.steady()
+    assert config.surprise_gate > 0
+    assert OnlineConfig.from_dict(config.to_dict()) == config

@@ -63,6 +63,14 @@ class OnlineConfig:
     onset_learning_rate: float = 0.5
     restart_span: int = 6
     motor_input: Literal["closed_loop", "recorded"] = "closed_loop"
+    # The surprise gate (off at 0): before each regression, the RMS sensory error of the
+    # window's last ``gate_steps`` predictions scales the error term of eq. 1 by
+    # (error / surprise_gate) ** gate_power, clipped to [gate_floor, 1]: the PB moves at its
+    # full rate while the predictions are poor and all but stops once they are good.
+    surprise_gate: float = 0.0
+    gate_power: float = 3.0
+    gate_floor: float = 0.01
+    gate_steps: int = 4
 
     def __post_init__(self) -> None:
         if self.window < 2:
@@ -73,6 +81,14 @@ class OnlineConfig:
             raise ConfigError("onset_learning_rate must be >= 0")
         if not 0 <= self.restart_span <= self.window:
             raise ConfigError(f"restart_span must be in [0, window], got {self.restart_span}")
+        if self.surprise_gate < 0:
+            raise ConfigError(f"surprise_gate must be >= 0, got {self.surprise_gate}")
+        if self.gate_power <= 0:
+            raise ConfigError(f"gate_power must be > 0, got {self.gate_power}")
+        if not 0 < self.gate_floor <= 1:
+            raise ConfigError(f"gate_floor must be in (0, 1], got {self.gate_floor}")
+        if self.gate_steps < 1:
+            raise ConfigError(f"gate_steps must be >= 1, got {self.gate_steps}")
         if self.motor_input not in ("closed_loop", "recorded"):
             raise ConfigError(f"motor_input must be 'closed_loop' or 'recorded', got "
                               f"{self.motor_input!r}")
@@ -84,6 +100,12 @@ class OnlineConfig:
                                      integration_length=20),
                    optimize_onset=False, restart_span=0)
         return replace(base, **changes)
+
+    @classmethod
+    def steady(cls, **changes: Any) -> OnlineConfig:
+        """The default with the surprise gate on (0.035 RMS, power 3): the PB settles once the
+        predictions are good, at some cost in lock-on and switching (docs/model.md)."""
+        return replace(cls(surprise_gate=0.035), **changes)
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -301,6 +323,23 @@ def _window_error(params: Params, state: OnlineState, rho: jax.Array, onset_cont
     return 0.5 * jnp.sum(error ** 2)
 
 
+def _surprise_gate(params: Params, state: OnlineState, config: OnlineConfig
+                   ) -> jax.Array | None:
+    """The factor on the PB's error gradient (see ``OnlineConfig.surprise_gate``); None when
+    the gate is off. Measured with the profile and onset the regression starts from."""
+    if config.surprise_gate <= 0:
+        return None
+    length, s = state.sensory.shape
+    predictions, _ = _window_run(params, state, state.rho, state.onset_context,
+                                 state.onset_motor, config)
+    index = jnp.arange(length - 1)
+    recent = (index < state.n - 1) & (index >= state.n - 1 - config.gate_steps)
+    target = recent[:, None] & state.seen[1:]
+    squared = jnp.where(target, (predictions[:-1, :s] - state.sensory[1:]) ** 2, 0.0)
+    rms = jnp.sqrt(jnp.sum(squared) / jnp.maximum(jnp.sum(target), 1))
+    return jnp.clip((rms / config.surprise_gate) ** config.gate_power, config.gate_floor, 1.0)
+
+
 @partial(jax.jit, static_argnames=("config",))
 def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Array,
                 config: OnlineConfig, candidates: jax.Array | None = None
@@ -338,10 +377,14 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
         state = state._replace(rho=profiles[best], rho_velocity=jnp.where(
             best > 0, jnp.zeros_like(state.rho_velocity), state.rho_velocity))
 
+    gate = _surprise_gate(params, state, config)
+
     def iteration(_, carry):
         rho, velocity, context, motor = carry
         g_rho, g_context, g_motor = _window_gradients(params, state, rho, context, motor,
                                                       config)
+        if gate is not None:
+            g_rho = gate * g_rho
         rho, velocity = pb_update(rho, velocity, g_rho, config.pb, valid)
         if config.optimize_onset:
             context = context - config.onset_learning_rate * g_context

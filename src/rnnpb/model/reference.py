@@ -259,11 +259,27 @@ class ReferenceMirrorSystem:
             if best[0] > 0:
                 self.rho = best[1]
                 self.velocity = np.zeros_like(self.velocity)
+        gate = 1.0
+        if cfg.surprise_gate > 0:
+            # The surprise gate: RMS error of the last gate_steps predictions before regressing.
+            predictions = window_error_and_gradients(
+                self.params, self.sensory, self.seen, self.n, self.rho, self.onset_context,
+                self.onset_motor, motor_inputs)[4]
+            s = self.sensory.shape[1]
+            squared = []
+            for t in range(max(self.n - 1 - cfg.gate_steps, 0), self.n - 1):
+                for j in range(s):
+                    if self.seen[t + 1, j]:
+                        squared.append((predictions[t, j] - self.sensory[t + 1, j]) ** 2)
+            rms = float(np.sqrt(np.mean(squared))) if squared else 0.0
+            gate = float(np.clip((rms / cfg.surprise_gate) ** cfg.gate_power, cfg.gate_floor,
+                                 1.0))
         for _ in range(cfg.iterations):
             _, g_rho, g_c, g_m, _, _ = window_error_and_gradients(
                 self.params, self.sensory, self.seen, self.n, self.rho, self.onset_context,
                 self.onset_motor, motor_inputs)
-            self.rho, self.velocity = pb_update(self.rho, self.velocity, g_rho, cfg.pb, self.n)
+            self.rho, self.velocity = pb_update(self.rho, self.velocity, gate * g_rho, cfg.pb,
+                                                self.n)
             if cfg.optimize_onset:
                 self.onset_context = self.onset_context - cfg.onset_learning_rate * g_c
                 self.onset_motor = self.onset_motor - cfg.onset_learning_rate * g_m
