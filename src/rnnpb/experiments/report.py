@@ -158,8 +158,7 @@ def _range(values: list[Any]) -> str:
 def _target(values: list[Any], limit: float) -> tuple[bool, str]:
     worst = _max_or_none(values)
     met = worst is not None and worst <= limit
-    n_ok = sum(v is not None and v <= limit for v in values)
-    return met, f"{n_ok}/{len(values)} within {limit:g}"
+    return met, f"{_within(values, limit)}/{len(values)} within {limit:g}"
 
 
 def targets(summary: dict[str, Any], larger: list[dict], novel_cases: list[int]
@@ -183,9 +182,8 @@ def targets(summary: dict[str, Any], larger: list[dict], novel_cases: list[int]
                                                "; the report explains why, from the "
                                                "attractor analysis")}
     if larger:
-        success = sum(r["follows_all"] for r in larger)
-        out["larger_set_9_of_10"] = {"met": success >= math.ceil(0.9 * len(larger)),
-                                     "detail": f"{success}/{len(larger)}"}
+        out["larger_set_9_of_10"] = _larger_target(sum(r["follows_all"] for r in larger),
+                                                   len(larger))
     return out
 
 
@@ -193,6 +191,14 @@ _DRAW_MEASURES = (("sync_steps_to_lock", "lock_within_10", LOCK_LIMIT),
                   ("pb_settle_steps", "pb_settles_within_20", SETTLE_LIMIT),
                   ("pause_steps_to_relock", "relock_within_5", RELOCK_LIMIT),
                   ("switch_steps", "switch_within_15", SWITCH_LIMIT))
+
+
+def _larger_target(success: int, runs: int) -> dict[str, Any]:
+    return {"met": success >= math.ceil(0.9 * runs), "detail": f"{success}/{runs}"}
+
+
+def _within(values: list[Any], limit: float) -> int:
+    return sum(v is not None and v <= limit for v in values)
 
 
 def draws_summary(results: dict[str, dict], larger: list[dict], config: ExperimentConfig
@@ -203,39 +209,29 @@ def draws_summary(results: dict[str, dict], larger: list[dict], config: Experime
     ordered = {k: results[k] for k in sorted(results)}
     by_seed: dict[str, dict[str, Any]] = {}
     for seed in (config.scenario_seed, *config.extra_scenario_seeds):
-        if seed == config.scenario_seed:
-            syncs = {k: r["synchronization"] for k, r in ordered.items()}
-            switches = {k: r["switching"]["pairs"] for k, r in ordered.items()}
-            follows = list(larger)
-        else:
-            syncs = {k: r["draws"][seed]["synchronization"] for k, r in ordered.items()}
-            switches = {k: r["draws"][seed]["switching"]["pairs"] for k, r in ordered.items()}
-            follows = [r["draws"][seed] for r in larger]
-        draw: dict[str, Any] = {
-            key: {k: {s["pattern"]: s[source] for s in runs} for k, runs in syncs.items()}
-            for key, source in (("sync_steps_to_lock", "steps_to_lock"),
-                                ("pb_settle_steps", "pb_settle_steps"),
-                                ("pause_steps_to_relock", "pause_steps_to_relock"))}
-        draw["switch_steps"] = switches
+        primary = seed == config.scenario_seed
+        runs = ordered if primary else {k: r["draws"][seed] for k, r in ordered.items()}
+        follows = list(larger) if primary else [r["draws"][seed] for r in larger]
+        draw: dict[str, Any] = {key: _values(runs, source) for key, source in (
+            ("sync_steps_to_lock", "steps_to_lock"), ("pb_settle_steps", "pb_settle_steps"),
+            ("pause_steps_to_relock", "pause_steps_to_relock"))}
+        draw["switch_steps"] = {k: r["switching"]["pairs"] for k, r in runs.items()}
         draw["larger_set_success"] = int(sum(f["follows_all"] for f in follows))
         draw["larger_set_steps_to_follow"] = [f["steps_to_follow"] for f in follows]
         draw["targets"] = {name: dict(zip(("met", "detail"),
                                           _target(_flat(draw[key]), limit), strict=True))
                            for key, name, limit in _DRAW_MEASURES}
         if larger:
-            draw["targets"]["larger_set_9_of_10"] = {
-                "met": draw["larger_set_success"] >= math.ceil(0.9 * len(follows)),
-                "detail": f"{draw['larger_set_success']}/{len(follows)}"}
+            draw["targets"]["larger_set_9_of_10"] = _larger_target(draw["larger_set_success"],
+                                                                   len(follows))
         by_seed[str(seed)] = draw
     pooled: dict[str, dict[str, Any]] = {}
     for key, name, limit in _DRAW_MEASURES:
         met, detail = _target([v for d in by_seed.values() for v in _flat(d[key])], limit)
         pooled[name] = {"met": met, "detail": detail}
     if larger:
-        success = sum(d["larger_set_success"] for d in by_seed.values())
-        runs = len(larger) * len(by_seed)
-        pooled["larger_set_9_of_10"] = {"met": success >= math.ceil(0.9 * runs),
-                                        "detail": f"{success}/{runs}"}
+        pooled["larger_set_9_of_10"] = _larger_target(
+            sum(d["larger_set_success"] for d in by_seed.values()), len(larger) * len(by_seed))
     return {"scenario_seeds": [int(s) for s in by_seed], "by_seed": by_seed,
             "targets": pooled}
 
@@ -545,9 +541,9 @@ def write_report(path: Path, results: dict[str, Any], config: ExperimentConfig) 
               "larger set |", "|---|---|---|---|---|---|"]
     for seed, draw in draws["by_seed"].items():
         cells = []
-        for key, name, _ in _DRAW_MEASURES:
-            cells.append(f"{draw['targets'][name]['detail'].split(' ')[0]} "
-                         f"({_range(_flat(draw[key]))})")
+        for key, _, limit in _DRAW_MEASURES:
+            values = _flat(draw[key])
+            cells.append(f"{_within(values, limit)}/{len(values)} ({_range(values)})")
         n_larger = len(draw["larger_set_steps_to_follow"])
         cells.append(f"{draw['larger_set_success']}/{n_larger}" if n_larger else "–")
         lines.append(f"| {seed}{' (above)' if int(seed) == seeds[0] else ''} | "

@@ -272,6 +272,23 @@ def _window_forward(params: Params, state: OnlineState, rho: jax.Array,
     return hidden, outputs
 
 
+def _prediction_errors(predictions: jax.Array, state: OnlineState,
+                       since: jax.Array | int | None = None) -> tuple[jax.Array, jax.Array]:
+    """Each window step's sensory prediction minus the next observation, where one was seen
+    (from step ``since`` on, when given): errors (L - 1, S), 0 elsewhere, and the mask."""
+    length, n_s = state.sensory.shape
+    index = jnp.arange(length - 1)
+    steps = index < state.n - 1
+    if since is not None:
+        steps = steps & (index >= since)
+    target = steps[:, None] & state.seen[1:]
+    return jnp.where(target, predictions[:-1, :n_s] - state.sensory[1:], 0.0), target
+
+
+def _mean_squared(error: jax.Array, target: jax.Array) -> jax.Array:
+    return jnp.sum(error ** 2) / jnp.maximum(jnp.sum(target), 1)
+
+
 def _window_gradients(params: Params, state: OnlineState, rho: jax.Array,
                       onset_context: jax.Array, onset_motor: jax.Array, config: OnlineConfig
                       ) -> tuple[jax.Array, jax.Array, jax.Array]:
@@ -286,8 +303,7 @@ def _window_gradients(params: Params, state: OnlineState, rho: jax.Array,
     _, w_loop, mask, w_p = _window_terms(params, state, rho, config)
     first = _first_input(onset_context, onset_motor, n_s)
     hidden, outputs = _window_forward(params, state, rho, onset_context, onset_motor, config)
-    has_target = (jnp.arange(length - 1) < state.n - 1)[:, None] & state.seen[1:]
-    error = jnp.where(has_target, outputs[:-1, :n_s] - state.sensory[1:], 0.0)
+    error, _ = _prediction_errors(outputs, state)
     d_output_direct = jnp.zeros_like(outputs).at[:-1, :n_s].set(error)
     next_mask = jnp.concatenate([mask[1:], jnp.zeros_like(mask[:1])])
     w_out_t = params.w_out.T
@@ -316,10 +332,7 @@ def _window_error(params: Params, state: OnlineState, rho: jax.Array, onset_cont
                   onset_motor: jax.Array, config: OnlineConfig) -> jax.Array:
     """0.5 · Σ over the window of the squared error of the sensory predictions."""
     predictions, _ = _window_run(params, state, rho, onset_context, onset_motor, config)
-    s = state.sensory.shape[1]
-    length = state.sensory.shape[0]
-    has_target = (jnp.arange(length - 1) < state.n - 1)[:, None] & state.seen[1:]
-    error = jnp.where(has_target, predictions[:-1, :s] - state.sensory[1:], 0.0)
+    error, _ = _prediction_errors(predictions, state)
     return 0.5 * jnp.sum(error ** 2)
 
 
@@ -329,14 +342,10 @@ def _surprise_gate(params: Params, state: OnlineState, config: OnlineConfig
     the gate is off. Measured with the profile and onset the regression starts from."""
     if config.surprise_gate <= 0:
         return None
-    length, s = state.sensory.shape
     predictions, _ = _window_run(params, state, state.rho, state.onset_context,
                                  state.onset_motor, config)
-    index = jnp.arange(length - 1)
-    recent = (index < state.n - 1) & (index >= state.n - 1 - config.gate_steps)
-    target = recent[:, None] & state.seen[1:]
-    squared = jnp.where(target, (predictions[:-1, :s] - state.sensory[1:]) ** 2, 0.0)
-    rms = jnp.sqrt(jnp.sum(squared) / jnp.maximum(jnp.sum(target), 1))
+    rms = jnp.sqrt(_mean_squared(*_prediction_errors(predictions, state,
+                                                     since=state.n - 1 - config.gate_steps)))
     return jnp.clip((rms / config.surprise_gate) ** config.gate_power, config.gate_floor, 1.0)
 
 
@@ -400,9 +409,7 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
     motor_now = jnp.where(n >= 2, predictions[jnp.maximum(n - 2, 0), s:],
                           jax.nn.sigmoid(motor))
     predicted_next = predictions[n - 1, :s]
-    has_target = (jnp.arange(length - 1) < n - 1)[:, None] & state.seen[1:]
-    squared = jnp.where(has_target, (predictions[:-1, :s] - state.sensory[1:]) ** 2, 0.0)
-    window_error = jnp.sum(squared) / jnp.maximum(jnp.sum(has_target), 1)
+    window_error = _mean_squared(*_prediction_errors(predictions, state))
     new_state = state._replace(
         rho=rho, rho_velocity=velocity, onset_context=context, onset_motor=motor,
         motor_sent=state.motor_sent.at[n - 1].set(motor_now),
