@@ -17,7 +17,7 @@ from rnnpb.interaction import (
     open_source,
     read_session,
 )
-from rnnpb.model import MirrorSystem, TrainConfig, train
+from rnnpb.model import MirrorSystem, OnlineConfig, TrainConfig, train
 from rnnpb.robot import JOINT_LIMITS, KinematicRobot
 from rnnpb.sequences import write_sensory_stream
 from rnnpb.vectors import MOTOR_NAMES, SENSORY_NAMES
@@ -50,6 +50,14 @@ def test_interact_writes_recording_plot_and_summary(model_path, tmp_path, capsys
     assert set(summary["loop"]["section_ms"]) == {"perceive", "mirror", "act", "record"}
     assert (out / "session.png").stat().st_size > 20_000
     assert "mirror" in capsys.readouterr().out
+
+
+def test_steady_regression_is_recorded_in_the_summary(model_path, tmp_path):
+    out = tmp_path / "steady"
+    assert main(["interact", "--model", str(model_path), "--source", "scenario:held:1",
+                 "--out", str(out), "--steps", "12", "--online", "steady"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["online_config"]["surprise_gate"] == OnlineConfig.steady().surprise_gate > 0
 
 
 def test_lost_hands_from_a_csv_stream_are_marked_and_bridged(model_path, tmp_path):
