@@ -110,10 +110,10 @@ def test_compiled_step_matches_numpy_reference(trained, motor_input, optimize_on
 
 def test_surprise_gate_steadies_the_pb_and_keeps_the_lock(trained):
     # A learned pattern, performed anew: once locked, the gated PB barely moves from step to
-    # step, while the ungated one keeps fitting the demonstration's noise.
+    # step (the default), while the ungated one keeps fitting the demonstration's noise.
     demo = make_sequences(n_samples=1, n_steps=60, seed=12, kinds=(1,))[0]
     moves = {}
-    for name, config in (("default", OnlineConfig()), ("steady", OnlineConfig.steady())):
+    for name, config in (("gated", OnlineConfig()), ("ungated", OnlineConfig.ungated())):
         mirror = MirrorSystem(trained, config)
         pbs, errors = [], []
         for t in range(demo.n_steps):
@@ -123,7 +123,7 @@ def test_surprise_gate_steadies_the_pb_and_keeps_the_lock(trained):
         assert max(errors[LOCK_STEPS:]) < 0.05, (name, np.round(errors, 3))
         assert trained.nearest_pattern(pbs[-1])[0] == "1"
         moves[name] = np.median(np.abs(np.diff(np.array(pbs[30:]), axis=0)).max(axis=1))
-    assert moves["steady"] < 0.5 * moves["default"], moves
+    assert moves["gated"] < 0.5 * moves["ungated"], moves
 
 
 @pytest.mark.parametrize("change, message", [
@@ -134,7 +134,8 @@ def test_bad_surprise_gate_settings_are_refused(change, message):
         OnlineConfig(**change)
 
 
-def test_steady_preset_round_trips():
-    config = OnlineConfig.steady()
-    assert config.surprise_gate > 0
-    assert OnlineConfig.from_dict(config.to_dict()) == config
+def test_presets_round_trip_and_only_the_default_is_gated():
+    assert OnlineConfig().surprise_gate > 0
+    assert OnlineConfig.ungated().surprise_gate == 0 == OnlineConfig.paper().surprise_gate
+    for config in (OnlineConfig(), OnlineConfig.ungated(), OnlineConfig.paper()):
+        assert OnlineConfig.from_dict(config.to_dict()) == config

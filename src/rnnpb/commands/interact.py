@@ -34,9 +34,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", required=True, metavar="DIR", help="output directory")
     parser.add_argument("--robot", choices=("kinematic", "mujoco"), default="kinematic",
                         help="simulated robot (default kinematic: instant, no physics)")
-    parser.add_argument("--online", choices=("default", "paper", "steady"), default="default",
-                        help="on-line regression settings (default: the best measured; steady: "
-                        "the PB settles once the robot is locked; paper: the paper's)")
+    parser.add_argument("--online", choices=("default", "paper", "ungated"), default="default",
+                        help="on-line regression settings (default: the best measured; "
+                        "ungated: without the surprise gate, for models learned with "
+                        "--preset fast; paper: the paper's)")
     parser.add_argument("--paced", action="store_true",
                         help="run in real time, one step every --dt seconds")
     parser.add_argument("--dt", type=float, default=0.4, help="seconds per step (default 0.4)")
@@ -69,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb.robot import JOINT_LIMITS, KinematicRobot
 
     model = TrainedModel.load(args.model)
-    online = {"paper": OnlineConfig.paper, "steady": OnlineConfig.steady}.get(
+    online = {"paper": OnlineConfig.paper, "ungated": OnlineConfig.ungated}.get(
         args.online, OnlineConfig)()
     loop_config = LoopConfig(dt=args.dt, paced=args.paced, max_steps=args.steps)
     out = Path(args.out)

@@ -49,10 +49,13 @@ class OnlineConfig:
     """How the PB is regressed on-line.
 
     ``OnlineConfig.paper()``: L = 30, 100 iterations, l = 20, the onset state carried over and
-    not optimised. ``OnlineConfig()`` (the default) is the best measured (docs/model.md):
-    the onset state optimised with the PB, l = 4 without the low-pass term, and restarts —
-    before each regression, the last ``restart_span`` steps of the PB profile are also tried
-    at each learned pattern's PB, and the regression starts from the profile that fits best.
+    not optimised. ``OnlineConfig()`` (the default) is the best measured with models learned
+    by the paper's algorithm (docs/model.md): the onset state optimised with the PB, l = 4
+    without the low-pass term, restarts — before each regression, the last ``restart_span``
+    steps of the PB profile are also tried at each learned pattern's PB, and the regression
+    starts from the profile that fits best — and the surprise gate, which lets the PB settle
+    once the predictions are good. ``OnlineConfig.ungated()`` is the default without the gate,
+    the better choice for models learned with ``TrainConfig.fast()``.
     """
 
     window: int = 30  # L
@@ -63,12 +66,12 @@ class OnlineConfig:
     onset_learning_rate: float = 0.5
     restart_span: int = 6
     motor_input: Literal["closed_loop", "recorded"] = "closed_loop"
-    # The surprise gate (off at 0): before each regression, the RMS sensory error of the
+    # The surprise gate (0 turns it off): before each regression, the RMS sensory error of the
     # window's last ``gate_steps`` predictions scales the error term of eq. 1 by
     # (error / surprise_gate) ** gate_power, clipped to [gate_floor, 1]: the PB moves at its
     # full rate while the predictions are poor and all but stops once they are good.
-    surprise_gate: float = 0.0
-    gate_power: float = 3.0
+    surprise_gate: float = 0.035
+    gate_power: float = 4.0
     gate_floor: float = 0.01
     gate_steps: int = 4
 
@@ -98,14 +101,15 @@ class OnlineConfig:
         """The paper's regression: L = 30, 100 iterations, l = 20, no onset optimisation."""
         base = cls(pb=PBUpdateConfig(learning_rate=0.5, momentum=0.9, k_bp=1.0, k_nb=0.2,
                                      integration_length=20),
-                   optimize_onset=False, restart_span=0)
+                   optimize_onset=False, restart_span=0, surprise_gate=0.0)
         return replace(base, **changes)
 
     @classmethod
-    def steady(cls, **changes: Any) -> OnlineConfig:
-        """The default with the surprise gate on (0.035 RMS, power 3): the PB settles once the
-        predictions are good, at some cost in lock-on and switching (docs/model.md)."""
-        return replace(cls(surprise_gate=0.035), **changes)
+    def ungated(cls, **changes: Any) -> OnlineConfig:
+        """The default without the surprise gate: the PB keeps fitting every step. Models
+        learned with ``TrainConfig.fast()`` lock on and switch faster with it, though their
+        PB never settles (docs/model.md)."""
+        return replace(cls(surprise_gate=0.0), **changes)
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
