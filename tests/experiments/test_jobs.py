@@ -28,3 +28,45 @@ def test_demo_refuses_a_bad_number_of_demonstrations(tmp_path, capsys):
     assert main(["demo", "--samples-per-pattern", "0", "--out", str(out)]) == 2
     assert "samples_per_pattern must be >= 1" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_the_comparison_runs_the_papers_regression_on_the_same_model(tmp_path):
+    config = ExperimentConfig(extra_scenario_seeds=())
+    result = learning_set_job("1", TrainConfig.fast(iterations=20), OnlineConfig(), config,
+                              str(tmp_path / "set1.npz"), None, "default", full=False,
+                              compare=OnlineConfig.paper())
+    compared = result["compare"]
+    assert [s["pattern"] for s in compared["synchronization"]] == ["1", "2", "3"]
+    assert set(compared["switching"]["pairs"]) == set(result["switching"]["pairs"])
+    # Same scenario, same model, another regression: the PB takes another course.
+    ours, theirs = result["synchronization"][0]["run"], compared["synchronization"][0]["run"]
+    assert ours.pb.shape == theirs.pb.shape
+    assert abs(ours.pb - theirs.pb).max() > 1e-3
+
+
+def test_the_report_says_which_learning_and_regression_it_ran():
+    from rnnpb.experiments.report import _describe_configuration
+
+    full = _describe_configuration(ExperimentConfig())
+    assert "gradient descent with momentum, 50,000 iterations" in full
+    assert "the larger set: 30,000 iterations" in full
+    assert "surprise gate at 0.035" in full
+    assert "**paper's regression**" in full
+    quick = _describe_configuration(ExperimentConfig.quick_run())
+    assert "fast preset" in quick and "no surprise gate" in quick
+    assert "paper's regression" not in quick
+
+
+def test_the_missing_case_explanation_counts_the_closed_loop_cycles():
+    from rnnpb.experiments.report import _missing_cases_explanation
+
+    runs = [{"case": case, "period": 12, "return_error": 0.05} for case in (1, 2, 2)]
+    periodic = {"closed_loop_periods": {"1": {"1": 12, "2": 12, "3": 23}}, "novel_case": runs}
+    text = " ".join(_missing_cases_explanation(periodic))
+    assert "Why case 3 did not occur" in text
+    assert "are limit cycles too (periods 12, 23)" in text
+    mixed = {**periodic, "closed_loop_periods": {"1": {"1": 12, "2": None, "3": 37}}}
+    text = " ".join(_missing_cases_explanation(mixed))
+    assert "2 of 3 are limit cycles (periods 12, 37)" in text
+    assert _missing_cases_explanation({**periodic, "novel_case": runs + [
+        {"case": 3, "period": None, "return_error": 0.4}]}) == []

@@ -12,13 +12,14 @@ section 3 (synchronization and pause, switching, novel patterns and attractors, 
 set) and write OUT/report.md (measure | paper | ours, figures embedded), OUT/results.json
 (every measure, the config and versions), OUT/figures/, OUT/models/ and OUT/data/.
 
-The full run also repeats learning and interaction with the paper's own algorithm for
-comparison (about 6 minutes on 2 cores). --quick keeps the lock-on and switching
-experiments whole and shortens the rest (about 2 minutes).
+The full run learns with the paper's algorithm and also runs the paper's own on-line
+regression on the same models for comparison (about 10 minutes on 2 cores). --quick learns
+with the fast preset, keeps the lock-on and switching experiments whole and shortens the rest
+(about 2 minutes); its models go with `rnnpb interact --online ungated`.
 
 Example:
-  rnnpb demo --quick --out results/quick
-  rnnpb interact --model results/quick/models/set1.npz --source scenario:switch:1,2,3 --out run/
+  rnnpb demo --out results/demo
+  rnnpb interact --model results/demo/models/set1.npz --source scenario:switch:1,2,3 --out run/
 """
 
 

@@ -4,7 +4,7 @@ The jobs (one per trained model) run in ``workers`` processes; every job is seed
 repeats. Outputs under the chosen directory::
 
     data/            the learning sets as sequence CSVs (set1/ … set4/, full/)
-    models/          every trained model (setK.npz, full_seedN.npz, paper_setK.npz)
+    models/          every trained model (setK.npz, full_seedN.npz)
     figures/         the figures the report embeds
     report.md        measure | paper | ours, with the figures
     results.json     every measure, the config, versions and which file is which
@@ -38,6 +38,7 @@ from rnnpb.experiments.paper import (
     learning_set_job,
     sequence_file_name,
 )
+from rnnpb.model import TrainConfig
 
 LEARNING_SETS = ("1", "2", "3", "4")
 
@@ -61,17 +62,13 @@ def run_jobs(out: Path, config: ExperimentConfig,
     context = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(max_workers=config.workers, mp_context=context,
                              initializer=_worker_init) as pool:
-        if config.compare_paper:  # the longest jobs first
-            for name in LEARNING_SETS:
-                future = pool.submit(learning_set_job, name, config.paper_train,
-                                     config.paper_online, config,
-                                     str(models / f"paper_set{name}.npz"), None, "paper", False)
-                jobs[future] = ("paper", name)
+        compare = config.paper_online if config.compare_paper else None
         for name in LEARNING_SETS:
             data_dir = data / f"set{name}"
             data_dir.mkdir(parents=True, exist_ok=True)
             future = pool.submit(learning_set_job, name, config.train, config.online, config,
-                                 str(models / f"set{name}.npz"), str(data_dir), "default", True)
+                                 str(models / f"set{name}.npz"), str(data_dir), "default", True,
+                                 compare)
             jobs[future] = ("default", name)
         for seed in range(config.larger_set_seeds):
             future = pool.submit(larger_set_job, seed, config.larger_train, config.online, config,
@@ -82,8 +79,9 @@ def run_jobs(out: Path, config: ExperimentConfig,
             result = future.result()
             if kind == "default":
                 default[key] = result
-            elif kind == "paper":
-                paper[key] = result
+                if "compare" in result:  # the same model, the paper's on-line regression
+                    compared = result.pop("compare")
+                    paper[key] = {**result, **compared, "label": "paper"}
             else:
                 larger.append(result)
             log(f"  [{done}/{len(jobs)}] {kind} {'seed ' if kind == 'larger' else 'set '}"
@@ -308,8 +306,7 @@ def run_demo(out_dir: str | os.PathLike[str], config: ExperimentConfig,
                                  JOINT_LIMITS)
     figures.plot_attractors(shown, figure_dir / "figure9_attractors.png",
                             config.attractor_transient)
-    histories = {f"set {k} (default)": default[k]["train_history"] for k in sorted(default)}
-    histories.update({f"set {k} (paper)": paper[k]["train_history"] for k in sorted(paper)})
+    histories = {f"set {k}": default[k]["train_history"] for k in sorted(default)}
     figures.plot_training(histories, figure_dir / "training.png")
 
     summary = summarize(default)
@@ -335,8 +332,7 @@ def run_demo(out_dir: str | os.PathLike[str], config: ExperimentConfig,
         "files": {
             "models": {**{f"set{k}": f"models/set{k}.npz" for k in sorted(default)},
                        **{f"full_seed{r['seed']}": f"models/full_seed{r['seed']}.npz"
-                          for r in larger},
-                       **{f"paper_set{k}": f"models/paper_set{k}.npz" for k in sorted(paper)}},
+                          for r in larger}},
             "learning_sets": {**{f"set{k}": {"patterns": default[k]["patterns"],
                                              "data": f"data/set{k}/"} for k in sorted(default)},
                               "full": {"patterns": ["1", "2", "3", "4"], "data": "data/full/"}},
@@ -344,8 +340,8 @@ def run_demo(out_dir: str | os.PathLike[str], config: ExperimentConfig,
         },
     }
     if paper:
-        results["paper_algorithm"] = summarize(paper)
-        results["paper_algorithm"]["targets"] = targets(results["paper_algorithm"], [], [])
+        results["paper_regression"] = summarize(paper)
+        results["paper_regression"]["targets"] = targets(results["paper_regression"], [], [])
     results["runtime_s"] = time.perf_counter() - start
     with atomic_write(out / "results.json", "w", encoding="utf-8") as handle:
         json.dump(_jsonable(results), handle, indent=1)
@@ -371,17 +367,27 @@ def _missing_cases_explanation(results: dict[str, Any]) -> list[str]:
         return []
     periods = sorted({r["period"] for r in runs if r["period"] is not None})
     worst_return = max(r["return_error"] for r in runs)
-    learned = sorted({p for periods_ in results["closed_loop_periods"].values()
-                      for p in periods_.values() if p is not None})
+    closed = [p for periods_ in results["closed_loop_periods"].values()
+              for p in periods_.values()]
+    learned = sorted({p for p in closed if p is not None})
+    cycles = sum(p is not None for p in closed)
+    if cycles == len(closed):
+        autonomous = (f"The closed-loop attractors of the learned patterns are limit cycles too "
+                      f"(periods {', '.join(map(str, learned))}), and with on-line regression "
+                      "the network entrains to the period it is shown.")
+    else:
+        autonomous = (f"Of the learned patterns' closed-loop attractors, {cycles} of "
+                      f"{len(closed)} are limit cycles (periods "
+                      f"{', '.join(map(str, learned)) or '–'}) and the others do not repeat "
+                      "within 60 steps; yet driven by a repeated input and with on-line "
+                      "regression, the network entrains to the period it is shown.")
     lines = ["", f"**Why case {' and '.join(map(str, missing))} did not occur here.**"]
     if 3 in missing:
         lines.append(
             f"Every response settled on a limit cycle: the largest return error over all "
             f"{len(runs)} runs is {worst_return:.3f} (a response counts as unsteady above "
             f"0.1), at period(s) {', '.join(map(str, periods))} — the period of the repeated "
-            f"input cycle. The closed-loop attractors of the learned patterns are limit cycles "
-            f"too (periods {', '.join(map(str, learned)) or '–'}), and with on-line regression "
-            "the network entrains to the period it is shown. The input here is one exactly "
+            f"input cycle or a multiple of it. {autonomous} The input here is one exactly "
             "repeated cycle (the paper's user demonstrated the novel patterns by hand), and "
             "the PB, regressed every step, keeps the response on that period.")
     if 2 in missing:
@@ -392,9 +398,37 @@ def _missing_cases_explanation(results: dict[str, Any]) -> list[str]:
     return lines
 
 
+def _describe_learning(train: TrainConfig) -> str:
+    if train.optimizer == "momentum":
+        how = "the paper's algorithm, gradient descent with momentum"
+    else:
+        how = "Adam with noise on the teacher-forced inputs (the fast preset)"
+    return f"{how}, {train.iterations:,} iterations"
+
+
+def _describe_configuration(config: ExperimentConfig) -> str:
+    """What **default** and **paper's regression** mean in this run, from its config."""
+    online = config.online
+    gate = (f", the surprise gate at {online.surprise_gate} RMS (power {online.gate_power:g})"
+            if online.surprise_gate > 0 else ", no surprise gate")
+    text = (f"**default** is this run's configuration. Learning: "
+            f"{_describe_learning(config.train)} (the larger set: "
+            f"{_describe_learning(config.larger_train).split(', ')[-1]}). On-line: "
+            f"L = {online.window}, {online.iterations} iterations, integration length "
+            f"{online.pb.integration_length}, onset state "
+            f"{'optimised with the PB' if online.optimize_onset else 'carried over'}"
+            f"{', restarts at the learned PBs' if online.restart_span else ''}{gate}.")
+    if config.compare_paper:
+        paper = config.paper_online
+        text += (f" **paper's regression** runs the same models with the paper's on-line "
+                 f"regression (L = {paper.window}, l = {paper.pb.integration_length}, "
+                 f"{paper.iterations} iterations, onset state carried over).")
+    return text
+
+
 def write_report(path: Path, results: dict[str, Any], config: ExperimentConfig) -> None:
     ours = results
-    theirs = results.get("paper_algorithm")
+    theirs = results.get("paper_regression")
     lines = [
         "# rnnpb — the experiments of Ito & Tani (2004), reproduced",
         "",
@@ -404,11 +438,7 @@ def write_report(path: Path, results: dict[str, Any], config: ExperimentConfig) 
         "Every number below is in `results.json`; the definitions of the measures are in "
         "`rnnpb.analysis.metrics` and docs/experiments.md.",
         "",
-        "**default** is rnnpb's default configuration (learning: Adam with noise on the "
-        "teacher-forced inputs; on-line: onset state optimised with the PB, integration "
-        "length 4, no low-pass term). **paper algorithm** is the paper's (learning: gradient "
-        "descent with momentum, 50,000 iterations; on-line: L = 30, l = 20, 100 iterations, "
-        "onset state carried over).",
+        _describe_configuration(config),
         "",
         f"Every learning set holds {config.samples_per_pattern} demonstrations of each of its "
         f"patterns (the paper: 2), from the synthetic demonstrator with data seed "
@@ -416,7 +446,7 @@ def write_report(path: Path, results: dict[str, Any], config: ExperimentConfig) 
         "",
         "## Summary",
         "",
-        "| measure | paper | ours (default) | ours (paper algorithm) |",
+        "| measure | paper | ours (default) | ours (paper's regression) |",
         "|---|---|---|---|",
     ]
 
@@ -467,7 +497,7 @@ def write_report(path: Path, results: dict[str, Any], config: ExperimentConfig) 
               f"For the report's draw of the user's imperfection (scenario seed {seeds[0]}) and "
               f"over all {len(seeds)} draws ({', '.join(map(str, seeds))}; see "
               "\"Other draws of the user's imperfection\" below):", "",
-              "| target | default | default, all draws | paper algorithm |",
+              "| target | default | default, all draws | paper's regression |",
               "|---|---|---|---|"]
     for key, value in ours["targets"].items():
         other = theirs["targets"].get(key) if theirs else None
@@ -485,11 +515,8 @@ def write_report(path: Path, results: dict[str, Any], config: ExperimentConfig) 
         "|---|---|---|---|",
     ]
     for k in sorted(ours["train_mse"]):
-        lines.append(f"| {k} (default) | {ours['train_mse'][k]:.2e} | {ours['train_rms'][k]:.2e}"
+        lines.append(f"| {k} | {ours['train_mse'][k]:.2e} | {ours['train_rms'][k]:.2e}"
                      f" | {ours['train_seconds'][k]:.0f} |")
-        if theirs and k in theirs["train_mse"]:
-            lines.append(f"| {k} (paper algorithm) | {theirs['train_mse'][k]:.2e} | "
-                         f"{theirs['train_rms'][k]:.2e} | {theirs['train_seconds'][k]:.0f} |")
     lines += ["", "![training](figures/training.png)", "",
               "## 3.1 Synchronization and pause (Figure 5)", "",
               "| set | pattern | steps to lock | PB settles | phase lag | recognised | "
