@@ -36,7 +36,8 @@ class ExperimentConfig:
 
     quick: bool = False
     # The paper's learning: its networks entrain better than those of the fast preset, and the
-    # surprise gate lets their PB settle (docs/experiments.md, "Learning algorithm").
+    # surprise gate lets their PB settle (docs/model.md, "Which learning, and why the gate
+    # is on").
     train: TrainConfig = field(default_factory=TrainConfig.paper)
     # The larger set (3.4): 30,000 iterations followed best over five draws of the user
     # (20,000: 45/50 seed-runs, 30,000: 47/50, 50,000: 26/30 over three draws).

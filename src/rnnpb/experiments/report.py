@@ -38,7 +38,7 @@ from rnnpb.experiments.paper import (
     learning_set_job,
     sequence_file_name,
 )
-from rnnpb.model import TrainConfig
+from rnnpb.model import OnlineConfig, TrainConfig
 
 LEARNING_SETS = ("1", "2", "3", "4")
 
@@ -408,21 +408,23 @@ def _describe_learning(train: TrainConfig) -> str:
 
 def _describe_configuration(config: ExperimentConfig) -> str:
     """What **default** and **paper's regression** mean in this run, from its config."""
+    def onset(online: OnlineConfig) -> str:
+        return "optimised with the PB" if online.optimize_onset else "carried over"
+
     online = config.online
     gate = (f", the surprise gate at {online.surprise_gate} RMS (power {online.gate_power:g})"
             if online.surprise_gate > 0 else ", no surprise gate")
     text = (f"**default** is this run's configuration. Learning: "
             f"{_describe_learning(config.train)} (the larger set: "
-            f"{_describe_learning(config.larger_train).split(', ')[-1]}). On-line: "
+            f"{config.larger_train.iterations:,} iterations). On-line: "
             f"L = {online.window}, {online.iterations} iterations, integration length "
-            f"{online.pb.integration_length}, onset state "
-            f"{'optimised with the PB' if online.optimize_onset else 'carried over'}"
+            f"{online.pb.integration_length}, onset state {onset(online)}"
             f"{', restarts at the learned PBs' if online.restart_span else ''}{gate}.")
     if config.compare_paper:
         paper = config.paper_online
         text += (f" **paper's regression** runs the same models with the paper's on-line "
                  f"regression (L = {paper.window}, l = {paper.pb.integration_length}, "
-                 f"{paper.iterations} iterations, onset state carried over).")
+                 f"{paper.iterations} iterations, onset state {onset(paper)}).")
     return text
 
 
