@@ -6,6 +6,7 @@ import pytest
 
 from rnnpb.errors import ConfigError
 from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel
+from rnnpb.model.online import phase_candidates
 from rnnpb.model.reference import ReferenceMirrorSystem
 
 from .synthetic import LIMITS, make_sequences
@@ -82,30 +83,69 @@ def test_numerical_failure_holds_the_last_good_state(trained):
         assert np.all(np.isfinite(result.motor)) and np.all(np.isfinite(result.pb))
 
 
-@pytest.mark.parametrize("motor_input, optimize_onset, restart_span, surprise_gate", [
-    ("closed_loop", True, 6, 0.0), ("closed_loop", False, 0, 0.0), ("recorded", True, 3, 0.0),
-    ("recorded", False, 6, 0.0), ("closed_loop", True, 6, 0.05)])
+@pytest.mark.parametrize("motor_input, optimize_onset, restart_span, surprise_gate, phase", [
+    ("closed_loop", True, 6, 0.0, 0), ("closed_loop", False, 0, 0.0, 0),
+    ("recorded", True, 3, 0.0, 0), ("recorded", False, 6, 0.0, 0),
+    ("closed_loop", True, 6, 0.05, 0), ("closed_loop", True, 6, 0.05, 3),
+    ("recorded", True, 0, 0.0, 2)])
 def test_compiled_step_matches_numpy_reference(trained, motor_input, optimize_onset,
-                                               restart_span, surprise_gate):
+                                               restart_span, surprise_gate, phase):
     config = OnlineConfig(window=8, iterations=5, motor_input=motor_input,
                           optimize_onset=optimize_onset, restart_span=restart_span,
-                          surprise_gate=surprise_gate)
-    demo = make_sequences(n_samples=1, n_steps=14, seed=3, kinds=(2,))[0]
+                          surprise_gate=surprise_gate, phase_restarts=phase)
+    # Pattern 2, then pattern 0: the switch makes the phase restarts start the window over.
+    first, second = make_sequences(n_samples=1, n_steps=10, seed=3, kinds=(2, 0))
+    sensory = np.concatenate([first.sensory, second.sensory])
+    sensory[5, :2] = np.nan  # a lost hand inside the window
     mirror = MirrorSystem(trained, config)
     net = trained.network
     pb0 = np.mean(list(trained.pattern_pb.values()), axis=0)
     ref = ReferenceMirrorSystem(trained.params, trained.mean_initial_context, pb0,
                                 net.sensory_size, net.motor_size, config,
-                                np.array(list(trained.pattern_pb.values())))
-    sensory = demo.sensory.copy()
-    sensory[5, :2] = np.nan  # a lost hand inside the window
-    for t in range(14):  # fills the window, then shifts it
+                                np.array(list(trained.pattern_pb.values())),
+                                phase_candidates(trained) if phase else None)
+    starts_over = 0
+    for t in range(len(sensory)):  # fills the window, then shifts it
         result = mirror.step(sensory[t])
         motor, predicted, pb = ref.step(sensory[t])
         np.testing.assert_allclose(result.pb, pb, atol=2e-4)
         np.testing.assert_allclose(result.predicted_hands, predicted, atol=2e-4)
         np.testing.assert_allclose(trained.normalize(np.r_[predicted, result.motor])[4:],
                                    motor, atol=2e-4)
+        assert len(mirror.pb_profile) == ref.n
+        starts_over += ref.n < min(t + 1, config.window)
+    assert (starts_over > 0) == (phase > 0)
+
+
+def test_phase_restart_starts_the_window_over_after_a_switch_not_while_locked(trained):
+    first, second = make_sequences(n_samples=1, n_steps=45, seed=31, kinds=(0, 2))
+    sensory = np.concatenate([first.sensory, second.sensory[:25]])
+    motor = np.concatenate([first.motor, second.motor[:25]])
+    mirror = MirrorSystem(trained, OnlineConfig(phase_restarts=3))
+    lengths, errors = [], []
+    for u, m in zip(sensory, motor, strict=True):
+        result = mirror.step(u)
+        lengths.append(len(mirror.pb_profile))
+        errors.append(_motor_error(result.motor, m))
+    # Locked on pattern 0 (after the first cycle): the window only grows or stays full.
+    assert np.all(np.diff(lengths[12:45]) >= 0), lengths
+    # After the switch the window starts over from a state on pattern 2's cycle, and the robot
+    # follows the new pattern within a few steps.
+    assert min(lengths[45:52]) == 4, lengths[45:]
+    assert max(errors[52:]) < 0.05, np.round(errors[45:], 3)
+    assert trained.nearest_pattern(mirror.pb)[0] == "2"
+
+
+def test_phase_candidates_lie_on_each_learned_cycle(trained):
+    candidates = phase_candidates(trained, skip=6, steps=24)
+    net = trained.network
+    assert candidates.shape == (3 * 24, net.pb_size + net.motor_size + net.context_size)
+    pbs = 1.0 / (1.0 + np.exp(-candidates[:, :net.pb_size]))
+    for k, (name, pb) in enumerate(trained.pattern_pb.items()):
+        np.testing.assert_allclose(pbs[24 * k:24 * (k + 1)], np.tile(pb, (24, 1)), atol=1e-4)
+    # The motor part follows the learned cycle: one period (12 steps) on, nearly the same.
+    motor = candidates[:, net.pb_size:net.pb_size + net.motor_size]
+    assert np.sqrt(np.mean((motor[12:24] - motor[:12]) ** 2)) < 0.5
 
 
 def test_surprise_gate_steadies_the_pb_and_keeps_the_lock(trained):
@@ -128,7 +168,10 @@ def test_surprise_gate_steadies_the_pb_and_keeps_the_lock(trained):
 
 @pytest.mark.parametrize("change, message", [
     ({"surprise_gate": -0.1}, "surprise_gate"), ({"gate_power": 0}, "gate_power"),
-    ({"gate_floor": 0}, "gate_floor"), ({"gate_steps": 0}, "gate_steps")])
+    ({"gate_floor": 0}, "gate_floor"), ({"gate_steps": 0}, "gate_steps"),
+    ({"phase_restarts": -1}, "phase_restarts"), ({"phase_restarts": 30}, "phase_restarts"),
+    ({"phase_restart_ratio": 0}, "phase_restart_ratio"),
+    ({"phase_restart_level": -0.1}, "phase_restart_level")])
 def test_bad_surprise_gate_settings_are_refused(change, message):
     with pytest.raises(ConfigError, match=message):
         OnlineConfig(**change)

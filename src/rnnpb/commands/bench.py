@@ -66,6 +66,7 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb.model import MirrorSystem, NetworkConfig, OnlineConfig, TrainConfig, TrainedModel
     from rnnpb.model import training as training_module
     from rnnpb.model.network import init_params
+    from rnnpb.model.online import phase_candidates
     from rnnpb.model.reference import ReferenceMirrorSystem
     from rnnpb.robot import JOINT_LIMITS
 
@@ -109,7 +110,8 @@ def run(args: argparse.Namespace) -> int:
     reference = ReferenceMirrorSystem(params, model.mean_initial_context,
                                       np.mean(model.sequence_pb, axis=0), network.sensory_size,
                                       network.motor_size, online,
-                                      np.array(list(model.pattern_pb.values())))
+                                      np.array(list(model.pattern_pb.values())),
+                                      phase_candidates(model))
     for t in range(online.window):
         if t == online.window - 1:
             break

@@ -74,6 +74,15 @@ class OnlineConfig:
     gate_power: float = 4.0
     gate_floor: float = 0.01
     gate_steps: int = 4
+    # Phase restarts (0 turns them off): before each regression, the network is also started
+    # ``phase_restarts + 1`` steps back from each of a set of states on the learned patterns'
+    # cycles (with that pattern's PB); where one predicts the last ``phase_restarts``
+    # observations better than the window does, by the factor ``phase_restart_ratio``, and the
+    # window's own prediction error there is above ``phase_restart_level`` (RMS), the window
+    # starts over from that state.
+    phase_restarts: int = 3
+    phase_restart_ratio: float = 0.5
+    phase_restart_level: float = 0.02
 
     def __post_init__(self) -> None:
         if self.window < 2:
@@ -92,6 +101,13 @@ class OnlineConfig:
             raise ConfigError(f"gate_floor must be in (0, 1], got {self.gate_floor}")
         if self.gate_steps < 1:
             raise ConfigError(f"gate_steps must be >= 1, got {self.gate_steps}")
+        if not 0 <= self.phase_restarts < self.window:
+            raise ConfigError(f"phase_restarts must be in [0, window), got "
+                              f"{self.phase_restarts}")
+        if not 0 < self.phase_restart_ratio <= 1:
+            raise ConfigError("phase_restart_ratio must be in (0, 1]")
+        if self.phase_restart_level < 0:
+            raise ConfigError("phase_restart_level must be >= 0")
         if self.motor_input not in ("closed_loop", "recorded"):
             raise ConfigError(f"motor_input must be 'closed_loop' or 'recorded', got "
                               f"{self.motor_input!r}")
@@ -101,7 +117,7 @@ class OnlineConfig:
         """The paper's regression: L = 30, 100 iterations, l = 20, no onset optimisation."""
         base = cls(pb=PBUpdateConfig(learning_rate=0.5, momentum=0.9, k_bp=1.0, k_nb=0.2,
                                      integration_length=20),
-                   optimize_onset=False, restart_span=0, surprise_gate=0.0)
+                   optimize_onset=False, restart_span=0, surprise_gate=0.0, phase_restarts=0)
         return replace(base, **changes)
 
     @classmethod
@@ -353,9 +369,51 @@ def _surprise_gate(params: Params, state: OnlineState, config: OnlineConfig
     return jnp.clip((rms / config.surprise_gate) ** config.gate_power, config.gate_floor, 1.0)
 
 
+def _phase_restart(params: Params, state: OnlineState, phase_candidates: jax.Array,
+                   config: OnlineConfig) -> OnlineState:
+    """Start the window over from a learned state where one predicts the recent steps much
+    better than the window does (see ``OnlineConfig.phase_restarts``)."""
+    length, n_p = state.rho.shape
+    n_m = state.onset_motor.shape[0]
+    recent = config.phase_restarts
+    span = recent + 1
+    start = jnp.maximum(state.n - span, 0)
+
+    def cut(buffer: jax.Array) -> jax.Array:
+        return jax.lax.dynamic_slice_in_dim(buffer, start, span, axis=0)
+
+    short = state._replace(sensory=cut(state.sensory), seen=cut(state.seen),
+                           motor_sent=cut(state.motor_sent), n=jnp.asarray(span, jnp.int32),
+                           rho=cut(state.rho), rho_velocity=cut(state.rho_velocity))
+
+    def candidate_error(candidate: jax.Array) -> jax.Array:
+        rho = jnp.broadcast_to(candidate[:n_p], (span, n_p))
+        predictions, _ = _window_run(params, short, rho, candidate[n_p + n_m:],
+                                     candidate[n_p:n_p + n_m], config)
+        return _mean_squared(*_prediction_errors(predictions, short))
+
+    errors = jax.lax.map(candidate_error, phase_candidates)
+    best = jnp.argmin(errors)
+    predictions, _ = _window_run(params, state, state.rho, state.onset_context,
+                                 state.onset_motor, config)
+    current = _mean_squared(*_prediction_errors(predictions, state, since=state.n - span))
+    accept = ((state.n >= span) & (errors[best] < config.phase_restart_ratio * current)
+              & (current > config.phase_restart_level ** 2))
+    chosen = phase_candidates[best]
+    index = jnp.minimum(jnp.arange(length) + start, length - 1)
+    restarted = state._replace(
+        sensory=state.sensory[index], seen=state.seen[index], motor_sent=state.motor_sent[index],
+        n=jnp.asarray(span, jnp.int32),
+        rho=jnp.broadcast_to(chosen[:n_p], (length, n_p)),
+        rho_velocity=jnp.zeros_like(state.rho_velocity),
+        onset_motor=chosen[n_p:n_p + n_m], onset_context=chosen[n_p + n_m:])
+    return jax.tree_util.tree_map(lambda a, b: jnp.where(accept, a, b), restarted, state)
+
+
 @partial(jax.jit, static_argnames=("config",))
 def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Array,
-                config: OnlineConfig, candidates: jax.Array | None = None
+                config: OnlineConfig, candidates: jax.Array | None = None,
+                phase_candidates: jax.Array | None = None
                 ) -> tuple[OnlineState, StepOutputs]:
     """One step of the mirror system, compiled as one call.
 
@@ -376,6 +434,8 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
     """
     previous = state
     state = _shift_in(state, u, seen)
+    if phase_candidates is not None and config.phase_restarts > 0:
+        state = _phase_restart(params, state, phase_candidates, config)
     length = state.sensory.shape[0]
     valid = jnp.arange(length) < state.n
     if candidates is not None and config.restart_span > 0:
@@ -444,11 +504,12 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
 
 @partial(jax.jit, static_argnames=("config",))
 def _online_step_packed(params: Params, state: OnlineState, u: jax.Array, seen: jax.Array,
-                        config: OnlineConfig, candidates: jax.Array | None = None
+                        config: OnlineConfig, candidates: jax.Array | None = None,
+                        phase_candidates: jax.Array | None = None
                         ) -> tuple[OnlineState, jax.Array]:
     """:func:`online_step` with its outputs packed into one vector — ``motor, predicted
     sensory, pb, window error, held, context`` — so that they come back in one transfer."""
-    state, out = online_step(params, state, u, seen, config, candidates)
+    state, out = online_step(params, state, u, seen, config, candidates, phase_candidates)
     return state, jnp.concatenate([out.motor, out.predicted_sensory, out.pb,
                                    out.window_error[None], out.held[None].astype(jnp.float32),
                                    out.context])
@@ -489,6 +550,29 @@ class StepResult:
     context: np.ndarray | None = None
 
 
+def phase_candidates(model: TrainedModel, skip: int = 6, steps: int = 24) -> np.ndarray:
+    """States on each learned pattern's cycle, for phase restarts: the network run in closed
+    loop from the pattern's learned initial context with its PB, steps ``skip`` to
+    ``skip + steps``. Each row is the logits of ``[PB, motor input, context input]``, shape
+    (patterns × steps, P + M + C)."""
+    from rnnpb.model.network import closed_loop
+
+    net = model.network
+    rows = []
+    for name, pb in model.pattern_pb.items():
+        pbs = jnp.broadcast_to(jnp.asarray(pb, jnp.float32), (skip + steps, net.pb_size))
+        predictions, contexts = closed_loop(
+            model.params, jnp.asarray(model.pattern_initial_context(name), jnp.float32),
+            jnp.full(net.io_size, 0.5, jnp.float32), pbs)
+        predictions = np.asarray(predictions, dtype=np.float64)[skip:]
+        contexts = np.asarray(contexts, dtype=np.float64)[skip:]
+        states = np.concatenate([np.broadcast_to(pb, (steps, net.pb_size)),
+                                 predictions[:, net.sensory_size:], contexts], axis=1)
+        rows.append(states)
+    states = np.clip(np.concatenate(rows), 1e-4, 1 - 1e-4)
+    return np.log(states) - np.log1p(-states)
+
+
 class MirrorSystem:
     """On-line recognition and generation with a trained RNNPB (weights frozen).
 
@@ -516,6 +600,9 @@ class MirrorSystem:
         if self.config.restart_span > 0:
             learned = np.clip(np.array(list(model.pattern_pb.values())), 1e-4, 1 - 1e-4)
             self._candidates = jnp.asarray(np.log(learned) - np.log1p(-learned), jnp.float32)
+        self._phase_candidates = None
+        if self.config.phase_restarts > 0:
+            self._phase_candidates = jnp.asarray(phase_candidates(model), jnp.float32)
         self.steps = 0
 
     def reset(self, initial_pb: np.ndarray | None = None) -> None:
@@ -560,7 +647,7 @@ class MirrorSystem:
         # transfer: at a few milliseconds a step, per-array round trips are worth avoiding.
         self._state, packed = _online_step_packed(
             self._params, self._state, u_norm.astype(np.float32), seen, self.config,
-            self._candidates)
+            self._candidates, self._phase_candidates)
         packed = np.asarray(packed, dtype=np.float64)
         s, m, p = self._sensory_size, self._motor_size, self._pb_size
         motor, predicted = packed[:m], packed[m:m + s]

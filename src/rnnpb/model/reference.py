@@ -200,9 +200,12 @@ class ReferenceMirrorSystem:
 
     def __init__(self, params: Params, initial_context: np.ndarray, initial_pb: np.ndarray,
                  sensory_size: int, motor_size: int, config: OnlineConfig,
-                 learned_pbs: np.ndarray | None = None) -> None:
+                 learned_pbs: np.ndarray | None = None,
+                 phase_candidates: np.ndarray | None = None) -> None:
         self.params = params
         self.config = config
+        self.phase_candidates = (None if phase_candidates is None or config.phase_restarts == 0
+                                 else np.asarray(phase_candidates, dtype=np.float64))
         self.candidates = (None if learned_pbs is None or config.restart_span == 0
                            else logit(np.asarray(learned_pbs, dtype=np.float64)))
         length = config.window
@@ -216,6 +219,52 @@ class ReferenceMirrorSystem:
         self.onset_motor = np.zeros(motor_size)
         self.next_onset_context = self.onset_context.copy()
         self.next_onset_motor = self.onset_motor.copy()
+
+    def _recent_mse(self, predictions: np.ndarray, sensory: np.ndarray, seen: np.ndarray,
+                    first: int, last: int) -> float:
+        """Mean squared error of the predictions made at steps ``first`` … ``last - 1``."""
+        squared = [(predictions[t, j] - sensory[t + 1, j]) ** 2
+                   for t in range(first, last) for j in range(sensory.shape[1])
+                   if seen[t + 1, j]]
+        return float(np.mean(squared)) if squared else 0.0
+
+    def _phase_restart(self, motor_inputs: np.ndarray | None) -> None:
+        """Start the window over from the learned state that best predicts the last
+        ``phase_restarts`` observations, where it does so much better than the window."""
+        cfg = self.config
+        length = cfg.window
+        span = cfg.phase_restarts + 1
+        start = self.n - span
+        n_pb = self.rho.shape[1]
+        n_m = self.onset_motor.shape[0]
+        piece = slice(start, start + span)
+        sensory, seen = self.sensory[piece], self.seen[piece]
+        inputs = None if motor_inputs is None else motor_inputs[piece]
+        best_error, best = None, None
+        for candidate in self.phase_candidates:
+            predictions = window_error_and_gradients(
+                self.params, sensory, seen, span, np.tile(candidate[:n_pb], (span, 1)),
+                candidate[n_pb + n_m:], candidate[n_pb:n_pb + n_m], inputs)[4]
+            error = self._recent_mse(predictions, sensory, seen, 0, span - 1)
+            if best_error is None or error < best_error:
+                best_error, best = error, candidate
+        predictions = window_error_and_gradients(
+            self.params, self.sensory, self.seen, self.n, self.rho, self.onset_context,
+            self.onset_motor, motor_inputs)[4]
+        current = self._recent_mse(predictions, self.sensory, self.seen, start, self.n - 1)
+        if not (best_error < cfg.phase_restart_ratio * current
+                and current > cfg.phase_restart_level ** 2):
+            return
+        for name in ("sensory", "seen", "motor_sent"):
+            buffer = getattr(self, name)
+            moved = buffer[start:].copy()
+            buffer[:len(moved)] = moved
+            buffer[len(moved):] = moved[-1]
+        self.n = span
+        self.rho = np.tile(best[:n_pb], (length, 1))
+        self.velocity = np.zeros_like(self.velocity)
+        self.onset_motor = best[n_pb:n_pb + n_m].copy()
+        self.onset_context = best[n_pb + n_m:].copy()
 
     def step(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Observe normalized hands ``u`` (NaN = not seen); return (motor, predicted, pb)."""
@@ -242,6 +291,9 @@ class ReferenceMirrorSystem:
             self.velocity[i] = 0.0
         self.n = min(self.n + 1, length)
         motor_inputs = self.motor_sent if cfg.motor_input == "recorded" else None
+        if self.phase_candidates is not None and self.n >= cfg.phase_restarts + 1:
+            self._phase_restart(motor_inputs)
+            motor_inputs = self.motor_sent if cfg.motor_input == "recorded" else None
         if self.candidates is not None:
             # Restarts: the recent end of the profile at each learned PB; keep the best fit.
             recent = np.arange(length) >= self.n - cfg.restart_span
