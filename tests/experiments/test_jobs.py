@@ -51,6 +51,7 @@ def test_the_report_says_which_learning_and_regression_it_ran():
     assert "gradient descent with momentum, 50,000 iterations" in full
     assert "the larger set: 30,000 iterations" in full
     assert "surprise gate at 0.035" in full
+    assert "phase restarts from the learned cycles (scored on the last 3 steps)" in full
     assert "**paper's regression**" in full
     quick = _describe_configuration(ExperimentConfig.quick_run())
     assert "fast preset" in quick and "no surprise gate" in quick

@@ -72,6 +72,7 @@ def test_bench_prints_and_writes_its_figures(tmp_path):
     assert result.returncode == 0, result.stderr
     figures = json.loads(path.read_text())
     for key in ("train_iteration_ms_median", "online_step_ms_median", "online_step_ms_p99",
+                "online_step_without_phase_restarts_ms_median",
                 "online_step_reference_numpy_ms_median"):
         assert figures[key] > 0
     # The compiled step is faster than the plain NumPy one.

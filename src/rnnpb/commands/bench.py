@@ -13,7 +13,8 @@ single-threaded, after warm-up:
 
   - one learning iteration on 6 sequences x 50 steps (BPTT + weight and PB updates);
   - one on-line step (PB regression over a window of L = 30 steps, 100 iterations,
-    then the motor command): median and 99th percentile;
+    then the motor command): median and 99th percentile, and the median of the same step
+    without phase restarts, timed alternately with it (what they cost);
   - the same on-line step in a straightforward NumPy implementation (the reference the
     tests hold the compiled one to), and the ratio;
   - colour-ball tracking of 640x480 frames.
@@ -56,6 +57,7 @@ def run(args: argparse.Namespace) -> int:
     import json
     import platform
     import time
+    from dataclasses import replace
 
     import jax
     import numpy as np
@@ -95,16 +97,21 @@ def run(args: argparse.Namespace) -> int:
                          sequence_patterns=data.patterns,
                          initial_context=np.full((len(sequences), network.context_size), 0.5))
     online = OnlineConfig()
+    # The default step and the same step without phase restarts, timed alternately so that
+    # both see the same machine: the difference is what phase restarts cost.
     mirror = MirrorSystem(model, online)
+    plain = MirrorSystem(model, replace(online, phase_restarts=0))
     stream = np.concatenate([s.sensory for s in sequences])
     for t in range(40):
         mirror.step(stream[t])
-    step_times = []
+        plain.step(stream[t])
+    step_times, plain_times = [], []
     for t in range(args.steps):
         u = stream[(40 + t) % len(stream)]
-        t0 = time.perf_counter()
-        mirror.step(u)
-        step_times.append((time.perf_counter() - t0) * 1e3)
+        for system, times in ((mirror, step_times), (plain, plain_times)):
+            t0 = time.perf_counter()
+            system.step(u)
+            times.append((time.perf_counter() - t0) * 1e3)
     step_times = np.asarray(step_times)
 
     reference = ReferenceMirrorSystem(params, model.mean_initial_context,
@@ -131,6 +138,7 @@ def run(args: argparse.Namespace) -> int:
         "train_50k_iterations_s_estimate": train_ms * 50.0,
         "online_step_ms_median": float(np.median(step_times)),
         "online_step_ms_p99": float(np.percentile(step_times, 99)),
+        "online_step_without_phase_restarts_ms_median": float(np.median(plain_times)),
         "online_step_reference_numpy_ms_median": reference_ms,
         "online_speedup_vs_numpy": reference_ms / float(np.median(step_times)),
     }
@@ -150,6 +158,11 @@ def run(args: argparse.Namespace) -> int:
     print(f"  on-line step (L={online.window}, {online.iterations} it.): "
           f"{figures['online_step_ms_median']:8.3f} ms median, "
           f"{figures['online_step_ms_p99']:.3f} ms p99 (over {args.steps} steps)")
+    cost = (figures["online_step_ms_median"]
+            / figures["online_step_without_phase_restarts_ms_median"] - 1)
+    print(f"  on-line step without phase restarts:     "
+          f"{figures['online_step_without_phase_restarts_ms_median']:8.3f} ms median "
+          f"(phase restarts cost {cost:+.0%})")
     print(f"  on-line step, NumPy reference:           {reference_ms:8.1f} ms median "
           f"(over {args.reference_steps} steps) — compiled is "
           f"{figures['online_speedup_vs_numpy']:.0f}x faster")

@@ -412,6 +412,8 @@ def _describe_configuration(config: ExperimentConfig) -> str:
         return "optimised with the PB" if online.optimize_onset else "carried over"
 
     online = config.online
+    phase = (f", phase restarts from the learned cycles (scored on the last "
+             f"{online.phase_restarts} steps)" if online.phase_restarts else "")
     gate = (f", the surprise gate at {online.surprise_gate} RMS (power {online.gate_power:g})"
             if online.surprise_gate > 0 else ", no surprise gate")
     text = (f"**default** is this run's configuration. Learning: "
@@ -419,7 +421,8 @@ def _describe_configuration(config: ExperimentConfig) -> str:
             f"{config.larger_train.iterations:,} iterations). On-line: "
             f"L = {online.window}, {online.iterations} iterations, integration length "
             f"{online.pb.integration_length}, onset state {onset(online)}"
-            f"{', restarts at the learned PBs' if online.restart_span else ''}{gate}.")
+            f"{', restarts at the learned PBs' if online.restart_span else ''}"
+            f"{phase}{gate}.")
     if config.compare_paper:
         paper = config.paper_online
         text += (f" **paper's regression** runs the same models with the paper's on-line "
