@@ -40,7 +40,7 @@ import numpy as np
 
 from rnnpb.errors import ConfigError
 from rnnpb.model.io import TrainedModel
-from rnnpb.model.network import Params
+from rnnpb.model.network import Params, closed_loop
 from rnnpb.model.parametric_bias import PBUpdateConfig, pb_update
 
 
@@ -550,25 +550,30 @@ class StepResult:
     context: np.ndarray | None = None
 
 
+_batched_closed_loop = jax.jit(closed_loop)
+
+
 def phase_candidates(model: TrainedModel, skip: int = 6, steps: int = 24) -> np.ndarray:
     """States on each learned pattern's cycle, for phase restarts: the network run in closed
     loop from the pattern's learned initial context with its PB, steps ``skip`` to
     ``skip + steps``. Each row is the logits of ``[PB, motor input, context input]``, shape
     (patterns × steps, P + M + C)."""
-    from rnnpb.model.network import closed_loop
-
     net = model.network
-    rows = []
-    for name, pb in model.pattern_pb.items():
-        pbs = jnp.broadcast_to(jnp.asarray(pb, jnp.float32), (skip + steps, net.pb_size))
-        predictions, contexts = closed_loop(
-            model.params, jnp.asarray(model.pattern_initial_context(name), jnp.float32),
-            jnp.full(net.io_size, 0.5, jnp.float32), pbs)
-        predictions = np.asarray(predictions, dtype=np.float64)[skip:]
-        contexts = np.asarray(contexts, dtype=np.float64)[skip:]
-        states = np.concatenate([np.broadcast_to(pb, (steps, net.pb_size)),
-                                 predictions[:, net.sensory_size:], contexts], axis=1)
-        rows.append(states)
+    learned = np.array(list(model.pattern_pb.values()))  # (K, P)
+    contexts0 = np.array([model.pattern_initial_context(name) for name in model.pattern_pb])
+    params = jax.tree_util.tree_map(lambda a: jnp.asarray(a, jnp.float32), model.params)
+    # All patterns in one batched run, compiled once per shape (a mirror system is made for
+    # every experiment run).
+    predictions, contexts = _batched_closed_loop(
+        params, jnp.asarray(contexts0, jnp.float32),
+        jnp.full((len(learned), net.io_size), 0.5, jnp.float32),
+        jnp.broadcast_to(jnp.asarray(learned, jnp.float32),
+                         (skip + steps, *learned.shape)))
+    predictions = np.asarray(predictions, dtype=np.float64)[skip:]  # (steps, K, I)
+    contexts = np.asarray(contexts, dtype=np.float64)[skip:]  # (steps, K, C)
+    rows = [np.concatenate([np.broadcast_to(pb, (steps, net.pb_size)),
+                            predictions[:, k, net.sensory_size:], contexts[:, k]], axis=1)
+            for k, pb in enumerate(learned)]
     states = np.clip(np.concatenate(rows), 1e-4, 1 - 1e-4)
     return np.log(states) - np.log1p(-states)
 
