@@ -141,7 +141,7 @@ def test_phase_candidates_lie_on_each_learned_cycle(trained):
     net = trained.network
     assert candidates.shape == (3 * 24, net.pb_size + net.motor_size + net.context_size)
     pbs = 1.0 / (1.0 + np.exp(-candidates[:, :net.pb_size]))
-    for k, (name, pb) in enumerate(trained.pattern_pb.items()):
+    for k, pb in enumerate(trained.pattern_pb.values()):
         np.testing.assert_allclose(pbs[24 * k:24 * (k + 1)], np.tile(pb, (24, 1)), atol=1e-4)
     # The motor part follows the learned cycle: one period (12 steps) on, nearly the same.
     motor = candidates[:, net.pb_size:net.pb_size + net.motor_size]

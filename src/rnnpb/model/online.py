@@ -25,6 +25,12 @@ shifts by one step, the new onset takes the context and motor values the last re
 forward pass had at that step. With ``optimize_onset`` (the improved configuration) the onset
 context and motor values are also regressed by gradient descent along with the PB, so the
 window's start state need not be right for the window to fit (docs/model.md measures it).
+
+Phase restarts (the default) can start the window over: before the regression, the network
+is also run over the last few steps from states on the learned patterns' cycles; where one of
+them predicts those steps far better than the window does, the window keeps only those steps
+and takes that state as its onset and that pattern's PB, so that after a pause or a switch
+the context need not be dragged to the user's phase through the old observations.
 """
 
 from __future__ import annotations
@@ -53,9 +59,10 @@ class OnlineConfig:
     by the paper's algorithm (docs/model.md): the onset state optimised with the PB, l = 4
     without the low-pass term, restarts — before each regression, the last ``restart_span``
     steps of the PB profile are also tried at each learned pattern's PB, and the regression
-    starts from the profile that fits best — and the surprise gate, which lets the PB settle
-    once the predictions are good. ``OnlineConfig.ungated()`` is the default without the gate,
-    the better choice for models learned with ``TrainConfig.fast()``.
+    starts from the profile that fits best — phase restarts (below) and the surprise gate,
+    which lets the PB settle once the predictions are good. ``OnlineConfig.ungated()`` is the
+    default without the gate, the better choice for models learned with
+    ``TrainConfig.fast()``.
     """
 
     window: int = 30  # L
@@ -426,6 +433,10 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
         PB values (logits) to try as restarts for the recent end of the window
         (``config.restart_span`` steps) before the regression: the regression starts from
         whichever profile — the current one or a restart — fits the window best.
+    phase_candidates : array, shape (Q, P + M + C), optional
+        States on the learned cycles (logits of PB, motor input and context input;
+        :func:`phase_candidates`) from which the window may start over
+        (``config.phase_restarts``).
 
     Returns
     -------
