@@ -13,7 +13,7 @@ set) and write OUT/report.md (measure | paper | ours, figures embedded), OUT/res
 (every measure, the config and versions), OUT/figures/, OUT/models/ and OUT/data/.
 
 The full run learns with the paper's algorithm and also runs the paper's own on-line
-regression on the same models for comparison (about 9–10 minutes on 2 cores). --quick learns
+regression on the same models for comparison (about 8 minutes on 2 cores). --quick learns
 with the fast preset, keeps the lock-on and switching experiments whole and shortens the rest
 (about 2 minutes); its models go with `rnnpb interact --online ungated`.
 
