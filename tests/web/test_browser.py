@@ -7,6 +7,7 @@ skip, when it cannot run.
 
 from __future__ import annotations
 
+import json
 import time
 from pathlib import Path
 
@@ -130,12 +131,18 @@ def test_mouse_tracing_a_learned_pattern_is_recognised(page, server, model):
                 page.mouse.move(x, y)
                 page.mouse.up()
                 where[hand] = (x, y)
-        # The robot perceived the traced markers, not something else: a step that began after
-        # the last drag had ended sees both markers where they were left.
+        # The robot perceived the traced markers, not something else: once the last drag has
+        # reached the server (its message can arrive a step after the drag ended in the page),
+        # the steps see both markers where they were left, and go on seeing them.
+        expected = json.dumps([float(v) for v in sensory[-1]])
+        seen_there = (f"rnnpbDashboard.lastStep.observed.every("
+                      f"(v, i) => Math.abs(v - {expected}[i]) < 0.01)")
         done = page.evaluate("rnnpbDashboard.lastStep.step")
-        handle = page.wait_for_function(f"rnnpbDashboard.lastStep.step > {done} && "
-                                        "rnnpbDashboard.lastStep.observed", timeout=10000)
-        np.testing.assert_allclose(np.array(handle.json_value(), dtype=float), sensory[-1],
+        there = page.wait_for_function(f"rnnpbDashboard.lastStep.step > {done} && {seen_there}"
+                                       " && rnnpbDashboard.lastStep.step", timeout=10000)
+        later = page.wait_for_function(f"rnnpbDashboard.lastStep.step > {there.json_value()} "
+                                       "&& rnnpbDashboard.lastStep.observed", timeout=10000)
+        np.testing.assert_allclose(np.array(later.json_value(), dtype=float), sensory[-1],
                                    atol=0.01)
     finally:
         page.click("#stop")
