@@ -363,16 +363,22 @@ def _window_error(params: Params, state: OnlineState, rho: jax.Array, onset_cont
     return 0.5 * jnp.sum(error ** 2)
 
 
+def _recent_error(params: Params, state: OnlineState, config: OnlineConfig,
+                  steps: int) -> jax.Array:
+    """Mean squared error of the window's last ``steps`` sensory predictions, with the profile
+    and onset the regression starts from."""
+    predictions, _ = _window_run(params, state, state.rho, state.onset_context,
+                                 state.onset_motor, config)
+    return _mean_squared(*_prediction_errors(predictions, state, since=state.n - 1 - steps))
+
+
 def _surprise_gate(params: Params, state: OnlineState, config: OnlineConfig
                    ) -> jax.Array | None:
     """The factor on the PB's error gradient (see ``OnlineConfig.surprise_gate``); None when
     the gate is off. Measured with the profile and onset the regression starts from."""
     if config.surprise_gate <= 0:
         return None
-    predictions, _ = _window_run(params, state, state.rho, state.onset_context,
-                                 state.onset_motor, config)
-    rms = jnp.sqrt(_mean_squared(*_prediction_errors(predictions, state,
-                                                     since=state.n - 1 - config.gate_steps)))
+    rms = jnp.sqrt(_recent_error(params, state, config, config.gate_steps))
     return jnp.clip((rms / config.surprise_gate) ** config.gate_power, config.gate_floor, 1.0)
 
 
@@ -401,9 +407,7 @@ def _phase_restart(params: Params, state: OnlineState, phase_candidates: jax.Arr
 
     errors = jax.lax.map(candidate_error, phase_candidates)
     best = jnp.argmin(errors)
-    predictions, _ = _window_run(params, state, state.rho, state.onset_context,
-                                 state.onset_motor, config)
-    current = _mean_squared(*_prediction_errors(predictions, state, since=state.n - span))
+    current = _recent_error(params, state, config, recent)
     accept = ((state.n >= span) & (errors[best] < config.phase_restart_ratio * current)
               & (current > config.phase_restart_level ** 2))
     chosen = phase_candidates[best]

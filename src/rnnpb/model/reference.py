@@ -317,13 +317,9 @@ class ReferenceMirrorSystem:
             predictions = window_error_and_gradients(
                 self.params, self.sensory, self.seen, self.n, self.rho, self.onset_context,
                 self.onset_motor, motor_inputs)[4]
-            s = self.sensory.shape[1]
-            squared = []
-            for t in range(max(self.n - 1 - cfg.gate_steps, 0), self.n - 1):
-                for j in range(s):
-                    if self.seen[t + 1, j]:
-                        squared.append((predictions[t, j] - self.sensory[t + 1, j]) ** 2)
-            rms = float(np.sqrt(np.mean(squared))) if squared else 0.0
+            rms = float(np.sqrt(self._recent_mse(predictions, self.sensory, self.seen,
+                                                 max(self.n - 1 - cfg.gate_steps, 0),
+                                                 self.n - 1)))
             gate = float(np.clip((rms / cfg.surprise_gate) ** cfg.gate_power, cfg.gate_floor,
                                  1.0))
         for _ in range(cfg.iterations):
