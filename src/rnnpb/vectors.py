@@ -14,3 +14,10 @@ SENSORY_SIZE = len(SENSORY_NAMES)
 MOTOR_SIZE = len(MOTOR_NAMES)
 STEP_COLUMN = "step"
 PREDICTED_PREFIX = "pred_"
+TRUTH_PATTERN_COLUMN = "truth_pattern"
+PB_PREFIX = "pb"
+
+
+def pb_column(unit: int) -> str:
+    """The column of PB unit ``unit`` in a session recording: ``pb0``, ``pb1``, …"""
+    return f"{PB_PREFIX}{unit}"

@@ -86,3 +86,11 @@ def test_sensory_error_ignores_unseen_values():
     assert errors[0] == pytest.approx(0.05)
     assert np.isnan(errors[1])
     assert errors[2] == 0.0
+
+
+def test_the_targets_are_the_papers():
+    assert metrics.TRAIN_ERROR_TARGET == 3e-4
+    assert (metrics.LOCK_LIMIT, metrics.SETTLE_LIMIT) == (10, 20)
+    # 9 of 10 seeds; with fewer runs, the same share rounded up.
+    assert metrics.larger_set_share_met(9, 10) and not metrics.larger_set_share_met(8, 10)
+    assert metrics.larger_set_share_met(3, 3) and not metrics.larger_set_share_met(2, 3)

@@ -33,6 +33,30 @@ import numpy as np
 MOTOR_LOCK_THRESHOLD = 0.05
 SENSORY_LOCK_THRESHOLD = 0.03
 LOCK_HOLD = 6
+# Periodicity and the response cases: a trajectory repeats within ``MAX_PERIOD`` steps with a
+# return error below ``PERIODIC_TOLERANCE``; a cycle within ``SIMILAR_CYCLE`` of a learned one
+# (cycle distance) is "like" it.
+MAX_PERIOD = 60
+PERIODIC_TOLERANCE = 0.1
+SIMILAR_CYCLE = 0.05
+
+# --- the paper's figures, as the targets the measures are held to (section 3) ---------------
+# Final training error (the paper: RMS below 3e-4; read as mean squared error per output).
+TRAIN_ERROR_TARGET = 3e-4
+LOCK_LIMIT = 10  # steps until locked on a learned pattern ("about 10")
+SETTLE_LIMIT = 20  # steps until the PB settles ("about 20")
+RELOCK_LIMIT = 5  # steps to re-lock after the pause ("a few")
+SWITCH_LIMIT = 15  # steps until the robot follows a switch ("several")
+# The larger set: 9 of the paper's 10 seeds followed every pattern.
+LARGER_SET_FOLLOWS = 9
+LARGER_SET_RUNS = 10
+# The three response cases to a novel pattern, all of which the paper observes.
+RESPONSE_CASES = (1, 2, 3)
+
+
+def larger_set_share_met(success: int, runs: int) -> bool:
+    """At least the paper's share (9 of 10) of ``runs`` followed every pattern."""
+    return success >= math.ceil(LARGER_SET_FOLLOWS / LARGER_SET_RUNS * runs)
 
 
 def motor_error(motor: np.ndarray, truth: np.ndarray, joint_limits: np.ndarray) -> np.ndarray:
@@ -124,7 +148,8 @@ class Periodicity:
     best_period: int
 
 
-def periodicity(x: np.ndarray, max_period: int = 60, tolerance: float = 0.1) -> Periodicity:
+def periodicity(x: np.ndarray, max_period: int = MAX_PERIOD,
+                tolerance: float = PERIODIC_TOLERANCE) -> Periodicity:
     """The smallest period whose return error is below ``tolerance`` (see module doc)."""
     x = np.asarray(x, dtype=np.float64)
     if x.ndim == 1:
@@ -175,8 +200,8 @@ class ResponseCase:
 
 
 def classify_response(response: np.ndarray, learned_cycles: dict[str, np.ndarray],
-                      tolerance: float = 0.1, similar: float = 0.05,
-                      max_period: int = 60) -> ResponseCase:
+                      tolerance: float = PERIODIC_TOLERANCE, similar: float = SIMILAR_CYCLE,
+                      max_period: int = MAX_PERIOD) -> ResponseCase:
     """Classify a (normalized) motor trajectory after its transient, shape (T, D)."""
     found = periodicity(response, max_period=max_period, tolerance=tolerance)
     if found.period is None:
