@@ -1,9 +1,19 @@
 """One learning-set job of ``rnnpb demo`` with more demonstrations than the paper's two: every
 demonstration is learned and kept under ``data/``; a bad count is refused up front."""
 
+import math
+import pickle
+
+import numpy as np
+
 from rnnpb.cli import main
-from rnnpb.experiments import ExperimentConfig
-from rnnpb.experiments.paper import learning_set_job
+from rnnpb.experiments import (
+    ExperimentConfig,
+    NovelResponse,
+    describe_configuration,
+    learning_set_job,
+    missing_cases_explanation,
+)
 from rnnpb.model import OnlineConfig, TrainConfig, TrainedModel
 from rnnpb.sequences import read_sequences
 
@@ -19,8 +29,12 @@ def test_every_demonstration_is_learned_and_kept(tmp_path):
     assert [s.pattern for s in read_sequences(data / "2_3.csv")] == ["2"]
     model = TrainedModel.load(tmp_path / "set1.npz")
     assert model.patterns == ("1", "2", "3")
-    assert len(result["synchronization"]) == 3
-    assert len(result["switching"]["pairs"]) == 6
+    assert len(result.synchronization) == 3
+    assert len(result.switching.pairs) == 6
+    # The job's result goes back from a worker process whole.
+    again = pickle.loads(pickle.dumps(result))
+    assert again.switching == result.switching
+    np.testing.assert_array_equal(again.synchronization[0].run.pb, result.synchronization[0].run.pb)
 
 
 def test_demo_refuses_a_bad_number_of_demonstrations(tmp_path, capsys):
@@ -35,39 +49,42 @@ def test_the_comparison_runs_the_papers_regression_on_the_same_model(tmp_path):
     result = learning_set_job("1", TrainConfig.fast(iterations=20), OnlineConfig(), config,
                               str(tmp_path / "set1.npz"), None, "default", full=False,
                               compare=OnlineConfig.paper())
-    compared = result["compare"]
-    assert [s["pattern"] for s in compared["synchronization"]] == ["1", "2", "3"]
-    assert set(compared["switching"]["pairs"]) == set(result["switching"]["pairs"])
+    compared = result.compared("paper")
+    assert compared.label == "paper" and compared.model == result.model
+    assert [s.pattern for s in compared.synchronization] == ["1", "2", "3"]
+    assert set(compared.switching.pairs) == set(result.switching.pairs)
     # Same scenario, same model, another regression: the PB takes another course.
-    ours, theirs = result["synchronization"][0]["run"], compared["synchronization"][0]["run"]
+    ours, theirs = result.synchronization[0].run, compared.synchronization[0].run
     assert ours.pb.shape == theirs.pb.shape
     assert abs(ours.pb - theirs.pb).max() > 1e-3
 
 
 def test_the_report_says_which_learning_and_regression_it_ran():
-    from rnnpb.experiments.report import _describe_configuration
-
-    full = _describe_configuration(ExperimentConfig())
+    full = describe_configuration(ExperimentConfig())
     assert "gradient descent with momentum, 50,000 iterations" in full
     assert "the larger set: 30,000 iterations" in full
     assert "surprise gate at 0.035" in full
     assert "phase restarts from the learned cycles (scored on the last 3 steps)" in full
     assert "**paper's regression**" in full
-    quick = _describe_configuration(ExperimentConfig.quick_run())
+    quick = describe_configuration(ExperimentConfig.quick_run())
     assert "fast preset" in quick and "no surprise gate" in quick
     assert "paper's regression" not in quick
 
 
-def test_the_missing_case_explanation_counts_the_closed_loop_cycles():
-    from rnnpb.experiments.report import _missing_cases_explanation
+def _novel(case, period, return_error):
+    return NovelResponse(learning_set="1", novel_pattern="4", amplitude=1.0, case=case,
+                         description="", period=period, nearest_pattern=None,
+                         distance=math.nan, return_error=return_error, motor=np.zeros((1, 8)),
+                         pb=np.zeros((1, 4)), context=np.zeros((1, 30)))
 
-    runs = [{"case": case, "period": 12, "return_error": 0.05} for case in (1, 2, 2)]
-    periodic = {"closed_loop_periods": {"1": {"1": 12, "2": 12, "3": 23}}, "novel_case": runs}
-    text = " ".join(_missing_cases_explanation(periodic))
+
+def test_the_missing_case_explanation_counts_the_closed_loop_cycles():
+    runs = [_novel(case, 12, 0.05) for case in (1, 2, 2)]
+    periodic = {"1": {"1": 12, "2": 12, "3": 23}}
+    text = " ".join(missing_cases_explanation(runs, periodic))
     assert "Why case 3 did not occur" in text
     assert "are limit cycles too (periods 12, 23)" in text
-    mixed = {**periodic, "closed_loop_periods": {"1": {"1": 12, "2": None, "3": 37}}}
-    text = " ".join(_missing_cases_explanation(mixed))
+    assert "counts as unsteady above 0.1" in text
+    text = " ".join(missing_cases_explanation(runs, {"1": {"1": 12, "2": None, "3": 37}}))
     assert "2 of 3 are limit cycles (periods 12, 37)" in text
-    assert _missing_cases_explanation({**periodic, "novel_case": runs + [
-        {"case": 3, "period": None, "return_error": 0.4}]}) == []
+    assert missing_cases_explanation(runs + [_novel(3, None, 0.4)], periodic) == []

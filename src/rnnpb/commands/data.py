@@ -33,13 +33,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="leave the rendered robot poses out of the figure (no MuJoCo)")
 
 
+FIGURE_FILE = "figure4.png"
+
+
 def run(args: argparse.Namespace) -> int:
-    from rnnpb.demonstrator._datafiles import write_dataset
+    from pathlib import Path
+
+    from rnnpb.analysis.figures import plot_patterns
+    from rnnpb.demonstrator import write_dataset
 
     result = write_dataset(args.out, seed=args.seed, period_steps=args.period,
-                           n_steps=args.steps, samples_per_pattern=args.samples,
-                           render=not args.no_render)
+                           n_steps=args.steps, samples_per_pattern=args.samples)
+    figure = Path(args.out) / FIGURE_FILE
+    plot_patterns(result["sequences"], figure, render=not args.no_render)
     print(f"wrote {len(result['files'])} sequences to {result['patterns_dir']}")
     print(f"wrote {result['learning_sets']}")
-    print(f"wrote {result['figure']}")
+    print(f"wrote {figure}")
     return 0

@@ -48,7 +48,7 @@ def run(args: argparse.Namespace) -> int:
     config = replace(config, workers=args.workers, samples_per_pattern=args.samples_per_pattern)
     results = run_demo(args.out, config)
     print(f"wrote {args.out}/report.md and {args.out}/results.json in "
-          f"{results['runtime_s']:.0f} s")
-    for key, value in results["targets"].items():
-        print(f"  {key}: {'met' if value['met'] else 'NOT met'} ({value['detail']})")
+          f"{results.runtime_s:.0f} s")
+    for key, target in results.targets.items():
+        print(f"  {key}: {'met' if target.met else 'NOT met'} ({target.detail})")
     return 0

@@ -1,6 +1,7 @@
 """The synthetic user: the paper's four movement patterns with human imperfection, the
 training datasets and the scripted interaction scenarios (docs/robot-and-demonstrator.md)."""
 
+from rnnpb.demonstrator._datafiles import write_dataset
 from rnnpb.demonstrator._datasets import (
     DEFAULT_SAMPLES,
     DEFAULT_STEPS,
@@ -67,4 +68,5 @@ __all__ = [
     "sample_rng",
     "scenario_arrays",
     "switch_scenario",
+    "write_dataset",
 ]

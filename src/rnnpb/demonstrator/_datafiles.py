@@ -1,4 +1,4 @@
-"""Writing the synthetic dataset to disk: sequence CSVs, the learning-set index, Figure 4."""
+"""Writing the synthetic dataset to disk: sequence CSVs and the learning-set index."""
 
 from __future__ import annotations
 
@@ -16,17 +16,16 @@ from ._user import PATTERN_DESCRIPTIONS, PATTERNS, PatternConfig
 
 LEARNING_SETS_FILE = "learning_sets.json"
 PATTERNS_DIR = "patterns"
-FIGURE_FILE = "figure4.png"
 
 
 def write_dataset(out: str | os.PathLike[str], seed: int = 0, period_steps: float = 12.0,
-                  n_steps: int = 50, samples_per_pattern: int = 2,
-                  render: bool = True) -> dict[str, Any]:
-    """Write the four patterns' demonstrations, the learning-set index and Figure 4.
+                  n_steps: int = 50, samples_per_pattern: int = 2) -> dict[str, Any]:
+    """Write the four patterns' demonstrations and the learning-set index.
 
     ``learning_sets.json`` maps each learning set (``"1"``-``"4"``, ``"full"``) to its
     patterns and its files (paths relative to ``out``), and records how the data was made.
-    Returns the paths written.
+    Returns the paths written and the demonstrations (``"sequences"``, for Figure 4:
+    :func:`rnnpb.analysis.figures.plot_patterns`).
     """
     out = Path(out)
     if out.exists() and not out.is_dir():
@@ -56,10 +55,6 @@ def write_dataset(out: str | os.PathLike[str], seed: int = 0, period_steps: floa
     with atomic_write(out / LEARNING_SETS_FILE, "w", encoding="utf-8") as handle:
         json.dump(index, handle, indent=2)
         handle.write("\n")
-    from ._figure import figure4
-
-    figure_path = out / FIGURE_FILE
-    figure4(sequences, figure_path, render=render)
     return {"files": [out / f for p in PATTERNS for f in files[p]],
             "patterns_dir": out / PATTERNS_DIR, "learning_sets": out / LEARNING_SETS_FILE,
-            "figure": figure_path}
+            "sequences": sequences}

@@ -1,26 +1,84 @@
-"""The paper's experiments (section 3) over the library, and the report that shows them."""
+"""The paper's experiments (section 3) over the library, and the report that shows them.
+
+:mod:`~rnnpb.experiments.paper` holds the experiments and their result objects,
+:mod:`~rnnpb.experiments.summary` the measures over all jobs and the targets they meet,
+:mod:`~rnnpb.experiments.report` the demo and its report, and
+:mod:`~rnnpb.experiments.reporting` what every report shares (tables, figures, versions,
+writing ``report.md`` and ``results.json``).
+"""
 
 from rnnpb.experiments.paper import (
+    Attractor,
+    Draw,
     ExperimentConfig,
+    FollowsEveryPattern,
+    LargerSetRun,
+    LearningSetResult,
+    NovelResponse,
+    Run,
+    Switching,
+    SwitchingSequence,
+    Synchronization,
     follows_every_pattern,
+    larger_set_job,
     learned_attractors,
+    learning_set_job,
     novel_response,
     run_scenario,
     switching,
     switching_sequence,
     synchronization,
 )
-from rnnpb.experiments.report import run_demo, write_report
+from rnnpb.experiments.report import (
+    describe_configuration,
+    missing_cases_explanation,
+    report_lines,
+    run_demo,
+    write_report,
+)
+from rnnpb.experiments.summary import (
+    DemoResults,
+    DrawsSummary,
+    DrawSummary,
+    Summary,
+    Target,
+    draws_summary,
+    summarize,
+    targets,
+)
 
 __all__ = [
+    "Attractor",
+    "DemoResults",
+    "Draw",
+    "DrawSummary",
+    "DrawsSummary",
     "ExperimentConfig",
+    "FollowsEveryPattern",
+    "LargerSetRun",
+    "LearningSetResult",
+    "NovelResponse",
+    "Run",
+    "Summary",
+    "Switching",
+    "SwitchingSequence",
+    "Synchronization",
+    "Target",
+    "describe_configuration",
+    "draws_summary",
     "follows_every_pattern",
+    "larger_set_job",
     "learned_attractors",
+    "learning_set_job",
+    "missing_cases_explanation",
     "novel_response",
+    "report_lines",
     "run_demo",
     "run_scenario",
+    "summarize",
     "switching",
     "switching_sequence",
     "synchronization",
+    "targets",
     "write_report",
 ]

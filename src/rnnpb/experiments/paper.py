@@ -1,8 +1,9 @@
 """The experiments of Ito & Tani (2004), section 3, as functions over the library.
 
-Each experiment takes a trained model and returns plain results (numbers and the arrays its
-figure needs); :mod:`rnnpb.experiments.report` draws the figures and writes the report.
-The measures and their definitions are in :mod:`rnnpb.analysis.metrics`.
+Each experiment takes a trained model and returns a frozen result object (its measures and
+the arrays its figure needs); :mod:`rnnpb.experiments.report` draws the figures and writes the
+report. The measures, their definitions and the paper's targets are in
+:mod:`rnnpb.analysis.metrics`. The results pickle, so the jobs run in worker processes.
 """
 
 from __future__ import annotations
@@ -18,14 +19,19 @@ import numpy as np
 from rnnpb.analysis import metrics
 from rnnpb.errors import ConfigError
 from rnnpb.model import MirrorSystem, OnlineConfig, TrainConfig, TrainedModel, generate, train
+from rnnpb.vectors import (
+    MOTOR_NAMES,
+    PREDICTED_PREFIX,
+    SENSORY_NAMES,
+    STEP_COLUMN,
+    TRUTH_PATTERN_COLUMN,
+    pb_column,
+)
 
-SWITCH_LIMIT = 15  # steps: "follows the new pattern" within this many steps of a switch
-LOCK_LIMIT = 10
-RELOCK_LIMIT = 5
-SETTLE_LIMIT = 20
-# What the other draws of the user's imperfection keep of a synchronization run.
-DRAW_SYNC_KEYS = ("pattern", "steps_to_lock", "pb_settle_steps", "pause_steps_to_relock",
-                  "recognized_pattern")
+# The scripted interactions (paper 3.1, 3.2): the user's pause, and how long the user performs
+# each pattern before switching.
+PAUSE_STEPS = 5
+SWITCH_STEPS_EACH = 50
 
 
 @dataclass(frozen=True)
@@ -77,7 +83,7 @@ class ExperimentConfig:
 
 # --- running a scenario ------------------------------------------------------------------
 
-@dataclass
+@dataclass(frozen=True)
 class Run:
     """One interaction with a scenario: what the robot saw, predicted and did."""
 
@@ -95,17 +101,15 @@ class Run:
 
     def session(self) -> dict[str, np.ndarray]:
         """The run as the columns of a session recording (for the plots)."""
-        from rnnpb.vectors import MOTOR_NAMES, SENSORY_NAMES
-
-        out: dict[str, Any] = {"step": np.arange(len(self.labels)),
-                               "truth_pattern": np.array(self.labels, dtype=object)}
+        out: dict[str, Any] = {STEP_COLUMN: np.arange(len(self.labels)),
+                               TRUTH_PATTERN_COLUMN: np.array(self.labels, dtype=object)}
         for j, name in enumerate(SENSORY_NAMES):
             out[name] = self.observed[:, j]
-            out["pred_" + name] = self.predicted[:, j]
+            out[PREDICTED_PREFIX + name] = self.predicted[:, j]
         for j, name in enumerate(MOTOR_NAMES):
             out[name] = self.motor[:, j]
         for j in range(self.pb.shape[1]):
-            out[f"pb{j}"] = self.pb[:, j]
+            out[pb_column(j)] = self.pb[:, j]
         return out
 
 
@@ -139,9 +143,33 @@ def _normalized_motor(model: TrainedModel, motor: np.ndarray) -> np.ndarray:
 
 # --- 3.1 synchronization and pause ---------------------------------------------------------
 
+@dataclass(frozen=True)
+class Synchronization:
+    """The user performs one learned pattern, pauses and goes on (paper 3.1, Figure 5).
+
+    Step counts are ``None`` when the event never happened.
+    """
+
+    pattern: str
+    steps_to_lock: int | None
+    pb_settle_steps: int | None
+    phase_lag_steps: float  # nan: not locked long enough to measure
+    recognized_pattern: str  # the learned pattern whose PB is nearest before the pause
+    pb_distance_to_learned: float
+    pause_relative_motion: float  # the robot's motion in the pause relative to before it
+    pause_steps_to_relock: int | None
+    pause_start: int
+    pause_end: int
+    run: Run | None  # None where only the measures are kept (the other draws)
+
+    def without_run(self) -> Synchronization:
+        """The measures alone, light to send back from a worker."""
+        return replace(self, run=None)
+
+
 def synchronization(model: TrainedModel, pattern: str, online: OnlineConfig,
                     joint_limits: np.ndarray, seed: int = 0, before: int = 75,
-                    pause: int = 5, after: int = 45) -> dict[str, Any]:
+                    pause: int = PAUSE_STEPS, after: int = 45) -> Synchronization:
     """The user performs ``pattern``, pauses, and goes on (paper Figure 5)."""
     from rnnpb.demonstrator import pause_scenario
 
@@ -162,25 +190,24 @@ def synchronization(model: TrainedModel, pattern: str, online: OnlineConfig,
     relative_motion = float(np.sum(during) / max(np.sum(moving), 1e-9))
     relock = metrics.steps_to_lock(run.motor_error, run.sensory_error, pause_end)
     recognized, distance = model.nearest_pattern(run.pb[before - 1])
-    return {
-        "pattern": pattern,
-        "steps_to_lock": lock,
-        "pb_settle_steps": settle,
-        "phase_lag_steps": lag,
-        "recognized_pattern": recognized,
-        "pb_distance_to_learned": distance,
-        "pause_relative_motion": relative_motion,
-        "pause_steps_to_relock": relock,
-        "run": run,
-        "pause_start": before,
-        "pause_end": pause_end,
-    }
+    return Synchronization(
+        pattern=pattern, steps_to_lock=lock, pb_settle_steps=settle, phase_lag_steps=lag,
+        recognized_pattern=recognized, pb_distance_to_learned=distance,
+        pause_relative_motion=relative_motion, pause_steps_to_relock=relock,
+        pause_start=before, pause_end=pause_end, run=run)
 
 
 # --- 3.2 switching ---------------------------------------------------------------------------
 
+@dataclass(frozen=True)
+class Switching:
+    """Steps from the user's switch until the robot follows, per ordered pair ``"a->b"``."""
+
+    pairs: dict[str, int | None]
+
+
 def switching(model: TrainedModel, online: OnlineConfig, joint_limits: np.ndarray,
-              seed: int = 0, steps_each: int = 50) -> dict[str, Any]:
+              seed: int = 0, steps_each: int = SWITCH_STEPS_EACH) -> Switching:
     """Every ordered pair of learned patterns: steps from the switch until the robot follows
     the new pattern (locked on it)."""
     from rnnpb.demonstrator import switch_scenario
@@ -191,11 +218,19 @@ def switching(model: TrainedModel, online: OnlineConfig, joint_limits: np.ndarra
                            online, joint_limits)
         pairs[f"{a}->{b}"] = metrics.steps_to_lock(run.motor_error, run.sensory_error,
                                                    steps_each)
-    return {"pairs": pairs}
+    return Switching(pairs)
+
+
+@dataclass(frozen=True)
+class SwitchingSequence:
+    """The user performs the learned patterns one after another (Figures 6 and 7)."""
+
+    run: Run
+    steps_to_follow: list[int | None]  # per switch
 
 
 def switching_sequence(model: TrainedModel, online: OnlineConfig, joint_limits: np.ndarray,
-                       seed: int = 0, steps_each: int = 55) -> dict[str, Any]:
+                       seed: int = 0, steps_each: int = 55) -> SwitchingSequence:
     """The paper's Figure 6: the user performs the learned patterns one after another."""
     from rnnpb.demonstrator import switch_scenario
 
@@ -203,13 +238,33 @@ def switching_sequence(model: TrainedModel, online: OnlineConfig, joint_limits: 
                                               seed=seed), online, joint_limits)
     follow = [metrics.steps_to_lock(run.motor_error, run.sensory_error, s, s + steps_each)
               for s in run.switch_steps]
-    return {"run": run, "steps_to_follow": follow}
+    return SwitchingSequence(run, follow)
+
+
+@dataclass(frozen=True)
+class Draw:
+    """The synchronization runs (one per learned pattern) and the switching of one draw of the
+    user's imperfection, or of one on-line regression."""
+
+    synchronization: list[Synchronization]
+    switching: Switching
 
 
 # --- 3.3 novel patterns and attractors -----------------------------------------------------
 
+@dataclass(frozen=True)
+class Attractor:
+    """A learned pattern's closed-loop attractor after the transient."""
+
+    motor: np.ndarray  # (T, 8) normalized joints
+    context: np.ndarray  # (T, C)
+    cycle: np.ndarray  # (P, 8): the last period (or the best one, when not periodic)
+    period: int | None  # None: not periodic
+    return_error: float
+
+
 def learned_attractors(model: TrainedModel, n_steps: int, transient: int
-                       ) -> dict[str, dict[str, np.ndarray]]:
+                       ) -> dict[str, Attractor]:
     """Closed-loop run (no input) from each learned pattern's PB: motor and context after
     the transient, and one cycle of the motor trajectory."""
     out = {}
@@ -219,15 +274,41 @@ def learned_attractors(model: TrainedModel, n_steps: int, transient: int
         motor = _normalized_motor(model, generated.motor[transient:])
         found = metrics.periodicity(motor)
         period = found.period or found.best_period
-        out[name] = {"motor": motor, "context": generated.context[transient:],
-                     "cycle": motor[-period:], "period": found.period,
-                     "return_error": found.return_error}
+        out[name] = Attractor(motor=motor, context=generated.context[transient:],
+                              cycle=motor[-period:], period=found.period,
+                              return_error=found.return_error)
     return out
 
 
+@dataclass(frozen=True)
+class NovelResponse:
+    """The response to a learning set's novel pattern, classified (paper 3.3, Figure 8)."""
+
+    learning_set: str
+    novel_pattern: str
+    amplitude: float  # the pattern's size relative to the learned ones
+    case: int  # 1, 2 or 3 (metrics.classify_response)
+    description: str
+    period: int | None
+    nearest_pattern: str | None
+    distance: float
+    return_error: float
+    motor: np.ndarray  # (T, 8) rad
+    pb: np.ndarray  # (T, P)
+    context: np.ndarray  # (T, C)
+
+    def to_json(self) -> dict[str, Any]:
+        """The measures as ``results.json`` keeps them (the arrays stay out)."""
+        return {"learning_set": self.learning_set, "novel_pattern": self.novel_pattern,
+                "amplitude": self.amplitude, "case": self.case,
+                "description": self.description, "period": self.period,
+                "nearest_pattern": self.nearest_pattern, "distance": self.distance,
+                "return_error": self.return_error}
+
+
 def novel_response(model: TrainedModel, learning_set: str, online: OnlineConfig,
-                   joint_limits: np.ndarray, attractors: dict[str, dict[str, np.ndarray]],
-                   n_steps: int, transient: int, amplitude: float = 1.0) -> dict[str, Any]:
+                   joint_limits: np.ndarray, attractors: dict[str, Attractor],
+                   n_steps: int, transient: int, amplitude: float = 1.0) -> NovelResponse:
     """One cycle of the novel pattern, repeated for ``n_steps`` with on-line PB regression
     (the paper's open-loop attractor analysis); the response is classified."""
     from rnnpb.demonstrator import Imperfection, PatternConfig, make_scenario, novel_pattern
@@ -250,21 +331,30 @@ def novel_response(model: TrainedModel, learning_set: str, online: OnlineConfig,
         contexts.append(result.context)
     motor = np.array(motor)
     normalized = _normalized_motor(model, motor)
-    learned_cycles = {name: a["cycle"] for name, a in attractors.items()}
+    learned_cycles = {name: a.cycle for name, a in attractors.items()}
     case = metrics.classify_response(normalized[transient:], learned_cycles)
-    return {"learning_set": learning_set, "novel_pattern": pattern, "amplitude": amplitude,
-            "case": case.case, "description": case.describe(), "period": case.period,
-            "nearest_pattern": case.nearest_pattern, "distance": case.distance,
-            "return_error": case.return_error,
-            "motor": motor, "pb": np.array(pbs), "context": np.array(contexts)}
+    return NovelResponse(
+        learning_set=learning_set, novel_pattern=pattern, amplitude=amplitude, case=case.case,
+        description=case.describe(), period=case.period, nearest_pattern=case.nearest_pattern,
+        distance=case.distance, return_error=case.return_error, motor=motor,
+        pb=np.array(pbs), context=np.array(contexts))
 
 
 # --- 3.4 the larger set ----------------------------------------------------------------------
 
+@dataclass(frozen=True)
+class FollowsEveryPattern:
+    """Steps until the robot follows each learned pattern in turn (``None``: never)."""
+
+    steps_to_follow: dict[str, int | None]
+    follows_all: bool  # every pattern within metrics.SWITCH_LIMIT steps
+
+
 def follows_every_pattern(model: TrainedModel, online: OnlineConfig, joint_limits: np.ndarray,
-                          seed: int = 0, steps_each: int = 50) -> dict[str, Any]:
+                          seed: int = 0, steps_each: int = SWITCH_STEPS_EACH
+                          ) -> FollowsEveryPattern:
     """The user switches through all learned patterns; does the robot follow each within
-    ``SWITCH_LIMIT`` steps? Also: does closed-loop generation from each PB cycle?"""
+    ``metrics.SWITCH_LIMIT`` steps?"""
     from rnnpb.demonstrator import switch_scenario
 
     order = list(model.patterns)
@@ -273,8 +363,8 @@ def follows_every_pattern(model: TrainedModel, online: OnlineConfig, joint_limit
     starts = [0, *run.switch_steps]
     follow = {p: metrics.steps_to_lock(run.motor_error, run.sensory_error, s, s + steps_each)
               for p, s in zip(order, starts, strict=True)}
-    ok = all(v is not None and v <= SWITCH_LIMIT for v in follow.values())
-    return {"steps_to_follow": follow, "follows_all": ok}
+    ok = all(v is not None and v <= metrics.SWITCH_LIMIT for v in follow.values())
+    return FollowsEveryPattern(follow, ok)
 
 
 # --- one job per model (run in worker processes) -------------------------------------------
@@ -290,12 +380,48 @@ def _limits() -> np.ndarray:
     return JOINT_LIMITS
 
 
+@dataclass(frozen=True)
+class LearningSetResult:
+    """One learning set: its training and experiments 3.1–3.3 (3.3 and the other draws only
+    for a ``full`` job)."""
+
+    label: str
+    learning_set: str
+    model: str  # path of the saved model
+    patterns: list[str]
+    pattern_pb: dict[str, list[float]]
+    train_mse_per_output: list[float]
+    train_mse_max: float
+    train_rms_max: float
+    train_seconds: float
+    train_history: list[tuple[int, float]]
+    scenario_seed: int  # the draw of the user's imperfection of the runs below
+    synchronization: list[Synchronization]
+    switching: Switching
+    compare: Draw | None = None  # the same draw with the compared on-line regression
+    draws: dict[int, Draw] = field(default_factory=dict)  # the other draws, by scenario seed
+    sequence: SwitchingSequence | None = None
+    attractors: dict[str, Attractor] = field(default_factory=dict)
+    novel: list[NovelResponse] = field(default_factory=list)
+
+    def draws_by_seed(self) -> dict[int, Draw]:
+        """Every draw, this result's own first, by scenario seed."""
+        return {self.scenario_seed: Draw(self.synchronization, self.switching), **self.draws}
+
+    def compared(self, label: str = "paper") -> LearningSetResult:
+        """The same model with the compared on-line regression in place of the default's."""
+        if self.compare is None:
+            raise ValueError("this job ran no comparison")
+        return replace(self, label=label, synchronization=self.compare.synchronization,
+                       switching=self.compare.switching, compare=None)
+
+
 def learning_set_job(set_name: str, train_config: TrainConfig, online: OnlineConfig,
                      config: ExperimentConfig, model_path: str, data_dir: str | None,
                      label: str, full: bool = True, compare: OnlineConfig | None = None
-                     ) -> dict[str, Any]:
+                     ) -> LearningSetResult:
     """Train on one learning set and run experiments 3.1–3.3 on it; with ``compare``, also
-    run 3.1 and 3.2 with that on-line regression (``result["compare"]``)."""
+    run 3.1 and 3.2 with that on-line regression (``result.compare``)."""
     from rnnpb.demonstrator import learning_set
     from rnnpb.sequences import write_sequence
 
@@ -308,44 +434,65 @@ def learning_set_job(set_name: str, train_config: TrainConfig, online: OnlineCon
     model = train(sequences, limits, config=train_config)
     model.save(model_path)
     info = model.meta["training"]
-    result: dict[str, Any] = {
-        "label": label, "learning_set": set_name, "model": model_path,
-        "patterns": list(model.patterns), "pattern_pb": {k: v.tolist() for k, v in
-                                                         model.pattern_pb.items()},
-        "train_mse_per_output": info["mse_per_output"], "train_mse_max": info["mse_max"],
-        "train_rms_max": math.sqrt(info["mse_max"]), "train_seconds": info["seconds"],
-        "train_history": info["history"],
-    }
-    result["synchronization"] = [synchronization(model, p, online, limits,
-                                                 seed=config.scenario_seed)
-                                 for p in model.patterns]
-    result["switching"] = switching(model, online, limits, seed=config.scenario_seed)
+    seed = config.scenario_seed
+
+    def draw(regression: OnlineConfig, scenario_seed: int) -> Draw:
+        return Draw([synchronization(model, p, regression, limits, seed=scenario_seed)
+                     for p in model.patterns],
+                    switching(model, regression, limits, seed=scenario_seed))
+
+    primary = draw(online, seed)
+    extra: dict[str, Any] = {}
     if compare is not None:
-        result["compare"] = {
-            "synchronization": [synchronization(model, p, compare, limits,
-                                                seed=config.scenario_seed)
-                                for p in model.patterns],
-            "switching": switching(model, compare, limits, seed=config.scenario_seed)}
+        extra["compare"] = draw(compare, seed)
     if full:
-        result["draws"] = {}
-        for seed in config.extra_scenario_seeds:
-            sync = [synchronization(model, p, online, limits, seed=seed) for p in model.patterns]
-            result["draws"][seed] = {
-                "synchronization": [{k: s[k] for k in DRAW_SYNC_KEYS} for s in sync],
-                "switching": switching(model, online, limits, seed=seed)}
-        result["sequence"] = switching_sequence(model, online, limits, seed=config.scenario_seed)
+        extra["draws"] = {}
+        for other in config.extra_scenario_seeds:
+            measured = draw(online, other)
+            extra["draws"][other] = Draw([s.without_run() for s in measured.synchronization],
+                                         measured.switching)
+        extra["sequence"] = switching_sequence(model, online, limits, seed=seed)
         attractors = learned_attractors(model, config.attractor_steps,
                                         config.attractor_transient)
-        result["attractors"] = attractors
-        result["novel"] = [novel_response(model, set_name, online, limits, attractors,
-                                          config.attractor_steps, config.attractor_transient,
-                                          amplitude)
-                           for amplitude in config.novel_amplitudes]
-    return result
+        extra["attractors"] = attractors
+        extra["novel"] = [novel_response(model, set_name, online, limits, attractors,
+                                         config.attractor_steps, config.attractor_transient,
+                                         amplitude)
+                          for amplitude in config.novel_amplitudes]
+    return LearningSetResult(
+        label=label, learning_set=set_name, model=model_path, patterns=list(model.patterns),
+        pattern_pb={k: v.tolist() for k, v in model.pattern_pb.items()},
+        train_mse_per_output=info["mse_per_output"], train_mse_max=info["mse_max"],
+        train_rms_max=math.sqrt(info["mse_max"]), train_seconds=info["seconds"],
+        train_history=info["history"], scenario_seed=seed,
+        synchronization=primary.synchronization, switching=primary.switching, **extra)
+
+
+@dataclass(frozen=True)
+class LargerSetRun:
+    """The 4-pattern set learned with one seed (paper 3.4)."""
+
+    seed: int
+    model: str  # path of the saved model
+    train_mse_max: float
+    steps_to_follow: dict[str, int | None]
+    follows_all: bool
+    scenario_seed: int  # the draw of the user's imperfection above
+    draws: dict[int, FollowsEveryPattern]  # the other draws, by scenario seed
+
+    def draws_by_seed(self) -> dict[int, FollowsEveryPattern]:
+        """Every draw, this run's own first, by scenario seed."""
+        return {self.scenario_seed: FollowsEveryPattern(self.steps_to_follow, self.follows_all),
+                **self.draws}
+
+    def to_json(self) -> dict[str, Any]:
+        """The run as ``results.json`` keeps it (the other draws are summarized apart)."""
+        return {"seed": self.seed, "model": self.model, "train_mse_max": self.train_mse_max,
+                "steps_to_follow": self.steps_to_follow, "follows_all": self.follows_all}
 
 
 def larger_set_job(seed: int, train_config: TrainConfig, online: OnlineConfig,
-                   config: ExperimentConfig, model_path: str) -> dict[str, Any]:
+                   config: ExperimentConfig, model_path: str) -> LargerSetRun:
     """Train the 4-pattern set with one seed; does the robot follow every pattern?"""
     from rnnpb.demonstrator import learning_set
 
@@ -357,5 +504,7 @@ def larger_set_job(seed: int, train_config: TrainConfig, online: OnlineConfig,
     follow = follows_every_pattern(model, online, limits, seed=config.scenario_seed + seed)
     draws = {extra: follows_every_pattern(model, online, limits, seed=extra + seed)
              for extra in config.extra_scenario_seeds}
-    return {"seed": seed, "model": model_path, "train_mse_max": model.meta["training"]["mse_max"],
-            **follow, "draws": draws}
+    return LargerSetRun(seed=seed, model=model_path,
+                        train_mse_max=model.meta["training"]["mse_max"],
+                        steps_to_follow=follow.steps_to_follow, follows_all=follow.follows_all,
+                        scenario_seed=config.scenario_seed, draws=draws)

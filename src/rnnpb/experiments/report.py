@@ -12,31 +12,52 @@ repeats. Outputs under the chosen directory::
 
 from __future__ import annotations
 
-import json
-import math
 import multiprocessing
 import os
-import platform
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from rnnpb import __version__
-from rnnpb._atomic import atomic_write
+from rnnpb.analysis import metrics
 from rnnpb.experiments.paper import (
-    LOCK_LIMIT,
-    RELOCK_LIMIT,
-    SETTLE_LIMIT,
-    SWITCH_LIMIT,
+    PAUSE_STEPS,
+    SWITCH_STEPS_EACH,
+    Attractor,
     ExperimentConfig,
+    LargerSetRun,
+    LearningSetResult,
+    NovelResponse,
     larger_set_job,
     learning_set_job,
     sequence_file_name,
+)
+from rnnpb.experiments.reporting import (
+    FIGURES_DIR,
+    embed,
+    fmt,
+    median_and_worst,
+    row,
+    sci,
+    table,
+    versions,
+    write_lines,
+    write_outputs,
+)
+from rnnpb.experiments.summary import (
+    STEP_TARGETS,
+    DemoResults,
+    LearningSetFiles,
+    OutputFiles,
+    Summary,
+    Target,
+    draws_summary,
+    flat,
+    summarize,
+    targets,
+    within,
 )
 from rnnpb.model import OnlineConfig, TrainConfig
 
@@ -50,14 +71,18 @@ def _worker_init() -> None:
     _xla.single_threaded()
 
 
-def run_jobs(out: Path, config: ExperimentConfig,
-             log: Callable[[str], None]) -> tuple[dict, list, dict]:
+def run_jobs(out: Path, config: ExperimentConfig, log: Callable[[str], None]
+             ) -> tuple[dict[str, LearningSetResult], list[LargerSetRun],
+                        dict[str, LearningSetResult]]:
+    """Every job of the demo in worker processes: per learning set, the default's results
+    and (with ``config.compare_paper``) the paper's regression's; the larger-set runs by
+    seed."""
     models, data = out / "models", out / "data"
     models.mkdir(parents=True, exist_ok=True)
     jobs: dict[Any, tuple[str, Any]] = {}
-    default: dict[str, dict] = {}
-    paper: dict[str, dict] = {}
-    larger: list[dict] = []
+    default: dict[str, LearningSetResult] = {}
+    paper: dict[str, LearningSetResult] = {}
+    larger: list[LargerSetRun] = []
     _worker_init()
     context = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(max_workers=config.workers, mp_context=context,
@@ -79,187 +104,80 @@ def run_jobs(out: Path, config: ExperimentConfig,
             result = future.result()
             if kind == "default":
                 default[key] = result
-                if "compare" in result:  # the same model, the paper's on-line regression
-                    compared = result.pop("compare")
-                    paper[key] = {**result, **compared, "label": "paper"}
+                if result.compare is not None:  # the same model, the paper's regression
+                    paper[key] = result.compared("paper")
             else:
                 larger.append(result)
             log(f"  [{done}/{len(jobs)}] {kind} {'seed ' if kind == 'larger' else 'set '}"
                 f"{key} done")
-    larger.sort(key=lambda r: r["seed"])
+    larger.sort(key=lambda r: r.seed)
     return default, larger, paper
 
 
-def _values(results: dict[str, dict], key: str) -> dict[str, dict[str, Any]]:
-    return {name: {s["pattern"]: s[key] for s in r["synchronization"]}
-            for name, r in results.items()}
 
 
-def _flat(nested: dict[str, dict[str, Any]]) -> list[Any]:
-    return [v for inner in nested.values() for v in inner.values()]
+# --- running the demo --------------------------------------------------------------------
+
+def _shown_novel(novel_runs: Sequence[tuple[NovelResponse, dict[str, Attractor]]]
+                 ) -> list[tuple[NovelResponse, dict[str, Attractor]]]:
+    """One example of each response case, as the paper shows, then others up to three."""
+    shown: list[tuple[NovelResponse, dict[str, Attractor]]] = []
+    for case in metrics.RESPONSE_CASES:
+        for run, attractors in novel_runs:
+            if run.case == case:
+                shown.append((run, attractors))
+                break
+    for run, attractors in novel_runs:
+        if len(shown) >= 3:
+            break
+        if all(run is not s for s, _ in shown):
+            shown.append((run, attractors))
+    return shown
 
 
-def _max_or_none(values: list[Any]) -> Any:
-    """The largest value; None (never) counts as the worst."""
-    if any(v is None for v in values):
-        return None
-    return max(values) if values else None
+def _draw_figures(figure_dir: Path, full: list, default: dict[str, LearningSetResult],
+                  config: ExperimentConfig) -> None:
+    from rnnpb.analysis import figures
+    from rnnpb.robot import JOINT_LIMITS
 
-
-def summarize(results: dict[str, dict]) -> dict[str, Any]:
-    """The measures of one configuration (default or paper) as JSON-ready values."""
-    ordered = {k: results[k] for k in sorted(results)}
-    summary = {
-        "train_mse": {k: r["train_mse_max"] for k, r in ordered.items()},
-        "train_rms": {k: r["train_rms_max"] for k, r in ordered.items()},
-        "train_mse_per_output": {k: r["train_mse_per_output"] for k, r in ordered.items()},
-        "train_seconds": {k: r["train_seconds"] for k, r in ordered.items()},
-        "sync_steps_to_lock": _values(ordered, "steps_to_lock"),
-        "pb_settle_steps": _values(ordered, "pb_settle_steps"),
-        "phase_lag_steps": _values(ordered, "phase_lag_steps"),
-        "recognized_pattern": _values(ordered, "recognized_pattern"),
-        "pause_relative_motion": _values(ordered, "pause_relative_motion"),
-        "pause_steps_to_relock": _values(ordered, "pause_steps_to_relock"),
-        "switch_steps": {k: r["switching"]["pairs"] for k, r in ordered.items()},
-    }
-    recognized = _flat(_values(ordered, "recognized_pattern"))
-    patterns = [p for r in ordered.values() for p in r["patterns"]]
-    summary["recognized_correctly"] = int(sum(a == b for a, b in zip(recognized, patterns,
-                                                                     strict=True)))
-    summary["recognition_runs"] = len(patterns)
-    return summary
-
-
-def _fmt(value: Any, digits: int = 1) -> str:
-    if value is None:
-        return "never"
-    if isinstance(value, float):
-        if math.isnan(value):
-            return "–"
-        return f"{value:.{digits}f}"
-    return str(value)
-
-
-def _range(values: list[Any]) -> str:
-    if not values:
-        return "–"
-    if any(v is None for v in values):
-        finite = [v for v in values if v is not None]
-        worst = "never"
-    else:
-        finite = values
-        worst = _fmt(max(values))
-    median = _fmt(float(np.median(finite))) if finite else "–"
-    return f"median {median}, worst {worst}"
-
-
-def _target(values: list[Any], limit: float) -> tuple[bool, str]:
-    worst = _max_or_none(values)
-    met = worst is not None and worst <= limit
-    return met, f"{_within(values, limit)}/{len(values)} within {limit:g}"
-
-
-def targets(summary: dict[str, Any], larger: list[dict], novel_cases: list[int]
-            ) -> dict[str, dict[str, Any]]:
-    out = {}
-    mse = list(summary["train_mse"].values())
-    out["train_mse_below_3e-4"] = {"met": all(v < 3e-4 for v in mse),
-                                   "detail": f"max {max(mse):.2e}"}
-    for key, values, limit in (
-            ("lock_within_10", _flat(summary["sync_steps_to_lock"]), LOCK_LIMIT),
-            ("pb_settles_within_20", _flat(summary["pb_settle_steps"]), SETTLE_LIMIT),
-            ("relock_within_5", _flat(summary["pause_steps_to_relock"]), RELOCK_LIMIT),
-            ("switch_within_15", _flat(summary["switch_steps"]), SWITCH_LIMIT)):
-        met, detail = _target(values, limit)
-        out[key] = {"met": met, "detail": detail}
-    if novel_cases:
-        seen = sorted(set(novel_cases))
-        out["all_three_novel_cases"] = {
-            "met": seen == [1, 2, 3],
-            "detail": f"cases seen: {seen}" + ("" if seen == [1, 2, 3] else
-                                               "; the report explains why, from the "
-                                               "attractor analysis")}
-    if larger:
-        out["larger_set_9_of_10"] = _larger_target(sum(r["follows_all"] for r in larger),
-                                                   len(larger))
-    return out
-
-
-_DRAW_MEASURES = (("sync_steps_to_lock", "lock_within_10", LOCK_LIMIT),
-                  ("pb_settle_steps", "pb_settles_within_20", SETTLE_LIMIT),
-                  ("pause_steps_to_relock", "relock_within_5", RELOCK_LIMIT),
-                  ("switch_steps", "switch_within_15", SWITCH_LIMIT))
-
-
-def _larger_target(success: int, runs: int) -> dict[str, Any]:
-    return {"met": success >= math.ceil(0.9 * runs), "detail": f"{success}/{runs}"}
-
-
-def _within(values: list[Any], limit: float) -> int:
-    return sum(v is not None and v <= limit for v in values)
-
-
-def draws_summary(results: dict[str, dict], larger: list[dict], config: ExperimentConfig
-                  ) -> dict[str, Any]:
-    """The lock-on, pause, switching and larger-set measures for every draw of the user's
-    imperfection (the report's ``scenario_seed`` and the ``extra_scenario_seeds``), each
-    draw's target counts, and the targets over all draws pooled."""
-    ordered = {k: results[k] for k in sorted(results)}
-    by_seed: dict[str, dict[str, Any]] = {}
-    for seed in (config.scenario_seed, *config.extra_scenario_seeds):
-        primary = seed == config.scenario_seed
-        runs = ordered if primary else {k: r["draws"][seed] for k, r in ordered.items()}
-        follows = list(larger) if primary else [r["draws"][seed] for r in larger]
-        draw: dict[str, Any] = {key: _values(runs, source) for key, source in (
-            ("sync_steps_to_lock", "steps_to_lock"), ("pb_settle_steps", "pb_settle_steps"),
-            ("pause_steps_to_relock", "pause_steps_to_relock"))}
-        draw["switch_steps"] = {k: r["switching"]["pairs"] for k, r in runs.items()}
-        draw["larger_set_success"] = int(sum(f["follows_all"] for f in follows))
-        draw["larger_set_steps_to_follow"] = [f["steps_to_follow"] for f in follows]
-        draw["targets"] = {name: dict(zip(("met", "detail"),
-                                          _target(_flat(draw[key]), limit), strict=True))
-                           for key, name, limit in _DRAW_MEASURES}
-        if larger:
-            draw["targets"]["larger_set_9_of_10"] = _larger_target(draw["larger_set_success"],
-                                                                   len(follows))
-        by_seed[str(seed)] = draw
-    pooled: dict[str, dict[str, Any]] = {}
-    for key, name, limit in _DRAW_MEASURES:
-        met, detail = _target([v for d in by_seed.values() for v in _flat(d[key])], limit)
-        pooled[name] = {"met": met, "detail": detail}
-    if larger:
-        pooled["larger_set_9_of_10"] = _larger_target(
-            sum(d["larger_set_success"] for d in by_seed.values()), len(larger) * len(by_seed))
-    return {"scenario_seeds": [int(s) for s in by_seed], "by_seed": by_seed,
-            "targets": pooled}
-
-
-def _jsonable(value: Any) -> Any:
-    if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, (np.floating, float)):
-        return None if not math.isfinite(float(value)) else float(value)
-    if isinstance(value, np.integer):
-        return int(value)
-    return value
+    figures.plot_patterns(full, figure_dir / "figure4_patterns.png")
+    set1 = default["1"]
+    sync = set1.synchronization[0]
+    figures.plot_session(sync.run.session(), figure_dir / "figure5_synchronization.png",
+                         title=f"Learning set 1: the user performs pattern {sync.pattern}, "
+                         f"pauses (shaded) and goes on", joint_limits=JOINT_LIMITS,
+                         marks=[(sync.steps_to_lock or 0, "locked")])
+    sequence = set1.sequence
+    session = sequence.run.session()
+    switches = sequence.run.switch_steps
+    figures.plot_session(session, figure_dir / "figure6_switching.png",
+                         title="Learning set 1: the user switches among the learned patterns",
+                         joint_limits=JOINT_LIMITS,
+                         marks=[(s, "switch") for s in switches])
+    figures.plot_switch_zoom(session, [(s - 10, s + 30) for s in switches],
+                             figure_dir / "figure7_switching_zoom.png", JOINT_LIMITS, switches)
+    figures.plot_switch_matrix({k: default[k].switching.pairs for k in sorted(default)},
+                               figure_dir / "switching_matrix.png", metrics.SWITCH_LIMIT)
+    novel_runs = [(run, default[k].attractors) for k in sorted(default)
+                  for run in default[k].novel]
+    shown = _shown_novel(novel_runs)
+    figures.plot_novel_responses([r for r, _ in shown], figure_dir / "figure8_novel.png",
+                                 JOINT_LIMITS)
+    figures.plot_attractors(shown, figure_dir / "figure9_attractors.png",
+                            config.attractor_transient)
+    histories = {f"set {k}": default[k].train_history for k in sorted(default)}
+    figures.plot_training(histories, figure_dir / "training.png", metrics.TRAIN_ERROR_TARGET)
 
 
 def run_demo(out_dir: str | os.PathLike[str], config: ExperimentConfig,
-             log: Callable[[str], None] = print) -> dict[str, Any]:
+             log: Callable[[str], None] = print) -> DemoResults:
     """Run everything; write the report, the results and the figures; return the results."""
-    from rnnpb.analysis import figures
     from rnnpb.demonstrator import learning_set
-    from rnnpb.demonstrator._figure import figure4
-    from rnnpb.robot import JOINT_LIMITS
     from rnnpb.sequences import write_sequence
 
     start = time.perf_counter()
     out = Path(out_dir)
-    figure_dir = out / "figures"
+    figure_dir = out / FIGURES_DIR
     figure_dir.mkdir(parents=True, exist_ok=True)
     full_dir = out / "data" / "full"
     full = learning_set("full", seed=config.data_seed,
@@ -270,105 +188,49 @@ def run_demo(out_dir: str | os.PathLike[str], config: ExperimentConfig,
         f"{config.workers} workers) …")
     default, larger, paper = run_jobs(out, config, log)
     log("drawing the figures …")
-    figure4(full, figure_dir / "figure4_patterns.png")
+    _draw_figures(figure_dir, full, default, config)
 
-    set1 = default["1"]
-    sync = set1["synchronization"][0]
-    figures.plot_session(sync["run"].session(), figure_dir / "figure5_synchronization.png",
-                         title=f"Learning set 1: the user performs pattern {sync['pattern']}, "
-                         f"pauses (shaded) and goes on", joint_limits=JOINT_LIMITS,
-                         marks=[(sync["steps_to_lock"] or 0, "locked")])
-    sequence = set1["sequence"]
-    session = sequence["run"].session()
-    switches = sequence["run"].switch_steps
-    figures.plot_session(session, figure_dir / "figure6_switching.png",
-                         title="Learning set 1: the user switches among the learned patterns",
-                         joint_limits=JOINT_LIMITS,
-                         marks=[(s, "switch") for s in switches])
-    figures.plot_switch_zoom(session, [(s - 10, s + 30) for s in switches],
-                             figure_dir / "figure7_switching_zoom.png", JOINT_LIMITS, switches)
-    figures.plot_switch_matrix({k: default[k]["switching"]["pairs"] for k in sorted(default)},
-                               figure_dir / "switching_matrix.png", SWITCH_LIMIT)
-    novel_runs = [(run, default[k]["attractors"]) for k in sorted(default)
-                  for run in default[k]["novel"]]
-    shown: list[tuple[dict, dict]] = []
-    for case in (1, 2, 3):  # one example of each case, as the paper shows
-        for run, attractors in novel_runs:
-            if run["case"] == case:
-                shown.append((run, attractors))
-                break
-    for run, attractors in novel_runs:
-        if len(shown) >= 3:
-            break
-        if all(run is not s for s, _ in shown):
-            shown.append((run, attractors))
-    figures.plot_novel_responses([r for r, _ in shown], figure_dir / "figure8_novel.png",
-                                 JOINT_LIMITS)
-    figures.plot_attractors(shown, figure_dir / "figure9_attractors.png",
-                            config.attractor_transient)
-    histories = {f"set {k}": default[k]["train_history"] for k in sorted(default)}
-    figures.plot_training(histories, figure_dir / "training.png")
-
+    ordered = {k: default[k] for k in sorted(default)}
     summary = summarize(default)
-    novel = [{k: run[k] for k in ("learning_set", "novel_pattern", "amplitude", "case",
-                                  "description", "period", "nearest_pattern", "distance",
-                                  "return_error")} for run, _ in novel_runs]
-    results: dict[str, Any] = {
-        "rnnpb_version": __version__,
-        "versions": _versions(),
-        "config": asdict(config),
-        **summary,
-        "novel_case": novel,
-        "novel_cases_seen": sorted({r["case"] for r in novel}),
-        "closed_loop_periods": {k: {p: a["period"] for p, a in default[k]["attractors"].items()}
-                                for k in sorted(default)},
-        "switch_sequence_steps_to_follow": sequence["steps_to_follow"],
-        "larger_set_success": int(sum(r["follows_all"] for r in larger)),
-        "larger_set_runs": [{k: r[k] for k in ("seed", "model", "train_mse_max",
-                                               "steps_to_follow", "follows_all")}
-                            for r in larger],
-        "targets": targets(summary, larger, [r["case"] for r in novel]),
-        "draws": draws_summary(default, larger, config),
-        "files": {
-            "models": {**{f"set{k}": f"models/set{k}.npz" for k in sorted(default)},
-                       **{f"full_seed{r['seed']}": f"models/full_seed{r['seed']}.npz"
-                          for r in larger}},
-            "learning_sets": {**{f"set{k}": {"patterns": default[k]["patterns"],
-                                             "data": f"data/set{k}/"} for k in sorted(default)},
-                              "full": {"patterns": ["1", "2", "3", "4"], "data": "data/full/"}},
-            "figures": sorted(p.name for p in figure_dir.glob("*.png")),
-        },
-    }
-    if paper:
-        results["paper_regression"] = summarize(paper)
-        results["paper_regression"]["targets"] = targets(results["paper_regression"], [], [])
-    results["runtime_s"] = time.perf_counter() - start
-    with atomic_write(out / "results.json", "w", encoding="utf-8") as handle:
-        json.dump(_jsonable(results), handle, indent=1)
-    write_report(out / "report.md", results, config)
+    novel = [run for r in ordered.values() for run in r.novel]
+    paper_summary = summarize(paper) if paper else None
+    files = OutputFiles(
+        models={**{f"set{k}": f"models/set{k}.npz" for k in ordered},
+                **{f"full_seed{r.seed}": f"models/full_seed{r.seed}.npz" for r in larger}},
+        learning_sets={**{f"set{k}": LearningSetFiles(r.patterns, f"data/set{k}/")
+                          for k, r in ordered.items()},
+                       "full": LearningSetFiles(["1", "2", "3", "4"], "data/full/")},
+        figures=sorted(p.name for p in figure_dir.glob("*.png")))
+    results = DemoResults(
+        rnnpb_version=__version__, versions=versions(), config=config, default=summary,
+        novel=novel,
+        closed_loop_periods={k: {p: a.period for p, a in r.attractors.items()}
+                             for k, r in ordered.items()},
+        switch_sequence_steps_to_follow=ordered["1"].sequence.steps_to_follow,
+        larger=larger, targets=targets(summary, larger, [r.case for r in novel]),
+        draws=draws_summary({k: r.draws_by_seed() for k, r in ordered.items()},
+                            [r.draws_by_seed() for r in larger],
+                            (config.scenario_seed, *config.extra_scenario_seeds)),
+        files=files, paper=paper_summary,
+        paper_targets=targets(paper_summary, [], []) if paper_summary else None,
+        runtime_s=time.perf_counter() - start)
+    write_outputs(out, report_lines(results), results.to_json())
     return results
 
 
-def _versions() -> dict[str, str]:
-    import jax
-    import mujoco
+# --- the report: one function per section --------------------------------------------------
 
-    return {"python": platform.python_version(), "jax": jax.__version__,
-            "numpy": np.__version__, "mujoco": mujoco.__version__,
-            "machine": platform.machine(), "cpus": str(os.cpu_count())}
-
-
-def _missing_cases_explanation(results: dict[str, Any]) -> list[str]:
+def missing_cases_explanation(novel: Sequence[NovelResponse],
+                              closed_loop_periods: dict[str, dict[str, int | None]]
+                              ) -> list[str]:
     """Why a response case did not occur, from the attractor analysis's own numbers."""
-    runs = results["novel_case"]
-    seen = {r["case"] for r in runs}
-    missing = [c for c in (1, 2, 3) if c not in seen]
-    if not missing or not runs:
+    seen = {r.case for r in novel}
+    missing = [c for c in metrics.RESPONSE_CASES if c not in seen]
+    if not missing or not novel:
         return []
-    periods = sorted({r["period"] for r in runs if r["period"] is not None})
-    worst_return = max(r["return_error"] for r in runs)
-    closed = [p for periods_ in results["closed_loop_periods"].values()
-              for p in periods_.values()]
+    periods = sorted({r.period for r in novel if r.period is not None})
+    worst_return = max(r.return_error for r in novel)
+    closed = [p for periods_ in closed_loop_periods.values() for p in periods_.values()]
     learned = sorted({p for p in closed if p is not None})
     cycles = sum(p is not None for p in closed)
     if cycles == len(closed):
@@ -379,22 +241,25 @@ def _missing_cases_explanation(results: dict[str, Any]) -> list[str]:
         autonomous = (f"Of the learned patterns' closed-loop attractors, {cycles} of "
                       f"{len(closed)} are limit cycles (periods "
                       f"{', '.join(map(str, learned)) or '–'}) and the others do not repeat "
-                      "within 60 steps; yet driven by a repeated input and with on-line "
-                      "regression, the network entrains to the period it is shown.")
+                      f"within {metrics.MAX_PERIOD} steps; yet driven by a repeated input and "
+                      "with on-line regression, the network entrains to the period it is shown.")
     lines = ["", f"**Why case {' and '.join(map(str, missing))} did not occur here.**"]
     if 3 in missing:
         lines.append(
             f"Every response settled on a limit cycle: the largest return error over all "
-            f"{len(runs)} runs is {worst_return:.3f} (a response counts as unsteady above "
-            f"0.1), at period(s) {', '.join(map(str, periods))} — the period of the repeated "
-            f"input cycle or a multiple of it. {autonomous} The input here is one exactly "
+            f"{len(novel)} runs is {worst_return:.3f} (a response counts as unsteady above "
+            f"{metrics.PERIODIC_TOLERANCE:g}), at period(s) {', '.join(map(str, periods))} — "
+            "the period of the repeated input cycle or a multiple of it. "
+            f"{autonomous} The input here is one exactly "
             "repeated cycle (the paper's user demonstrated the novel patterns by hand), and "
             "the PB, regressed every step, keeps the response on that period.")
     if 2 in missing:
-        lines.append("Every periodic response lay within 0.05 of a learned pattern's cycle: "
-                     "the novel patterns were drawn into the learned attractors.")
+        lines.append(f"Every periodic response lay within {metrics.SIMILAR_CYCLE:g} of a "
+                     "learned pattern's cycle: the novel patterns were drawn into the learned "
+                     "attractors.")
     if 1 in missing:
-        lines.append("No periodic response lay within 0.05 of a learned pattern's cycle.")
+        lines.append(f"No periodic response lay within {metrics.SIMILAR_CYCLE:g} of a learned "
+                     "pattern's cycle.")
     return lines
 
 
@@ -406,7 +271,7 @@ def _describe_learning(train: TrainConfig) -> str:
     return f"{how}, {train.iterations:,} iterations"
 
 
-def _describe_configuration(config: ExperimentConfig) -> str:
+def describe_configuration(config: ExperimentConfig) -> str:
     """What **default** and **paper's regression** mean in this run, from its config."""
     def onset(online: OnlineConfig) -> str:
         return "optimised with the PB" if online.optimize_onset else "carried over"
@@ -431,158 +296,200 @@ def _describe_configuration(config: ExperimentConfig) -> str:
     return text
 
 
-def write_report(path: Path, results: dict[str, Any], config: ExperimentConfig) -> None:
-    ours = results
-    theirs = results.get("paper_regression")
-    lines = [
+def _header(results: DemoResults) -> list[str]:
+    config = results.config
+    return [
         "# rnnpb — the experiments of Ito & Tani (2004), reproduced",
         "",
-        f"rnnpb {results['rnnpb_version']}, {'quick' if config.quick else 'full'} run, "
-        f"{results['runtime_s']:.0f} s on {results['versions']['cpus']} CPU(s) "
-        f"(jax {results['versions']['jax']}, mujoco {results['versions']['mujoco']}). "
+        f"rnnpb {results.rnnpb_version}, {'quick' if config.quick else 'full'} run, "
+        f"{results.runtime_s:.0f} s on {results.versions['cpus']} CPU(s) "
+        f"(jax {results.versions['jax']}, mujoco {results.versions['mujoco']}). "
         "Every number below is in `results.json`; the definitions of the measures are in "
         "`rnnpb.analysis.metrics` and docs/experiments.md.",
         "",
-        _describe_configuration(config),
+        describe_configuration(config),
         "",
         f"Every learning set holds {config.samples_per_pattern} demonstrations of each of its "
         f"patterns (the paper: 2), from the synthetic demonstrator with data seed "
         f"{config.data_seed}.",
-        "",
-        "## Summary",
-        "",
-        "| measure | paper | ours (default) | ours (paper's regression) |",
-        "|---|---|---|---|",
     ]
 
-    def row(name: str, paper_text: str, key: str, flatten: bool = True,
-            kind: str = "range") -> None:
-        def cell(summary: dict | None) -> str:
+
+def _summary_section(results: DemoResults) -> list[str]:
+    ours, theirs = results.default, results.paper
+    absent = "not run (quick)" if results.config.quick else "–"
+
+    def spread(measure: str, per_pattern: bool = True) -> tuple[str, str]:
+        def cell(summary: Summary | None) -> str:
             if summary is None:
-                return "not run (quick)" if config.quick else "–"
-            value = summary[key]
-            values = _flat(value) if flatten else list(value.values())
-            if kind == "max":
-                return f"max {max(values):.2e}"
-            return _range(values)
-        lines.append(f"| {name} | {paper_text} | {cell(ours)} | {cell(theirs)} |")
+                return absent
+            value = getattr(summary, measure)
+            return median_and_worst(flat(value) if per_pattern else list(value.values()))
+        return cell(ours), cell(theirs)
 
-    row("final training error (MSE per output, worst of sets 1–4)", "< 3e-4 (RMS, read as MSE)",
-        "train_mse", flatten=False, kind="max")
-    lines.append(f"| final training error as RMS (worst) | < 3e-4 | "
-                 f"{max(ours['train_rms'].values()):.2e} | "
-                 + (f"{max(theirs['train_rms'].values()):.2e}" if theirs else "–") + " |")
-    row("steps until locked on a learned pattern", "about 10", "sync_steps_to_lock")
-    row("steps until the PB settles", "about 20", "pb_settle_steps")
-    row("phase lag once locked (steps; + = robot behind)", "mostly synchronous",
-        "phase_lag_steps")
-    row("robot motion during a 5-step pause (relative to before)", "keeps moving",
-        "pause_relative_motion")
-    row("steps to re-lock after the pause", "a few", "pause_steps_to_relock")
-    row("steps until the robot follows a switch (every ordered pair, sets 1–4)",
-        "several", "switch_steps")
-    lines.append(f"| learned pattern recognised (nearest learned PB) | all | "
-                 f"{ours['recognized_correctly']}/{ours['recognition_runs']} | "
-                 + (f"{theirs['recognized_correctly']}/{theirs['recognition_runs']}"
-                    if theirs else "–") + " |")
-    cases = [r["case"] for r in ours["novel_case"]]
-    lines.append(f"| novel-pattern responses (case 1 / 2 / 3) | all three occur | "
-                 f"{cases.count(1)} / {cases.count(2)} / {cases.count(3)} | – |")
-    lines.append(f"| larger set: runs that follow every pattern | 9 of 10 | "
-                 f"{ours['larger_set_success']} of {len(ours['larger_set_runs'])} | – |")
-    draws = ours["draws"]
-    seeds = draws["scenario_seeds"]
+    def worst(measure: str, prefix: str, none: str) -> tuple[str, str]:
+        def cell(summary: Summary | None) -> str:
+            if summary is None:
+                return none
+            return f"{prefix}{max(getattr(summary, measure).values()):.2e}"
+        return cell(ours), cell(theirs)
 
-    def verdict(value: dict[str, Any] | None) -> str:
-        if value is None:
-            return "–"
-        return f"{'met' if value['met'] else 'NOT met'} ({value['detail']})"
+    def recognised(summary: Summary | None) -> str:
+        return f"{summary.recognized_correctly}/{summary.recognition_runs}" if summary else "–"
 
-    lines += ["", "### Targets", "",
-              f"For the report's draw of the user's imperfection (scenario seed {seeds[0]}) and "
-              f"over all {len(seeds)} draws ({', '.join(map(str, seeds))}; see "
-              "\"Other draws of the user's imperfection\" below):", "",
-              "| target | default | default, all draws | paper's regression |",
-              "|---|---|---|---|"]
-    for key, value in ours["targets"].items():
-        other = theirs["targets"].get(key) if theirs else None
-        lines.append(f"| {key} | {verdict(value)} | {verdict(draws['targets'].get(key))} | "
-                     f"{verdict(other)} |")
-    lines += [
-        "",
-        "## The four movement patterns (Figure 4)",
-        "",
-        "![patterns](figures/figure4_patterns.png)",
-        "",
-        "## Learning",
-        "",
-        "| learning set | MSE (worst output) | RMS | seconds |",
-        "|---|---|---|---|",
+    target = sci(metrics.TRAIN_ERROR_TARGET)
+    cases = [r.case for r in results.novel]
+    rows = [
+        ("final training error (MSE per output, worst of sets 1–4)",
+         f"< {target} (RMS, read as MSE)", *worst("train_mse", "max ", absent)),
+        ("final training error as RMS (worst)", f"< {target}", *worst("train_rms", "", "–")),
+        ("steps until locked on a learned pattern", f"about {metrics.LOCK_LIMIT}",
+         *spread("sync_steps_to_lock")),
+        ("steps until the PB settles", f"about {metrics.SETTLE_LIMIT}",
+         *spread("pb_settle_steps")),
+        ("phase lag once locked (steps; + = robot behind)", "mostly synchronous",
+         *spread("phase_lag_steps")),
+        (f"robot motion during a {PAUSE_STEPS}-step pause (relative to before)",
+         "keeps moving", *spread("pause_relative_motion")),
+        ("steps to re-lock after the pause", "a few", *spread("pause_steps_to_relock")),
+        ("steps until the robot follows a switch (every ordered pair, sets 1–4)", "several",
+         *spread("switch_steps")),
+        ("learned pattern recognised (nearest learned PB)", "all", recognised(ours),
+         recognised(theirs)),
+        ("novel-pattern responses (case 1 / 2 / 3)", "all three occur",
+         " / ".join(str(cases.count(c)) for c in metrics.RESPONSE_CASES), "–"),
+        ("larger set: runs that follow every pattern",
+         f"{metrics.LARGER_SET_FOLLOWS} of {metrics.LARGER_SET_RUNS}",
+         f"{results.larger_set_success} of {len(results.larger)}", "–"),
     ]
-    for k in sorted(ours["train_mse"]):
-        lines.append(f"| {k} | {ours['train_mse'][k]:.2e} | {ours['train_rms'][k]:.2e}"
-                     f" | {ours['train_seconds'][k]:.0f} |")
-    lines += ["", "![training](figures/training.png)", "",
-              "## 3.1 Synchronization and pause (Figure 5)", "",
-              "| set | pattern | steps to lock | PB settles | phase lag | recognised | "
-              "motion in pause | re-lock |", "|---|---|---|---|---|---|---|---|"]
-    for k in sorted(ours["sync_steps_to_lock"]):
-        for p in ours["sync_steps_to_lock"][k]:
-            lines.append(
-                f"| {k} | {p} | {_fmt(ours['sync_steps_to_lock'][k][p])} | "
-                f"{_fmt(ours['pb_settle_steps'][k][p])} | "
-                f"{_fmt(ours['phase_lag_steps'][k][p], 2)} | "
-                f"{ours['recognized_pattern'][k][p]} | "
-                f"{_fmt(ours['pause_relative_motion'][k][p], 2)} | "
-                f"{_fmt(ours['pause_steps_to_relock'][k][p])} |")
-    lines += ["", "![synchronization](figures/figure5_synchronization.png)", "",
-              "## 3.2 Switching (Figures 6 and 7)", "",
-              "Steps from the user's switch until the robot follows the new pattern, for "
-              "every ordered pair of learned patterns in every learning set (the user performs "
-              "50 steps of the first pattern, then the second):", "",
-              "![switching matrix](figures/switching_matrix.png)", "",
-              "![switching](figures/figure6_switching.png)", "",
-              "![switching zoom](figures/figure7_switching_zoom.png)", "",
-              "## 3.3 Novel patterns and attractors (Figures 8 and 9)", "",
-              "One cycle of the pattern a learning set left out is repeated while the PB is "
-              "regressed on-line; the robot's response after the transient is classified "
-              "(case 1: a limit cycle like a learned one; 2: a new limit cycle; 3: unsteady).",
-              "", "| set | novel pattern | size | response |", "|---|---|---|---|"]
-    for run in ours["novel_case"]:
-        lines.append(f"| {run['learning_set']} | {run['novel_pattern']} | "
-                     f"x{run['amplitude']:g} | {run['description']} |")
-    lines += _missing_cases_explanation(ours)
-    lines += ["", "![novel](figures/figure8_novel.png)", "",
-              "![attractors](figures/figure9_attractors.png)", "",
-              "Closed-loop periods of the learned patterns (steps; none = not periodic): "
-              + "; ".join(f"set {k}: " + ", ".join(f"{p}→{_fmt(v)}" for p, v in periods.items())
-                          for k, periods in ours["closed_loop_periods"].items()),
-              "", "## 3.4 The larger set", "",
-              "| seed | training MSE | steps to follow 1 / 2 / 3 / 4 | follows all |",
-              "|---|---|---|---|"]
-    for run in ours["larger_set_runs"]:
-        steps = " / ".join(_fmt(v) for v in run["steps_to_follow"].values())
-        lines.append(f"| {run['seed']} | {run['train_mse_max']:.2e} | {steps} | "
-                     f"{'yes' if run['follows_all'] else 'no'} |")
-    lines += ["", "## Other draws of the user's imperfection", "",
-              "The user's imperfection (period, size and shape from cycle to cycle, drift, "
-              "sensor noise) is drawn at random; the figures above use one draw. The same "
-              "models, driven by other draws, give (counts within the target; median and worst "
-              "steps):", "",
-              "| scenario seed | lock on ≤ 10 | PB settles ≤ 20 | re-lock ≤ 5 | switch ≤ 15 | "
-              "larger set |", "|---|---|---|---|---|---|"]
-    for seed, draw in draws["by_seed"].items():
-        cells = []
-        for key, _, limit in _DRAW_MEASURES:
-            values = _flat(draw[key])
-            cells.append(f"{_within(values, limit)}/{len(values)} ({_range(values)})")
-        n_larger = len(draw["larger_set_steps_to_follow"])
-        cells.append(f"{draw['larger_set_success']}/{n_larger}" if n_larger else "–")
-        lines.append(f"| {seed}{' (above)' if int(seed) == seeds[0] else ''} | "
-                     + " | ".join(cells) + " |")
-    lines += ["", "## Files", "",
-              "Models (reuse them with `rnnpb interact --model …`): "
-              + ", ".join(f"`{v}`" for v in ours["files"]["models"].values()) + ".",
-              "Learning sets as sequence CSVs: `data/set1/` … `data/set4/`, `data/full/`.", ""]
-    with atomic_write(path, "w", encoding="utf-8") as handle:
-        handle.write("\n".join(lines))
+    return ["", "## Summary", "",
+            *table(("measure", "paper", "ours (default)", "ours (paper's regression)"), rows)]
+
+
+def _verdict(target: Target | None) -> str:
+    if target is None:
+        return "–"
+    return f"{'met' if target.met else 'NOT met'} ({target.detail})"
+
+
+def _targets_section(results: DemoResults) -> list[str]:
+    seeds = results.draws.scenario_seeds
+    pooled, theirs = results.draws.targets, results.paper_targets
+    rows = [(key, _verdict(value), _verdict(pooled.get(key)),
+             _verdict(theirs.get(key) if theirs else None))
+            for key, value in results.targets.items()]
+    return ["", "### Targets", "",
+            f"For the report's draw of the user's imperfection (scenario seed {seeds[0]}) and "
+            f"over all {len(seeds)} draws ({', '.join(map(str, seeds))}; see "
+            "\"Other draws of the user's imperfection\" below):", "",
+            *table(("target", "default", "default, all draws", "paper's regression"), rows)]
+
+
+def _patterns_section(results: DemoResults) -> list[str]:
+    return ["", "## The four movement patterns (Figure 4)", "",
+            embed("patterns", "figure4_patterns.png")]
+
+
+def _learning_section(results: DemoResults) -> list[str]:
+    ours = results.default
+    rows = [(k, f"{ours.train_mse[k]:.2e}", f"{ours.train_rms[k]:.2e}",
+             f"{ours.train_seconds[k]:.0f}") for k in sorted(ours.train_mse)]
+    return ["", "## Learning", "",
+            *table(("learning set", "MSE (worst output)", "RMS", "seconds"), rows),
+            "", embed("training", "training.png")]
+
+
+def _synchronization_section(results: DemoResults) -> list[str]:
+    ours = results.default
+    rows = [(k, p, fmt(ours.sync_steps_to_lock[k][p]), fmt(ours.pb_settle_steps[k][p]),
+             fmt(ours.phase_lag_steps[k][p], 2), ours.recognized_pattern[k][p],
+             fmt(ours.pause_relative_motion[k][p], 2), fmt(ours.pause_steps_to_relock[k][p]))
+            for k in sorted(ours.sync_steps_to_lock) for p in ours.sync_steps_to_lock[k]]
+    return ["", "## 3.1 Synchronization and pause (Figure 5)", "",
+            *table(("set", "pattern", "steps to lock", "PB settles", "phase lag", "recognised",
+                    "motion in pause", "re-lock"), rows),
+            "", embed("synchronization", "figure5_synchronization.png")]
+
+
+def _switching_section(results: DemoResults) -> list[str]:
+    return ["", "## 3.2 Switching (Figures 6 and 7)", "",
+            "Steps from the user's switch until the robot follows the new pattern, for "
+            "every ordered pair of learned patterns in every learning set (the user performs "
+            f"{SWITCH_STEPS_EACH} steps of the first pattern, then the second):", "",
+            embed("switching matrix", "switching_matrix.png"), "",
+            embed("switching", "figure6_switching.png"), "",
+            embed("switching zoom", "figure7_switching_zoom.png")]
+
+
+def _novel_section(results: DemoResults) -> list[str]:
+    rows = [(r.learning_set, r.novel_pattern, f"x{r.amplitude:g}", r.description)
+            for r in results.novel]
+    periods = "; ".join(f"set {k}: " + ", ".join(f"{p}→{fmt(v)}" for p, v in found.items())
+                        for k, found in results.closed_loop_periods.items())
+    return ["", "## 3.3 Novel patterns and attractors (Figures 8 and 9)", "",
+            "One cycle of the pattern a learning set left out is repeated while the PB is "
+            "regressed on-line; the robot's response after the transient is classified "
+            "(case 1: a limit cycle like a learned one; 2: a new limit cycle; 3: unsteady).",
+            "", *table(("set", "novel pattern", "size", "response"), rows),
+            *missing_cases_explanation(results.novel, results.closed_loop_periods),
+            "", embed("novel", "figure8_novel.png"), "",
+            embed("attractors", "figure9_attractors.png"), "",
+            "Closed-loop periods of the learned patterns (steps; none = not periodic): "
+            + periods]
+
+
+def _larger_set_section(results: DemoResults) -> list[str]:
+    rows = [(r.seed, f"{r.train_mse_max:.2e}",
+             " / ".join(fmt(v) for v in r.steps_to_follow.values()),
+             "yes" if r.follows_all else "no") for r in results.larger]
+    return ["", "## 3.4 The larger set", "",
+            *table(("seed", "training MSE", "steps to follow 1 / 2 / 3 / 4", "follows all"),
+                   rows)]
+
+
+def _draws_section(results: DemoResults) -> list[str]:
+    draws = results.draws
+    first = draws.scenario_seeds[0]
+    lines = ["", "## Other draws of the user's imperfection", "",
+             "The user's imperfection (period, size and shape from cycle to cycle, drift, "
+             "sensor noise) is drawn at random; the figures above use one draw. The same "
+             "models, driven by other draws, give (counts within the target; median and worst "
+             "steps):", ""]
+    names = {"sync_steps_to_lock": "lock on", "pb_settle_steps": "PB settles",
+             "pause_steps_to_relock": "re-lock", "switch_steps": "switch"}
+    header = ("scenario seed", *(f"{names[t.measure]} ≤ {t.limit}" for t in STEP_TARGETS),
+              "larger set")
+    lines += table(header, [])
+    for seed, draw in draws.by_seed.items():
+        cells: list[str] = [f"{seed}{' (above)' if int(seed) == first else ''}"]
+        for target in STEP_TARGETS:
+            values = flat(getattr(draw, target.measure))
+            cells.append(f"{within(values, target.limit)}/{len(values)} "
+                         f"({median_and_worst(values)})")
+        n_larger = len(draw.larger_set_steps_to_follow)
+        cells.append(f"{draw.larger_set_success}/{n_larger}" if n_larger else "–")
+        lines.append(row(cells))
+    return lines
+
+
+def _files_section(results: DemoResults) -> list[str]:
+    return ["", "## Files", "",
+            "Models (reuse them with `rnnpb interact --model …`): "
+            + ", ".join(f"`{v}`" for v in results.files.models.values()) + ".",
+            "Learning sets as sequence CSVs: `data/set1/` … `data/set4/`, `data/full/`.", ""]
+
+
+SECTIONS = (_header, _summary_section, _targets_section, _patterns_section,
+            _learning_section, _synchronization_section, _switching_section, _novel_section,
+            _larger_set_section, _draws_section, _files_section)
+
+
+def report_lines(results: DemoResults) -> list[str]:
+    """``report.md``, section after section, as lines."""
+    return [line for section in SECTIONS for line in section(results)]
+
+
+def write_report(path: str | os.PathLike[str], results: DemoResults) -> None:
+    """Write the report of ``results`` to ``path`` (``run_demo`` writes it with the
+    results)."""
+    write_lines(path, report_lines(results))
