@@ -16,10 +16,19 @@ pattern it recognises. The session can be downloaded as CSV.
 Serves on 127.0.0.1 (this computer only) unless --host says otherwise. All tabs share one
 session. Stop with Ctrl-C.
 
+The server answers only requests addressed to 127.0.0.1, localhost, [::1] or the --host
+address, and its WebSocket only accepts its own page, so that other web sites open in your
+browser can neither drive the robot nor see the camera. To reach it from other machines
+under a name, list the name with --allow-host (the page served under it is then its own);
+a page at another origin (a proxy) needs --allow-origin.
+
 Examples:
   rnnpb serve --model models/set1.npz
   rnnpb serve --model models/ --port 9000 --dt 0.2
-  rnnpb serve --model models/ --host 0.0.0.0      # reachable from other machines
+  rnnpb serve --model models/ --host 192.168.1.20   # reachable as http://192.168.1.20:8765
+  rnnpb serve --model models/ --host 0.0.0.0 --allow-host robot.lab
+  rnnpb serve --model models/ --host 0.0.0.0 --allow-host robot.lab \\
+      --allow-origin https://robot.lab                # behind an HTTPS proxy
 """
 
 
@@ -33,6 +42,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--dt", type=float, default=0.4,
                         help="seconds per network step (default 0.4, as in the paper; "
                              "changeable on the page)")
+    parser.add_argument("--allow-host", action="append", default=[], metavar="NAME",
+                        help="also answer requests addressed to this host name or IP address "
+                             "(repeatable; 127.0.0.1, localhost, [::1] and --host always are)")
+    parser.add_argument("--allow-origin", action="append", default=[], metavar="ORIGIN",
+                        help="also accept the WebSocket of pages from this origin, "
+                             "scheme://host[:port] (repeatable; the server's own page "
+                             "always is)")
     parser.add_argument("--log-level", default="warning",
                         choices=("debug", "info", "warning", "error"),
                         help="server log detail (default warning)")
@@ -42,19 +58,24 @@ def run(args: argparse.Namespace) -> int:
     import logging
 
     from rnnpb.errors import ConfigError
-    from rnnpb.web import DashboardServer, find_models
-    from rnnpb.web._protocol import MAX_DT, MIN_DT
+    from rnnpb.web import MAX_DT, MIN_DT, AccessPolicy, DashboardServer, find_models
 
     if not MIN_DT <= args.dt <= MAX_DT:
         raise ConfigError(f"--dt must be in [{MIN_DT}, {MAX_DT}] seconds, got {args.dt}")
     if not 0 <= args.port <= 65535:
         raise ConfigError(f"--port must be in [0, 65535], got {args.port}")
+    # Checked before anything starts, so a mistyped name is one clear error line.
+    access = AccessPolicy.for_address(args.host, args.allow_host, args.allow_origin)
     logging.basicConfig(level=args.log_level.upper(), format="%(levelname)s %(name)s: %(message)s")
     models = find_models(args.model)
     server = DashboardServer(models, host=args.host, port=args.port, dt=args.dt,
-                             log_level=args.log_level)
+                             log_level=args.log_level, allow_hosts=access.hosts,
+                             allow_origins=access.origins)
     server.start()
     print(f"rnnpb dashboard: {server.url}  (models: {', '.join(models)}; Ctrl-C to stop)",
+          flush=True)
+    print(f"answering for: {', '.join(access.allowed_hosts)}"
+          + (f"; pages from: {', '.join(access.origins)}" if access.origins else ""),
           flush=True)
     try:
         server.wait()

@@ -2,14 +2,26 @@
 imitating the demonstrator, the mouse or the webcam, with live plots of the hands, the joint
 angles and the parametric bias (docs/dashboard.md)."""
 
-from rnnpb.web._protocol import MAX_MESSAGE_BYTES, ProtocolError, parse_client_message
+from rnnpb.web._access import CONTENT_SECURITY_POLICY, LOOPBACK_HOSTS, AccessPolicy
+from rnnpb.web._protocol import (
+    MAX_DT,
+    MAX_MESSAGE_BYTES,
+    MIN_DT,
+    ProtocolError,
+    parse_client_message,
+)
 from rnnpb.web._server import STATIC_DIR, DashboardServer, create_app
 from rnnpb.web._session import Session, find_models
 from rnnpb.web._sources import DemonstratorSource, PointerSource
 
 __all__ = [
+    "CONTENT_SECURITY_POLICY",
+    "LOOPBACK_HOSTS",
+    "MAX_DT",
     "MAX_MESSAGE_BYTES",
+    "MIN_DT",
     "STATIC_DIR",
+    "AccessPolicy",
     "DashboardServer",
     "DemonstratorSource",
     "PointerSource",

@@ -3,6 +3,8 @@
 Every client message is one JSON object in a text frame of at most :data:`MAX_MESSAGE_BYTES`
 bytes with a ``type`` field; anything else is rejected with a :class:`ProtocolError` whose
 text goes back to the client as ``{"type": "error", "message": ...}`` (docs/dashboard.md).
+Every number is checked for its type, for being finite and for its range before anything
+else touches it: JSON integers have no size limit, and a 309-digit one overflows ``float``.
 """
 
 from __future__ import annotations
@@ -27,13 +29,34 @@ class ProtocolError(RnnpbError):
     """A client message that is not valid; the text says what is wrong with it."""
 
 
+def _shown(value: Any) -> str:
+    """A client's value for an error message: short, and never an exception itself (a huge
+    integer can exceed Python's limit on digits converted to text)."""
+    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 64:
+        # Not repr(): decimal text of a long integer is slow, and limited (sys.int_info).
+        return f"an integer of about {int(value.bit_length() * math.log10(2)) + 1} digits"
+    try:
+        text = repr(value)
+    except ValueError:
+        text = f"a {type(value).__name__}"
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
 def _number(value: Any, name: str, low: float, high: float) -> float:
     # bool is an int in Python; a JSON true is not a number here.
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise ProtocolError(f"{name} must be a number, got {type(value).__name__}")
-    value = float(value)
-    if not math.isfinite(value) or not low <= value <= high:
-        raise ProtocolError(f"{name} must be in [{low:g}, {high:g}], got {value:g}")
+    # The range is checked before float(): comparing an int with a float is exact in Python
+    # at any size, while float() of an integer beyond 1.8e308 raises OverflowError.
+    if (isinstance(value, float) and not math.isfinite(value)) or not low <= value <= high:
+        raise ProtocolError(f"{name} must be in [{low:g}, {high:g}], got {_shown(value)}")
+    return float(value)
+
+
+def _integer(value: Any, name: str, low: int, high: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+        raise ProtocolError(f"{name} must be an integer in [{low}, {high}], got "
+                            f"{_shown(value)}")
     return value
 
 
@@ -41,7 +64,7 @@ def _keys(message: dict[str, Any], allowed: tuple[str, ...]) -> None:
     extra = sorted(set(message) - {"type", *allowed})
     if extra:
         raise ProtocolError(f"message {message['type']!r} has unknown field(s) "
-                            f"{', '.join(extra)}")
+                            f"{', '.join(_shown(k) for k in extra[:5])}")
     missing = [k for k in allowed if k not in message]
     if missing:
         raise ProtocolError(f"message {message['type']!r} needs field(s) {', '.join(missing)}")
@@ -72,7 +95,7 @@ def parse_client_message(text: str | bytes | None) -> dict[str, Any]:
         raise ProtocolError(f"message too large: {size} bytes (at most {MAX_MESSAGE_BYTES})")
     try:
         message = json.loads(text)
-    except (json.JSONDecodeError, RecursionError) as error:
+    except (ValueError, RecursionError) as error:  # ValueError: also too many digits
         raise ProtocolError(f"malformed JSON: {error}") from None
     if not isinstance(message, dict):
         raise ProtocolError(f"a message must be a JSON object, got {type(message).__name__}")
@@ -90,31 +113,28 @@ def parse_client_message(text: str | bytes | None) -> dict[str, Any]:
         return {"type": "hands", "hands": values}
     if kind == "mode":
         _keys(message, ("mode",))
-        if message["mode"] not in MODES:
+        if not isinstance(message["mode"], str) or message["mode"] not in MODES:
             raise ProtocolError(f"mode must be one of {', '.join(MODES)}, got "
-                                f"{message['mode']!r}")
+                                f"{_shown(message['mode'])}")
         return {"type": "mode", "mode": message["mode"]}
     if kind == "camera":
         _keys(message, ("index",))
-        index = message["index"]
-        if isinstance(index, bool) or not isinstance(index, int) or \
-                not 0 <= index <= MAX_CAMERA_INDEX:
-            raise ProtocolError(f"camera index must be an integer in [0, {MAX_CAMERA_INDEX}]")
-        return {"type": "camera", "index": index}
+        return {"type": "camera",
+                "index": _integer(message["index"], "camera index", 0, MAX_CAMERA_INDEX)}
     if kind == "pattern":
         _keys(message, ("pattern",))
         pattern = message["pattern"]
-        if isinstance(pattern, int) and not isinstance(pattern, bool):
+        if isinstance(pattern, int) and not isinstance(pattern, bool) and 0 <= pattern <= 9:
             pattern = str(pattern)
-        if pattern not in PATTERN_CHOICES:
+        if not isinstance(pattern, str) or pattern not in PATTERN_CHOICES:
             raise ProtocolError(f"pattern must be one of {', '.join(PATTERN_CHOICES)}, got "
-                                f"{message['pattern']!r}")
+                                f"{_shown(message['pattern'])}")
         return {"type": "pattern", "pattern": pattern}
     if kind == "control":
         _keys(message, ("action",))
-        if message["action"] not in ACTIONS:
+        if not isinstance(message["action"], str) or message["action"] not in ACTIONS:
             raise ProtocolError(f"action must be one of {', '.join(ACTIONS)}, got "
-                                f"{message['action']!r}")
+                                f"{_shown(message['action'])}")
         return {"type": "control", "action": message["action"]}
     if kind == "dt":
         _keys(message, ("dt",))
@@ -128,4 +148,4 @@ def parse_client_message(text: str | bytes | None) -> dict[str, Any]:
     if kind == "ping":
         _keys(message, ())
         return {"type": "ping"}
-    raise ProtocolError(f"unknown message type {kind!r}")
+    raise ProtocolError(f"unknown message type {_shown(kind)}")

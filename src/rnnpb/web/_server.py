@@ -2,7 +2,9 @@
 
 Routes: ``/`` the page, ``/static/…`` its files (all vendored, nothing is fetched from the
 internet), ``/api/state`` the session state as JSON, ``/api/recording.csv`` the current
-session recording, and ``/ws`` the WebSocket every tab opens (docs/dashboard.md).
+session recording, and ``/ws`` the WebSocket every tab opens (docs/dashboard.md). Requests
+whose ``Host`` the :class:`AccessPolicy` does not name get 400, WebSocket handshakes from a
+foreign page get 403, and every response carries the page's Content-Security-Policy.
 """
 
 from __future__ import annotations
@@ -15,12 +17,15 @@ import threading
 from pathlib import Path
 
 from starlette.applications import Starlette
+from starlette.middleware import Middleware
+from starlette.middleware.trustedhost import TrustedHostMiddleware
 from starlette.requests import Request
 from starlette.responses import FileResponse, JSONResponse, PlainTextResponse, Response
 from starlette.routing import Mount, Route, WebSocketRoute
 from starlette.staticfiles import StaticFiles
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
+from rnnpb.web._access import ANY_ADDRESS, AccessPolicy, SecurityHeadersMiddleware, normalize_host
 from rnnpb.web._protocol import ProtocolError, parse_client_message
 from rnnpb.web._session import Session
 
@@ -35,8 +40,10 @@ WS_MAX_SIZE = 65536
 1009); smaller ones over the message limit get an error reply."""
 
 
-def create_app(session: Session) -> Starlette:
-    """The ASGI app serving ``session`` (already started)."""
+def create_app(session: Session, access: AccessPolicy | None = None) -> Starlette:
+    """The ASGI app serving ``session`` (already started) to the hosts and origins
+    ``access`` allows (default: this computer's loopback names only)."""
+    access = access or AccessPolicy()
 
     async def index(request: Request) -> Response:
         return FileResponse(STATIC_DIR / "index.html", media_type="text/html")
@@ -53,10 +60,20 @@ def create_app(session: Session) -> Starlette:
         return FileResponse(path, media_type="text/csv", filename=name)
 
     async def websocket(ws: WebSocket) -> None:
+        client = f"{ws.client.host}:{ws.client.port}" if ws.client else "client"
+        origin = ws.headers.get("origin")
+        if not access.origin_allowed(origin, ws.headers.get("host")):
+            # A page from another site, run by a browser here, must not drive the robot nor
+            # receive the camera's frames.
+            log.warning("%s: refused a WebSocket from origin %.200r (allowed: this server's "
+                        "own page; more with --allow-origin)", client, origin)
+            await ws.send_denial_response(PlainTextResponse(
+                f"origin {origin!r:.200} may not use this dashboard (start rnnpb serve with "
+                "--allow-origin to allow it)\n", status_code=403))
+            return
         await ws.accept()
         loop = asyncio.get_running_loop()
         outbox: asyncio.Queue[str] = asyncio.Queue(maxsize=SEND_QUEUE)
-        client = f"{ws.client.host}:{ws.client.port}" if ws.client else "client"
 
         def put(text: str) -> None:
             if outbox.full():
@@ -86,6 +103,11 @@ def create_app(session: Session) -> Starlette:
                     log.warning("%s: rejected message: %s", client, error)
                     put(json.dumps({"type": "error", "message": f"rejected: {error}"}))
                     continue
+                except Exception:  # a gap in the checks: still an answer, never a dropped tab
+                    log.exception("%s: message not checked", client)
+                    put(json.dumps({"type": "error", "message": "rejected: the server could "
+                                    "not check this message"}))
+                    continue
                 if message["type"] == "hands":
                     session.pointer.set_hands(message["hands"])
                 elif message["type"] == "ping":
@@ -108,11 +130,22 @@ def create_app(session: Session) -> Starlette:
         WebSocketRoute("/ws", websocket),
         Mount("/static", StaticFiles(directory=STATIC_DIR), name="static"),
     ]
-    return Starlette(routes=routes)
+    middleware = [
+        Middleware(SecurityHeadersMiddleware),
+        # Refuses DNS rebinding: a foreign name that resolves here reaches the server with
+        # its own name in Host.
+        Middleware(TrustedHostMiddleware, allowed_hosts=list(access.allowed_hosts),
+                   www_redirect=False),
+    ]
+    return Starlette(routes=routes, middleware=middleware)
 
 
 class DashboardServer:
     """The session and its web server on ``host:port``, run in a background thread.
+
+    It answers requests for the loopback names and for ``host`` (unless ``host`` is a
+    listen-everywhere address such as ``0.0.0.0``), and for the names in ``allow_hosts``; its
+    WebSocket accepts its own page and the origins in ``allow_origins`` (:class:`AccessPolicy`).
 
     >>> with DashboardServer(models, port=0) as server:    # doctest: +SKIP
     ...     print(server.url)
@@ -120,12 +153,14 @@ class DashboardServer:
 
     def __init__(self, models: dict[str, Path], host: str = "127.0.0.1", port: int = 8765,
                  dt: float = 0.4, model: str | None = None, workdir: str | Path | None = None,
-                 log_level: str = "warning") -> None:
+                 log_level: str = "warning", allow_hosts: tuple[str, ...] = (),
+                 allow_origins: tuple[str, ...] = ()) -> None:
         import uvicorn
 
+        self.access = AccessPolicy.for_address(host, allow_hosts, allow_origins)
         self.session = Session(models, dt=dt, workdir=workdir)
         self._first_model = model
-        self.app = create_app(self.session)
+        self.app = create_app(self.session, self.access)
         config = uvicorn.Config(self.app, host=host, port=port, log_level=log_level,
                                 ws="websockets-sansio", ws_max_size=WS_MAX_SIZE,
                                 lifespan="off")
@@ -142,7 +177,11 @@ class DashboardServer:
 
     @property
     def url(self) -> str:
-        host = f"[{self.host}]" if ":" in self.host else self.host
+        """The page's address; on a listen-everywhere address, the loopback one (a browser
+        asking for ``0.0.0.0`` names no host the server answers)."""
+        host = normalize_host(self.host) if self.host.strip() else ""
+        if host in ANY_ADDRESS:
+            host = "[::1]" if host == "[::]" else "127.0.0.1"
         return f"http://{host}:{self.port}/"
 
     def start(self) -> DashboardServer:

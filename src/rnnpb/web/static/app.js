@@ -1,5 +1,7 @@
 // rnnpb dashboard: one WebSocket to the server's shared session; the 3-D robot (three.js),
 // the pointer panel and the plots are drawn here from the server's step messages.
+// Text from the server (model and pattern names come from files, errors echo clients) is only
+// ever set as textContent, never parsed as HTML; the page's CSP allows no inline script.
 import * as THREE from "/static/vendor/three.module.min.js";
 
 const RED = "#d63a3a", BLUE = "#2f6fd6";
@@ -11,6 +13,15 @@ const PATTERN_NAMES = {
 const JOINT_COLORS = ["#7b3fb5", "#d98a00", "#1b9e77", "#555"];
 
 const $ = (id) => document.getElementById(id);
+// A learned pattern's description; any other name (even "__proto__") has none.
+const describe = (p) => (Object.hasOwn(PATTERN_NAMES, p) ? PATTERN_NAMES[p] : "");
+// An element with text children only: strings become text nodes, never markup.
+function el(tag, props = {}, ...children) {
+  const node = document.createElement(tag);
+  Object.assign(node, props);
+  node.append(...children.map((c) => (c instanceof Node ? c : String(c))));
+  return node;
+}
 const fmt = (v, digits = 3) => (v === null || v === undefined || Number.isNaN(v)) ? "—"
   : Number(v).toFixed(digits);
 
@@ -64,7 +75,7 @@ function onState(state) {
   dash.state = state;
   const select = $("model");
   if (select.options.length !== state.models.length) {
-    select.innerHTML = "";
+    select.replaceChildren();
     for (const name of state.models) select.add(new Option(name, name));
   }
   if (state.model) select.value = state.model;
@@ -119,15 +130,14 @@ function buildPatternButtons(state) {
   const key = JSON.stringify([state.patterns, state.novel_patterns, state.demonstrator_pattern]);
   if (box.dataset.key === key) return;
   box.dataset.key = key;
-  box.innerHTML = "";
+  box.replaceChildren();
   const all = [...state.patterns, ...state.novel_patterns].sort();
   for (const p of [...all, "pause"]) {
-    const button = document.createElement("button");
     const novel = state.novel_patterns.includes(p);
-    button.innerHTML = p === "pause"
-      ? "❚❚ Pause<small>hands held still</small>"
-      : `Pattern ${p}${novel ? " (novel)" : ""}<small>${PATTERN_NAMES[p] || ""}${
-        novel ? " — not learned" : ""}</small>`;
+    const button = p === "pause"
+      ? el("button", {}, "❚❚ Pause", el("small", {}, "hands held still"))
+      : el("button", {}, `Pattern ${p}${novel ? " (novel)" : ""}`,
+        el("small", {}, `${describe(p)}${novel ? " — not learned" : ""}`));
     button.dataset.pattern = p;
     button.classList.toggle("active", state.demonstrator_pattern === p);
     button.onclick = () => send({ type: "pattern", pattern: p });
@@ -143,7 +153,7 @@ function onStep(step) {
   if (dash.history.length > HISTORY) dash.history.shift();
   robotView.push(step);
   $("step").textContent = step.step;
-  $("nearest").textContent = `${step.nearest} — ${PATTERN_NAMES[step.nearest] || ""}`;
+  $("nearest").textContent = `${step.nearest} — ${describe(step.nearest)}`;
   $("nearest-distance").textContent = `(PB distance ${fmt(step.nearest_distance, 2)})`;
   $("pred-error").textContent = step.prediction_error === null ? "—"
     : step.prediction_error.toExponential(1);
@@ -562,20 +572,23 @@ function drawPB() {
 function drawTimings() {
   const table = $("timings");
   const steps = dash.history.slice(-50).filter((s) => s.timings_ms);
-  if (!steps.length) { table.innerHTML = "<tr><td>no steps yet</td></tr>"; return; }
+  if (!steps.length) { table.replaceChildren(el("tr", {}, el("td", {}, "no steps yet"))); return; }
   const names = Object.keys(steps[steps.length - 1].timings_ms);
   const median = (xs) => { const s = [...xs].sort((a, b) => a - b); return s[Math.floor(s.length / 2)]; };
+  const ms = (v) => fmt(v, 2);
   const rows = names.map((n) => {
     const values = steps.map((s) => s.timings_ms[n]);
-    return `<tr><td>${n}</td><td>${values[values.length - 1].toFixed(2)}</td>`
-      + `<td>${median(values).toFixed(2)}</td><td>${Math.max(...values).toFixed(2)}</td></tr>`;
+    return el("tr", {}, el("td", {}, n), el("td", {}, ms(values[values.length - 1])),
+      el("td", {}, ms(median(values))), el("td", {}, ms(Math.max(...values))));
   });
   const last = steps[steps.length - 1];
   const total = names.reduce((a, n) => a + last.timings_ms[n], 0);
-  table.innerHTML = "<tr><th>section</th><th>last ms</th><th>median ms</th><th>max ms</th></tr>"
-    + rows.join("")
-    + `<tr><th>step budget</th><td colspan="3">${total.toFixed(1)} of ${(last.dt * 1000).toFixed(0)} ms`
-    + ` · missed deadlines ${last.missed_deadlines}</td></tr>`;
+  table.replaceChildren(
+    el("tr", {}, ...["section", "last ms", "median ms", "max ms"].map((h) => el("th", {}, h))),
+    ...rows,
+    el("tr", {}, el("th", {}, "step budget"),
+      el("td", { colSpan: 3 }, `${fmt(total, 1)} of ${fmt(last.dt * 1000, 0)} ms`
+        + ` · missed deadlines ${last.missed_deadlines}`)));
 }
 
 function drawPlots() {
@@ -606,9 +619,12 @@ function drawPlots() {
 
 function jointLegend() {
   const names = ["shoulder pitch", "shoulder roll", "shoulder yaw", "elbow pitch"];
-  $("joint-legend").innerHTML = names.map((n, i) =>
-    `<span class="line" style="background:${JOINT_COLORS[i]}"></span>${n}`).join(" ")
-    + " — solid: left arm, dashed: right arm";
+  // Colours set through the style object: the CSP refuses style attributes in markup.
+  $("joint-legend").replaceChildren(...names.flatMap((n, i) => {
+    const swatch = el("span", { className: "line" });
+    swatch.style.background = JOINT_COLORS[i];
+    return [swatch, `${n} `];
+  }), "— solid: left arm, dashed: right arm");
 }
 
 // ---------------------------------------------------------------- controls
