@@ -18,6 +18,7 @@ from rnnpb.errors import RnnpbError
 # The order here is the order in `rnnpb --help`.
 COMMAND_MODULES: tuple[str, ...] = (
     "rnnpb.commands.demo",
+    "rnnpb.commands.study",
     "rnnpb.commands.train",
     "rnnpb.commands.generate",
     "rnnpb.commands.interact",

@@ -1,0 +1,46 @@
+"""rnnpb study: the studies beyond the paper's section 3."""
+
+from __future__ import annotations
+
+import argparse
+
+NAME = "study"
+HELP = "run a study beyond the paper: report.md, results.json, figures"
+DESCRIPTION = """\
+Run one study and write OUT/report.md (figures embedded from OUT/figures/) and
+OUT/results.json (every measure, with the config, seeds and versions). --quick is the short
+form, the one the test suite runs; the full form is the one whose figures docs/ quote.
+
+Example:
+  rnnpb study novelty --quick --out results/novelty
+"""
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from rnnpb.experiments.studies import STUDY_MODULES, load_study
+
+    choices = []
+    for name in STUDY_MODULES:
+        choices.append(f"{name}: {load_study(name).SUMMARY}")
+    parser.add_argument("name", metavar="NAME",
+                        help="the study: " + ("; ".join(choices) if choices else "none"))
+    parser.add_argument("--out", required=True, metavar="DIR", help="output directory")
+    parser.add_argument("--quick", action="store_true", help="the short form")
+    parser.add_argument("--workers", type=int, default=2,
+                        help="parallel worker processes (default 2)")
+    parser.add_argument("--seed", type=int, default=0, help="the first seed (default 0)")
+
+
+def run(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from rnnpb.experiments.studies import StudyOptions, load_study
+
+    study = load_study(args.name)
+    options = StudyOptions(quick=args.quick, workers=args.workers, seed=args.seed)
+    outcome = study.run(Path(args.out), options)
+    print(f"wrote {args.out}/report.md and {args.out}/results.json in "
+          f"{outcome.runtime_s:.0f} s")
+    for key, target in outcome.targets.items():
+        print(f"  {key}: {'met' if target.met else 'NOT met'} ({target.detail})")
+    return 0

@@ -1,0 +1,65 @@
+"""The studies beyond the paper's section 3: ``rnnpb study NAME [--quick] --out DIR``.
+
+A study is one module of this package that defines
+
+- ``NAME`` (the word on the command line) and ``SUMMARY`` (one line for ``--help``),
+- ``run(out: Path, options: StudyOptions) -> StudyOutcome``, which writes ``out/report.md``
+  (figures embedded from ``out/figures/``) and ``out/results.json`` (every measure, with the
+  config, seeds and versions: :func:`rnnpb.experiments.reporting.write_outputs`), each atomically.
+
+and is listed in :data:`STUDY_MODULES`. Only studies that exist are listed: the command offers
+what runs.
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass, field
+from types import ModuleType
+
+from rnnpb.errors import ConfigError
+from rnnpb.experiments.summary import Target
+
+# name -> module; the order is the order of `rnnpb study --help`.
+STUDY_MODULES: dict[str, str] = {}
+
+
+@dataclass(frozen=True)
+class StudyOptions:
+    """What every study takes. ``quick``: the short form (the one the tests run); ``workers``:
+    parallel worker processes; ``seed``: the first seed of the study's draws."""
+
+    quick: bool = False
+    workers: int = 2
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.workers, int) or isinstance(self.workers, bool) \
+                or self.workers < 1:
+            raise ConfigError(f"workers must be a whole number >= 1, got {self.workers!r}")
+        if not isinstance(self.seed, int) or isinstance(self.seed, bool) or self.seed < 0:
+            raise ConfigError(f"seed must be a whole number >= 0, got {self.seed!r}")
+
+
+@dataclass(frozen=True)
+class StudyOutcome:
+    """What a study tells the command line once its files are written: its targets (met or
+    not, and by how much) and how long it ran."""
+
+    runtime_s: float
+    targets: dict[str, Target] = field(default_factory=dict)
+
+
+def study_names() -> tuple[str, ...]:
+    return tuple(STUDY_MODULES)
+
+
+def load_study(name: str) -> ModuleType:
+    """The module of study ``name``; a clear error for a name no study has."""
+    if name not in STUDY_MODULES:
+        known = ", ".join(STUDY_MODULES) or "none yet"
+        raise ConfigError(f"no study {name!r} (studies: {known})")
+    return importlib.import_module(STUDY_MODULES[name])
+
+
+__all__ = ["STUDY_MODULES", "StudyOptions", "StudyOutcome", "load_study", "study_names"]
