@@ -9,17 +9,19 @@ from rnnpb.cli import main
 from rnnpb.demonstrator import learning_set
 from rnnpb.errors import ConfigError
 from rnnpb.interaction import (
-    ArraySensorySource,
-    FrameStepSource,
+    CAMERA_KINDS,
     InteractionLoop,
     LoopConfig,
     SessionRecorder,
+    SourceSpec,
     open_source,
+    parse_source_spec,
     read_session,
 )
 from rnnpb.model import MirrorSystem, OnlineConfig, TrainConfig, train
 from rnnpb.robot import JOINT_LIMITS, KinematicRobot
 from rnnpb.sequences import write_sensory_stream
+from rnnpb.sources import ArraySensorySource, FrameStepSource
 from rnnpb.vectors import MOTOR_NAMES, SENSORY_NAMES
 
 
@@ -111,6 +113,29 @@ def test_frame_step_keeps_every_nth_observation():
 def test_bad_source_specifications(spec, message):
     with pytest.raises(ConfigError, match=message):
         open_source(spec)
+
+
+@pytest.mark.parametrize("spec, parsed", [
+    ("scenario:switch:1,2", SourceSpec("scenario", "switch:1,2")),
+    ("csv:run/a:b.csv", SourceSpec("csv", "run/a:b.csv")),
+    ("webcam:2", SourceSpec("webcam", 2)),
+    (" Video:clip.mp4", SourceSpec("video", "clip.mp4")),
+    ("synthetic:rotation-in-phase", SourceSpec("synthetic", "rotation-in-phase")),
+])
+def test_the_one_grammar_of_source_specifications(spec, parsed):
+    assert parse_source_spec(spec) == parsed
+
+
+@pytest.mark.parametrize("spec, message", [
+    ("camera:0", "unknown kind 'camera'; expected one of webcam:INDEX"),
+    ("video:", "expected KIND:ARGUMENT, one of webcam:INDEX, video:PATH, images:DIR"),
+    ("webcam:front", "the webcam index must be an integer"),
+    ("csv:stream.csv", "a csv source cannot be used here"),
+    ("scenario:held:1", "a scenario source cannot be used here"),
+])
+def test_camera_only_specifications(spec, message):
+    with pytest.raises(ConfigError, match=message):
+        parse_source_spec(spec, kinds=CAMERA_KINDS)
 
 
 def test_side_by_side_video(model_path, tmp_path):

@@ -18,14 +18,16 @@ import time
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from rnnpb.errors import ConfigError
 from rnnpb.interaction.recorder import SessionRecorder
-from rnnpb.interaction.source import UserSource
-from rnnpb.model.online import MirrorSystem
+from rnnpb.sources import UserSource
+
+if TYPE_CHECKING:  # only annotated here: importing the loop does not import JAX
+    from rnnpb.model.online import MirrorSystem
 
 SECTIONS = ("perceive", "mirror", "act", "record")
 TIMING_WINDOW = 10_000

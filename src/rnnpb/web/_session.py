@@ -24,8 +24,8 @@ from typing import Any
 import numpy as np
 
 from rnnpb.errors import ConfigError, RnnpbError
-from rnnpb.interaction.source import Observation, UserSource
-from rnnpb.web._sources import PAUSE, DemonstratorSource, PointerSource
+from rnnpb.sources import UserSource
+from rnnpb.web._sources import PAUSE, DemonstratorSource, PointerSource, SwitchableSource
 
 log = logging.getLogger("rnnpb.web")
 
@@ -78,17 +78,6 @@ def _listed(values: np.ndarray) -> list[float | None]:
     return [float(v) if math.isfinite(v) else None for v in np.asarray(values, float).ravel()]
 
 
-class _SwitchableSource(UserSource):
-    """Delegates to the source of the current driving mode, so a mode change keeps the loop
-    (its step count, recording and regression window) going."""
-
-    def __init__(self, inner: UserSource) -> None:
-        self.inner = inner
-
-    def read(self) -> Observation | None:
-        return self.inner.read()
-
-
 class Session:
     """Model, mirror system, sources, loop and recording of the dashboard.
 
@@ -125,7 +114,7 @@ class Session:
         self.recording_path: Path | None = None
         self.last_error: str | None = None
         self._webcam: UserSource | None = None
-        self._source = _SwitchableSource(self.demonstrator)
+        self._source = SwitchableSource(self.demonstrator)
         self._user_view = _UserView()
         self._commands: queue.Queue[dict[str, Any]] = queue.Queue()
         self._subscribers: list[Callable[[str], None]] = []
@@ -345,7 +334,7 @@ class Session:
         if mode == "webcam":
             from rnnpb.perception import open_camera_source
 
-            webcam = open_camera_source(f"webcam:{self.camera_index}")
+            webcam = open_camera_source("webcam", self.camera_index)
             try:
                 webcam.connect()
             except RnnpbError as error:
