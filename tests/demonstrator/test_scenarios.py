@@ -14,8 +14,8 @@ from rnnpb.demonstrator import (
     switch_scenario,
 )
 from rnnpb.errors import ConfigError
-from rnnpb.interaction.source import Observation, UserSource
 from rnnpb.robot import JOINT_LIMITS
+from rnnpb.sources import Observation, UserSource
 
 
 def test_switch_scenario_truth_and_motion():

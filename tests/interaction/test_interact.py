@@ -1,6 +1,7 @@
 """The interaction loop and `rnnpb interact`: recordings, lost hands, timings, sources."""
 
 import json
+import time
 
 import numpy as np
 import pytest
@@ -9,17 +10,19 @@ from rnnpb.cli import main
 from rnnpb.demonstrator import learning_set
 from rnnpb.errors import ConfigError
 from rnnpb.interaction import (
-    ArraySensorySource,
-    FrameStepSource,
+    CAMERA_KINDS,
     InteractionLoop,
     LoopConfig,
     SessionRecorder,
+    SourceSpec,
     open_source,
+    parse_source_spec,
     read_session,
 )
 from rnnpb.model import MirrorSystem, OnlineConfig, TrainConfig, train
 from rnnpb.robot import JOINT_LIMITS, KinematicRobot
 from rnnpb.sequences import write_sensory_stream
+from rnnpb.sources import ArraySensorySource, FrameStepSource
 from rnnpb.vectors import MOTOR_NAMES, SENSORY_NAMES
 
 
@@ -87,7 +90,9 @@ def test_loop_sections_subscribers_and_pacing(model_path, tmp_path):
         loop.subscribe(seen.append)
         summary = loop.run()
     assert summary.steps == 8 and len(seen) == 8
-    assert seen[-1].timings["mirror"] > 0
+    # Subscribers are called once the step is complete: every section is measured.
+    assert all(r.timings["mirror"] > 0 and r.timings["record"] > 0 for r in seen)
+    assert seen[-1].time_s >= 7 * 0.05 - 0.005
     np.testing.assert_array_equal(robot.read(), seen[-1].motor)
     assert len(read_session(tmp_path / "s.csv")["step"]) == 8
 
@@ -111,6 +116,71 @@ def test_frame_step_keeps_every_nth_observation():
 def test_bad_source_specifications(spec, message):
     with pytest.raises(ConfigError, match=message):
         open_source(spec)
+
+
+@pytest.mark.parametrize("spec, parsed", [
+    ("scenario:switch:1,2", SourceSpec("scenario", "switch:1,2")),
+    ("csv:run/a:b.csv", SourceSpec("csv", "run/a:b.csv")),
+    ("webcam:2", SourceSpec("webcam", 2)),
+    (" Video:clip.mp4", SourceSpec("video", "clip.mp4")),
+    ("synthetic:rotation-in-phase", SourceSpec("synthetic", "rotation-in-phase")),
+])
+def test_the_one_grammar_of_source_specifications(spec, parsed):
+    assert parse_source_spec(spec) == parsed
+
+
+@pytest.mark.parametrize("spec, message", [
+    ("camera:0", "unknown kind 'camera'; expected one of webcam:INDEX"),
+    ("video:", "expected KIND:ARGUMENT, one of webcam:INDEX, video:PATH, images:DIR"),
+    ("webcam:front", "the webcam index must be an integer"),
+    ("csv:stream.csv", "a csv source cannot be used here"),
+    ("scenario:held:1", "a scenario source cannot be used here"),
+])
+def test_camera_only_specifications(spec, message):
+    with pytest.raises(ConfigError, match=message):
+        parse_source_spec(spec, kinds=CAMERA_KINDS)
+
+
+def test_the_loop_paces_itself_and_hands_its_waits_to_a_controller(model_path):
+    """A controller applies its commands in ``between_steps``: it changes dt, stops the run
+    (a pause: running again carries on), and replaces the source."""
+    from rnnpb.model import TrainedModel
+
+    sensory = learning_set("1")[2].sensory
+    loop = InteractionLoop(MirrorSystem(TrainedModel.load(model_path)),
+                           ArraySensorySource(sensory[:30]), config=LoopConfig(0.03, paced=True))
+    seen = []
+    loop.subscribe(seen.append)
+    waits = []
+
+    def controller(wait_s):
+        waits.append(wait_s)
+        if wait_s > 0.01:
+            time.sleep(0.005)  # returns before the step is due: it is called again
+            return
+        if loop.steps == 3:
+            loop.set_dt(0.06)
+        if loop.steps == 6:
+            loop.stop()
+        time.sleep(wait_s)
+
+    with loop.source:
+        loop.run(between_steps=controller)
+        assert loop.steps == 6 and [r.step for r in seen] == list(range(6))
+        starts = np.array([r.time_s for r in seen])
+        # Paced at the deadlines (step 0, which compiles, may overrun and move them later):
+        # steps 2 and 3 after 0.03 s each, 4 and 5 after the new 0.06 s.
+        assert starts[5] - starts[1] >= 2 * 0.03 + 2 * 0.06 - 0.01
+        assert starts[5] - starts[3] >= 2 * 0.06 - 0.01
+        assert max(waits) <= 0.06 + 1e-9 and len(waits) > 2 * 6
+        # Running again resumes the interaction where it stopped, from the replaced source.
+        loop.source = ArraySensorySource(sensory[40:44])
+        loop.source.connect()
+        summary = loop.run(between_steps=lambda wait_s: time.sleep(wait_s))
+    assert summary.steps == 10 and [r.step for r in seen[6:]] == [6, 7, 8, 9]
+    np.testing.assert_array_equal(seen[6].observed, sensory[40])
+    # The window carried on: the prediction for step 6 was made at step 5.
+    np.testing.assert_array_equal(seen[6].predicted, seen[5].predicted_next)
 
 
 def test_side_by_side_video(model_path, tmp_path):

@@ -120,3 +120,15 @@ def test_tracking_benchmark_reports_speed_and_accuracy():
     assert figures["clean_error_px"] < 1.0
     assert figures["noisy_error_px"] < 3.0
     assert figures["swapped"] == 0
+
+
+def test_track_and_calibrate_read_their_source_with_the_one_grammar(tmp_path, capsys):
+    for command in ("track", "calibrate"):
+        out = str(tmp_path / f"{command}.out")
+        assert main([command, "csv:stream.csv", "--out", out]) == 2
+        assert "'csv:stream.csv': a csv source cannot be used here" in capsys.readouterr().err
+        assert main([command, "webcam:front", "--out", out]) == 2
+        assert "the webcam index must be an integer" in capsys.readouterr().err
+    # The kind is case-insensitive for every command, as the grammar says.
+    assert main(["track", "Synthetic:2", "--steps", "3", "--out", str(tmp_path / "s.csv")]) == 0
+    assert read_sensory_stream(tmp_path / "s.csv").shape == (3, 4)

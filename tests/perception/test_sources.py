@@ -63,7 +63,7 @@ def test_video_round_trip_keeps_frames_and_tracking(tmp_path, suffix):
     with VideoWriter(path, fps=10) as writer:
         for frame in frames:
             writer.write(frame)
-    with open_camera_source(f"video:{path}") as source:
+    with open_camera_source("video", path) as source:
         observations = []
         while (obs := source.read()) is not None:
             observations.append(obs)
@@ -107,16 +107,17 @@ def test_image_folder_errors(tmp_path):
         source.read()
 
 
-def test_spec_strings():
-    with pytest.raises(ConfigError, match="expected one of"):
-        open_frame_source("camera:0")
-    with pytest.raises(ConfigError, match="expected one of"):
-        open_frame_source("video:")
+def test_camera_sources_from_kind_and_argument():
+    # Spec strings are parsed in rnnpb.interaction (tests/interaction); perception opens the parts.
+    with pytest.raises(ConfigError, match="no camera source of kind 'camera'"):
+        open_frame_source("camera", "0")
     with pytest.raises(ConfigError, match="integer"):
-        open_frame_source("webcam:front")
+        open_frame_source("webcam", "0")
     with pytest.raises(ConfigError, match="unknown movement pattern"):
-        open_frame_source("synthetic:9")
-    source = open_frame_source("synthetic:2", steps=7)
+        open_frame_source("synthetic", "9")
+    with pytest.raises(ConfigError, match="steps must be >= 1"):
+        open_frame_source("synthetic", "2", steps=0)
+    source = open_frame_source("synthetic", "2", steps=7)
     with source:
         assert len(list(source)) == 7
         assert source.last_truth["pattern"] == "2"
@@ -124,7 +125,7 @@ def test_spec_strings():
 
 def test_camera_user_source_gives_observations_with_frames_and_nan_when_lost():
     scene = SceneConfig(occlusion_probability=0.0, occlusions=((1, 3, 6),))
-    with open_camera_source("synthetic:1", steps=10, scene=scene) as source:
+    with open_camera_source("synthetic", "1", steps=10, scene=scene) as source:
         observations = []
         while (obs := source.read()) is not None:
             observations.append(obs)

@@ -8,9 +8,9 @@ import pytest
 
 from rnnpb.errors import ConfigError, DataFileError
 from rnnpb.interaction import InteractionLoop, LoopConfig, SessionRecorder, read_session
-from rnnpb.interaction.sources import ArraySensorySource, CsvSensorySource
 from rnnpb.model import MirrorSystem
 from rnnpb.robot import JOINT_LIMITS, KinematicRobot
+from rnnpb.sources import ArraySensorySource, CsvSensorySource
 
 
 def _check(result):

@@ -161,6 +161,31 @@ def test_two_clients_share_one_session_and_a_disconnect_mid_stream_is_harmless(s
     assert server.session.subscriber_count == 0
 
 
+def test_the_loop_paces_itself_at_the_chosen_dt_and_commands_apply_while_stopped(server):
+    with _ws(server) as ws:
+        _next(ws, "state")
+        dt = server.session.dt
+        _control(ws, type="control", action="stop")
+        _next(ws, "state", where=lambda m: not m["running"])
+        # Stopped: the session thread still applies commands, and no step is taken.
+        _control(ws, type="dt", dt=0.15)
+        _control(ws, type="control", action="reset")
+        state = _next(ws, "state", where=lambda m: m["dt"] == 0.15 and m["steps"] == 0)
+        assert not state["running"]
+        _control(ws, type="control", action="start")
+        steps = [_next(ws, "step", where=lambda m: m["step"] == 1)]
+        steps += [_next(ws, "step") for _ in range(3)]
+        _control(ws, type="dt", dt=dt)
+        _control(ws, type="control", action="stop")
+        _next(ws, "state", where=lambda m: not m["running"] and m["dt"] == dt)
+    starts = np.array([m["time_s"] for m in steps])
+    assert [m["step"] for m in steps] == [1, 2, 3, 4]
+    # One step every 0.15 s (a step may start late, never early), with every section timed.
+    assert starts[-1] - starts[0] >= 3 * 0.15 - 0.01
+    assert all(m["dt"] == 0.15 for m in steps)
+    assert all(m["timings_ms"]["mirror"] > 0 and m["timings_ms"]["record"] > 0 for m in steps)
+
+
 def test_the_recording_downloads_as_a_session_csv(server, tmp_path):
     from rnnpb.interaction import read_session
 

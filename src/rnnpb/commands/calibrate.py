@@ -57,6 +57,7 @@ def run(args: argparse.Namespace) -> int:
 
     from rnnpb._atomic import atomic_write
     from rnnpb.errors import RnnpbError
+    from rnnpb.interaction import CAMERA_KINDS, parse_source_spec
     from rnnpb.perception import (
         BROAD_BLUE,
         BROAD_RED,
@@ -73,8 +74,9 @@ def run(args: argparse.Namespace) -> int:
 
     if args.frame < 0:
         raise RnnpbError(f"--frame must be >= 0, got {args.frame}")
+    spec = parse_source_spec(args.source, kinds=CAMERA_KINDS)
     frame = None
-    with open_frame_source(args.source, steps=args.frame + 1) as source:
+    with open_frame_source(spec.kind, spec.argument, steps=args.frame + 1) as source:
         for image in source:
             frame = image
         if frame is None or source.frame_index < args.frame:

@@ -47,6 +47,7 @@ def run(args: argparse.Namespace) -> int:
 
     import numpy as np
 
+    from rnnpb.interaction import CAMERA_KINDS, parse_source_spec
     from rnnpb.perception import (
         TrackerConfig,
         VideoWriter,
@@ -56,11 +57,12 @@ def run(args: argparse.Namespace) -> int:
     )
     from rnnpb.sequences import write_sensory_stream
 
+    spec = parse_source_spec(args.source, kinds=CAMERA_KINDS)
     config = TrackerConfig(smoothing=args.smoothing)
     if args.colors:
         config = replace(config, colors=load_ball_colors(args.colors))
-    source = open_camera_source(args.source, tracker_config=config, steps=args.steps,
-                                seed=args.seed)
+    source = open_camera_source(spec.kind, spec.argument, tracker_config=config,
+                                steps=args.steps, seed=args.seed)
     rows = []
     writer = VideoWriter(args.render, args.fps) if args.render else None
     ok = False

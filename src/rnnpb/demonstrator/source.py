@@ -1,9 +1,9 @@
-"""The synthetic demonstrator as a :class:`~rnnpb.interaction.source.UserSource`."""
+"""The synthetic demonstrator as a :class:`~rnnpb.sources.UserSource`."""
 
 from __future__ import annotations
 
 from rnnpb.errors import ConfigError
-from rnnpb.interaction.source import Observation, UserSource
+from rnnpb.sources import Observation, UserSource
 
 from ._scenarios import Scenario
 

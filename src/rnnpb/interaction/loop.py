@@ -3,12 +3,21 @@
 Each step is timed by sections — ``perceive`` (read the source: a camera frame and the
 tracker, or the next scripted observation), ``mirror`` (the PB regression and the motor
 generation: one compiled call), ``act`` (send the command to the robot) and ``record`` (write
-the session row, notify subscribers). Run paced (one step every ``dt`` seconds, as a robot
-would) the loop counts the steps whose work overran ``dt`` as missed deadlines; run as fast as
-possible it just measures.
+the session row). A step whose sections together overran ``dt`` counts as a missed deadline;
+run as fast as possible the loop just measures.
 
-Subscribers (the dashboard, a live plot) receive every :class:`StepRecord`; they observe the
-loop and never drive it.
+The loop owns its pacing: :meth:`InteractionLoop.run` paced (one step every ``dt`` seconds, as
+a robot would) starts each step at its deadline, and a step that overran makes the next one
+start at once (missed steps are not made up). A controller — the dashboard — passes
+``between_steps``: the loop calls it while it waits for the next step, and there the controller
+applies its commands (:meth:`~InteractionLoop.set_dt`, :meth:`~InteractionLoop.stop`, a new
+source); it never steps the loop itself.
+
+Subscribers (the dashboard, the session video) receive every :class:`StepRecord` once the step
+is complete: its four timings and the loop's counters are filled in before they are called, so
+what they publish is this step's. Their own time is outside the sections and the deadline
+check (they run on the loop's thread, so they should be quick; a paced run absorbs them in its
+wait).
 """
 
 from __future__ import annotations
@@ -17,15 +26,17 @@ import math
 import time
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from rnnpb.errors import ConfigError
 from rnnpb.interaction.recorder import SessionRecorder
-from rnnpb.interaction.source import UserSource
-from rnnpb.model.online import MirrorSystem
+from rnnpb.sources import UserSource
+
+if TYPE_CHECKING:  # only annotated here: importing the loop does not import JAX
+    from rnnpb.model.online import MirrorSystem
 
 SECTIONS = ("perceive", "mirror", "act", "record")
 TIMING_WINDOW = 10_000
@@ -124,6 +135,7 @@ class InteractionLoop:
         self.lost_steps = 0
         self.held_steps = 0
         self._start: float | None = None
+        self._stop_requested = False
 
     def subscribe(self, callback: Callable[[StepRecord], None]) -> Callable[[], None]:
         """Call ``callback(record)`` after every step; returns a function that unsubscribes."""
@@ -152,15 +164,11 @@ class InteractionLoop:
             window_error=result.window_error, held=result.held, truth=observation.truth,
             frame=observation.frame, context=result.context)
         self._predicted = result.predicted_hands.copy()
-        # Subscribers see this step's timings so far; "record" is filled in after them.
-        record.timings = {"perceive": t1 - t0, "mirror": t2 - t1, "act": t3 - t2,
-                          "record": 0.0}
         if self.recorder is not None:
             self.recorder.write(record)
-        for callback in list(self._subscribers):
-            callback(record)
         t4 = time.perf_counter()
-        record.timings["record"] = t4 - t3
+        record.timings = {"perceive": t1 - t0, "mirror": t2 - t1, "act": t3 - t2,
+                          "record": t4 - t3}
         for name, value in record.timings.items():
             self._timings[name].append(value)
         self.steps += 1
@@ -168,25 +176,66 @@ class InteractionLoop:
         self.held_steps += int(result.held)
         if t4 - t0 > self.config.dt:
             self.missed_deadlines += 1
+        # Last, so that subscribers publish this step's complete timings and counts.
+        for callback in list(self._subscribers):
+            callback(record)
         return record
 
-    def run(self, on_step: Callable[[StepRecord], None] | None = None) -> LoopSummary:
-        """Run until the source ends or ``max_steps``; paced at ``dt`` if configured."""
+    def run(self, on_step: Callable[[StepRecord], None] | None = None,
+            between_steps: Callable[[float], None] | None = None) -> LoopSummary:
+        """Run until the source ends, ``max_steps`` or :meth:`stop`; paced at ``dt`` if
+        configured.
+
+        Parameters
+        ----------
+        on_step : callable(StepRecord), optional
+            Called after every step (as a subscriber is, but for this run only).
+        between_steps : callable(wait_s), optional
+            Called before every step with the seconds left until that step is due (0 when the
+            run is not paced or is late). It may block for up to ``wait_s`` — waiting for a
+            command — and is called again until the step is due, so it should wait rather than
+            return at once. In it a controller may :meth:`set_dt`, :meth:`stop` the run (to
+            pause: stop, and call ``run`` again later; steps, window and timings carry on) or
+            replace :attr:`source`. Without it a paced run sleeps until each deadline.
+        """
+        self._stop_requested = False
         deadline = time.perf_counter()
         while self.config.max_steps is None or self.steps < self.config.max_steps:
+            self._wait_until(deadline, between_steps)
+            if self._stop_requested:
+                break
             record = self.step()
             if record is None:
                 break
             if on_step is not None:
                 on_step(record)
             if self.config.paced:
-                deadline += self.config.dt
-                delay = deadline - time.perf_counter()
-                if delay > 0:
-                    time.sleep(delay)
-                else:
-                    deadline = time.perf_counter()
+                # A step that overran starts the next at once: missed steps are not made up.
+                deadline = max(deadline + self.config.dt, time.perf_counter())
         return self.summary()
+
+    def _wait_until(self, deadline: float, between_steps: Callable[[float], None] | None
+                    ) -> None:
+        if between_steps is None:
+            delay = deadline - time.perf_counter()
+            if self.config.paced and delay > 0:
+                time.sleep(delay)
+            return
+        while True:
+            wait_s = max(0.0, deadline - time.perf_counter()) if self.config.paced else 0.0
+            between_steps(wait_s)
+            if self._stop_requested or wait_s == 0.0 or time.perf_counter() >= deadline:
+                return
+
+    def stop(self) -> None:
+        """Make :meth:`run` return before its next step (from ``between_steps``, a subscriber
+        or another thread while it runs)."""
+        self._stop_requested = True
+
+    def set_dt(self, dt: float) -> None:
+        """Change the seconds per step from the next step on (the current wait keeps its
+        deadline). Raises :class:`ConfigError` unless ``dt > 0``."""
+        self.config = replace(self.config, dt=float(dt))
 
     def summary(self) -> LoopSummary:
         stats = {}

@@ -1,4 +1,4 @@
-"""Open a user source from a short specification string (the ``--source`` option).
+"""The one grammar of source specifications (``--source``, ``rnnpb track SOURCE``, …).
 
 =========================  ================================================================
 ``scenario:held:P``        the synthetic demonstrator keeps performing pattern ``P``
@@ -12,6 +12,12 @@
 ``synthetic:P``            a rendered synthetic camera of pattern ``P``, through the tracker
 =========================  ================================================================
 
+This module is the only place a spec string is taken apart: it sits above every kind of
+source and opens each from its parts — scenarios from :mod:`rnnpb.demonstrator`, streams from
+:mod:`rnnpb.sources`, cameras from :mod:`rnnpb.perception` (which opens a camera from
+``kind, argument`` and reads no spec strings itself). Commands that take only cameras
+(``rnnpb track``, ``rnnpb calibrate``) parse with ``kinds=CAMERA_KINDS``.
+
 Camera sources deliver one observation per frame; a video or image folder recorded faster
 than the network's step is sampled every ``frame_step``-th frame (for a video, by default the
 frame nearest to each ``dt``).
@@ -20,70 +26,72 @@ frame nearest to each ``dt``).
 from __future__ import annotations
 
 import math
-from typing import Any
-
-import numpy as np
+from dataclasses import dataclass
 
 from rnnpb.errors import ConfigError, RnnpbError
-from rnnpb.interaction.source import Observation, UserSource
-from rnnpb.sequences import read_sensory_stream
+from rnnpb.sources import CsvSensorySource, FrameStepSource, UserSource
+
+SOURCE_FORMS = {
+    "scenario": "scenario:held|pause|switch|novel:ARGUMENT",
+    "csv": "csv:FILE",
+    "video": "video:PATH",
+    "images": "images:DIR",
+    "webcam": "webcam:INDEX",
+    "synthetic": "synthetic:PATTERN",
+}
+"""Every kind of source, with the form of its spec string (for messages)."""
+
+SOURCE_KINDS = tuple(SOURCE_FORMS)
+CAMERA_KINDS = ("webcam", "video", "images", "synthetic")
+"""The kinds read through a camera and the colour-ball tracker."""
 
 SCENARIO_KINDS = ("held", "pause", "switch", "novel")
 
 
-class ArraySensorySource(UserSource):
-    """A sensory stream held in memory (or read from CSV), one row per step."""
+@dataclass(frozen=True)
+class SourceSpec:
+    """A parsed source specification.
 
-    def __init__(self, sensory: np.ndarray, truth: list[dict[str, Any]] | None = None,
-                 name: str = "stream") -> None:
-        sensory = np.asarray(sensory, dtype=np.float64)
-        if sensory.ndim != 2 or sensory.shape[1] != 4:
-            raise ConfigError(f"{name}: sensory stream must have shape (n_steps, 4), got "
-                              f"{sensory.shape}")
-        self.sensory = sensory
-        self.truth = truth
-        self.name = name
-        self.position = 0
+    Attributes
+    ----------
+    kind : str
+        One of :data:`SOURCE_KINDS`.
+    argument : str or int
+        What follows the first ``:`` — the device index (an int) for ``webcam``, the path, the
+        pattern or the scenario (``held:1``) for the others.
+    """
 
-    def connect(self) -> None:
-        self.position = 0
-
-    def read(self) -> Observation | None:
-        if self.position >= len(self.sensory):
-            return None
-        truth = self.truth[self.position] if self.truth else {}
-        observation = Observation(self.sensory[self.position], truth=truth)
-        self.position += 1
-        return observation
+    kind: str
+    argument: str | int
 
 
-class CsvSensorySource(ArraySensorySource):
-    def __init__(self, path: str) -> None:
-        super().__init__(read_sensory_stream(path), name=path)
+def parse_source_spec(spec: str, kinds: tuple[str, ...] = SOURCE_KINDS) -> SourceSpec:
+    """``"webcam:0"`` → ``SourceSpec("webcam", 0)``; raises :class:`ConfigError`.
 
-
-class FrameStepSource(UserSource):
-    """Keeps every ``frame_step``-th observation of a camera source (the others are read and
-    dropped), so that a video recorded at camera rate drives the network at its own step."""
-
-    def __init__(self, inner: UserSource, frame_step: int) -> None:
-        if frame_step < 1:
-            raise ConfigError(f"frame step must be >= 1, got {frame_step}")
-        self.inner = inner
-        self.frame_step = frame_step
-
-    def connect(self) -> None:
-        self.inner.connect()
-
-    def read(self) -> Observation | None:
-        observation = self.inner.read()
-        for _ in range(self.frame_step - 1):
-            if self.inner.read() is None:
-                break
-        return observation
-
-    def close(self) -> None:
-        self.inner.close()
+    Parameters
+    ----------
+    spec : str
+        ``KIND:ARGUMENT`` (see the module doc). The kind is case-insensitive.
+    kinds : tuple of str
+        The kinds the caller takes (default all; ``CAMERA_KINDS`` for camera-only commands).
+    """
+    text = str(spec)
+    forms = ", ".join(SOURCE_FORMS[kind] for kind in kinds)
+    kind, sep, argument = text.partition(":")
+    kind = kind.strip().lower()
+    if not sep or not argument:
+        raise ConfigError(f"source {text!r}: expected KIND:ARGUMENT, one of {forms}")
+    if kind not in SOURCE_KINDS:
+        raise ConfigError(f"source {text!r}: unknown kind {kind!r}; expected one of {forms}")
+    if kind not in kinds:
+        raise ConfigError(f"source {text!r}: a {kind} source cannot be used here; expected "
+                          f"one of {forms}")
+    if kind == "webcam":
+        try:
+            return SourceSpec(kind, int(argument))
+        except ValueError:
+            raise ConfigError(f"source {text!r}: the webcam index must be an integer") from None
+    return SourceSpec(kind, argument)
 
 
 def parse_scenario(spec: str, seed: int = 0):
@@ -112,28 +120,38 @@ def parse_scenario(spec: str, seed: int = 0):
 
 def open_source(spec: str, *, seed: int = 0, dt: float = 0.4, frame_step: int | None = None,
                 colors: str | None = None, steps: int | None = None) -> UserSource:
-    """Open the user source a specification string names (see the module doc)."""
-    scheme, sep, rest = spec.partition(":")
-    if not sep or not rest:
-        raise ConfigError(f"source {spec!r}: expected KIND:ARGUMENT, e.g. scenario:held:1, "
-                          "csv:FILE, video:FILE, webcam:0")
-    if scheme == "scenario":
+    """Open the user source a specification string names (see the module doc).
+
+    Parameters
+    ----------
+    spec : str
+    seed : int
+        Seed of the scenario or the synthetic camera.
+    dt : float
+        Seconds per network step (a video's default ``frame_step`` is its fps × dt).
+    frame_step : int, optional
+        Keep every N-th camera frame.
+    colors : path of a colour file, optional
+        Ball colours for camera sources.
+    steps : int, optional
+        At most this many camera frames (the synthetic camera renders this many).
+    """
+    parsed = parse_source_spec(spec)
+    if parsed.kind == "scenario":
         from rnnpb.demonstrator import ScenarioSource
 
-        return ScenarioSource(parse_scenario(rest, seed))
-    if scheme == "csv":
-        return CsvSensorySource(rest)
-    if scheme in ("video", "images", "webcam", "synthetic"):
-        from rnnpb.perception import open_camera_source
+        return ScenarioSource(parse_scenario(str(parsed.argument), seed))
+    if parsed.kind == "csv":
+        return CsvSensorySource(str(parsed.argument))
+    from rnnpb.perception import open_camera_source
 
-        source = open_camera_source(spec, colors=colors, steps=steps, seed=seed)
-        if frame_step is None and scheme == "video":
-            frame_step = _video_frame_step(rest, dt)
-        if frame_step and frame_step > 1:
-            return FrameStepSource(source, frame_step)
-        return source
-    raise ConfigError(f"source {spec!r}: unknown kind {scheme!r} (scenario, csv, video, "
-                      "images, webcam, synthetic)")
+    source = open_camera_source(parsed.kind, parsed.argument, colors=colors, steps=steps,
+                                seed=seed)
+    if frame_step is None and parsed.kind == "video":
+        frame_step = _video_frame_step(str(parsed.argument), dt)
+    if frame_step and frame_step > 1:
+        return FrameStepSource(source, frame_step)
+    return source
 
 
 def _video_frame_step(path: str, dt: float) -> int:

@@ -1,9 +1,10 @@
 """Perception: camera sources (webcam, video file, image folder, synthetic render) and the
 colour-ball tracker that turns the user's hands into the sensory vector ``lhy lhz rhy rhz``.
 
-Open a source from a spec string (``webcam:0``, ``video:clip.mp4``, ``images:frames/``,
-``synthetic:1``) with :func:`open_camera_source`; it is a
-:class:`rnnpb.interaction.source.UserSource` yielding one observation per frame.
+Open a camera with the tracker from its kind and argument (``"webcam", 0``, ``"video",
+"clip.mp4"``, ``"images", "frames/"``, ``"synthetic", "1"``) with :func:`open_camera_source`; it
+is a :class:`rnnpb.sources.UserSource` yielding one observation per frame. Spec strings such as
+``webcam:0`` are parsed by :func:`rnnpb.interaction.parse_source_spec`, the one grammar.
 """
 
 from rnnpb.perception._bench import center_errors, tracking_benchmark
@@ -49,7 +50,6 @@ from rnnpb.perception._user_source import (
     TrackedUserSource,
     open_camera_source,
     open_frame_source,
-    parse_source_spec,
     synthetic_user_hands,
 )
 
@@ -89,7 +89,6 @@ __all__ = [
     "oscillating_hands",
     "open_camera_source",
     "open_frame_source",
-    "parse_source_spec",
     "save_ball_colors",
     "synthetic_user_hands",
     "tracking_benchmark",

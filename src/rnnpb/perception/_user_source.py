@@ -1,13 +1,15 @@
-"""A camera and the tracker as a :class:`rnnpb.interaction.source.UserSource`, and the source
-spec strings the command line and the interaction loop take.
+"""A camera and the tracker as a :class:`rnnpb.sources.UserSource`, opened from the parts of a
+source spec.
 
-Spec strings::
+The spec strings themselves (``webcam:0``, ``video:clip.mp4`` …) are parsed in one place,
+:func:`rnnpb.interaction.parse_source_spec`; the functions here take what it gives, a kind
+and its argument:
 
-    webcam:INDEX      a camera device, e.g. webcam:0
-    video:PATH        a video file
-    images:DIR        a folder of images, in natural order of their names
-    synthetic:PATTERN the synthetic camera rendering the synthetic user performing PATTERN
-                      (1…4 or an alias such as rotation-in-phase)
+    "webcam", INDEX        a camera device, e.g. ("webcam", 0)
+    "video", PATH          a video file
+    "images", DIR          a folder of images, in natural order of their names
+    "synthetic", PATTERN   the synthetic camera rendering the synthetic user performing
+                           PATTERN (1…4 or an alias such as rotation-in-phase)
 """
 
 from __future__ import annotations
@@ -19,7 +21,6 @@ from typing import Any
 import numpy as np
 
 from rnnpb.errors import ConfigError, RnnpbError
-from rnnpb.interaction.source import Observation, UserSource
 from rnnpb.perception._colors import BallColors, load_ball_colors
 from rnnpb.perception._sources import (
     FrameSource,
@@ -31,8 +32,8 @@ from rnnpb.perception._sources import (
 from rnnpb.perception._synthetic import SceneConfig, SyntheticCamera
 from rnnpb.perception._tracker import BallTracker, TrackerConfig, TrackingResult
 from rnnpb.robot.camera import RobotCamera
+from rnnpb.sources import Observation, UserSource
 
-SOURCE_KINDS = ("webcam", "video", "images", "synthetic")
 DEFAULT_SYNTHETIC_STEPS = 200
 
 
@@ -75,16 +76,6 @@ class TrackedUserSource(UserSource):
         self.frames.close()
 
 
-def parse_source_spec(spec: str) -> tuple[str, str]:
-    """``"video:clip.mp4"`` → ``("video", "clip.mp4")``; raises :class:`ConfigError`."""
-    kind, sep, arg = str(spec).partition(":")
-    kind = kind.strip().lower()
-    if not sep or kind not in SOURCE_KINDS or not arg:
-        raise ConfigError(f"camera source {spec!r}: expected one of webcam:INDEX, video:PATH, "
-                          "images:DIR, synthetic:PATTERN")
-    return kind, arg
-
-
 def synthetic_user_hands(pattern: str, steps: int, seed: int = 0) -> np.ndarray:
     """The synthetic user's hands performing ``pattern`` for ``steps`` steps, (steps, 2, 3)."""
     try:
@@ -96,15 +87,19 @@ def synthetic_user_hands(pattern: str, steps: int, seed: int = 0) -> np.ndarray:
     return motion.hands
 
 
-def open_frame_source(spec: str, *, steps: int | None = None, seed: int = 0,
-                      scene: SceneConfig | None = None, camera: RobotCamera | None = None,
+def open_frame_source(kind: str, argument: str | int | os.PathLike[str], *,
+                      steps: int | None = None, seed: int = 0, scene: SceneConfig | None = None,
+                      camera: RobotCamera | None = None,
                       hands: np.ndarray | None = None) -> FrameSource:
-    """The camera source a spec string names (not yet connected).
+    """The camera source of ``kind`` (not yet connected).
 
     Parameters
     ----------
-    spec : str
-        ``webcam:INDEX``, ``video:PATH``, ``images:DIR`` or ``synthetic:PATTERN``.
+    kind : str
+        ``webcam``, ``video``, ``images`` or ``synthetic``.
+    argument : int, str or path
+        The device index (an int) for ``webcam``, the path for ``video`` and ``images``, the
+        pattern for ``synthetic`` — as :func:`rnnpb.interaction.parse_source_spec` gives them.
     steps : int, optional
         At most this many frames (the synthetic camera renders this many; default 200).
     seed : int
@@ -112,41 +107,43 @@ def open_frame_source(spec: str, *, steps: int | None = None, seed: int = 0,
     scene, camera : optional
         The synthetic camera's scene and camera model.
     hands : array, shape (n_steps, 2, 3), optional
-        For ``synthetic:``, render these hand positions instead of the synthetic user's
-        (the pattern in the spec is then only a label).
+        For ``synthetic``, render these hand positions instead of the synthetic user's
+        (the pattern is then only a label).
     """
-    kind, arg = parse_source_spec(spec)
     if steps is not None and steps < 1:
         raise ConfigError(f"steps must be >= 1, got {steps}")
     source: FrameSource
     if kind == "webcam":
-        try:
-            index = int(arg)
-        except ValueError:
-            raise ConfigError(f"camera source {spec!r}: webcam index must be an integer") from None
-        source = WebcamSource(index)
+        if isinstance(argument, bool) or not isinstance(argument, int):
+            raise ConfigError(f"webcam: the device index must be an integer, got {argument!r}")
+        source = WebcamSource(argument)
     elif kind == "video":
-        source = VideoFileSource(arg)
+        source = VideoFileSource(argument)
     elif kind == "images":
-        source = ImageFolderSource(arg)
-    else:
+        source = ImageFolderSource(argument)
+    elif kind == "synthetic":
+        pattern = str(argument)
         if hands is None:
-            hands = synthetic_user_hands(arg, steps or DEFAULT_SYNTHETIC_STEPS, seed)
+            hands = synthetic_user_hands(pattern, steps or DEFAULT_SYNTHETIC_STEPS, seed)
         scene = scene or SceneConfig(seed=seed)
         return SyntheticCamera(hands[:steps] if steps else hands, camera, scene,
-                               truth={"pattern": arg})
+                               truth={"pattern": pattern})
+    else:
+        raise ConfigError(f"no camera source of kind {kind!r} (webcam, video, images, "
+                          "synthetic)")
     return LimitedSource(source, steps) if steps else source
 
 
-def open_camera_source(spec: str, *, colors: BallColors | str | os.PathLike[str] | None = None,
+def open_camera_source(kind: str, argument: str | int | os.PathLike[str], *,
+                       colors: BallColors | str | os.PathLike[str] | None = None,
                        tracker_config: TrackerConfig | None = None, steps: int | None = None,
                        seed: int = 0, **synthetic: Any) -> TrackedUserSource:
-    """A :class:`UserSource` that tracks the balls in the frames of the source ``spec`` names.
+    """A :class:`UserSource` that tracks the balls in the frames of a camera source.
 
     Parameters
     ----------
-    spec : str
-        ``webcam:INDEX``, ``video:PATH``, ``images:DIR`` or ``synthetic:PATTERN``.
+    kind, argument
+        The camera source (see :func:`open_frame_source`).
     colors : BallColors or path of a colour file, optional
         Overrides the colours in ``tracker_config``.
     tracker_config : TrackerConfig, optional
@@ -155,7 +152,7 @@ def open_camera_source(spec: str, *, colors: BallColors | str | os.PathLike[str]
 
     Examples
     --------
-    >>> with open_camera_source("synthetic:1", steps=50) as source:   # doctest: +SKIP
+    >>> with open_camera_source("synthetic", "1", steps=50) as source:   # doctest: +SKIP
     ...     while (observation := source.read()) is not None:
     ...         print(observation.sensory)
     """
@@ -164,5 +161,5 @@ def open_camera_source(spec: str, *, colors: BallColors | str | os.PathLike[str]
         if not isinstance(colors, BallColors):
             colors = load_ball_colors(colors)
         config = replace(config, colors=colors)
-    frames = open_frame_source(spec, steps=steps, seed=seed, **synthetic)
+    frames = open_frame_source(kind, argument, steps=steps, seed=seed, **synthetic)
     return TrackedUserSource(frames, BallTracker(config))

@@ -3,9 +3,14 @@
 All browser tabs observe the same session. Control messages (start, stop, reset, mode,
 pattern, dt, model) are put on a queue and applied by the session thread between two steps,
 one at a time, so two tabs can never interleave half-applied changes; pointer positions go
-straight to the :class:`PointerSource` (the newest position wins). Each step the thread
-publishes one JSON message to every subscriber; the subscribers (the WebSocket connections)
-only observe.
+straight to the :class:`PointerSource` (the newest position wins).
+
+The loop drives itself: while the session runs, its thread is inside
+:meth:`InteractionLoop.run <rnnpb.interaction.InteractionLoop.run>`, which paces the steps at
+``dt`` and hands the waits between them to the session to apply its commands. The session
+subscribes to the loop's step records and publishes one JSON message per step to its own
+subscribers (the WebSocket connections), which only observe. While stopped, the thread waits
+for commands and applies them itself.
 """
 
 from __future__ import annotations
@@ -24,8 +29,8 @@ from typing import Any
 import numpy as np
 
 from rnnpb.errors import ConfigError, RnnpbError
-from rnnpb.interaction.source import Observation, UserSource
-from rnnpb.web._sources import PAUSE, DemonstratorSource, PointerSource
+from rnnpb.sources import UserSource
+from rnnpb.web._sources import PAUSE, DemonstratorSource, PointerSource, SwitchableSource
 
 log = logging.getLogger("rnnpb.web")
 
@@ -78,17 +83,6 @@ def _listed(values: np.ndarray) -> list[float | None]:
     return [float(v) if math.isfinite(v) else None for v in np.asarray(values, float).ravel()]
 
 
-class _SwitchableSource(UserSource):
-    """Delegates to the source of the current driving mode, so a mode change keeps the loop
-    (its step count, recording and regression window) going."""
-
-    def __init__(self, inner: UserSource) -> None:
-        self.inner = inner
-
-    def read(self) -> Observation | None:
-        return self.inner.read()
-
-
 class Session:
     """Model, mirror system, sources, loop and recording of the dashboard.
 
@@ -96,7 +90,7 @@ class Session:
     ----------
     models : dict of name → path
     dt : float
-        Seconds per step (the loop is paced at it).
+        Seconds per step (the loop paces itself at it).
     workdir : path
         Where session recordings are written.
     """
@@ -125,7 +119,7 @@ class Session:
         self.recording_path: Path | None = None
         self.last_error: str | None = None
         self._webcam: UserSource | None = None
-        self._source = _SwitchableSource(self.demonstrator)
+        self._source = SwitchableSource(self.demonstrator)
         self._user_view = _UserView()
         self._commands: queue.Queue[dict[str, Any]] = queue.Queue()
         self._subscribers: list[Callable[[str], None]] = []
@@ -222,37 +216,46 @@ class Session:
         self._publish({"type": "error", "message": text})
 
     def _run(self) -> None:
-        next_step = time.perf_counter()
         while not self._closed.is_set():
-            timeout = max(0.0, next_step - time.perf_counter()) if self.running else 0.5
+            loop = self.loop
+            if self.running and loop is not None:
+                self._drive(loop)
+            else:
+                self._apply_commands(timeout_s=0.5)
+
+    def _drive(self, loop) -> None:
+        """Let ``loop`` run (it paces itself) until a command stops or replaces it, the session
+        closes, or its source ends or fails; the queued commands are applied between steps."""
+
+        def between_steps(wait_s: float) -> None:
+            self._apply_commands(timeout_s=wait_s)
+            if self._closed.is_set() or not self.running or self.loop is not loop:
+                loop.stop()
+
+        try:
+            loop.run(between_steps=between_steps)
+        except RnnpbError as error:
+            self.running = False
+            self._error(f"the {self.mode} source failed: {error}")
+            self._publish_state()
+            return
+        if self.running and self.loop is loop and not self._closed.is_set():
+            self.running = False
+            self._error(f"the {self.mode} source has ended")
+            self._publish_state()
+
+    def _apply_commands(self, timeout_s: float) -> None:
+        """Apply every queued command, waiting up to ``timeout_s`` for the first."""
+        try:
+            command = self._commands.get(timeout=timeout_s)
+        except queue.Empty:
+            return
+        while True:
+            self._apply_safely(command)
             try:
-                command = self._commands.get(timeout=timeout)
+                command = self._commands.get_nowait()
             except queue.Empty:
-                command = None
-            if command is not None:
-                self._apply_safely(command)
-                continue
-            if not self.running or self.loop is None:
-                next_step = time.perf_counter()
-                continue
-            try:
-                record = self.loop.step()
-            except RnnpbError as error:
-                self.running = False
-                self._error(f"the {self.mode} source failed: {error}")
-                self._publish_state()
-                continue
-            if record is None:
-                self.running = False
-                self._error(f"the {self.mode} source has ended")
-                self._publish_state()
-                continue
-            # Published after the step returns (not from a loop subscription) so the message
-            # carries this step's section timings, which the loop fills in last.
-            self._publish_step(record)
-            next_step += self.dt
-            if next_step < time.perf_counter():  # overran: do not try to catch up
-                next_step = time.perf_counter()
+                return
 
     def _apply_safely(self, command: dict[str, Any]) -> None:
         try:
@@ -290,11 +293,9 @@ class Session:
         elif kind == "pattern":
             self.demonstrator.perform(command["pattern"])
         elif kind == "dt":
-            from rnnpb.interaction import LoopConfig
-
             self.dt = command["dt"]
             if self.loop is not None:
-                self.loop.config = LoopConfig(dt=self.dt)
+                self.loop.set_dt(self.dt)
 
     def _load_model(self, name: str) -> None:
         from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel
@@ -331,7 +332,10 @@ class Session:
         self.recorder = SessionRecorder(self.recording_path, self.model.network.pb_size)
         self.recorder.open()
         self.loop = InteractionLoop(self.mirror, self._source, recorder=self.recorder,
-                                    config=LoopConfig(dt=self.dt))
+                                    config=LoopConfig(dt=self.dt, paced=True))
+        # The loop calls subscribers once a step's timings are complete, so the step message
+        # carries this step's sections.
+        self.loop.subscribe(self._publish_step)
 
     def _close_run(self) -> None:
         if self.recorder is not None:
@@ -345,7 +349,7 @@ class Session:
         if mode == "webcam":
             from rnnpb.perception import open_camera_source
 
-            webcam = open_camera_source(f"webcam:{self.camera_index}")
+            webcam = open_camera_source("webcam", self.camera_index)
             try:
                 webcam.connect()
             except RnnpbError as error:

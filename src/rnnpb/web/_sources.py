@@ -1,7 +1,8 @@
-"""User sources the dashboard controls: the browser's pointer and a steerable demonstrator.
+"""User sources the dashboard controls: the browser's pointer, a steerable demonstrator, and
+the switch between them and the webcam.
 
-Both are :class:`~rnnpb.interaction.source.UserSource` subclasses, so the interaction loop
-reads them exactly as it reads a scripted scenario or a camera.
+All are :class:`~rnnpb.sources.UserSource` subclasses, so the interaction loop reads them
+exactly as it reads a scripted scenario or a camera.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ import threading
 import numpy as np
 
 from rnnpb.errors import ConfigError
-from rnnpb.interaction.source import Observation, UserSource
+from rnnpb.sources import Observation, UserSource
 from rnnpb.vectors import SENSORY_SIZE
 
 PAUSE = "pause"
@@ -119,3 +120,15 @@ class DemonstratorSource(UserSource):
             self._position += 1
             self._last = hands
             return Observation(hands.copy(), truth={"pattern": self._pattern, "pause": False})
+
+
+class SwitchableSource(UserSource):
+    """Reads whichever source drives the robot now (``inner``: the pointer, the demonstrator
+    or the webcam), so that a change of driver keeps the loop — its step count, recording and
+    regression window — going. Whoever switches ``inner`` opens and closes the sources."""
+
+    def __init__(self, inner: UserSource) -> None:
+        self.inner = inner
+
+    def read(self) -> Observation | None:
+        return self.inner.read()
