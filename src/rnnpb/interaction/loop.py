@@ -25,7 +25,7 @@ import numpy as np
 from rnnpb.errors import ConfigError
 from rnnpb.interaction.recorder import SessionRecorder
 from rnnpb.interaction.source import UserSource
-from rnnpb.model.online import MirrorSystem
+from rnnpb.model.mirror import MirrorSystem
 
 SECTIONS = ("perceive", "mirror", "act", "record")
 TIMING_WINDOW = 10_000
