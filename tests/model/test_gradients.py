@@ -9,10 +9,9 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from rnnpb.model import NetworkConfig, OnlineConfig, init_params, reference
-from rnnpb.model import online as online_module
-from rnnpb.model import training as training_module
+from rnnpb.model import NetworkConfig, OnlineConfig, init_params, learning, reference, window
 from rnnpb.model.network import Params, mixed_loop
+from rnnpb.model.online import OnlineState
 
 NET = NetworkConfig(sensory_size=4, motor_size=8, pb_size=3, hidden_size=7, context_size=5)
 
@@ -43,8 +42,8 @@ def test_learning_gradients_match_numpy_reference_and_finite_differences():
         context_logit = rng.normal(0, 1, (n_seq, NET.context_size))
         noise = jnp.zeros((n_seq, n_steps - 1, NET.io_size))
 
-        error_fn = jax.jit(training_module._squared_error)
-        (g_params, g_context), g_rho = jax.grad(training_module._squared_error,
+        error_fn = jax.jit(learning.squared_error)
+        (g_params, g_context), g_rho = jax.grad(learning.squared_error,
                                                 argnums=(0, 1))(
             (params, jnp.asarray(context_logit)), jnp.asarray(rho), jnp.asarray(inputs),
             jnp.asarray(valid), noise)
@@ -88,7 +87,7 @@ def _window_state(rng, length, n, unseen):
     sensory[~seen] = 0.0
     sensory[n:] = 0.0
     seen[n:] = False
-    return online_module.OnlineState(
+    return OnlineState(
         sensory=jnp.asarray(sensory), seen=jnp.asarray(seen),
         motor_sent=jnp.asarray(rng.uniform(0.2, 0.8, (length, NET.motor_size))),
         n=jnp.asarray(n), rho=jnp.zeros((length, NET.pb_size)),
@@ -112,8 +111,8 @@ def test_window_gradients_match_numpy_reference_and_finite_differences(motor_inp
         context = rng.normal(0, 1, NET.context_size)
         motor = rng.normal(0, 1, NET.motor_size)
 
-        error_fn = jax.jit(online_module._window_error, static_argnames="config")
-        g_rho, g_context, g_motor = jax.grad(online_module._window_error, argnums=(2, 3, 4))(
+        error_fn = jax.jit(window.squared_error, static_argnames="config")
+        g_rho, g_context, g_motor = jax.grad(window.squared_error, argnums=(2, 3, 4))(
             params, state, jnp.asarray(rho), jnp.asarray(context), jnp.asarray(motor), config)
         recorded = np.asarray(state.motor_sent) if motor_input == "recorded" else None
         error, r_rho, r_context, r_motor, predictions, contexts = \
@@ -127,14 +126,14 @@ def test_window_gradients_match_numpy_reference_and_finite_differences(motor_inp
         _close(g_motor, r_motor, rtol=1e-8)
         assert np.abs(r_rho[:n]).max() > 1e-6  # the comparison is not of zeros
         # The hand-written back-propagation the on-line step uses agrees too.
-        m_rho, m_context, m_motor = online_module._window_gradients(
+        m_rho, m_context, m_motor = window.gradients(
             params, state, jnp.asarray(rho), jnp.asarray(context), jnp.asarray(motor), config)
         _close(m_rho, r_rho, rtol=1e-8)
         _close(m_context, r_context, rtol=1e-8)
         _close(m_motor, r_motor, rtol=1e-8)
 
         # The fast window run equals the plain mixed loop of network.py.
-        fast_predictions, fast_contexts = online_module._window_run(
+        fast_predictions, fast_contexts = window.run(
             params, state, jnp.asarray(rho), jnp.asarray(context), jnp.asarray(motor), config)
         valid = np.arange(length) < n
         plain_predictions, plain_contexts = mixed_loop(

@@ -5,14 +5,16 @@ import numpy as np
 import pytest
 
 from rnnpb.errors import ConfigError
-from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel
-from rnnpb.model.online import phase_candidates
-from rnnpb.model.reference import ReferenceMirrorSystem
+from rnnpb.model import MIRROR_SYSTEMS, MirrorSystem, OnlineConfig, TrainedModel
+from rnnpb.model.mirror import PackedLayout, pack
+from rnnpb.model.online import StepOutputs, phase_candidates
 
 from .synthetic import LIMITS, make_sequences
 
 LOCK_STEPS = 10  # the motor command must be locked on within this many steps
 SPAN = LIMITS[:, 1] - LIMITS[:, 0]
+# A short regression, so that the NumPy twin runs a test in a second or two.
+SHORT = OnlineConfig(window=8, iterations=5)
 
 
 def _motor_error(result_motor, true_motor):
@@ -53,34 +55,55 @@ def test_lost_hands_are_filled_by_prediction(trained):
     assert _motor_error(result.motor, demo.motor[49]) < 0.05
 
 
-def test_reset_repeats_exactly(trained):
+@pytest.mark.parametrize("twin", MIRROR_SYSTEMS)
+def test_reset_repeats_exactly(trained, twin):
     demo = make_sequences(n_samples=1, n_steps=12, seed=5, kinds=(1,))[0]
-    mirror = MirrorSystem(trained)
+    mirror = MIRROR_SYSTEMS[twin](trained, OnlineConfig() if twin == "compiled" else SHORT)
     first = [mirror.step(u).motor for u in demo.sensory]
     mirror.reset()
+    assert mirror.steps == 0 and len(mirror.pb_profile) == 0
     second = [mirror.step(u).motor for u in demo.sensory]
     np.testing.assert_array_equal(np.array(first), np.array(second))
 
 
-def test_wrong_shape_is_a_clear_error(trained):
-    mirror = MirrorSystem(trained)
+@pytest.mark.parametrize("twin", MIRROR_SYSTEMS)
+def test_wrong_shape_is_a_clear_error(trained, twin):
+    mirror = MIRROR_SYSTEMS[twin](trained, SHORT)
     with pytest.raises(ConfigError, match="4 values"):
         mirror.step([0.5, 0.5, 0.5])
     with pytest.raises(ConfigError, match="must be 4 numbers"):
         mirror.step(["a", "b", "c", "d"])
 
 
-def test_numerical_failure_holds_the_last_good_state(trained):
+def test_numerical_failure_holds_the_last_good_state_in_both_twins(trained):
     broken = TrainedModel(
         network=trained.network,
         params=trained.params._replace(w_out=jnp.full_like(trained.params.w_out, jnp.nan)),
         lower=trained.lower, upper=trained.upper, sequence_pb=trained.sequence_pb,
         sequence_patterns=trained.sequence_patterns, initial_context=trained.initial_context)
-    mirror = MirrorSystem(broken)
+    twins = {name: system(broken, SHORT) for name, system in MIRROR_SYSTEMS.items()}
     for _ in range(3):
-        result = mirror.step([0.5, 0.5, 0.5, 0.5])
-        assert result.held
-        assert np.all(np.isfinite(result.motor)) and np.all(np.isfinite(result.pb))
+        results = {name: twin.step([0.5, 0.5, 0.5, 0.5]) for name, twin in twins.items()}
+        for result in results.values():
+            assert result.held and np.isnan(result.window_error)
+            assert np.all(np.isfinite(result.motor)) and np.all(np.isfinite(result.pb))
+        compiled, reference = results["compiled"], results["reference"]
+        for name in ("motor", "predicted_hands", "pb", "context"):
+            np.testing.assert_allclose(getattr(compiled, name), getattr(reference, name),
+                                       atol=2e-4, err_msg=name)
+
+
+def test_packed_outputs_come_back_under_their_names(trained):
+    net = trained.network
+    rng = np.random.default_rng(0)
+    outputs = StepOutputs(motor=rng.uniform(size=net.motor_size),
+                          predicted_sensory=rng.uniform(size=net.sensory_size),
+                          pb=rng.uniform(size=net.pb_size), window_error=np.asarray(0.25),
+                          held=np.asarray(True), context=rng.uniform(size=net.context_size))
+    unpacked = PackedLayout.for_network(net).unpack(np.asarray(pack(outputs), np.float64))
+    assert unpacked._fields == outputs._fields
+    for name, value, back in zip(outputs._fields, outputs, unpacked, strict=True):
+        np.testing.assert_allclose(back, np.reshape(value, -1).astype(np.float32), err_msg=name)
 
 
 @pytest.mark.parametrize("motor_input, optimize_onset, restart_span, surprise_gate, phase", [
@@ -97,23 +120,25 @@ def test_compiled_step_matches_numpy_reference(trained, motor_input, optimize_on
     first, second = make_sequences(n_samples=1, n_steps=10, seed=3, kinds=(2, 0))
     sensory = np.concatenate([first.sensory, second.sensory])
     sensory[5, :2] = np.nan  # a lost hand inside the window
-    mirror = MirrorSystem(trained, config)
-    net = trained.network
-    pb0 = np.mean(list(trained.pattern_pb.values()), axis=0)
-    ref = ReferenceMirrorSystem(trained.params, trained.mean_initial_context, pb0,
-                                net.sensory_size, net.motor_size, config,
-                                np.array(list(trained.pattern_pb.values())),
-                                phase_candidates(trained) if phase else None)
+    mirror = MIRROR_SYSTEMS["compiled"](trained, config)
+    ref = MIRROR_SYSTEMS["reference"](trained, config)
     starts_over = 0
     for t in range(len(sensory)):  # fills the window, then shifts it
-        result = mirror.step(sensory[t])
-        motor, predicted, pb = ref.step(sensory[t])
-        np.testing.assert_allclose(result.pb, pb, atol=2e-4)
-        np.testing.assert_allclose(result.predicted_hands, predicted, atol=2e-4)
-        np.testing.assert_allclose(trained.normalize(np.r_[predicted, result.motor])[4:],
-                                   motor, atol=2e-4)
-        assert len(mirror.pb_profile) == ref.n
-        starts_over += ref.n < min(t + 1, config.window)
+        result, expected = mirror.step(sensory[t]), ref.step(sensory[t])
+        np.testing.assert_allclose(result.pb, expected.pb, atol=2e-4)
+        np.testing.assert_allclose(result.predicted_hands, expected.predicted_hands, atol=2e-4)
+        # The motor command compared normalized, as the network computes it.
+        np.testing.assert_allclose(result.motor / SPAN, expected.motor / SPAN, atol=2e-4)
+        np.testing.assert_allclose(result.context, expected.context, atol=2e-4)
+        np.testing.assert_allclose(result.window_error, expected.window_error, atol=1e-6)
+        np.testing.assert_allclose(result.prediction_error, expected.prediction_error,
+                                   atol=1e-6)
+        np.testing.assert_array_equal(result.seen, expected.seen)
+        assert not result.held and not expected.held
+        assert len(mirror.pb_profile) == len(ref.pb_profile)
+        starts_over += len(ref.pb_profile) < min(t + 1, config.window)
+    assert mirror.steps == ref.steps == len(sensory)
+    np.testing.assert_allclose(mirror.pb, ref.pb, atol=2e-4)
     assert (starts_over > 0) == (phase > 0)
 
 

@@ -13,7 +13,8 @@ from hypothesis import strategies as st
 from rnnpb.errors import ModelFileError
 from rnnpb.model import TrainConfig, TrainedModel
 from rnnpb.model.io import MODEL_FORMAT, MODEL_FORMAT_VERSION, load_archive, save_archive
-from rnnpb.model.training import init_state, load_checkpoint, prepare_data, save_checkpoint
+from rnnpb.model.learning import init_state, prepare_data
+from rnnpb.model.training import load_checkpoint, save_checkpoint
 from rnnpb.robot import JOINT_LIMITS
 from rnnpb.sequences import read_sequence_files
 

@@ -65,19 +65,23 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb import __version__
     from rnnpb._atomic import atomic_write
     from rnnpb.demonstrator import learning_set
-    from rnnpb.model import MirrorSystem, NetworkConfig, OnlineConfig, TrainConfig, TrainedModel
-    from rnnpb.model import training as training_module
+    from rnnpb.model import (
+        MIRROR_SYSTEMS,
+        NetworkConfig,
+        OnlineConfig,
+        TrainConfig,
+        TrainedModel,
+        learning,
+    )
     from rnnpb.model.network import init_params
-    from rnnpb.model.online import phase_candidates
-    from rnnpb.model.reference import ReferenceMirrorSystem
     from rnnpb.robot import JOINT_LIMITS
 
     network = NetworkConfig()
     sequences = learning_set("1", seed=0)
-    data = training_module.prepare_data(sequences, JOINT_LIMITS)
+    data = learning.prepare_data(sequences, JOINT_LIMITS)
     config = TrainConfig.paper()
-    state = training_module.init_state(data, network, config)
-    run_chunk = training_module._make_chunk_runner(config, training_module._optimizer(config))
+    state = learning.init_state(data, network, config)
+    run_chunk = learning.chunk_runner(config)
     inputs = jax.numpy.asarray(data.inputs, jax.numpy.float32)
     valid = jax.numpy.asarray(data.valid)
     chunk = 200
@@ -99,8 +103,9 @@ def run(args: argparse.Namespace) -> int:
     online = OnlineConfig()
     # The default step and the same step without phase restarts, timed alternately so that
     # both see the same machine: the difference is what phase restarts cost.
-    mirror = MirrorSystem(model, online)
-    plain = MirrorSystem(model, replace(online, phase_restarts=0))
+    compiled = MIRROR_SYSTEMS["compiled"]
+    mirror = compiled(model, online)
+    plain = compiled(model, replace(online, phase_restarts=0))
     stream = np.concatenate([s.sensory for s in sequences])
     for t in range(40):
         mirror.step(stream[t])
@@ -114,15 +119,11 @@ def run(args: argparse.Namespace) -> int:
             times.append((time.perf_counter() - t0) * 1e3)
     step_times = np.asarray(step_times)
 
-    reference = ReferenceMirrorSystem(params, model.mean_initial_context,
-                                      np.mean(model.sequence_pb, axis=0), network.sensory_size,
-                                      network.motor_size, online,
-                                      np.array(list(model.pattern_pb.values())),
-                                      phase_candidates(model))
-    for t in range(online.window):
-        if t == online.window - 1:
-            break
-        # Fill the window without timing (a full window is the steady-state cost).
+    # The same step, same model and config, in the NumPy twin.
+    reference = MIRROR_SYSTEMS["reference"](model, online)
+    # Fill its window without regressing it (a full window is the steady-state cost; 29
+    # regressions would take seconds): the reference keeps its state in plain attributes.
+    for t in range(online.window - 1):
         reference.n = t + 1
         reference.sensory[t] = stream[t]
         reference.seen[t] = True

@@ -36,7 +36,7 @@ from rnnpb.interaction.recorder import SessionRecorder
 from rnnpb.sources import UserSource
 
 if TYPE_CHECKING:  # only annotated here: importing the loop does not import JAX
-    from rnnpb.model.online import MirrorSystem
+    from rnnpb.model.mirror import MirrorSystem
 
 SECTIONS = ("perceive", "mirror", "act", "record")
 TIMING_WINDOW = 10_000

@@ -1,8 +1,14 @@
-"""The RNNPB: network, learning, generation and on-line PB regression (no I/O, no clocks
-beyond model files)."""
+"""The RNNPB: network, learning, generation and on-line PB regression.
+
+Pure functions and their configs, with no I/O or clocks, except where a module says why in its
+docstring: model files (``io.py``) and the training driver's checkpoints and clock
+(``training.py``). ``reference.py`` is the NumPy twin the compiled code is held to.
+"""
 
 from rnnpb.model.generation import Generated, generate
 from rnnpb.model.io import TrainedModel
+from rnnpb.model.learning import TrainConfig
+from rnnpb.model.mirror import MirrorSystem, StepResult
 from rnnpb.model.network import (
     NetworkConfig,
     Params,
@@ -12,17 +18,20 @@ from rnnpb.model.network import (
     open_loop,
     step,
 )
-from rnnpb.model.online import MirrorSystem, OnlineConfig, StepResult
+from rnnpb.model.online_config import OnlineConfig
 from rnnpb.model.parametric_bias import PBUpdateConfig, pb_update
-from rnnpb.model.training import TrainConfig, TrainingProgress, train
+from rnnpb.model.reference import MIRROR_SYSTEMS, ReferenceMirrorSystem
+from rnnpb.model.training import TrainingProgress, train
 
 __all__ = [
+    "MIRROR_SYSTEMS",
     "Generated",
     "MirrorSystem",
     "NetworkConfig",
     "OnlineConfig",
     "PBUpdateConfig",
     "Params",
+    "ReferenceMirrorSystem",
     "StepResult",
     "TrainConfig",
     "TrainedModel",

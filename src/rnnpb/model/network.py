@@ -23,7 +23,9 @@ Everything is built on one pure :func:`step`. Three ways to run a sequence:
   motor input is the network's own previous motor prediction.
 
 The parametric bias itself (eqs. 1–3) is computed by the callers
-(:mod:`rnnpb.model.training`, :mod:`rnnpb.model.online`) as ``p_t = sigmoid(rho_t)``.
+(:mod:`rnnpb.model.learning`, :mod:`rnnpb.model.online`) as ``p_t = sigmoid(rho_t)``; where a
+unit's value must be turned back into the internal value it comes from (a learned PB into
+``rho``, a context output into the next onset's logit), :func:`logit` does it.
 """
 
 from __future__ import annotations
@@ -227,6 +229,25 @@ def mixed_loop(params: Params, context: jax.Array, motor0: jax.Array, sensory: j
         body, (context, motor0, first_sensory), (sensory, sensory_seen, pbs, motor_inputs),
         unroll=unroll)
     return predictions, contexts
+
+
+# A saturated unit (an output at 0 or 1 in float32) has no finite logit: values are clipped
+# this far inside (0, 1) first, which bounds the internal values at about ±9.2.
+LOGIT_CLIP = 1e-4
+
+
+def logit(p: jax.Array) -> jax.Array:
+    """The inverse of the units' sigmoid, ``log(p / (1 - p))``, for ``p`` clipped to
+    ``[LOGIT_CLIP, 1 - LOGIT_CLIP]``; any shape. :func:`logit_numpy` is the same on the host."""
+    p = jnp.clip(p, LOGIT_CLIP, 1 - LOGIT_CLIP)
+    return jnp.log(p) - jnp.log1p(-p)
+
+
+def logit_numpy(p: np.ndarray) -> np.ndarray:
+    """:func:`logit` in NumPy, in the precision of ``p`` (float64 for host-side values: learned
+    PBs, phase candidates, the NumPy reference)."""
+    p = np.clip(p, LOGIT_CLIP, 1 - LOGIT_CLIP)
+    return np.log(p) - np.log1p(-p)
 
 
 def params_to_numpy(params: Params) -> dict[str, np.ndarray]:

@@ -2,26 +2,34 @@
 through time, in float64.
 
 It is the reference the JAX implementation is held to (tests/model/test_gradients.py and
-test_online_parity.py) and the baseline ``rnnpb bench`` compares the compiled on-line step
-with. It is written for clarity, not speed: plain loops over time, one matrix product at a time.
+test_online.py) and the baseline ``rnnpb bench`` compares the compiled on-line step with. It is
+written for clarity, not speed: plain loops over time, one matrix product at a time.
+:class:`ReferenceMirrorSystem` is the drop-in twin of :class:`rnnpb.model.mirror.MirrorSystem`;
+:data:`MIRROR_SYSTEMS` names both.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from rnnpb.model.network import Params
-from rnnpb.model.online import OnlineConfig
+from rnnpb.model.io import TrainedModel
+from rnnpb.model.mirror import (
+    MirrorSystem,
+    StepResult,
+    motor_command,
+    normalized_hands,
+    one_step_prediction_error,
+)
+from rnnpb.model.network import Params, logit_numpy
+from rnnpb.model.online import phase_candidates, restart_candidates
+from rnnpb.model.online_config import OnlineConfig
 from rnnpb.model.parametric_bias import PBUpdateConfig
 
 
 def sigmoid(z: np.ndarray) -> np.ndarray:
     return 1.0 / (1.0 + np.exp(-z))
-
-
-def logit(p: np.ndarray) -> np.ndarray:
-    p = np.clip(p, 1e-4, 1 - 1e-4)
-    return np.log(p) - np.log1p(-p)
 
 
 def as_numpy(params: Params) -> dict[str, np.ndarray]:
@@ -193,32 +201,66 @@ def pb_update(rho: np.ndarray, velocity: np.ndarray, grad: np.ndarray, config: P
 
 
 class ReferenceMirrorSystem:
-    """The on-line step of :class:`rnnpb.model.online.MirrorSystem`, in plain NumPy.
+    """:class:`rnnpb.model.mirror.MirrorSystem` in plain NumPy, float64: its drop-in twin.
 
-    Works in normalized units; same algorithm and same state, float64.
+    Same constructor, same :meth:`step` returning a :class:`~rnnpb.model.mirror.StepResult`,
+    same :meth:`reset`, :attr:`pb`, :attr:`pb_profile` and :attr:`steps`; same algorithm and
+    same state, kept in the attributes below (normalized units) and written out step by step.
+    :data:`MIRROR_SYSTEMS` names both.
     """
 
-    def __init__(self, params: Params, initial_context: np.ndarray, initial_pb: np.ndarray,
-                 sensory_size: int, motor_size: int, config: OnlineConfig,
-                 learned_pbs: np.ndarray | None = None,
-                 phase_candidates: np.ndarray | None = None) -> None:
-        self.params = params
-        self.config = config
-        self.phase_candidates = (None if phase_candidates is None or config.phase_restarts == 0
-                                 else np.asarray(phase_candidates, dtype=np.float64))
-        self.candidates = (None if learned_pbs is None or config.restart_span == 0
-                           else logit(np.asarray(learned_pbs, dtype=np.float64)))
-        length = config.window
-        self.sensory = np.zeros((length, sensory_size))
-        self.seen = np.zeros((length, sensory_size), bool)
-        self.motor_sent = np.full((length, motor_size), 0.5)
+    def __init__(self, model: TrainedModel, config: OnlineConfig | None = None) -> None:
+        self.model = model
+        self.config = config or OnlineConfig()
+        self.params = model.params
+        # The same learned states as the compiled step's (they are its inputs, not its work).
+        self.phase_candidates = (phase_candidates(model) if self.config.phase_restarts > 0
+                                 else None)
+        self.candidates = restart_candidates(model) if self.config.restart_span > 0 else None
+        self.reset()
+
+    def reset(self, initial_pb: np.ndarray | None = None) -> None:
+        """Forget the window: the next step starts a new interaction."""
+        net = self.model.network
+        length = self.config.window
+        pb0 = (np.mean(list(self.model.pattern_pb.values()), axis=0) if initial_pb is None
+               else np.asarray(initial_pb, dtype=np.float64))
+        self.sensory = np.zeros((length, net.sensory_size))
+        self.seen = np.zeros((length, net.sensory_size), bool)
+        self.motor_sent = np.full((length, net.motor_size), 0.5)
         self.n = 0
-        self.rho = np.tile(logit(np.asarray(initial_pb, dtype=np.float64)), (length, 1))
+        self.rho = np.tile(logit_numpy(pb0), (length, 1))
         self.velocity = np.zeros_like(self.rho)
-        self.onset_context = logit(np.asarray(initial_context, dtype=np.float64))
-        self.onset_motor = np.zeros(motor_size)
+        self.onset_context = logit_numpy(np.asarray(self.model.mean_initial_context,
+                                              dtype=np.float64))
+        self.onset_motor = np.zeros(net.motor_size)
         self.next_onset_context = self.onset_context.copy()
         self.next_onset_motor = self.onset_motor.copy()
+        self.predicted_sensory = np.full(net.sensory_size, 0.5)
+        self._predicted: np.ndarray | None = None
+        self.steps = 0
+
+    @property
+    def pb(self) -> np.ndarray:
+        """The current PB, shape (P,)."""
+        return sigmoid(self.rho[max(self.n - 1, 0)])
+
+    @property
+    def pb_profile(self) -> np.ndarray:
+        """The PB over the filled part of the window, shape (n, P)."""
+        return sigmoid(self.rho[:self.n])
+
+    def step(self, observed_hands: np.ndarray) -> StepResult:
+        """Observe the user's hands for this step; regress the PB; return the motor command
+        (as :meth:`rnnpb.model.mirror.MirrorSystem.step`)."""
+        u, seen = normalized_hands(observed_hands, self.model.network.sensory_size)
+        motor, predicted, pb, window_error, held, context = self._regress(u, seen)
+        self.steps += 1
+        prediction_error = one_step_prediction_error(self._predicted, u, seen)
+        self._predicted = predicted
+        return StepResult(motor=motor_command(self.model, motor), predicted_hands=predicted,
+                          pb=pb, prediction_error=prediction_error, window_error=window_error,
+                          seen=seen, held=held, context=context)
 
     def _recent_mse(self, predictions: np.ndarray, sensory: np.ndarray, seen: np.ndarray,
                     first: int, last: int) -> float:
@@ -266,13 +308,15 @@ class ReferenceMirrorSystem:
         self.onset_motor = best[n_pb:n_pb + n_m].copy()
         self.onset_context = best[n_pb + n_m:].copy()
 
-    def step(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Observe normalized hands ``u`` (NaN = not seen); return (motor, predicted, pb)."""
+    def _regress(self, u: np.ndarray, seen: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, bool, np.ndarray]:
+        """One on-line step on normalized hands ``u`` (S,) (0 where not ``seen``): the motor
+        command (M,), the predicted hands (S,), the PB (P,), the window's error, whether the
+        last good state was kept, and the context after the step (C,)."""
         cfg = self.config
         length = cfg.window
-        seen = np.isfinite(u)
-        u = np.where(seen, u, 0.0)
         last = max(min(self.n, length) - 1, 0)
+        held_motor = self.motor_sent[last].copy()
         if self.n >= length:
             for name in ("sensory", "seen", "motor_sent", "rho", "velocity"):
                 buffer = getattr(self, name)
@@ -311,6 +355,9 @@ class ReferenceMirrorSystem:
             if best[0] > 0:
                 self.rho = best[1]
                 self.velocity = np.zeros_like(self.velocity)
+        # Where the regression would hand out a non-finite value, the step keeps this state.
+        start_rho, start_context, start_motor = (self.rho.copy(), self.onset_context,
+                                                 self.onset_motor)
         gate = 1.0
         if cfg.surprise_gate > 0:
             # The surprise gate: RMS error of the last gate_steps predictions before regressing.
@@ -337,7 +384,25 @@ class ReferenceMirrorSystem:
         s = self.sensory.shape[1]
         n = self.n
         motor = predictions[n - 2, s:] if n >= 2 else sigmoid(self.onset_motor)
+        predicted = predictions[n - 1, :s]
+        if not all(np.all(np.isfinite(a)) for a in (self.rho, motor, self.onset_context,
+                                                     predicted)):
+            self.rho, self.velocity = start_rho, np.zeros_like(self.velocity)
+            self.onset_context, self.onset_motor = start_context, start_motor
+            self.motor_sent[n - 1] = held_motor
+            return (held_motor, self.predicted_sensory.copy(), sigmoid(self.rho[n - 1]),
+                    math.nan, True, sigmoid(self.next_onset_context))
         self.motor_sent[n - 1] = motor
-        self.next_onset_context = logit(contexts[0])
-        self.next_onset_motor = logit(predictions[0, s:])
-        return motor, predictions[n - 1, :s], sigmoid(self.rho[n - 1])
+        self.next_onset_context = logit_numpy(contexts[0])
+        self.next_onset_motor = logit_numpy(predictions[0, s:])
+        self.predicted_sensory = predicted
+        window_error = self._recent_mse(predictions, self.sensory, self.seen, 0, n - 1)
+        return (motor, predicted, sigmoid(self.rho[n - 1]), window_error, False,
+                contexts[n - 1])
+
+
+#: The mirror system's twins by name, so that a test or the bench swaps one for the other.
+MIRROR_SYSTEMS: dict[str, type[MirrorSystem] | type[ReferenceMirrorSystem]] = {
+    "compiled": MirrorSystem,
+    "reference": ReferenceMirrorSystem,
+}

@@ -1,249 +1,45 @@
-"""The learning phase (Ito & Tani 2004, sections 2.2–2.3): BPTT over whole sequences.
+"""Learning, driven: :func:`train` runs the compiled chunks of :mod:`rnnpb.model.learning`
+until the iterations are done, and returns the trained model.
 
-The weights are shared by all training sequences; each sequence has its own PB profile
-``p_t = sigmoid(rho_t)`` (eqs. 1–3, the window being the whole sequence) and, optionally, its
-own learned initial context. Each iteration runs every sequence open loop (teacher forced),
-back-propagates the squared prediction error through time, and updates
-
-* the weights (and initial contexts) by gradient descent with momentum — the paper's — or Adam;
-* each sequence's ``rho`` profile by eqs. 1–2.
-
-A sequence's learned PB is the mean of its PB profile; a pattern's PB is the mean over its
-sequences (:class:`rnnpb.model.io.TrainedModel`).
+Unlike the rest of :mod:`rnnpb.model`, this driver reads a clock (the progress it reports and
+the seconds the model records) and writes files: a checkpoint of the whole training state
+every ``checkpoint_every`` iterations, atomically, so that an interrupted run resumes
+(:func:`save_checkpoint`, :func:`load_checkpoint`). A sequence's learned PB is the mean of its
+PB profile; a pattern's PB is the mean over its sequences
+(:class:`rnnpb.model.io.TrainedModel`).
 """
 
 from __future__ import annotations
 
-import functools
-import hashlib
 import math
 import os
 import time
 from collections.abc import Callable
 from collections.abc import Sequence as SequenceABC
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any, Literal, NamedTuple
 
 import jax
 import jax.numpy as jnp
 import numpy as np
-import optax
 
 from rnnpb import __version__
-from rnnpb.errors import ConfigError, DataFileError, ModelFileError
+from rnnpb.errors import ConfigError, ModelFileError
 from rnnpb.model.io import TrainedModel, check_numeric, load_archive, save_archive
-from rnnpb.model.network import NetworkConfig, Params, init_params, open_loop
-from rnnpb.model.parametric_bias import PBUpdateConfig, pb_update
+from rnnpb.model.learning import (
+    TrainConfig,
+    TrainingData,
+    TrainState,
+    chunk_runner,
+    init_state,
+    per_output_mse,
+    prepare_data,
+)
+from rnnpb.model.network import NetworkConfig
 from rnnpb.sequences import Sequence
-from rnnpb.vectors import SENSORY_SIZE
 
 CHECKPOINT_FORMAT = "rnnpb-checkpoint"
 CHECKPOINT_FORMAT_VERSION = 1
-
-
-@dataclass(frozen=True)
-class TrainConfig:
-    """How to learn.
-
-    ``TrainConfig.paper()`` is the paper's algorithm (gradient descent with momentum, no input
-    noise, 50,000 iterations, l = 20). The plain constructor gives the same; options are
-    measured against it (docs/model.md).
-    """
-
-    iterations: int = 50_000
-    optimizer: Literal["momentum", "adam"] = "momentum"
-    learning_rate: float = 1.0
-    momentum: float = 0.9
-    pb: PBUpdateConfig = field(default_factory=lambda: PBUpdateConfig(
-        learning_rate=2.0, momentum=0.9, k_bp=1.0, k_nb=0.05, integration_length=20))
-    input_noise: float = 0.0
-    learn_initial_context: bool = True
-    seed: int = 0
-    chunk_iterations: int = 100
-    checkpoint_every: int = 5_000
-
-    def __post_init__(self) -> None:
-        if self.iterations < 0:
-            raise ConfigError(f"iterations must be >= 0, got {self.iterations}")
-        if self.optimizer not in ("momentum", "adam"):
-            raise ConfigError(f"optimizer must be 'momentum' or 'adam', got {self.optimizer!r}")
-        if not self.learning_rate > 0:
-            raise ConfigError(f"learning_rate must be > 0, got {self.learning_rate}")
-        if not 0 <= self.momentum < 1:
-            raise ConfigError(f"momentum must be in [0, 1), got {self.momentum}")
-        if self.input_noise < 0:
-            raise ConfigError(f"input_noise must be >= 0, got {self.input_noise}")
-        if self.chunk_iterations < 1 or self.checkpoint_every < 1:
-            raise ConfigError("chunk_iterations and checkpoint_every must be >= 1")
-
-    @classmethod
-    def paper(cls, **changes: Any) -> TrainConfig:
-        """The paper's learning: momentum descent, no noise, 50,000 iterations, l = 20."""
-        return replace(cls(), **changes)
-
-    @classmethod
-    def fast(cls, **changes: Any) -> TrainConfig:
-        """Adam with noise on the teacher-forced inputs: reaches the paper's error in far
-        fewer iterations and gives a network that is easier to entrain (docs/model.md)."""
-        base = cls(iterations=3_000, optimizer="adam", learning_rate=0.01, input_noise=0.02)
-        return replace(base, **changes)
-
-    def to_dict(self) -> dict[str, Any]:
-        return asdict(self)
-
-    @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> TrainConfig:
-        data = dict(data)
-        data["pb"] = PBUpdateConfig(**data["pb"])
-        return cls(**data)
-
-
-class TrainState(NamedTuple):
-    """Everything that changes during learning (S sequences, T-1 prediction steps)."""
-
-    params: Params
-    initial_context_logit: jax.Array  # (S, C)
-    opt_state: Any
-    rho: jax.Array  # (S, T-1, P)
-    rho_velocity: jax.Array  # (S, T-1, P)
-    key: jax.Array
-    iteration: jax.Array  # scalar int
-
-
-@dataclass(frozen=True)
-class TrainingData:
-    """Training sequences normalized and padded into arrays.
-
-    ``inputs`` (S, T, I) normalized, ``valid`` (S, T-1): whether step t predicts a real step.
-    """
-
-    inputs: np.ndarray
-    valid: np.ndarray
-    patterns: tuple[str, ...]
-    lower: np.ndarray
-    upper: np.ndarray
-
-    @property
-    def fingerprint(self) -> str:
-        digest = hashlib.sha256()
-        for array in (self.inputs, self.valid, self.lower, self.upper):
-            digest.update(np.ascontiguousarray(array).tobytes())
-        digest.update("\n".join(self.patterns).encode())
-        return digest.hexdigest()
-
-
-def normalization_for(joint_limits: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Normalization bounds (I,): sensory in [0, 1] as is, motor by the joint limits (8, 2)."""
-    limits = np.asarray(joint_limits, dtype=np.float64)
-    lower = np.concatenate([np.zeros(SENSORY_SIZE), limits[:, 0]])
-    upper = np.concatenate([np.ones(SENSORY_SIZE), limits[:, 1]])
-    return lower, upper
-
-
-def prepare_data(sequences: SequenceABC[Sequence], joint_limits: np.ndarray) -> TrainingData:
-    """Normalize and pad sequences; motor values outside the joint limits are an error."""
-    if not sequences:
-        raise DataFileError("no training sequences")
-    lower, upper = normalization_for(joint_limits)
-    if np.asarray(joint_limits).shape[0] != sequences[0].motor.shape[1]:
-        raise ConfigError("joint limits do not match the motor vector size")
-    n_steps = max(s.n_steps for s in sequences)
-    io = lower.shape[0]
-    inputs = np.full((len(sequences), n_steps, io), 0.5)
-    valid = np.zeros((len(sequences), n_steps - 1), dtype=bool)
-    for i, seq in enumerate(sequences):
-        raw = np.concatenate([seq.sensory, seq.motor], axis=1)
-        x = (raw - lower) / (upper - lower)
-        if np.any(x < -1e-9) or np.any(x > 1 + 1e-9):
-            bad = np.argwhere((x < -1e-9) | (x > 1 + 1e-9))[0]
-            raise DataFileError(
-                f"{seq.source or 'sequence'}: step {bad[0]} has a value outside the normalization "
-                f"range (sensory must be in [0, 1], motor within the joint limits): "
-                f"{raw[bad[0], bad[1]]:.4g} in column {bad[1]}")
-        inputs[i, :seq.n_steps] = x
-        valid[i, :seq.n_steps - 1] = True
-    return TrainingData(inputs, valid, tuple(s.pattern for s in sequences), lower, upper)
-
-
-def _optimizer(config: TrainConfig) -> optax.GradientTransformation:
-    if config.optimizer == "adam":
-        return optax.adam(config.learning_rate)
-    return optax.sgd(config.learning_rate, momentum=config.momentum)
-
-
-def _squared_error(trainable: tuple[Params, jax.Array], rho: jax.Array, inputs: jax.Array,
-                   valid: jax.Array, noise: jax.Array) -> jax.Array:
-    """0.5 · Σ over sequences, valid steps and outputs of the squared prediction error."""
-    params, context_logit = trainable
-    pbs = jax.nn.sigmoid(rho)  # (S, T-1, P)
-    teacher = inputs[:, :-1] + noise
-    predictions, _ = open_loop(params, jax.nn.sigmoid(context_logit),
-                               jnp.swapaxes(teacher, 0, 1), jnp.swapaxes(pbs, 0, 1))
-    error = (jnp.swapaxes(predictions, 0, 1) - inputs[:, 1:]) * valid[..., None]
-    return 0.5 * jnp.sum(error ** 2)
-
-
-def _make_chunk_runner(config: TrainConfig, optimizer: optax.GradientTransformation):
-    # Settings that do not enter the compiled update are normalized away so that runs that
-    # differ only in them share one compiled function.
-    return _chunk_runner(replace(config, iterations=0, seed=0, chunk_iterations=1,
-                                 checkpoint_every=1))
-
-
-@functools.lru_cache(maxsize=16)
-def _chunk_runner(config: TrainConfig):
-    optimizer = _optimizer(config)
-    grad_fn = jax.grad(_squared_error, argnums=(0, 1))
-
-    def one_iteration(state: TrainState, inputs: jax.Array, valid: jax.Array) -> TrainState:
-        key, noise_key = jax.random.split(state.key)
-        noise = config.input_noise * jax.random.normal(noise_key, inputs[:, :-1].shape)
-        trainable = (state.params, state.initial_context_logit)
-        grad_trainable, grad_rho = grad_fn(trainable, state.rho, inputs, valid, noise)
-        # Weights see the mean error per prediction step so their step size does not depend on
-        # how much data there is; each PB profile sees its own sequence's summed error (eq. 1).
-        n_valid = jnp.maximum(jnp.sum(valid), 1)
-        grad_trainable = jax.tree_util.tree_map(lambda g: g / n_valid, grad_trainable)
-        if not config.learn_initial_context:
-            grad_trainable = (grad_trainable[0], jnp.zeros_like(grad_trainable[1]))
-        updates, opt_state = optimizer.update(grad_trainable, state.opt_state, trainable)
-        params, context_logit = optax.apply_updates(trainable, updates)
-        rho, rho_velocity = jax.vmap(lambda r, v, g, m: pb_update(r, v, g, config.pb, m))(
-            state.rho, state.rho_velocity, grad_rho, valid)
-        return TrainState(params, context_logit, opt_state, rho, rho_velocity, key,
-                          state.iteration + 1)
-
-    @jax.jit
-    def run_chunk(state: TrainState, inputs: jax.Array, valid: jax.Array,
-                  n_iterations: jax.Array) -> TrainState:
-        return jax.lax.fori_loop(0, n_iterations,
-                                 lambda _, s: one_iteration(s, inputs, valid), state)
-
-    return run_chunk
-
-
-@jax.jit
-def _per_output_mse(trainable: tuple[Params, jax.Array], rho: jax.Array, inputs: jax.Array,
-                    valid: jax.Array) -> jax.Array:
-    params, context_logit = trainable
-    predictions, _ = open_loop(params, jax.nn.sigmoid(context_logit),
-                               jnp.swapaxes(inputs[:, :-1], 0, 1),
-                               jnp.swapaxes(jax.nn.sigmoid(rho), 0, 1))
-    error = (jnp.swapaxes(predictions, 0, 1) - inputs[:, 1:]) ** 2 * valid[..., None]
-    return jnp.sum(error, axis=(0, 1)) / jnp.sum(valid)
-
-
-def init_state(data: TrainingData, network: NetworkConfig, config: TrainConfig) -> TrainState:
-    key = jax.random.PRNGKey(config.seed)
-    key, params_key = jax.random.split(key)
-    params = init_params(network, params_key)
-    n_seq, n_pred = data.valid.shape
-    context_logit = jnp.zeros((n_seq, network.context_size), jnp.float32)
-    opt_state = _optimizer(config).init((params, context_logit))
-    rho = jnp.zeros((n_seq, n_pred, network.pb_size), jnp.float32)
-    return TrainState(params, context_logit, opt_state, rho, jnp.zeros_like(rho), key,
-                      jnp.asarray(0, jnp.int32))
 
 
 @dataclass
@@ -282,11 +78,10 @@ def train(sequences: SequenceABC[Sequence], joint_limits: np.ndarray,
     if data.inputs.shape[-1] != network.io_size:
         raise ConfigError(f"sequences have {data.inputs.shape[-1]} values per step but the "
                           f"network expects {network.io_size}")
-    optimizer = _optimizer(config)
     state = init_state(data, network, config)
     if resume and checkpoint_path is not None and os.path.exists(checkpoint_path):
         state = load_checkpoint(checkpoint_path, state, data, network, config)
-    run_chunk = _make_chunk_runner(config, optimizer)
+    run_chunk = chunk_runner(config)
     inputs = jnp.asarray(data.inputs, jnp.float32)
     valid = jnp.asarray(data.valid)
 
@@ -300,7 +95,7 @@ def train(sequences: SequenceABC[Sequence], joint_limits: np.ndarray,
     done = int(state.iteration)
     history: list[tuple[int, float]] = []
     if done == 0:
-        history.append((0, float(jnp.mean(_per_output_mse(
+        history.append((0, float(jnp.mean(per_output_mse(
             (state.params, state.initial_context_logit), state.rho, inputs, valid)))))
     try:
         while done < config.iterations:
@@ -309,7 +104,7 @@ def train(sequences: SequenceABC[Sequence], joint_limits: np.ndarray,
             n = min(n, next_checkpoint - done)
             state = run_chunk(state, inputs, valid, jnp.asarray(n, jnp.int32))
             done += n
-            mse = float(jnp.mean(_per_output_mse((state.params, state.initial_context_logit),
+            mse = float(jnp.mean(per_output_mse((state.params, state.initial_context_logit),
                                                  state.rho, inputs, valid)))
             if not math.isfinite(mse):
                 raise ConfigError(f"training diverged at iteration {done} (error is {mse}); "
@@ -335,7 +130,7 @@ def _finish(state: TrainState, data: TrainingData, network: NetworkConfig, confi
             history: list[tuple[int, float]], elapsed: float) -> TrainedModel:
     inputs = jnp.asarray(data.inputs, jnp.float32)
     valid = jnp.asarray(data.valid)
-    per_output = np.asarray(_per_output_mse((state.params, state.initial_context_logit),
+    per_output = np.asarray(per_output_mse((state.params, state.initial_context_logit),
                                             state.rho, inputs, valid), dtype=np.float64)
     pbs = np.asarray(jax.nn.sigmoid(state.rho), dtype=np.float64)
     weights = data.valid[..., None].astype(np.float64)

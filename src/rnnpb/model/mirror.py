@@ -1,0 +1,219 @@
+"""The mirror system on the host: :class:`MirrorSystem` keeps the on-line state between steps
+and speaks raw units (hands in [0, 1], NaN where not seen; joint angles in radians).
+
+Each :meth:`MirrorSystem.step` is one call of the compiled :func:`rnnpb.model.online.online_step`
+and one transfer back from the device: the step's outputs come back packed into one vector,
+whose layout (:class:`PackedLayout`) is computed once from the network's sizes. The NumPy
+reference :class:`rnnpb.model.reference.ReferenceMirrorSystem` is its drop-in twin: same
+constructor, same :class:`StepResult`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import partial
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from rnnpb.errors import ConfigError
+from rnnpb.model.io import TrainedModel
+from rnnpb.model.network import NetworkConfig, Params
+from rnnpb.model.online import (
+    OnlineState,
+    StepOutputs,
+    initial_state,
+    online_step,
+    phase_candidates,
+    restart_candidates,
+)
+from rnnpb.model.online_config import OnlineConfig
+
+
+@dataclass(frozen=True)
+class StepResult:
+    """What the mirror system returns each step (raw units).
+
+    Attributes
+    ----------
+    motor : array, shape (8,)
+        The motor command for the current step, radians, within the joint limits.
+    predicted_hands : array, shape (4,)
+        The predicted hands for the next step, ``lhy lhz rhy rhz`` in [0, 1].
+    pb : array, shape (4,)
+        The current parametric bias.
+    prediction_error : float
+        Mean squared error between this step's observed hands and what the network predicted
+        for them one step before (NaN on the first step or when no hand was seen).
+    window_error : float
+        Mean squared sensory error over the regression window after the regression.
+    seen : array of bool, shape (4,)
+        Which sensory values were observed (False where the input was NaN).
+    held : bool
+        The regression failed numerically this step and the last good state was kept.
+    context : array, shape (C,)
+        The context units after the current step (for phase-space analysis).
+    """
+
+    motor: np.ndarray
+    predicted_hands: np.ndarray
+    pb: np.ndarray
+    prediction_error: float
+    window_error: float
+    seen: np.ndarray
+    held: bool = False
+    context: np.ndarray | None = None
+
+
+class PackedLayout(NamedTuple):
+    """Where each of :class:`rnnpb.model.online.StepOutputs` sits in the one vector the
+    compiled step hands back: the fields in the same order, each a slice of the vector."""
+
+    motor: slice  # (M,)
+    predicted_sensory: slice  # (S,)
+    pb: slice  # (P,)
+    window_error: slice  # (1,)
+    held: slice  # (1,) 1.0 when held
+    context: slice  # (C,)
+
+    @classmethod
+    def for_network(cls, network: NetworkConfig) -> PackedLayout:
+        sizes = {"motor": network.motor_size, "predicted_sensory": network.sensory_size,
+                 "pb": network.pb_size, "window_error": 1, "held": 1,
+                 "context": network.context_size}
+        parts, start = {}, 0
+        for name in cls._fields:
+            parts[name] = slice(start, start + sizes[name])
+            start += sizes[name]
+        return cls(**parts)
+
+    def unpack(self, packed: np.ndarray) -> StepOutputs:
+        """The packed vector (host side) back into named outputs."""
+        return StepOutputs(*(packed[part] for part in self))
+
+
+def pack(outputs: StepOutputs) -> jax.Array:
+    """The outputs of a step as one float32 vector, in :class:`PackedLayout`'s order."""
+    return jnp.concatenate([jnp.reshape(value, (-1,)).astype(jnp.float32) for value in outputs])
+
+
+@partial(jax.jit, static_argnames=("config",))
+def _online_step_packed(params: Params, state: OnlineState, u: jax.Array, seen: jax.Array,
+                        config: OnlineConfig, candidates: jax.Array | None = None,
+                        phase_candidates: jax.Array | None = None
+                        ) -> tuple[OnlineState, jax.Array]:
+    """:func:`online_step` with its outputs packed into one vector, so that they come back in
+    one transfer."""
+    state, outputs = online_step(params, state, u, seen, config, candidates, phase_candidates)
+    return state, pack(outputs)
+
+
+def normalized_hands(values: object, sensory_size: int) -> tuple[np.ndarray, np.ndarray]:
+    """Check a step's observed hands; return them normalized (clipped to [0, 1], 0 where not
+    seen), shape (S,), and which were seen (finite), shape (S,)."""
+    try:
+        u = np.asarray(values, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError):
+        raise ConfigError(f"observed hands must be {sensory_size} numbers (lhy lhz rhy rhz), "
+                          f"got {values!r:.80}") from None
+    if u.shape != (sensory_size,):
+        raise ConfigError(f"observed hands must have {sensory_size} values "
+                          f"(lhy lhz rhy rhz), got {np.shape(values)}")
+    seen = np.isfinite(u)
+    return np.where(seen, np.clip(u, 0.0, 1.0), 0.0), seen
+
+
+def one_step_prediction_error(predicted: np.ndarray | None, u: np.ndarray,
+                              seen: np.ndarray) -> float:
+    """Mean squared error of the previous step's prediction of the seen hands (NaN if there
+    was none or nothing was seen)."""
+    if predicted is None or not seen.any():
+        return math.nan
+    return float(np.mean((predicted[seen] - u[seen]) ** 2))
+
+
+def motor_command(model: TrainedModel, motor: np.ndarray) -> np.ndarray:
+    """A normalized motor output (M,) as joint angles (M,), radians, within the joint limits."""
+    s = model.network.sensory_size
+    lower = np.asarray(model.lower, dtype=np.float64)[s:]
+    upper = np.asarray(model.upper, dtype=np.float64)[s:]
+    return np.clip(motor, 0.0, 1.0) * (upper - lower) + lower
+
+
+class MirrorSystem:
+    """On-line recognition and generation with a trained RNNPB (weights frozen).
+
+    >>> mirror = MirrorSystem(model)                       # doctest: +SKIP
+    >>> result = mirror.step([0.4, 0.6, 0.6, 0.6])         # doctest: +SKIP
+    >>> result.motor, result.pb, result.predicted_hands    # doctest: +SKIP
+    """
+
+    def __init__(self, model: TrainedModel, config: OnlineConfig | None = None) -> None:
+        self.model = model
+        self.config = config or OnlineConfig()
+        self._layout = PackedLayout.for_network(model.network)
+        self._params = jax.tree_util.tree_map(lambda a: jnp.asarray(a, jnp.float32),
+                                              model.params)
+        self._state = initial_state(model, self.config)
+        # The last prediction of the hands, kept on the host: the next step's prediction error
+        # is measured against it without a transfer from the device.
+        self._predicted: np.ndarray | None = None
+        self._candidates = None
+        if self.config.restart_span > 0:
+            self._candidates = jnp.asarray(restart_candidates(model), jnp.float32)
+        self._phase_candidates = None
+        if self.config.phase_restarts > 0:
+            self._phase_candidates = jnp.asarray(phase_candidates(model), jnp.float32)
+        self.steps = 0
+
+    def reset(self, initial_pb: np.ndarray | None = None) -> None:
+        """Forget the window: the next step starts a new interaction."""
+        self._state = initial_state(self.model, self.config, initial_pb)
+        self._predicted = None
+        self.steps = 0
+
+    @property
+    def pb(self) -> np.ndarray:
+        """The current PB, shape (P,)."""
+        n = int(self._state.n)
+        return np.asarray(jax.nn.sigmoid(self._state.rho[max(n - 1, 0)]), dtype=np.float64)
+
+    @property
+    def pb_profile(self) -> np.ndarray:
+        """The PB over the filled part of the window, shape (n, P)."""
+        n = int(self._state.n)
+        return np.asarray(jax.nn.sigmoid(self._state.rho[:n]), dtype=np.float64)
+
+    def step(self, observed_hands: np.ndarray) -> StepResult:
+        """Observe the user's hands for this step; regress the PB; return the motor command.
+
+        Parameters
+        ----------
+        observed_hands : array, shape (4,)
+            ``lhy lhz rhy rhz`` in [0, 1]. NaN marks a value that was not seen (a lost
+            tracker): the network uses its own prediction there. Values outside [0, 1] are
+            clipped to it (the view plane ends there).
+        """
+        u, seen = normalized_hands(observed_hands, self.model.network.sensory_size)
+        # NumPy inputs go to the compiled step as they are and all outputs come back in one
+        # transfer: at a few milliseconds a step, per-array round trips are worth avoiding.
+        self._state, packed = _online_step_packed(
+            self._params, self._state, u.astype(np.float32), seen, self.config,
+            self._candidates, self._phase_candidates)
+        outputs = self._layout.unpack(np.asarray(packed, dtype=np.float64))
+        self.steps += 1
+        prediction_error = one_step_prediction_error(self._predicted, u, seen)
+        self._predicted = outputs.predicted_sensory
+        return StepResult(
+            motor=motor_command(self.model, outputs.motor),
+            predicted_hands=outputs.predicted_sensory,
+            pb=outputs.pb,
+            prediction_error=prediction_error,
+            window_error=float(outputs.window_error[0]),
+            seen=seen,
+            held=bool(outputs.held[0]),
+            context=outputs.context,
+        )

@@ -1,0 +1,107 @@
+"""How the PB is regressed on-line (:mod:`rnnpb.model.online`): the settings and their presets.
+
+``OnlineConfig.paper()`` is the paper's regression (section 2.3); ``OnlineConfig()`` the best
+measured (docs/model.md), ``OnlineConfig.ungated()`` the same without the surprise gate.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field, replace
+from typing import Any, Literal
+
+from rnnpb.errors import ConfigError
+from rnnpb.model.parametric_bias import PBUpdateConfig
+
+
+@dataclass(frozen=True)
+class OnlineConfig:
+    """How the PB is regressed on-line.
+
+    ``OnlineConfig.paper()``: L = 30, 100 iterations, l = 20, the onset state carried over and
+    not optimised. ``OnlineConfig()`` (the default) is the best measured with models learned
+    by the paper's algorithm (docs/model.md): the onset state optimised with the PB, l = 4
+    without the low-pass term, restarts — before each regression, the last ``restart_span``
+    steps of the PB profile are also tried at each learned pattern's PB, and the regression
+    starts from the profile that fits best — phase restarts (below) and the surprise gate,
+    which lets the PB settle once the predictions are good. ``OnlineConfig.ungated()`` is the
+    default without the gate, the better choice for models learned with
+    ``TrainConfig.fast()``.
+    """
+
+    window: int = 30  # L
+    iterations: int = 100
+    pb: PBUpdateConfig = field(default_factory=lambda: PBUpdateConfig(
+        learning_rate=1.0, momentum=0.9, k_bp=1.0, k_nb=0.0, integration_length=4))
+    optimize_onset: bool = True
+    onset_learning_rate: float = 0.5
+    restart_span: int = 6
+    motor_input: Literal["closed_loop", "recorded"] = "closed_loop"
+    # The surprise gate (0 turns it off): before each regression, the RMS sensory error of the
+    # window's last ``gate_steps`` predictions scales the error term of eq. 1 by
+    # (error / surprise_gate) ** gate_power, clipped to [gate_floor, 1]: the PB moves at its
+    # full rate while the predictions are poor and all but stops once they are good.
+    surprise_gate: float = 0.035
+    gate_power: float = 4.0
+    gate_floor: float = 0.01
+    gate_steps: int = 4
+    # Phase restarts (0 turns them off): before each regression, the network is also started
+    # ``phase_restarts + 1`` steps back from each of a set of states on the learned patterns'
+    # cycles (with that pattern's PB); where one predicts the last ``phase_restarts``
+    # observations better than the window does, by the factor ``phase_restart_ratio``, and the
+    # window's own prediction error there is above ``phase_restart_level`` (RMS), the window
+    # starts over from that state.
+    phase_restarts: int = 3
+    phase_restart_ratio: float = 0.5
+    phase_restart_level: float = 0.02
+
+    def __post_init__(self) -> None:
+        if self.window < 2:
+            raise ConfigError(f"regression window must be >= 2 steps, got {self.window}")
+        if self.iterations < 0:
+            raise ConfigError(f"iterations must be >= 0, got {self.iterations}")
+        if self.onset_learning_rate < 0:
+            raise ConfigError("onset_learning_rate must be >= 0")
+        if not 0 <= self.restart_span <= self.window:
+            raise ConfigError(f"restart_span must be in [0, window], got {self.restart_span}")
+        if self.surprise_gate < 0:
+            raise ConfigError(f"surprise_gate must be >= 0, got {self.surprise_gate}")
+        if self.gate_power <= 0:
+            raise ConfigError(f"gate_power must be > 0, got {self.gate_power}")
+        if not 0 < self.gate_floor <= 1:
+            raise ConfigError(f"gate_floor must be in (0, 1], got {self.gate_floor}")
+        if self.gate_steps < 1:
+            raise ConfigError(f"gate_steps must be >= 1, got {self.gate_steps}")
+        if not 0 <= self.phase_restarts < self.window:
+            raise ConfigError(f"phase_restarts must be in [0, window), got "
+                              f"{self.phase_restarts}")
+        if not 0 < self.phase_restart_ratio <= 1:
+            raise ConfigError("phase_restart_ratio must be in (0, 1]")
+        if self.phase_restart_level < 0:
+            raise ConfigError("phase_restart_level must be >= 0")
+        if self.motor_input not in ("closed_loop", "recorded"):
+            raise ConfigError(f"motor_input must be 'closed_loop' or 'recorded', got "
+                              f"{self.motor_input!r}")
+
+    @classmethod
+    def paper(cls, **changes: Any) -> OnlineConfig:
+        """The paper's regression: L = 30, 100 iterations, l = 20, no onset optimisation."""
+        base = cls(pb=PBUpdateConfig(learning_rate=0.5, momentum=0.9, k_bp=1.0, k_nb=0.2,
+                                     integration_length=20),
+                   optimize_onset=False, restart_span=0, surprise_gate=0.0, phase_restarts=0)
+        return replace(base, **changes)
+
+    @classmethod
+    def ungated(cls, **changes: Any) -> OnlineConfig:
+        """The default without the surprise gate: the PB keeps fitting every step. Models
+        learned with ``TrainConfig.fast()`` lock on and switch faster with it, though their
+        PB never settles (docs/model.md)."""
+        return replace(cls(surprise_gate=0.0), **changes)
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> OnlineConfig:
+        data = dict(data)
+        data["pb"] = PBUpdateConfig(**data["pb"])
+        return cls(**data)
