@@ -44,6 +44,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from rnnpb import _xla
 from rnnpb.errors import ConfigError
 from rnnpb.model.io import TrainedModel
 from rnnpb.model.network import Params, closed_loop
@@ -602,6 +603,7 @@ class MirrorSystem:
     """
 
     def __init__(self, model: TrainedModel, config: OnlineConfig | None = None) -> None:
+        _xla.warn_if_not_configured()  # once per process, if nobody chose XLA's loop setting
         self.model = model
         self.config = config or OnlineConfig()
         net = model.network
