@@ -105,7 +105,7 @@ def _interrupt_during_startup(command, marker, delays, tmp_path):
     after the start), and return what each run left."""
     runs = []
     for i, delay in enumerate(delays):
-        out = tmp_path / f"run{i}"
+        out = tmp_path / f"run-{marker}-{i}"
         out.mkdir()
         process = _rnnpb(*command(out))
         if marker is not None:
@@ -129,7 +129,7 @@ def test_ctrl_c_during_the_first_compile_stops_training_cleanly(data_dir, tmp_pa
         return ["train", "--data", data_dir, "--out", out / "model.npz", "--preset", "fast",
                 "--iterations", 100_000, "--no-progress"]
 
-    runs = _interrupt_during_startup(command, None, [0.4, 1.0], tmp_path)
+    runs = _interrupt_during_startup(command, None, [0.5], tmp_path)
     runs += _interrupt_during_startup(command, "training on", [0.0, 0.3], tmp_path)
     for status, stdout, stderr, out in runs:
         assert status == 130, stderr
@@ -143,8 +143,8 @@ def test_ctrl_c_during_the_first_compile_stops_interact_cleanly(model_file, tmp_
     def command(out):
         return ["interact", "--model", model_file, "--source", "scenario:held:1", "--out", out]
 
-    runs = _interrupt_during_startup(command, None, [0.6], tmp_path)
-    runs += _interrupt_during_startup(command, "interacting:", [0.0, 0.2], tmp_path)
+    runs = _interrupt_during_startup(command, None, [0.5], tmp_path)
+    runs += _interrupt_during_startup(command, "interacting:", [0.0], tmp_path)
     for status, stdout, stderr, out in runs:
         assert status == 0, stderr
         assert "interrupted: the recording keeps every step so far" in stdout
