@@ -1,8 +1,12 @@
-"""rnnpb: a recurrent neural network with parametric bias as a mirror system (Ito & Tani 2004)."""
+"""rnnpb: a recurrent neural network with parametric bias as a mirror system (Ito & Tani 2004).
 
-from rnnpb import _xla
+Importing rnnpb sets nothing: no environment variable, backend or global. The one process-wide
+choice that makes the on-line step fast is :func:`configure_xla`; call it before the first JAX
+computation (the ``rnnpb`` command does).
+"""
+
+from rnnpb._xla import configure as configure_xla
 
 __version__ = "0.1.0"
 
-# Before any JAX computation: XLA reads its flags once, when its CPU backend starts.
-_xla.configure()
+__all__ = ["__version__", "configure_xla"]

@@ -1,4 +1,4 @@
-"""The one XLA setting rnnpb makes, applied when the package is imported.
+"""The one XLA setting rnnpb recommends, and who applies it.
 
 The on-line step (:func:`rnnpb.model.online.online_step`) runs 100 iterations of a forward and a
 backward pass through a 30-step window every step: some 12,000 tiny matrix-vector products in
@@ -6,15 +6,20 @@ sequence. XLA's CPU runtime launches every operation of a loop body as a separat
 these sizes the launches cost more than the arithmetic. XLA compiles a *small* while loop into
 one function instead when the loop touches fewer bytes than a threshold (1 KiB by default) and
 holds nothing it must hand to a library (a matrix library call, a custom call). The window's
-loops are written to hold no such operation, and rnnpb raises the threshold to 1 MiB, so the
-whole regression compiles into one function: this halves the on-line step's time
+loops are written to hold no such operation, and :data:`FLAG` raises the threshold to 1 MiB, so
+the whole regression compiles into one function: this halves the on-line step's time
 (``rnnpb bench``, docs/model.md). Loops that move more data — learning, with six sequences at
 once — keep their library calls and are not affected.
 
-XLA reads its flags once, when JAX starts its CPU backend, so the setting takes effect only if
-rnnpb is imported before the first JAX computation of the process. Set ``XLA_FLAGS`` yourself
-with an ``--xla_backend_extra_options`` of your own (it then wins), or ``RNNPB_XLA_DEFAULTS=0``
-to leave XLA's defaults untouched.
+Importing rnnpb changes nothing: the setting is a process-wide environment variable, so the
+program decides. The ``rnnpb`` command, the demo's worker processes and the test suite call
+:func:`configure` before their first JAX computation. A library user calls
+``rnnpb.configure_xla()`` the same way, or sets ``XLA_FLAGS`` themselves; one who did neither
+is told once, when they build a :class:`~rnnpb.model.MirrorSystem`
+(:func:`warn_if_not_configured`). XLA reads its flags once, when JAX starts its CPU backend, so
+the setting takes effect only before the first JAX computation of the process.
+``RNNPB_XLA_DEFAULTS=0`` (or an ``--xla_backend_extra_options`` of one's own in ``XLA_FLAGS``)
+keeps XLA's defaults and silences the notice.
 """
 
 from __future__ import annotations
@@ -22,33 +27,72 @@ from __future__ import annotations
 import os
 import sys
 import warnings
-from collections.abc import MutableMapping
+from collections.abc import Mapping, MutableMapping
 
 SMALL_LOOP_OPTION = "xla_cpu_small_while_loop_byte_threshold"
 SMALL_LOOP_BYTES = 1 << 20
 FLAG = f"--xla_backend_extra_options={SMALL_LOOP_OPTION}={SMALL_LOOP_BYTES}"
 
+_told = False
 
-def configure(environ: MutableMapping[str, str] | None = None) -> bool:
-    """Add :data:`FLAG` to ``XLA_FLAGS`` unless the user decided otherwise.
 
-    Returns whether the flag was added. Warns when JAX's backend has already started in this
-    process (the flag can no longer take effect there).
-    """
+def user_decided(environ: Mapping[str, str] | None = None) -> bool:
+    """Whether the environment already says what XLA should do with small loops: rnnpb's
+    setting is off (``RNNPB_XLA_DEFAULTS=0``) or ``XLA_FLAGS`` sets backend options of its own."""
     environ = os.environ if environ is None else environ
     if environ.get("RNNPB_XLA_DEFAULTS", "1").strip() == "0":
-        return False
+        return True
     flags = environ.get("XLA_FLAGS", "")
-    if "xla_backend_extra_options" in flags:
+    return "xla_backend_extra_options" in flags and FLAG not in flags
+
+
+def configure(environ: MutableMapping[str, str] | None = None) -> bool:
+    """Compile the on-line regression into one function: add :data:`FLAG` to ``XLA_FLAGS``.
+
+    Call it before the first JAX computation of the process (XLA reads its flags once). It
+    leaves the environment alone when the user decided otherwise (:func:`user_decided`) or the
+    flag is already there.
+
+    Parameters
+    ----------
+    environ : mapping, optional
+        The environment to change; default ``os.environ``.
+
+    Returns
+    -------
+    bool
+        Whether the flag was added. Warns when JAX's backend has already started in this
+        process, because the flag can then no longer take effect there.
+    """
+    environ = os.environ if environ is None else environ
+    flags = environ.get("XLA_FLAGS", "")
+    if user_decided(environ) or FLAG in flags:
         return False
     # First: XLA stops reading flags at the first word that is not one ("--name=value").
     environ["XLA_FLAGS"] = f"{FLAG} {flags}".strip()
     if environ is os.environ and backend_started():
         warnings.warn(
-            "JAX started before rnnpb was imported, so rnnpb's XLA setting does not apply in "
-            "this process and the on-line step runs about twice as slow; import rnnpb before "
-            f"the first JAX computation, or set XLA_FLAGS={FLAG}", RuntimeWarning, stacklevel=3)
+            "JAX started before rnnpb.configure_xla() was called, so the setting does not "
+            "apply in this process and the on-line step runs about twice as slow; call it "
+            f"before the first JAX computation, or set XLA_FLAGS={FLAG}", RuntimeWarning,
+            stacklevel=2)
     return True
+
+
+def warn_if_not_configured() -> None:
+    """Tell a library user once per process that the on-line step runs at XLA's default speed.
+
+    Silent when the flag is active or the user decided otherwise (:func:`user_decided`).
+    """
+    global _told
+    if _told or active() or user_decided():
+        return
+    _told = True
+    warnings.warn(
+        "the on-line step runs about twice as slow as it can: XLA compiles its regression "
+        "loop as separate tasks. Call rnnpb.configure_xla() before the first JAX computation "
+        f"(or set XLA_FLAGS={FLAG}); RNNPB_XLA_DEFAULTS=0 keeps XLA's defaults and silences "
+        "this", RuntimeWarning, stacklevel=3)
 
 
 def single_threaded(environ: MutableMapping[str, str] | None = None) -> None:

@@ -3,6 +3,12 @@
 Each subcommand lives in ``rnnpb/commands/<name>.py`` and defines ``NAME``, ``HELP``,
 ``DESCRIPTION``, ``add_arguments(parser)`` and ``run(args) -> int``. Command modules import
 heavy libraries (JAX, MuJoCo, OpenCV) inside ``run`` only, so ``rnnpb --help`` stays fast.
+
+The command line makes the process-wide choices a library leaves to its user: before anything
+imports JAX it applies rnnpb's XLA setting (:func:`rnnpb.configure_xla`; ``RNNPB_XLA_DEFAULTS=0``
+keeps XLA's defaults). A command that sets ``SAFE_POINTS = True`` runs with
+:class:`rnnpb._interrupt.SafeInterrupts`: Ctrl-C stops it at the next point it checks, never in
+the middle of an import or an XLA compilation, and it exits 130 (see docs/robustness.md).
 """
 
 from __future__ import annotations
@@ -12,7 +18,7 @@ import importlib
 import sys
 from collections.abc import Sequence
 
-from rnnpb import __version__
+from rnnpb import __version__, _interrupt, _xla
 from rnnpb.errors import RnnpbError
 
 # The order here is the order in `rnnpb --help`.
@@ -57,17 +63,34 @@ def build_parser() -> argparse.ArgumentParser:
         command = sub.add_parser(module.NAME, help=module.HELP, description=module.DESCRIPTION,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
         module.add_arguments(command)
-        command.set_defaults(_run=module.run)
+        command.set_defaults(_run=module.run,
+                             _safe_points=bool(getattr(module, "SAFE_POINTS", False)))
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    if not getattr(args, "_run", None):
-        parser.print_help()
-        return 2
+    interrupts = _interrupt.safe_interrupts()
+    args = argparse.Namespace(debug=False)
     try:
+        # From the start: a Ctrl-C while the command line starts is held like one in a command.
+        with interrupts:
+            # Before any command imports JAX: XLA reads its flags once, when its backend starts.
+            _xla.configure()
+            parser = build_parser()
+            args = parser.parse_args(argv)
+            if not getattr(args, "_run", None):
+                parser.print_help()
+                return 2
+            interrupts.check()
+            if args._safe_points:
+                status = int(args._run(args) or 0)
+                if interrupts.requested:
+                    # Ctrl-C after the command's last safe point: its output is complete.
+                    interrupts.requested = False
+                    print("rnnpb: interrupted after the work was done; the output is complete",
+                          file=sys.stderr)
+                return status
+        # A command without safe points: Python's own Ctrl-C, caught below.
         return int(args._run(args) or 0)
     except RnnpbError as error:
         if args.debug:

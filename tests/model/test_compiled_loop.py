@@ -23,6 +23,17 @@ def test_configure_adds_the_flag_once_and_respects_the_user():
     assert own["XLA_FLAGS"] == "--xla_backend_extra_options=xla_cpu_fold_all_constants"
     off = {"RNNPB_XLA_DEFAULTS": "0"}
     assert not _xla.configure(off) and "XLA_FLAGS" not in off
+    twice = {}
+    assert _xla.configure(twice) and not _xla.configure(twice)
+    assert twice["XLA_FLAGS"] == _xla.FLAG
+
+
+def test_the_user_decided_when_the_setting_is_off_or_flags_carry_other_backend_options():
+    assert not _xla.user_decided({})
+    assert not _xla.user_decided({"XLA_FLAGS": _xla.FLAG})
+    assert _xla.user_decided({"RNNPB_XLA_DEFAULTS": "0"})
+    own = "--xla_backend_extra_options=xla_cpu_fold_all_constants"
+    assert _xla.user_decided({"XLA_FLAGS": f"--xla_cpu_multi_thread_eigen=false {own}"})
 
 
 def test_single_threaded_adds_only_real_flags_once():
@@ -38,8 +49,7 @@ def test_single_threaded_adds_only_real_flags_once():
 @pytest.mark.parametrize("config", [OnlineConfig(), OnlineConfig.paper()],
                          ids=["default", "paper"])
 def test_the_regression_loop_is_compiled_as_one_function(trained, config):
-    # Importing rnnpb configured XLA before its backend started (the test process imports
-    # rnnpb while collecting, before any computation).
+    # tests/conftest.py configured XLA before its backend started (before any computation).
     assert _xla.active()
     params = jax.tree_util.tree_map(lambda a: np.asarray(a, np.float32), trained.params)
     state = initial_state(trained, config)

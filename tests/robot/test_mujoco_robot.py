@@ -5,8 +5,14 @@ import pytest
 
 from rnnpb.demonstrator import learning_set
 from rnnpb.errors import ConfigError
-from rnnpb.robot import JOINT_LIMITS, MujocoRobot, RobotCamera, forward_kinematics, load_model
-from rnnpb.robot._mujoco import ROBOT_EYE
+from rnnpb.robot import (
+    JOINT_LIMITS,
+    ROBOT_EYE,
+    MujocoRobot,
+    RobotCamera,
+    forward_kinematics,
+    load_model,
+)
 from rnnpb.vectors import MOTOR_NAMES
 
 

@@ -5,8 +5,14 @@ import pytest
 
 from rnnpb.demonstrator import pattern_dataset
 from rnnpb.errors import ConfigError
-from rnnpb.robot import RobotCamera, RobotRenderer, forward_kinematics, write_video
-from rnnpb.robot._mujoco import ROBOT_EYE, load_model
+from rnnpb.robot import (
+    ROBOT_EYE,
+    RobotCamera,
+    RobotRenderer,
+    forward_kinematics,
+    load_model,
+    write_video,
+)
 
 HAND_GEOMS = ("lhand_geom", "rhand_geom")
 

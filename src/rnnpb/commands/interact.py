@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 NAME = "interact"
+SAFE_POINTS = True  # Ctrl-C stops between steps (rnnpb._interrupt)
 HELP = "run the on-line interaction: a user source drives the robot"
 DESCRIPTION = """\
 Run the interaction phase: every step the robot observes the user's hands, the mirror
@@ -56,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
     import os
     from pathlib import Path
 
-    from rnnpb import __version__
+    from rnnpb import __version__, _interrupt
     from rnnpb._atomic import atomic_write
     from rnnpb.analysis.figures import plot_session
     from rnnpb.interaction import (
@@ -99,7 +100,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"interacting: {args.source} -> {args.model} ({args.online} regression, "
               f"{args.robot} robot{', paced' if args.paced else ''}); Ctrl-C stops")
         try:
-            summary = loop.run()
+            # Between steps is the safe point: the step's results are read back from XLA.
+            summary = loop.run(on_step=lambda record: _interrupt.check())
         except KeyboardInterrupt:
             summary = loop.summary()
             print("interrupted: the recording keeps every step so far")

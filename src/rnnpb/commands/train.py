@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 NAME = "train"
+SAFE_POINTS = True  # Ctrl-C stops between training chunks (rnnpb._interrupt)
 HELP = "learn movement patterns from sequence CSV files"
 DESCRIPTION = """\
 Learn movement patterns from demonstrations: paired user-hand / robot-joint sequences.
@@ -66,6 +67,7 @@ def run(args: argparse.Namespace) -> int:
 
     import numpy as np
 
+    from rnnpb import _interrupt
     from rnnpb.model import NetworkConfig, TrainConfig, train
     from rnnpb.robot import JOINT_LIMITS
     from rnnpb.sequences import read_sequence_files
@@ -89,8 +91,26 @@ def run(args: argparse.Namespace) -> int:
     print(f"training on {len(sequences)} sequences of {len(patterns)} pattern(s): "
           f"{', '.join(patterns)}; {config.iterations} iterations ({args.preset} preset, "
           f"{config.optimizer})")
-    model = train(sequences, JOINT_LIMITS, network, config, progress=not args.no_progress,
-                  checkpoint_path=checkpoint_path_for(args.out), resume=args.resume)
+    bar = None
+    if not args.no_progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=config.iterations, unit="it", desc="training", dynamic_ncols=True)
+
+    def after_chunk(progress) -> None:
+        if bar is not None:
+            bar.update(progress.iteration - bar.n)
+            bar.set_postfix(mse=f"{progress.mse:.2e}")
+        # A safe point: the chunk's error has been read back, so no XLA work is in flight.
+        _interrupt.check()
+
+    try:
+        model = train(sequences, JOINT_LIMITS, network, config, progress=after_chunk,
+                      checkpoint_path=checkpoint_path_for(args.out), resume=args.resume)
+    finally:
+        if bar is not None:
+            bar.close()
+    _interrupt.check()  # interrupted during the last chunk: no model file
     model.save(args.out)
     info = model.meta["training"]
     mse = np.asarray(info["mse_per_output"])

@@ -9,8 +9,6 @@ import numpy as np
 
 from rnnpb.robot.camera import RobotCamera
 
-os.environ.setdefault("MUJOCO_GL", "egl")
-
 LEFT_BGR = (40, 40, 220)  # the user's left hand: red ball
 RIGHT_BGR = (220, 90, 30)  # the user's right hand: blue ball
 

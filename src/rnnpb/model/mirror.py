@@ -19,6 +19,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from rnnpb import _xla
 from rnnpb.errors import ConfigError
 from rnnpb.model.io import TrainedModel
 from rnnpb.model.network import NetworkConfig, Params
@@ -152,6 +153,7 @@ class MirrorSystem:
     """
 
     def __init__(self, model: TrainedModel, config: OnlineConfig | None = None) -> None:
+        _xla.warn_if_not_configured()  # once per process, if nobody chose XLA's loop setting
         self.model = model
         self.config = config or OnlineConfig()
         self._layout = PackedLayout.for_network(model.network)

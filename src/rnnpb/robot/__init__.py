@@ -1,6 +1,11 @@
 """The simulated humanoid robot: arm kinematics, joint limits, the robot interface and its
-kinematic and MuJoCo implementations, and rendering (see docs/robot-and-demonstrator.md)."""
+kinematic and MuJoCo implementations, and rendering (see docs/robot-and-demonstrator.md).
 
+MuJoCo is imported, and its OpenGL chosen, only when a model is first loaded (a
+:class:`MujocoRobot` connects, a :class:`RobotRenderer` is made).
+"""
+
+from rnnpb.robot._gl import choose_gl
 from rnnpb.robot._interface import KinematicRobot, Robot
 from rnnpb.robot._kinematics import (
     ARM_SIDES,
@@ -17,6 +22,8 @@ from rnnpb.robot._kinematics import (
     forward_kinematics,
     inverse_kinematics,
 )
+from rnnpb.robot._mujoco import ROBOT_EYE, MujocoRobot, load_model
+from rnnpb.robot._render import CAMERAS, RobotRenderer, render_pose, write_video
 from rnnpb.robot.camera import RobotCamera
 
 __all__ = [
@@ -30,6 +37,7 @@ __all__ = [
     "IKResult",
     "KinematicRobot",
     "CAMERAS",
+    "ROBOT_EYE",
     "MujocoRobot",
     "RobotRenderer",
     "load_model",
@@ -37,6 +45,7 @@ __all__ = [
     "write_video",
     "Robot",
     "RobotCamera",
+    "choose_gl",
     "clip_to_limits",
     "coupled_elbow",
     "coupled_pitch_range",
@@ -44,15 +53,3 @@ __all__ = [
     "inverse_kinematics",
 ]
 
-
-def __getattr__(name: str):
-    # The MuJoCo parts import mujoco; load them only when asked for, so kinematics stay light.
-    if name in ("MujocoRobot", "load_model"):
-        from rnnpb.robot import _mujoco
-
-        return getattr(_mujoco, name)
-    if name in ("CAMERAS", "RobotRenderer", "render_pose", "write_video"):
-        from rnnpb.robot import _render
-
-        return getattr(_render, name)
-    raise AttributeError(f"module 'rnnpb.robot' has no attribute {name!r}")

@@ -1,22 +1,26 @@
 """The humanoid in MuJoCo: the model (``humanoid.xml`` + the head camera) and a position
-controlled :class:`MujocoRobot` behind the :class:`~rnnpb.robot.Robot` interface."""
+controlled :class:`MujocoRobot` behind the :class:`~rnnpb.robot.Robot` interface.
+
+MuJoCo itself is imported when a model is first loaded (:mod:`rnnpb.robot._gl`), not here.
+"""
 
 from __future__ import annotations
 
-import os
 import xml.etree.ElementTree as ET
 from importlib import resources
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from rnnpb.errors import ConfigError
+from rnnpb.robot._gl import import_mujoco
 from rnnpb.robot._interface import Robot, as_joint_vector
 from rnnpb.robot._kinematics import clip_to_limits
 from rnnpb.robot.camera import RobotCamera
 from rnnpb.vectors import MOTOR_NAMES
 
-os.environ.setdefault("MUJOCO_GL", "egl")
-import mujoco  # noqa: E402  (MUJOCO_GL must be set before the import)
+if TYPE_CHECKING:
+    import mujoco
 
 ROBOT_EYE = "robot_eye"
 """Name of the head camera in the model; its pose and field of view come from RobotCamera."""
@@ -40,7 +44,7 @@ def model_xml(camera: RobotCamera | None = None) -> str:
 def load_model(camera: RobotCamera | None = None) -> mujoco.MjModel:
     """The compiled MuJoCo model of the humanoid (render buffers sized for ``camera``)."""
     camera = camera or RobotCamera()
-    model = mujoco.MjModel.from_xml_string(model_xml(camera))
+    model = import_mujoco().MjModel.from_xml_string(model_xml(camera))
     model.vis.global_.offwidth = max(model.vis.global_.offwidth, camera.width)
     model.vis.global_.offheight = max(model.vis.global_.offheight, camera.height)
     return model
@@ -58,7 +62,7 @@ def set_pose(model: mujoco.MjModel, data: mujoco.MjData, joints: np.ndarray,
     data.qpos[joint_addresses(model)] = clip_to_limits(joints)
     data.qvel[:] = 0.0
     set_user_hands(model, data, user_hands)
-    mujoco.mj_forward(model, data)
+    import_mujoco().mj_forward(model, data)
 
 
 def set_user_hands(model: mujoco.MjModel, data: mujoco.MjData,
@@ -122,7 +126,8 @@ class MujocoRobot(Robot):
     def connect(self) -> None:
         self.model = load_model(self.camera)
         self.model.opt.timestep = self.dt / self.n_substeps
-        self.data = mujoco.MjData(self.model)
+        self._mujoco = import_mujoco()
+        self.data = self._mujoco.MjData(self.model)
         self._qadr = joint_addresses(self.model)
         self._actuators = np.array([self.model.actuator(name).id for name in MOTOR_NAMES])
         set_pose(self.model, self.data, self._initial)
@@ -142,7 +147,7 @@ class MujocoRobot(Robot):
         for k in range(self.n_substeps):
             w = min(1.0, (k + 1) / ramp) if self.ramp_fraction > 0 else 1.0
             data.ctrl[self._actuators] = start + w * (target - start)
-            mujoco.mj_step(model, data)
+            self._mujoco.mj_step(model, data)
         self._target = target
 
     def read(self) -> np.ndarray:
@@ -152,14 +157,14 @@ class MujocoRobot(Robot):
     def hand_positions(self) -> np.ndarray:
         """The simulated hands (left, right) in the robot frame, shape (2, 3)."""
         model, data = self._require()
-        mujoco.mj_kinematics(model, data)  # after mj_step, xpos lags qpos by one substep
+        self._mujoco.mj_kinematics(model, data)  # after mj_step, xpos lags qpos by one substep
         return np.stack([data.site("left_hand").xpos, data.site("right_hand").xpos]).copy()
 
     def set_user_hands(self, user_hands: np.ndarray | None) -> None:
         """Show the user's hands (2, 3) as balls in the scene (None hides them)."""
         model, data = self._require()
         set_user_hands(model, data, user_hands)
-        mujoco.mj_kinematics(model, data)
+        self._mujoco.mj_kinematics(model, data)
 
     def close(self) -> None:
         self.model = None

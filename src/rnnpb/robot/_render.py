@@ -1,7 +1,7 @@
 """Offscreen images and videos of the humanoid from its head camera or an outside camera.
 
-Rendering runs on the CPU or GPU through EGL by default (``MUJOCO_GL=egl``; set
-``MUJOCO_GL=osmesa`` before importing rnnpb where EGL is missing).
+Rendering is headless: the OpenGL is ``MUJOCO_GL`` if the program set it, else EGL, else OSMesa,
+chosen when the first model is loaded (:mod:`rnnpb.robot._gl`).
 """
 
 from __future__ import annotations
@@ -9,16 +9,17 @@ from __future__ import annotations
 import os
 from collections.abc import Iterable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from rnnpb.errors import ConfigError
+from rnnpb.robot._gl import import_mujoco
+from rnnpb.robot._mujoco import ROBOT_EYE, load_model, set_pose
+from rnnpb.robot.camera import RobotCamera
 
-os.environ.setdefault("MUJOCO_GL", "egl")
-import mujoco  # noqa: E402  (MUJOCO_GL must be set before the import)
-
-from rnnpb.robot._mujoco import ROBOT_EYE, load_model, set_pose  # noqa: E402
-from rnnpb.robot.camera import RobotCamera  # noqa: E402
+if TYPE_CHECKING:
+    import mujoco
 
 CAMERAS: tuple[str, ...] = (ROBOT_EYE, "front", "three_quarter")
 """Named cameras: the robot's head camera and two outside views of the robot."""
@@ -48,9 +49,16 @@ class RobotRenderer:
             raise ConfigError(f"render size {width}x{height} exceeds the model's offscreen "
                               f"buffer {self.model.vis.global_.offwidth}x"
                               f"{self.model.vis.global_.offheight}")
-        self.data = mujoco.MjData(self.model)
+        mj = import_mujoco()
+        self.data = mj.MjData(self.model)
         self.width, self.height = int(width), int(height)
-        self._renderer = mujoco.Renderer(self.model, height=self.height, width=self.width)
+        try:
+            self._renderer = mj.Renderer(self.model, height=self.height, width=self.width)
+        except Exception as error:  # the GL library loads but gives no context (no device)
+            raise ConfigError(
+                f"MuJoCo cannot render with MUJOCO_GL={os.environ.get('MUJOCO_GL', '')!r}: "
+                f"{error}; set MUJOCO_GL=osmesa (software rendering) before the first "
+                "simulation or renderer is made") from error
 
     def _check_camera(self, camera: str) -> None:
         if camera not in CAMERAS:
@@ -77,7 +85,7 @@ class RobotRenderer:
         finally:
             self._renderer.disable_segmentation_rendering()
         ids = seg[..., 0].astype(np.int64)
-        ids[seg[..., 1] != int(mujoco.mjtObj.mjOBJ_GEOM)] = -1
+        ids[seg[..., 1] != int(import_mujoco().mjtObj.mjOBJ_GEOM)] = -1
         return ids
 
     def close(self) -> None:

@@ -1,0 +1,107 @@
+"""Nothing happens at import: importing rnnpb sets no environment variable and imports no
+MuJoCo; the command line makes XLA's loop choice; a library user who did not is told once."""
+
+import os
+import subprocess
+import sys
+import textwrap
+
+import rnnpb
+from rnnpb import _xla
+
+PACKAGES = ("rnnpb", "rnnpb.cli", "rnnpb.model", "rnnpb.robot", "rnnpb.interaction",
+            "rnnpb.perception", "rnnpb.demonstrator", "rnnpb.sequences", "rnnpb.experiments")
+
+
+def _python(code, **env_changes):
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("XLA_FLAGS", "RNNPB_XLA_DEFAULTS", "MUJOCO_GL")}
+    env.update(env_changes)
+    result = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], env=env,
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr
+    return result
+
+
+def test_importing_rnnpb_leaves_the_environment_alone():
+    result = _python(f"""
+        import os, sys
+        # What the libraries rnnpb builds on change when imported is theirs, not rnnpb's.
+        import jax, optax, numpy, cv2
+        before = dict(os.environ)
+        for name in {PACKAGES!r}:
+            __import__(name)
+            changed = sorted(k for k in set(before) | set(os.environ)
+                             if before.get(k) != os.environ.get(k))
+            assert not changed, (name, changed)
+        # MuJoCo reads MUJOCO_GL when it is imported: that must still be the program's choice.
+        assert "mujoco" not in sys.modules
+        print("unchanged")
+    """)
+    assert result.stdout.strip() == "unchanged"
+
+
+def test_mujoco_gets_a_headless_gl_when_first_needed_unless_the_user_chose():
+    code = """
+        import os, sys
+        from rnnpb.robot import load_model
+        assert "MUJOCO_GL" not in os.environ or os.environ["MUJOCO_GL"] == "osmesa"
+        load_model()
+        import mujoco
+        print(os.environ["MUJOCO_GL"])
+    """
+    assert _python(code).stdout.strip() in ("egl", "osmesa")
+    assert _python(code, MUJOCO_GL="osmesa").stdout.strip() == "osmesa"
+
+
+MIRROR = """
+    import warnings
+    warnings.simplefilter("always")
+    import jax, numpy as np
+    import rnnpb
+    from rnnpb.model import MirrorSystem, NetworkConfig, TrainedModel, init_params
+    {before}
+    network = NetworkConfig()
+    model = TrainedModel(network, init_params(network, jax.random.PRNGKey(0)),
+                         np.zeros(network.io_size), np.ones(network.io_size),
+                         np.full((1, network.pb_size), 0.5), ("1",),
+                         np.zeros((1, network.context_size)))
+    with warnings.catch_warnings(record=True) as caught:
+        MirrorSystem(model)
+        MirrorSystem(model)
+    for warning in caught:
+        print(warning.category.__name__, warning.filename.endswith("<string>"), warning.message)
+"""
+
+
+def test_a_library_user_who_did_not_choose_is_told_once_how_to():
+    lines = _python(MIRROR.format(before="")).stdout.splitlines()
+    assert len(lines) == 1, lines
+    # Pointed at the caller's line, saying what to call.
+    assert lines[0].startswith("RuntimeWarning True ") and "rnnpb.configure_xla()" in lines[0]
+
+
+def test_no_notice_once_configured_or_when_the_user_chose():
+    configured = _python(MIRROR.format(before="assert rnnpb.configure_xla()"))
+    assert configured.stdout == ""
+    assert _python(MIRROR.format(before=""), RNNPB_XLA_DEFAULTS="0").stdout == ""
+    own = "--xla_backend_extra_options=xla_cpu_fold_all_constants"
+    assert _python(MIRROR.format(before=""), XLA_FLAGS=own).stdout == ""
+
+
+def test_the_command_line_makes_the_xla_choice_before_jax_starts():
+    result = _python("""
+        import os
+        from rnnpb import cli, _xla
+        try:
+            cli.main(["--version"])
+        except SystemExit:
+            pass
+        print(_xla.active(), _xla.backend_started())
+    """)
+    assert result.stdout.split()[-2:] == ["True", "False"]
+
+
+def test_the_test_suite_made_the_choice_itself():
+    # tests/conftest.py, before any computation: the suite runs as the command line does.
+    assert _xla.active() and rnnpb.configure_xla is _xla.configure
