@@ -68,6 +68,7 @@ def _worker_init() -> None:
     # Each worker keeps to one core; the pool provides the parallelism.
     from rnnpb import _xla
 
+    _xla.configure()  # the on-line step's loop setting, unless the caller chose otherwise
     _xla.single_threaded()
 
 

@@ -110,15 +110,17 @@ def train(sequences: SequenceABC[Sequence], joint_limits: np.ndarray,
                 raise ConfigError(f"training diverged at iteration {done} (error is {mse}); "
                                   "lower the learning rate")
             history.append((done, mse))
+            # The checkpoint first: a progress callback may end the run (a Ctrl-C taken at
+            # this safe point), and the chunk just learned is then kept.
+            if checkpoint_path is not None and (done % config.checkpoint_every == 0
+                                                or done == config.iterations):
+                save_checkpoint(checkpoint_path, state, data, network, config)
             if bar is not None:
                 bar.update(n)
                 bar.set_postfix(mse=f"{mse:.2e}")
             elif callable(progress):
                 progress(TrainingProgress(done, config.iterations, mse,
                                           time.perf_counter() - start))
-            if checkpoint_path is not None and (done % config.checkpoint_every == 0
-                                                or done == config.iterations):
-                save_checkpoint(checkpoint_path, state, data, network, config)
     finally:
         if bar is not None:
             bar.close()
