@@ -1,0 +1,99 @@
+"""The layout of docs/design.md, held to the code: every import inside rnnpb points down.
+
+Each part (a subpackage or a top-level module of rnnpb) may import only the parts listed for it
+in ALLOWED. A part that is not listed fails the test until docs/design.md and this table say
+where it stands.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import rnnpb
+
+FOUNDATION = {"rnnpb", "errors", "vectors", "_atomic", "_xla", "_interrupt"}
+
+# part -> the parts it may import (besides itself and the foundation). The model never imports
+# the robot, the camera, the screen or the memory store.
+ALLOWED: dict[str, set[str]] = {
+    "rnnpb": set(),
+    "errors": set(),
+    "vectors": set(),
+    "_atomic": set(),
+    "_xla": set(),
+    "_interrupt": set(),
+    "sequences": set(),
+    "sources": {"sequences"},
+    "robot": set(),
+    "model": {"sequences"},
+    "memory": {"sequences"},
+    "demonstrator": {"robot", "sequences", "sources"},
+    "safety": {"model", "robot", "sequences"},
+    "perception": {"demonstrator", "robot", "sources", "sequences"},
+    "analysis": {"demonstrator", "robot", "sequences"},
+    "interaction": {"model", "memory", "safety", "perception", "demonstrator", "robot", "sources",
+                    "sequences"},
+    "experiments": {"analysis", "interaction", "model", "memory", "safety", "demonstrator",
+                    "perception", "robot", "sources", "sequences"},
+    "web": {"interaction", "model", "memory", "safety", "perception", "demonstrator", "robot",
+            "sources", "sequences", "analysis"},
+    "sweeps": {"experiments", "analysis", "interaction", "model", "demonstrator", "robot",
+               "sources", "sequences"},
+    "commands": {"experiments", "sweeps", "web", "interaction", "analysis", "model", "memory",
+                 "safety", "perception", "demonstrator", "robot", "sources", "sequences"},
+    "cli": set(),
+}
+
+ROOT = Path(rnnpb.__file__).parent
+
+
+def _part(module: str) -> str:
+    pieces = module.split(".")
+    return "rnnpb" if len(pieces) == 1 else pieces[1]
+
+
+def _imports() -> dict[str, set[tuple[str, str]]]:
+    """part -> {(imported part, file that imports it)}."""
+    found: dict[str, set[tuple[str, str]]] = {}
+    for path in sorted(ROOT.rglob("*.py")):
+        relative = path.relative_to(ROOT.parent).with_suffix("")
+        module = ".".join(relative.parts).removesuffix(".__init__")
+        part = _part(module)
+        edges = found.setdefault(part, set())
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            targets: list[str] = []
+            if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                if node.module == "rnnpb":
+                    targets = [f"rnnpb.{alias.name}" for alias in node.names]
+                elif node.module.startswith("rnnpb."):
+                    targets = [node.module]
+            elif isinstance(node, ast.Import):
+                targets = [a.name for a in node.names if a.name.startswith("rnnpb")]
+            for target in targets:
+                edges.add((_part(target), str(path.relative_to(ROOT))))
+    return found
+
+
+def test_every_part_has_a_place():
+    assert set(_imports()) <= set(ALLOWED), (
+        "parts without a place in the layout: "
+        f"{sorted(set(_imports()) - set(ALLOWED))} (add them to docs/design.md and ALLOWED)")
+
+
+def test_imports_point_down():
+    wrong = []
+    for part, edges in _imports().items():
+        allowed = ALLOWED.get(part, set()) | FOUNDATION | {part}
+        if part in FOUNDATION - {"rnnpb"}:
+            allowed = {part, "errors"}
+        if part == "rnnpb":
+            allowed = FOUNDATION
+        wrong += [f"{file} imports rnnpb.{target}" for target, file in sorted(edges)
+                  if target not in allowed and not target.startswith("__")]
+    assert not wrong, "imports that run against the layout:\n" + "\n".join(wrong)
+
+
+def test_the_model_imports_nothing_of_the_world():
+    edges = {target for target, _ in _imports()["model"]}
+    assert not edges & {"robot", "perception", "web", "memory", "interaction", "demonstrator"}
