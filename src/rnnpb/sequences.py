@@ -3,17 +3,20 @@
 A sequence file has a header row and one row per step. Columns: ``step``, the sensory values
 ``lhy lhz rhy rhz`` (normalized to [0, 1]) and the motor values ``lshp … relp`` (radians).
 An optional ``pattern`` column names the movement pattern; without it the pattern is taken from
-the file name (``wave_1.csv`` and ``wave-2.csv`` are both pattern ``wave``). Extra columns are
-ignored. A sensory stream (the input of the interaction phase) needs only ``step`` and the
+the file name (``wave_1.csv`` and ``wave-2.csv`` are both pattern ``wave``); either way the name
+must pass :func:`pattern_name_problem`. Extra columns are ignored; a column name may appear only
+once. A sensory stream (the input of the interaction phase) needs only ``step`` and the
 sensory columns.
 
-Files are read as UTF-8, with or without a byte-order mark, with any line endings. Every problem
-with a file raises :class:`rnnpb.errors.DataFileError` naming the file (and the line and column
-where there is one); see docs/robustness.md.
+Files are read as UTF-8, with or without a byte-order mark, with any line endings; only regular
+files of at most 256 MiB with lines of at most 64 Ki characters are read. Every problem with a
+file raises :class:`rnnpb.errors.DataFileError` naming the file (and the line and column where
+there is one); see docs/robustness.md.
 """
 
 from __future__ import annotations
 
+import array
 import csv
 import math
 import os
@@ -25,10 +28,40 @@ from pathlib import Path
 import numpy as np
 
 from rnnpb._atomic import atomic_write
+from rnnpb._reading import MAX_TEXT_FILE_BYTES, bounded_lines, open_regular_file
 from rnnpb.errors import DataFileError
 from rnnpb.vectors import MOTOR_NAMES, MOTOR_SIZE, SENSORY_NAMES, SENSORY_SIZE, STEP_COLUMN
 
 PATTERN_COLUMN = "pattern"
+PATTERN_NAME_MAX_LENGTH = 32
+_PATTERN_NAME_PUNCTUATION = frozenset("-_. ")
+
+
+def pattern_name_problem(name: object) -> str | None:
+    """Why ``name`` is not a valid pattern name, or ``None`` if it is one.
+
+    A pattern name is 1 to 32 characters: letters and digits of any script (as
+    :meth:`str.isalnum` has them), ``-``, ``_``, ``.`` and spaces, neither starting nor ending
+    with a space. Pattern names reach file names, figure titles, reports and the dashboard's
+    page, so nothing that markup, a terminal or a shell gives a meaning (``<``, ``&``, quotes,
+    control characters, line breaks) is part of one.
+    """
+    if not isinstance(name, str):
+        return f"is not text but {type(name).__name__}"
+    if not 1 <= len(name) <= PATTERN_NAME_MAX_LENGTH:
+        return f"has {len(name)} characters, expected 1 to {PATTERN_NAME_MAX_LENGTH}"
+    if name != name.strip(" "):
+        return "starts or ends with a space"
+    bad = [c for c in name if not (c.isalnum() or c in _PATTERN_NAME_PUNCTUATION)]
+    if bad:
+        return (f"holds {bad[0]!r}; a pattern name has only letters, digits, '-', '_', '.' and "
+                "spaces")
+    return None
+
+
+def _shown_name(name: object) -> str:
+    text = repr(name)
+    return text if len(text) <= 40 else text[:40] + "…"
 
 
 @dataclass(frozen=True)
@@ -73,6 +106,9 @@ class Sequence:
             raise DataFileError(f"{where}: contains NaN or infinite values")
         if not self.pattern:
             raise DataFileError(f"{where}: the pattern name is empty")
+        problem = pattern_name_problem(self.pattern)
+        if problem:
+            raise DataFileError(f"{where}: pattern name {_shown_name(self.pattern)} {problem}")
         object.__setattr__(self, "sensory", sensory)
         object.__setattr__(self, "motor", motor)
 
@@ -81,72 +117,110 @@ class Sequence:
         return int(self.sensory.shape[0])
 
 
-def _parse_float(text: str, path: Path, line: int, column: str) -> float:
+@dataclass(frozen=True)
+class _Table:
+    """The numeric columns a reader asked for, parsed as the file is read (one float64 array
+    per file rather than a dict of strings per row: a few bytes of memory per byte of file)."""
+
+    header: list[str]
+    values: np.ndarray  # shape (n_rows, n_columns asked for)
+    lines: np.ndarray  # shape (n_rows,), the line each row ends on
+    label_runs: list[tuple[int, str]]  # (first row, label) of each run of equal labels
+
+
+def _cell_value(text: str, path: Path, line: int, column: str, blank_is_nan: bool,
+                finite: bool) -> float:
+    if blank_is_nan and not text.strip():
+        return math.nan
     try:
         value = float(text)
     except ValueError:
-        raise DataFileError(f"{path}: line {line}, column {column!r}: {text!r} is not a "
+        raise DataFileError(f"{path}: line {line}, column {column!r}: {text[:40]!r} is not a "
                             "number") from None
+    if finite and not math.isfinite(value):
+        raise DataFileError(f"{path}: line {line}, column {column!r}: {text[:40]!r} is not a "
+                            "finite number")
     return value
 
 
-def _read_rows(path: Path, required: SequenceABC[str]) -> tuple[list[str], list[dict[str, str]]]:
-    if not path.exists():
-        raise DataFileError(f"{path}: no such file")
-    if path.is_dir():
-        raise DataFileError(f"{path}: is a directory, expected a CSV file")
+def _shown(name: str) -> str:
+    # A quoted header cell may hold a line break: show such names escaped so the message stays
+    # on one line (found by fuzzing).
+    return name if name.isprintable() else repr(name)
+
+
+def _check_header(path: Path, header: list[str], required: SequenceABC[str]) -> None:
+    seen: set[str] = set()
+    for name in header:
+        # An empty header cell (a spreadsheet's trailing comma) names no column; any other name
+        # appearing twice would make one of its columns silently win.
+        if name and name in seen:
+            raise DataFileError(f"{path}: column {_shown(name)[:40]} appears more than once in "
+                                "the header")
+        seen.add(name)
+    missing = [name for name in required if name not in seen]
+    if missing:
+        shown = ", ".join(_shown(name) for name in header)
+        raise DataFileError(f"{path}: missing column(s) {', '.join(missing)} "
+                            f"(header has {shown[:200]})")
+
+
+def _read_table(path: Path, required: SequenceABC[str], numeric: SequenceABC[str],
+                blank_is_nan: bool = False, label_column: str | None = None) -> _Table:
+    """Read a CSV file into the float columns ``numeric`` (the step column must be finite,
+    others too unless ``blank_is_nan``); ``label_column``, if the file has it, as runs."""
+    # utf-8-sig: a byte-order mark (spreadsheet programs write one) is not part of the header.
+    handle = open_regular_file(path, DataFileError, "a CSV file", MAX_TEXT_FILE_BYTES,
+                               newline="", encoding="utf-8-sig")
+    values = array.array("d")
+    lines = array.array("q")
+    label_runs: list[tuple[int, str]] = []
     try:
-        # utf-8-sig: a byte-order mark (spreadsheet programs write one) is not part of the header.
-        with open(path, newline="", encoding="utf-8-sig") as handle:
-            reader = csv.DictReader(handle)
-            header = reader.fieldnames
+        with handle:
+            reader = csv.reader(bounded_lines(handle, path, DataFileError))
+            header = next((row for row in reader if row), None)
             if not header:
                 raise DataFileError(f"{path}: empty file, expected a CSV header with columns "
                                     f"{', '.join(required)}")
             header = [name.strip() for name in header]
-            reader.fieldnames = header
-            missing = [name for name in required if name not in header]
-            if missing:
-                # A quoted header cell may hold a line break: show such names escaped so the
-                # message stays on one line (found by fuzzing).
-                shown = ", ".join(name if name.isprintable() else repr(name) for name in header)
-                raise DataFileError(f"{path}: missing column(s) {', '.join(missing)} "
-                                    f"(header has {shown[:200]})")
-            rows = []
+            _check_header(path, header, required)
+            where = [header.index(name) for name in numeric]
+            finite = [not blank_is_nan or name == STEP_COLUMN for name in numeric]
+            label_at = header.index(label_column) if label_column in header else None
+            n_rows = 0
             for row in reader:
-                # DictReader puts surplus fields under None and fills missing ones with None.
-                if None in row or None in row.values():
-                    raise DataFileError(f"{path}: line {reader.line_num}: expected "
-                                        f"{len(header)} fields")
-                rows.append(row)
+                if not row:  # a blank line
+                    continue
+                line = reader.line_num
+                if len(row) != len(header):
+                    raise DataFileError(f"{path}: line {line}: expected {len(header)} fields")
+                values.extend([_cell_value(row[j], path, line, name, blank_is_nan and not fin,
+                                           fin)
+                               for j, name, fin in zip(where, numeric, finite, strict=True)])
+                lines.append(line)
+                if label_at is not None:
+                    label = row[label_at].strip()
+                    if not label:
+                        raise DataFileError(f"{path}: line {line}: empty {label_column!r} value")
+                    if not label_runs or label_runs[-1][1] != label:
+                        label_runs.append((n_rows, label))
+                n_rows += 1
     except UnicodeDecodeError:
         raise DataFileError(f"{path}: not a text CSV file (cannot decode as UTF-8)") from None
     except csv.Error as error:
         raise DataFileError(f"{path}: malformed CSV: {error}") from None
     except OSError as error:
         raise DataFileError(f"{path}: cannot read: {error.strerror or error}") from None
-    return header, rows
+    table = np.frombuffer(values, dtype=np.float64).reshape(-1, len(numeric))
+    return _Table(header, table, np.frombuffer(lines, dtype=np.int64), label_runs)
 
 
-def _matrix(path: Path, rows: list[dict[str, str]], columns: SequenceABC[str],
-            allow_nan: bool = False) -> np.ndarray:
-    out = np.empty((len(rows), len(columns)))
-    for i, row in enumerate(rows):
-        for j, name in enumerate(columns):
-            value = _parse_float(row[name], path, i + 2, name)
-            if not allow_nan and not math.isfinite(value):
-                raise DataFileError(f"{path}: line {i + 2}, column {name!r}: {row[name]!r} is not "
-                                    "a finite number")
-            out[i, j] = value
-    return out
-
-
-def _check_steps(path: Path, rows: list[dict[str, str]]) -> None:
-    steps = _matrix(path, rows, [STEP_COLUMN])[:, 0]
+def _check_steps(path: Path, table: _Table) -> None:
+    steps = table.values[:, 0]
     # Compare neighbours rather than take differences: those overflow for huge step numbers.
     decreasing = steps[1:] <= steps[:-1]
     if np.any(decreasing):
-        bad = int(np.argmax(decreasing)) + 3
+        bad = int(table.lines[int(np.argmax(decreasing)) + 1])
         raise DataFileError(f"{path}: line {bad}: column 'step' must increase row by row")
 
 
@@ -159,24 +233,21 @@ def pattern_from_filename(path: str | os.PathLike[str]) -> str:
 def read_sequences(path: str | os.PathLike[str]) -> list[Sequence]:
     """Read one sequence CSV; a ``pattern`` column may split it into several sequences."""
     path = Path(path)
-    header, rows = _read_rows(path, (STEP_COLUMN, *SENSORY_NAMES, *MOTOR_NAMES))
-    if len(rows) < 2:
-        raise DataFileError(f"{path}: needs at least 2 rows of data, has {len(rows)}")
-    _check_steps(path, rows)
-    sensory = _matrix(path, rows, SENSORY_NAMES)
-    motor = _matrix(path, rows, MOTOR_NAMES)
-    if PATTERN_COLUMN not in header:
+    columns = (STEP_COLUMN, *SENSORY_NAMES, *MOTOR_NAMES)
+    table = _read_table(path, columns, columns, label_column=PATTERN_COLUMN)
+    n_rows = len(table.values)
+    if n_rows < 2:
+        raise DataFileError(f"{path}: needs at least 2 rows of data, has {n_rows}")
+    _check_steps(path, table)
+    sensory = table.values[:, 1:1 + SENSORY_SIZE]
+    motor = table.values[:, 1 + SENSORY_SIZE:]
+    if PATTERN_COLUMN not in table.header:
         return [Sequence(sensory, motor, pattern_from_filename(path), str(path))]
-    labels = [row[PATTERN_COLUMN].strip() for row in rows]
-    if any(not label for label in labels):
-        line = labels.index("") + 2
-        raise DataFileError(f"{path}: line {line}: empty 'pattern' value")
-    sequences, start = [], 0
-    for i in range(1, len(labels) + 1):
-        if i == len(labels) or labels[i] != labels[start]:
-            where = f"{path} (rows {start + 2}-{i + 1})"
-            sequences.append(Sequence(sensory[start:i], motor[start:i], labels[start], where))
-            start = i
+    sequences = []
+    ends = [start for start, _ in table.label_runs[1:]] + [n_rows]
+    for (start, label), end in zip(table.label_runs, ends, strict=True):
+        where = f"{path} (lines {table.lines[start]}-{table.lines[end - 1]})"
+        sequences.append(Sequence(sensory[start:end], motor[start:end], label, where))
     return sequences
 
 
@@ -227,15 +298,12 @@ def read_sensory_stream(path: str | os.PathLike[str]) -> np.ndarray:
     the view plane. Text that is not a number is an error.
     """
     path = Path(path)
-    _, rows = _read_rows(path, (STEP_COLUMN, *SENSORY_NAMES))
-    if not rows:
+    columns = (STEP_COLUMN, *SENSORY_NAMES)
+    table = _read_table(path, columns, columns, blank_is_nan=True)
+    if not len(table.values):
         raise DataFileError(f"{path}: has a header but no rows of data")
-    _check_steps(path, rows)
-    for row in rows:
-        for name in SENSORY_NAMES:
-            if row[name].strip() == "":
-                row[name] = "nan"
-    values = _matrix(path, rows, SENSORY_NAMES, allow_nan=True)
+    _check_steps(path, table)
+    values = np.array(table.values[:, 1:])
     values[~np.isfinite(values)] = np.nan
     return values
 

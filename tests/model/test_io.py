@@ -99,3 +99,24 @@ def test_failed_save_leaves_the_old_file_and_no_debris(trained, tmp_path, monkey
         trained.save(path)
     assert path.read_bytes() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["model.npz"]
+
+
+def test_trained_model_passes_the_robot_check_and_narrower_bounds_do_too(trained, tmp_path):
+    from rnnpb.robot import JOINT_LIMITS as ROBOT_LIMITS
+
+    from .synthetic import LIMITS as JOINT_LIMITS
+
+    path = tmp_path / "model.npz"
+    trained.save(path)
+    # This model learned joints of [-2, 2] rad: the humanoid's own limits are narrower.
+    with pytest.raises(ModelFileError, match="joint lshp is \\[-2, 2\\] rad, outside"):
+        TrainedModel.load(path, joint_limits=ROBOT_LIMITS)
+    loaded = TrainedModel.load(path, joint_limits=JOINT_LIMITS)
+    np.testing.assert_array_equal(loaded.upper, trained.upper)
+    narrow = _corrupt(trained, tmp_path, lambda meta, arrays: arrays.update(
+        upper=arrays["upper"] - 0.1 * (arrays["upper"] - arrays["lower"])))
+    assert TrainedModel.load(narrow, joint_limits=JOINT_LIMITS) is not None
+    wide = _corrupt(trained, tmp_path, lambda meta, arrays: arrays.update(
+        upper=arrays["upper"] + 1.0))
+    with pytest.raises(ModelFileError, match="outside the robot's joint limits"):
+        TrainedModel.load(wide, joint_limits=JOINT_LIMITS)

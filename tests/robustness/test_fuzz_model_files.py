@@ -147,18 +147,25 @@ def test_forged_model_files(tmp_path, genuine, name, build, message):
     assert str(caught.value).startswith(str(path)) and message in str(caught.value)
 
 
-def test_array_claiming_huge_size(tmp_path, genuine):
-    meta, _ = genuine
+@pytest.mark.parametrize("shape, message", [
+    ((10**13,), r"array 'lower' has shape \(10000000000000,\), expected \(12,\)"),
+    ((12,), r"array 'lower' claims 96 bytes but its member holds 32"),
+])
+def test_array_claiming_huge_size(tmp_path, genuine, shape, message):
+    meta, arrays = genuine
     header = np.lib.format.header_data_from_array_1_0(np.zeros(4))
-    header["shape"] = (10**13,)
+    header["shape"] = shape
     big = io.BytesIO()
     np.lib.format.write_array_header_1_0(big, header)
     path = tmp_path / "model.npz"
     with zipfile.ZipFile(path, "w") as archive:
         archive.writestr("meta.json.npy", _npy(np.frombuffer(json.dumps(meta).encode(),
                                                              np.uint8)))
-        archive.writestr("lower.npy", big.getvalue() + b"\0" * 32)
-    with pytest.raises(ModelFileError, match="claims more memory|truncated or not an .npz"):
+        for name, array in arrays.items():
+            archive.writestr(f"{name}.npy", big.getvalue() + b"\0" * 32 if name == "lower"
+                             else _npy(array))
+    # Refused from the header, before anything of that size is allocated.
+    with pytest.raises(ModelFileError, match=message):
         TrainedModel.load(path)
 
 
@@ -206,7 +213,8 @@ def test_checkpoint_round_trip_and_forgeries(tmp_path, checkpoint_setup):
         (meta, {**arrays, "state/0000": np.array(["x"] * arrays["state/0000"].size)
                 .reshape(arrays["state/0000"].shape)}, "expected real numbers"),
         ({**meta, "data_fingerprint": "other"}, arrays, "other training data"),
-        ({**meta, "n_leaves": 1}, arrays, "does not match this training state"),
+        ({**meta, "n_leaves": 1}, arrays, "unexpected member(s) 'state/0001'"),
+        ({**meta, "n_leaves": 99}, arrays, "missing array 'state/00"),
     ]
     for forged_meta, forged_arrays, message in cases:
         forged = tmp_path / "forged.npz"

@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel
     from rnnpb.robot import JOINT_LIMITS, KinematicRobot
 
-    model = TrainedModel.load(args.model)
+    model = TrainedModel.load(args.model, joint_limits=JOINT_LIMITS)
     online = {"paper": OnlineConfig.paper, "ungated": OnlineConfig.ungated}.get(
         args.online, OnlineConfig)()
     loop_config = LoopConfig(dt=args.dt, paced=args.paced, max_steps=args.steps)

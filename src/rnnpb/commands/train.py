@@ -63,6 +63,11 @@ def checkpoint_path_for(model_path: str) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    # A model that cannot be written is refused before training, not after it.
+    from rnnpb._atomic import check_writable
+
+    check_writable(args.out, "model")
+
     from dataclasses import replace
 
     import numpy as np

@@ -17,7 +17,6 @@ written when the process died); anything else malformed is an error naming the f
 from __future__ import annotations
 
 import csv
-import io
 import math
 import os
 from pathlib import Path
@@ -94,59 +93,80 @@ def read_session(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
 
     A last line without its line break is a row cut short by an interrupted write and is left
     out; every other row must have one field per column and numbers (or nothing) in the numeric
-    columns, else :class:`DataFileError` names the file, line and column.
+    columns, else :class:`DataFileError` names the file, line and column. Only a regular file of
+    at most 256 MiB with lines of at most 64 Ki characters is read, and each column name may
+    appear once.
     """
+    import array
+    import re
+
+    from rnnpb._reading import MAX_TEXT_FILE_BYTES, bounded_lines, open_regular_file
+
     path = Path(path)
-    if not path.exists():
-        raise DataFileError(f"{path}: no such file")
-    if path.is_dir():
-        raise DataFileError(f"{path}: is a directory, expected a session recording (.csv)")
+    # surrogateescape: bytes that are not UTF-8 are kept as lone surrogates rather than raised
+    # at once, because a write cut short may split a character in the unfinished last row, which
+    # is left out anyway; in any other line they are an error.
+    handle = open_regular_file(path, DataFileError, "a session recording (.csv)",
+                               MAX_TEXT_FILE_BYTES, newline="", encoding="utf-8-sig",
+                               errors="surrogateescape")
+    undecodable = re.compile("[\udc80-\udcff]")
+
+    def complete_lines():
+        previous, any_break = None, False
+        for line in bounded_lines(handle, path, DataFileError):
+            if previous is not None:
+                yield previous
+            any_break = any_break or line.endswith("\n")
+            previous = line
+        if previous is not None and (previous.endswith("\n") or not any_break):
+            yield previous
+
+    def decoded(lines):
+        for line in lines:
+            if undecodable.search(line):
+                raise DataFileError(f"{path}: not a text CSV file (cannot decode as UTF-8)")
+            yield line
+
+    columns: dict[str, array.array | list] = {}
     try:
-        data = path.read_bytes()
-    except OSError as error:
-        raise DataFileError(f"{path}: cannot read: {error.strerror or error}") from None
-    header_end = data.find(b"\n")
-    last_break = data.rfind(b"\n")
-    if header_end != -1 and last_break != len(data) - 1:
-        data = data[:last_break + 1]
-    try:
-        text = data.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        raise DataFileError(f"{path}: not a text CSV file (cannot decode as UTF-8)") from None
-    try:
-        reader = csv.reader(io.StringIO(text, newline=""))
-        header = next(reader, None)
-        if not header:
-            raise DataFileError(f"{path}: empty file, expected a session recording header")
-        header = [name.strip() for name in header]
-        required = [STEP_COLUMN, *SENSORY_NAMES, *MOTOR_NAMES]
-        missing = [c for c in required if c not in header]
-        if missing:
-            raise DataFileError(f"{path}: not a session recording: missing column(s) "
-                                f"{', '.join(missing)}")
-        rows, lines = [], []
-        for row in reader:
-            if not row:
-                continue
-            if len(row) != len(header):
-                raise DataFileError(f"{path}: line {reader.line_num}: expected {len(header)} "
-                                    f"fields, found {len(row)}")
-            rows.append(row)
-            lines.append(reader.line_num)
+        with handle:
+            reader = csv.reader(decoded(complete_lines()))
+            header = next(reader, None)
+            if not header:
+                raise DataFileError(f"{path}: empty file, expected a session recording header")
+            header = [name.strip() for name in header]
+            required = [STEP_COLUMN, *SENSORY_NAMES, *MOTOR_NAMES]
+            missing = [c for c in required if c not in header]
+            if missing:
+                raise DataFileError(f"{path}: not a session recording: missing column(s) "
+                                    f"{', '.join(missing)}")
+            repeated = sorted({name for name in header if name and header.count(name) > 1})
+            if repeated:
+                raise DataFileError(f"{path}: column(s) {', '.join(map(repr, repeated))[:200]} "
+                                    "appear more than once in the header")
+            columns = {name: [] if name == "truth_pattern" else array.array("d")
+                       for name in header}
+            cells = list(columns.values())
+            numeric = [not isinstance(cell, list) for cell in cells]
+            labels: dict[str, str] = {}  # one string object per distinct truth label
+            for row in reader:
+                if not row:
+                    continue
+                if len(row) != len(header):
+                    raise DataFileError(f"{path}: line {reader.line_num}: expected "
+                                        f"{len(header)} fields, found {len(row)}")
+                for name, value, cell, is_number in zip(header, row, cells, numeric, strict=True):
+                    if not is_number:
+                        cell.append(labels.setdefault(value, value))
+                        continue
+                    try:
+                        cell.append(float(value) if value.strip() else math.nan)
+                    except ValueError:
+                        raise DataFileError(f"{path}: line {reader.line_num}, column {name!r}: "
+                                            f"{value[:40]!r} is not a number") from None
     except csv.Error as error:
         raise DataFileError(f"{path}: malformed CSV: {error}") from None
-    out: dict[str, np.ndarray] = {}
-    for j, name in enumerate(header):
-        values = [row[j] for row in rows]
-        if name == "truth_pattern":
-            out[name] = np.array(values, dtype=object)
-            continue
-        column = np.empty(len(values))
-        for i, value in enumerate(values):
-            try:
-                column[i] = float(value) if value.strip() else math.nan
-            except ValueError:
-                raise DataFileError(f"{path}: line {lines[i]}, column {name!r}: {value!r} is "
-                                    "not a number") from None
-        out[name] = column
-    return out
+    except OSError as error:
+        raise DataFileError(f"{path}: cannot read: {error.strerror or error}") from None
+    return {name: np.array(cell, dtype=object) if isinstance(cell, list)
+            else np.frombuffer(cell, dtype=np.float64) for name, cell in columns.items()}

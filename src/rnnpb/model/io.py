@@ -5,16 +5,24 @@ rnnpb) holding the weights, each training sequence's learned PB and initial cont
 normalization and a JSON document ``meta.json`` with the format name and version, the network
 config, the pattern names, the training config and the training results. It is read with
 ``allow_pickle=False``: a model file cannot run code. Writes are atomic.
+
+Reading trusts nothing in the file. Before an array is decompressed the zip's central directory
+is checked: only the members the format names (``meta.json`` and, for a model, exactly the
+arrays its recorded network sizes imply), each no larger than those sizes allow, all together
+at most :data:`MAX_ARCHIVE_BYTES`. Each array's own header must match the size of its member.
+The limits and what they refuse are in docs/robustness.md.
 """
 
 from __future__ import annotations
 
 import io
 import json
+import math
 import os
 import tokenize
 import zipfile
 import zlib
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -23,6 +31,7 @@ import numpy as np
 
 from rnnpb import __version__
 from rnnpb._atomic import atomic_write
+from rnnpb._reading import open_regular_file
 from rnnpb.errors import ModelFileError
 from rnnpb.model.network import (
     NetworkConfig,
@@ -31,9 +40,27 @@ from rnnpb.model.network import (
     params_from_numpy,
     params_to_numpy,
 )
+from rnnpb.sequences import pattern_name_problem
+from rnnpb.vectors import MOTOR_NAMES
 
 MODEL_FORMAT = "rnnpb-model"
 MODEL_FORMAT_VERSION = 1
+
+MAX_ARCHIVE_BYTES = 512 * 2**20
+"""Largest total uncompressed size of a model or checkpoint archive (512 MiB)."""
+MAX_META_BYTES = 16 * 2**20
+"""Largest ``meta.json`` member (16 MiB)."""
+MAX_MEMBERS = 4096
+"""Most members an archive may hold."""
+NPY_HEADER_MARGIN = 64 * 2**10
+"""Room allowed for a ``.npy`` header on top of its data (NumPy's own limit is 10,000 bytes)."""
+MAX_ITEM_BYTES = 8
+"""Widest number an array may be stored as (float64, int64): the basis of the size bounds."""
+NETWORK_DTYPE = np.float32
+"""The dtype the network computes in: every stored value must be finite in it."""
+JOINT_LIMIT_TOLERANCE = 1e-9
+"""Radians a motor normalization bound may lie outside the robot's joint limit (rounding)."""
+_NPY_MAGIC = b"\x93NUMPY"
 
 
 @dataclass(frozen=True)
@@ -119,39 +146,121 @@ class TrainedModel:
         save_archive(path, meta, arrays)
 
     @classmethod
-    def load(cls, path: str | os.PathLike[str]) -> TrainedModel:
-        """Read a model file; any problem raises :class:`ModelFileError` naming the file."""
-        meta, arrays = load_archive(path, MODEL_FORMAT, MODEL_FORMAT_VERSION)
+    def load(cls, path: str | os.PathLike[str],
+             joint_limits: np.ndarray | None = None) -> TrainedModel:
+        """Read a model file; any problem raises :class:`ModelFileError` naming the file.
+
+        Parameters
+        ----------
+        path : path of the ``.npz`` file
+        joint_limits : array, shape (M, 2), optional
+            The robot's joint limits (radians). Given, the model is refused unless its motor
+            normalization lies within them (see :func:`check_joint_limits`); every command or
+            loader that pairs a model with a robot passes them.
+        """
         path = Path(path)
-        try:
-            network = NetworkConfig(**meta["network"])
-            patterns = tuple(str(p) for p in meta["sequence_patterns"])
-        except (KeyError, TypeError, ValueError) as error:
-            raise ModelFileError(f"{path}: bad network config or pattern list in meta.json "
-                                 f"({error})") from None
-        expected = {f"params/{k}": s for k, s in param_shapes(network).items()}
-        n_seq = len(patterns)
-        expected.update(lower=(network.io_size,), upper=(network.io_size,),
-                        sequence_pb=(n_seq, network.pb_size),
-                        initial_context=(n_seq, network.context_size))
-        for name, shape in expected.items():
-            if name not in arrays:
-                raise ModelFileError(f"{path}: missing array {name!r}")
-            if arrays[name].shape != shape:
-                raise ModelFileError(f"{path}: array {name!r} has shape {arrays[name].shape}, "
-                                     f"expected {shape} for the network config in the file")
+        meta, arrays = load_archive(path, MODEL_FORMAT, MODEL_FORMAT_VERSION)
+        network, patterns, expected = _model_layout(path, meta)
+        for name in expected:
             check_numeric(path, name, arrays[name])
         if np.any(arrays["upper"] <= arrays["lower"]):
             raise ModelFileError(f"{path}: normalization has upper <= lower")
+        for name in ("sequence_pb", "initial_context"):
+            # Both are sigmoid outputs; anything outside [0, 1] was not written by training.
+            if np.any((arrays[name] < 0) | (arrays[name] > 1)):
+                raise ModelFileError(f"{path}: array {name!r} has values outside [0, 1]")
         params = params_from_numpy({k[len("params/"):]: v for k, v in arrays.items()
                                     if k.startswith("params/")})
         extra = {k: v for k, v in meta.items()
                  if k not in ("format", "format_version", "network", "sequence_patterns")}
-        return cls(network=network, params=params, lower=arrays["lower"].astype(np.float64),
-                   upper=arrays["upper"].astype(np.float64),
-                   sequence_pb=arrays["sequence_pb"].astype(np.float64),
-                   sequence_patterns=patterns,
-                   initial_context=arrays["initial_context"].astype(np.float64), meta=extra)
+        model = cls(network=network, params=params, lower=arrays["lower"].astype(np.float64),
+                    upper=arrays["upper"].astype(np.float64),
+                    sequence_pb=arrays["sequence_pb"].astype(np.float64),
+                    sequence_patterns=patterns,
+                    initial_context=arrays["initial_context"].astype(np.float64), meta=extra)
+        if joint_limits is not None:
+            check_joint_limits(model, joint_limits, str(path))
+        return model
+
+
+def _model_layout(path: Path, meta: dict[str, Any]
+                  ) -> tuple[NetworkConfig, tuple[str, ...], dict[str, tuple[int, ...]]]:
+    """The network, the pattern names and every array's shape a model's meta.json implies."""
+    try:
+        network = NetworkConfig(**meta["network"])
+        patterns = meta["sequence_patterns"]
+        if not isinstance(patterns, list):
+            raise TypeError(f"sequence_patterns is {type(patterns).__name__}, not a list")
+    except (KeyError, TypeError, ValueError) as error:
+        raise ModelFileError(f"{path}: bad network config or pattern list in meta.json "
+                             f"({_one_line(error)})") from None
+    if not patterns:
+        raise ModelFileError(f"{path}: holds no training sequences (its pattern list is empty); "
+                             "a model needs at least one learned pattern")
+    for name in patterns:
+        problem = pattern_name_problem(name)
+        if problem:
+            shown = repr(name) if len(repr(name)) <= 40 else repr(name)[:40] + "…"
+            raise ModelFileError(f"{path}: pattern name {shown} {problem}")
+    shapes = {f"params/{k}": s for k, s in param_shapes(network).items()}
+    n_seq = len(patterns)
+    shapes.update(lower=(network.io_size,), upper=(network.io_size,),
+                  sequence_pb=(n_seq, network.pb_size),
+                  initial_context=(n_seq, network.context_size))
+    return network, tuple(patterns), shapes
+
+
+def _checkpoint_members(path: Path, meta: dict[str, Any]) -> dict[str, tuple[int, ...] | None]:
+    # A training checkpoint (rnnpb.model.training) holds meta.json and the leaves of the
+    # training state as state/0000 …; their shapes depend on the training data, which the
+    # checkpoint does not record, so only names, count and the total size are bounded here.
+    n_leaves = meta.get("n_leaves")
+    if not isinstance(n_leaves, int) or isinstance(n_leaves, bool) or not (
+            0 < n_leaves < MAX_MEMBERS):
+        raise ModelFileError(f"{path}: checkpoint meta.json has no valid 'n_leaves' "
+                             f"({n_leaves!r})")
+    return {f"state/{i:04d}": None for i in range(n_leaves)}
+
+
+# Which members each archive format holds, from its meta.json: name -> shape (None: any shape).
+_ARCHIVE_MEMBERS: dict[str, Callable[[Path, dict[str, Any]],
+                                     dict[str, tuple[int, ...] | None]]] = {
+    MODEL_FORMAT: lambda path, meta: dict(_model_layout(path, meta)[2]),
+    "rnnpb-checkpoint": _checkpoint_members,
+}
+
+
+def check_joint_limits(model: TrainedModel, joint_limits: np.ndarray, where: str = "model"
+                       ) -> None:
+    """Refuse a model whose motor normalization lies outside the robot's joint limits.
+
+    :class:`~rnnpb.model.MirrorSystem` turns the network's motor output in [0, 1] into radians
+    with the model's ``lower`` and ``upper``: bounds wider than the joints would command the
+    robot past them. The model package knows no robot, so the caller passes the limits.
+
+    Parameters
+    ----------
+    model : TrainedModel
+    joint_limits : array, shape (M, 2)
+        Lower and upper limit of each joint (radians), in the order of the motor values.
+    where : str
+        What to name in the message (the model file).
+    """
+    limits = np.asarray(joint_limits, dtype=np.float64)
+    s = model.network.sensory_size
+    lower, upper = np.asarray(model.lower)[s:], np.asarray(model.upper)[s:]
+    if limits.shape != (lower.shape[0], 2):
+        raise ModelFileError(f"{where}: the model has {lower.shape[0]} motor values but the "
+                             f"robot has joint limits of shape {limits.shape}")
+    outside = ((lower < limits[:, 0] - JOINT_LIMIT_TOLERANCE)
+               | (upper > limits[:, 1] + JOINT_LIMIT_TOLERANCE))
+    if np.any(outside):
+        j = int(np.argmax(outside))
+        name = MOTOR_NAMES[j] if len(MOTOR_NAMES) == len(lower) else f"motor {j}"
+        raise ModelFileError(f"{where}: normalization of joint {name} is [{lower[j]:.4g}, "
+                             f"{upper[j]:.4g}] rad, outside the robot's joint limits "
+                             f"[{limits[j, 0]:.4g}, {limits[j, 1]:.4g}]; refused, as it would "
+                             "command the robot past its joints")
 
 
 def save_archive(path: str | os.PathLike[str], meta: dict[str, Any],
@@ -165,32 +274,79 @@ def save_archive(path: str | os.PathLike[str], meta: dict[str, Any],
         handle.write(buffer.getvalue())
 
 
-def load_archive(path: str | os.PathLike[str], fmt: str, version: int
-                 ) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
-    """Read an archive written by :func:`save_archive` and check its format and version."""
+def load_archive(path: str | os.PathLike[str], fmt: str, version: int,
+                 members: Callable[[Path, dict[str, Any]], dict[str, tuple[int, ...] | None]]
+                 | None = None) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+    """Read an archive written by :func:`save_archive` and check its format and version.
+
+    The zip's central directory is checked before anything is decompressed: every member must
+    be a ``.npy`` array, there are at most :data:`MAX_MEMBERS`, their uncompressed sizes add
+    up to at most :data:`MAX_ARCHIVE_BYTES` and ``meta.json`` to at most
+    :data:`MAX_META_BYTES`. Then ``members(path, meta)`` (by default the one registered for
+    ``fmt``, for models and training checkpoints) names the arrays the archive must hold, with
+    their shapes where known: another member, a missing one, or one larger than its shape
+    allows (:data:`MAX_ITEM_BYTES` per element plus :data:`NPY_HEADER_MARGIN`) is refused.
+    Each array's header must agree with its shape and with the size of its member before its
+    data is read. Any problem raises :class:`ModelFileError` naming the file.
+    """
     path = Path(path)
-    if not path.exists():
-        raise ModelFileError(f"{path}: no such file")
-    if path.is_dir():
-        raise ModelFileError(f"{path}: is a directory, expected an rnnpb {fmt} file (.npz)")
-    try:
-        with open(path, "rb") as handle, np.load(handle, allow_pickle=False) as archive:
-            arrays = {name: archive[name] for name in archive.files}
-    except MemoryError:
-        raise ModelFileError(f"{path}: not a readable rnnpb {fmt} file (an array in it claims "
-                             "more memory than there is)") from None
-    # Damage inside a zip surfaces, besides BadZipFile, as zlib.error (a compressed member),
-    # NotImplementedError (a flipped compression method) or RuntimeError (a flipped
-    # "encrypted" flag); all three were found by fuzzing. A damaged .npy header inside can
-    # also stop NumPy's header parser with tokenize.TokenError or SyntaxError (fuzzing too).
-    except (zipfile.BadZipFile, zlib.error, NotImplementedError, RuntimeError, EOFError, OSError,
-            ValueError, tokenize.TokenError, SyntaxError) as error:
-        raise ModelFileError(f"{path}: not a readable rnnpb {fmt} file (truncated or not an "
-                             f".npz archive: {_one_line(error)})") from None
-    if "meta.json" not in arrays:
+    handle = open_regular_file(path, ModelFileError, f"an rnnpb {fmt} file (.npz)",
+                               MAX_ARCHIVE_BYTES, "rb")
+    with handle:
+        if handle.read(len(_NPY_MAGIC)) == _NPY_MAGIC:
+            raise ModelFileError(f"{path}: is a single .npy array, not an .npz archive (an "
+                                 f"rnnpb {fmt} file is a zip of .npy arrays)")
+        handle.seek(0)
+        try:
+            with zipfile.ZipFile(handle) as archive:
+                return _read_archive(path, archive, fmt, version,
+                                     members or _ARCHIVE_MEMBERS.get(fmt))
+        # Damage inside a zip surfaces, besides BadZipFile, as zlib.error (a compressed
+        # member), NotImplementedError (a flipped compression method) or RuntimeError (a
+        # flipped "encrypted" flag); all three were found by fuzzing. A damaged .npy header
+        # inside can also stop NumPy's header parser with tokenize.TokenError or SyntaxError
+        # (fuzzing too).
+        except (zipfile.BadZipFile, zlib.error, NotImplementedError, RuntimeError, EOFError,
+                OSError, ValueError, tokenize.TokenError, SyntaxError) as error:
+            if isinstance(error, ModelFileError):
+                raise
+            raise ModelFileError(f"{path}: not a readable rnnpb {fmt} file (truncated or not "
+                                 f"an .npz archive: {_one_line(error)})") from None
+
+
+def _read_archive(path: Path, archive: zipfile.ZipFile, fmt: str, version: int,
+                  members: Callable[[Path, dict[str, Any]], dict[str, tuple[int, ...] | None]]
+                  | None) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+    infos = archive.infolist()
+    if len(infos) > MAX_MEMBERS:
+        raise ModelFileError(f"{path}: holds {len(infos)} members, more than the "
+                             f"{MAX_MEMBERS} an rnnpb {fmt} file may have")
+    by_name: dict[str, zipfile.ZipInfo] = {}
+    for info in infos:
+        if not info.filename.endswith(".npy"):
+            raise ModelFileError(f"{path}: holds the member {_shown(info.filename)}, which is "
+                                 "not a .npy array")
+        key = info.filename[:-len(".npy")]
+        if key in by_name:
+            raise ModelFileError(f"{path}: holds the member {_shown(info.filename)} twice")
+        by_name[key] = info
+    total = sum(info.file_size for info in infos)
+    if total > MAX_ARCHIVE_BYTES:
+        raise ModelFileError(f"{path}: its members would take {total / 2**20:.0f} MiB "
+                             f"uncompressed, more than the {MAX_ARCHIVE_BYTES // 2**20} MiB "
+                             f"an rnnpb {fmt} file may hold")
+    meta_info = by_name.pop("meta.json", None)
+    if meta_info is None:
         raise ModelFileError(f"{path}: not an rnnpb {fmt} file (no meta.json inside)")
+    if meta_info.file_size > MAX_META_BYTES:
+        raise ModelFileError(f"{path}: meta.json is {meta_info.file_size / 2**20:.0f} MiB, more "
+                             f"than the {MAX_META_BYTES // 2**20} MiB allowed")
+    meta_array = _read_npy(path, archive, meta_info, None)
+    if meta_array.dtype != np.uint8 or meta_array.ndim != 1:
+        raise ModelFileError(f"{path}: meta.json is not stored as bytes "
+                             f"({meta_array.dtype} {meta_array.shape})")
     try:
-        meta = json.loads(arrays.pop("meta.json").tobytes().decode("utf-8"))
+        meta = json.loads(meta_array.tobytes().decode("utf-8"))
     # ValueError covers bad UTF-8, bad JSON and integers too long to convert; RecursionError
     # a document nested too deeply.
     except (ValueError, RecursionError) as error:
@@ -198,11 +354,70 @@ def load_archive(path: str | os.PathLike[str], fmt: str, version: int
                              f"({_one_line(error)})") from None
     if not isinstance(meta, dict) or meta.get("format") != fmt:
         found = meta.get("format") if isinstance(meta, dict) else None
-        raise ModelFileError(f"{path}: not an rnnpb {fmt} file (format is {found!r})")
+        raise ModelFileError(f"{path}: not an rnnpb {fmt} file (format is {_shown(found)})")
     if meta.get("format_version") != version:
-        raise ModelFileError(f"{path}: {fmt} format version {meta.get('format_version')!r} is "
-                             f"not supported by rnnpb {__version__} (expects {version})")
+        raise ModelFileError(f"{path}: {fmt} format version "
+                             f"{_shown(meta.get('format_version'))} is not supported by rnnpb "
+                             f"{__version__} (expects {version})")
+    shapes: dict[str, tuple[int, ...] | None] = (
+        members(path, meta) if members is not None else dict.fromkeys(by_name))
+    unknown = [name for name in by_name if name not in shapes]
+    if unknown:
+        raise ModelFileError(f"{path}: holds the unexpected member(s) "
+                             f"{', '.join(_shown(n) for n in unknown[:5])}; an rnnpb {fmt} file "
+                             "holds only its own arrays")
+    for name, shape in shapes.items():
+        if name not in by_name:
+            raise ModelFileError(f"{path}: missing array {name!r}")
+        if shape is not None:
+            limit = math.prod(shape) * MAX_ITEM_BYTES + NPY_HEADER_MARGIN
+            if by_name[name].file_size > limit:
+                raise ModelFileError(
+                    f"{path}: member {name!r} is {by_name[name].file_size:,} bytes uncompressed, "
+                    f"more than an array of shape {shape} takes ({limit:,} at most); refused "
+                    "before reading it")
+    arrays = {name: _read_npy(path, archive, by_name[name], shapes[name]) for name in shapes}
     return meta, arrays
+
+
+def _read_npy(path: Path, archive: zipfile.ZipFile, info: zipfile.ZipInfo,
+              shape: tuple[int, ...] | None) -> np.ndarray:
+    """One ``.npy`` member, its header checked against ``shape`` and the member's size first."""
+    name = info.filename[:-len(".npy")]
+    with archive.open(info) as member:
+        if member.read(len(_NPY_MAGIC)) != _NPY_MAGIC:
+            raise ModelFileError(f"{path}: member {name!r} is not a .npy array")
+        member.seek(0)
+        version = np.lib.format.read_magic(member)
+        if version == (1, 0):
+            found, fortran, dtype = np.lib.format.read_array_header_1_0(member)
+        elif version == (2, 0):
+            found, fortran, dtype = np.lib.format.read_array_header_2_0(member)
+        else:
+            raise ModelFileError(f"{path}: member {name!r} is a .npy file of version "
+                                 f"{version}, which rnnpb does not read")
+        header_size = member.tell()
+        found = tuple(int(n) for n in found)
+        if dtype.hasobject:
+            raise ModelFileError(f"{path}: array {name!r} holds Python objects ({dtype}); "
+                                 "rnnpb files hold numbers only and are never unpickled")
+        if shape is not None and found != tuple(shape):
+            raise ModelFileError(f"{path}: array {name!r} has shape {found}, expected "
+                                 f"{tuple(shape)} for the network config in the file")
+        # The header alone decides what NumPy would allocate: hold it to the member's size.
+        n_bytes = math.prod(found) * dtype.itemsize
+        if n_bytes != info.file_size - header_size:
+            raise ModelFileError(f"{path}: array {name!r} claims {n_bytes:,} bytes but its "
+                                 f"member holds {info.file_size - header_size:,}")
+        buffer = bytearray(n_bytes)
+        view, done = memoryview(buffer), 0
+        while done < n_bytes:
+            read = member.readinto(view[done:])
+            if not read:
+                raise ModelFileError(f"{path}: array {name!r} is cut short")
+            done += read
+    array = np.frombuffer(buffer, dtype=dtype) if dtype.itemsize else np.empty(0, dtype)
+    return array.reshape(found, order="F" if fortran else "C")
 
 
 def _one_line(error: BaseException) -> str:
@@ -210,10 +425,26 @@ def _one_line(error: BaseException) -> str:
     return text if len(text) <= 200 else text[:200] + "…"
 
 
-def check_numeric(path: Path, name: str, array: np.ndarray) -> None:
-    """Raise :class:`ModelFileError` unless ``array`` holds finite real numbers."""
+def _shown(value: object) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:60] + "…"
+
+
+def check_numeric(path: Path, name: str, array: np.ndarray,
+                  dtype: type[np.floating] = NETWORK_DTYPE) -> None:
+    """Raise :class:`ModelFileError` unless ``array`` holds real numbers finite in ``dtype``.
+
+    A value stored as float64 beyond float32's range (about 3.4e38) would become infinite in
+    the network and is refused like NaN.
+    """
     if array.dtype.kind not in "fiu":
         raise ModelFileError(f"{path}: array {name!r} has dtype {array.dtype}, expected real "
                              "numbers")
     if not np.all(np.isfinite(array)):
         raise ModelFileError(f"{path}: array {name!r} contains NaN or infinite values")
+    with np.errstate(over="ignore", invalid="ignore"):
+        cast = array.astype(dtype)
+    if not np.all(np.isfinite(cast)):
+        raise ModelFileError(f"{path}: array {name!r} has values beyond the range of "
+                             f"{np.dtype(dtype).name} (the network's dtype, max "
+                             f"{np.finfo(dtype).max:.3g})")

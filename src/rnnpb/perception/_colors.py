@@ -34,6 +34,8 @@ COLOR_FILE_FORMAT = "rnnpb-ball-colors"
 COLOR_FILE_VERSION = 1
 HUE_MAX = 179
 CHANNEL_MAX = 255
+MAX_COLOR_FILE_BYTES = 2**20
+"""Largest colour file read (1 MiB)."""
 
 
 def _check_pair(value: Any, name: str, upper: int, where: str, allow_wrap: bool) -> tuple[int, int]:
@@ -187,18 +189,28 @@ def _dotted(error: ConfigError, path: Path) -> ConfigError:
 
 def load_ball_colors(path: str | os.PathLike[str]) -> BallColors:
     """Read and validate a colour file (format above)."""
+    from rnnpb._reading import open_regular_file
+
     path = Path(path)
-    if not path.is_file():
+    if not path.exists() or path.is_dir():
         raise ConfigError(f"{path}: no such colour file")
+    # A FIFO or a device is refused before it is opened, an endless or huge file before it is
+    # read: a colour file is a few hundred bytes.
+    handle = open_regular_file(path, ConfigError, "a colour file (JSON)", MAX_COLOR_FILE_BYTES,
+                               encoding="utf-8-sig")
     try:
         # utf-8-sig: editors on Windows may start the file with a byte-order mark.
-        data = json.loads(path.read_text(encoding="utf-8-sig"))
+        with handle:
+            text = handle.read(MAX_COLOR_FILE_BYTES + 1)
+        data = None if len(text) > MAX_COLOR_FILE_BYTES else json.loads(text)
     except OSError as error:
         raise ConfigError(f"{path}: cannot read: {error.strerror or error}") from None
     # ValueError covers bad UTF-8, bad JSON and integers too long to convert; RecursionError
     # a document nested too deeply.
     except (ValueError, RecursionError) as error:
         raise ConfigError(f"{path}: not valid JSON: {error}") from None
+    if len(text) > MAX_COLOR_FILE_BYTES:
+        raise ConfigError(f"{path}: grew past {MAX_COLOR_FILE_BYTES:,} bytes while being read")
     try:
         return ball_colors_from_json(data, str(path))
     except ConfigError as error:

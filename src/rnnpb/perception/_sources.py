@@ -254,7 +254,15 @@ class ImageFolderSource(FrameSource):
         if self.frame_index + 1 >= len(self.files):
             return None
         path = self.files[self.frame_index + 1]
-        frame = cv2.imread(str(path), cv2.IMREAD_COLOR)
+        try:
+            frame = cv2.imread(str(path), cv2.IMREAD_COLOR)
+        except cv2.error as error:
+            # OpenCV checks the size a header claims before decoding (at most 2^30 pixels,
+            # CV_IO_MAX_IMAGE_PIXELS) and raises rather than returning None.
+            reason = " ".join(str(error).split())
+            if "CV_IO_MAX_IMAGE_PIXELS" in reason or "validateInputImageSize" in reason:
+                reason = "its header claims more than 2^30 pixels"
+            raise DataFileError(f"{path}: cannot read this image ({reason[:160]})") from None
         if frame is None:
             raise DataFileError(f"{path}: cannot read this image")
         self.frame_index += 1

@@ -307,7 +307,9 @@ class Session:
         self.loading = True
         self._publish_state()
         try:
-            model = TrainedModel.load(self.models[name])
+            from rnnpb.robot import JOINT_LIMITS
+
+            model = TrainedModel.load(self.models[name], joint_limits=JOINT_LIMITS)
             mirror = MirrorSystem(model, OnlineConfig())
             started = time.perf_counter()
             mirror.step(np.full(model.network.sensory_size, 0.5))  # compiles the step
