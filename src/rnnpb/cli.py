@@ -33,6 +33,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "rnnpb.commands.calibrate",
     "rnnpb.commands.serve",
     "rnnpb.commands.bench",
+    "rnnpb.commands.safety",
 )
 
 

@@ -14,7 +14,9 @@ single-threaded, after warm-up:
   - one learning iteration on 6 sequences x 50 steps (BPTT + weight and PB updates);
   - one on-line step (PB regression over a window of L = 30 steps, 100 iterations,
     then the motor command): median and 99th percentile, and the median of the same step
-    without phase restarts, timed alternately with it (what they cost);
+    without phase restarts, timed alternately with it (what they cost), and the step with
+    the safety guard on (the meta-level's barrier in the regression, then the command filter's
+    check before sending: docs/safety.md);
   - the same on-line step in a straightforward NumPy implementation (the reference the
     tests hold the compiled one to), and the ratio;
   - colour-ball tracking of 640x480 frames.
@@ -106,17 +108,32 @@ def run(args: argparse.Namespace) -> int:
     compiled = MIRROR_SYSTEMS["compiled"]
     mirror = compiled(model, online)
     plain = compiled(model, replace(online, phase_restarts=0))
+    # The safety-on step: a risk network of the stored size (its weights do not change the
+    # cost) as a barrier in the regression, and the command filter before sending.
+    from rnnpb.safety import CommandFilter, MetaConfig, init_meta
+
+    meta = init_meta(network.pb_size, MetaConfig().hidden, 0)
+    guarded = compiled(model, replace(online, safety_guard="barrier"), meta=meta)
+    command_filter = CommandFilter()
     stream = np.concatenate([s.sensory for s in sequences])
     for t in range(40):
         mirror.step(stream[t])
         plain.step(stream[t])
-    step_times, plain_times = [], []
+        command_filter(guarded.step(stream[t]).motor)
+    step_times, plain_times, guarded_times, filter_times = [], [], [], []
     for t in range(args.steps):
         u = stream[(40 + t) % len(stream)]
         for system, times in ((mirror, step_times), (plain, plain_times)):
             t0 = time.perf_counter()
             system.step(u)
             times.append((time.perf_counter() - t0) * 1e3)
+        t0 = time.perf_counter()
+        command = guarded.step(u).motor
+        t1 = time.perf_counter()
+        command_filter(command)
+        t2 = time.perf_counter()
+        guarded_times.append((t2 - t0) * 1e3)
+        filter_times.append((t2 - t1) * 1e3)
     step_times = np.asarray(step_times)
 
     # The same step, same model and config, in the NumPy twin.
@@ -140,6 +157,8 @@ def run(args: argparse.Namespace) -> int:
         "online_step_ms_median": float(np.median(step_times)),
         "online_step_ms_p99": float(np.percentile(step_times, 99)),
         "online_step_without_phase_restarts_ms_median": float(np.median(plain_times)),
+        "online_step_safety_on_ms_median": float(np.median(guarded_times)),
+        "command_filter_ms_median": float(np.median(filter_times)),
         "online_step_reference_numpy_ms_median": reference_ms,
         "online_speedup_vs_numpy": reference_ms / float(np.median(step_times)),
     }
@@ -164,6 +183,9 @@ def run(args: argparse.Namespace) -> int:
     print(f"  on-line step without phase restarts:     "
           f"{figures['online_step_without_phase_restarts_ms_median']:8.3f} ms median "
           f"(phase restarts cost {cost:+.0%})")
+    print(f"  on-line step, safety on (barrier+filter):"
+          f"{figures['online_step_safety_on_ms_median']:8.3f} ms median (the filter "
+          f"{figures['command_filter_ms_median']:.3f} ms of it)")
     print(f"  on-line step, NumPy reference:           {reference_ms:8.1f} ms median "
           f"(over {args.reference_steps} steps) — compiled is "
           f"{figures['online_speedup_vs_numpy']:.0f}x faster")

@@ -82,6 +82,11 @@ class StepRecord:
     timings: dict[str, float] = field(default_factory=dict)
     frame: np.ndarray | None = None
     context: np.ndarray | None = None
+    # With a command filter (rnnpb.safety.CommandFilter): why the generated command was unsafe
+    # (empty when safe) and what the filter did ("", "slowed", "shortened", "held"); ``motor``
+    # is then the command the robot was sent.
+    unsafe: str = ""
+    filtered: str = ""
 
 
 @dataclass
@@ -115,11 +120,14 @@ class InteractionLoop:
     source : UserSource
     robot : object with ``send(joints)``, optional
     recorder : SessionRecorder, optional
+    command_filter : callable(command) -> FilterDecision, optional
+        Checks each command in the act section, before it is sent
+        (:class:`rnnpb.safety.CommandFilter`); ``prevented_commands`` counts what it changed.
     """
 
     def __init__(self, mirror: MirrorSystem, source: UserSource, robot: Any | None = None,
-                 recorder: SessionRecorder | None = None, config: LoopConfig | None = None
-                 ) -> None:
+                 recorder: SessionRecorder | None = None, config: LoopConfig | None = None,
+                 command_filter: Callable[[np.ndarray], Any] | None = None) -> None:
         self.mirror = mirror
         self.source = source
         self.robot = robot
@@ -134,6 +142,9 @@ class InteractionLoop:
         self.missed_deadlines = 0
         self.lost_steps = 0
         self.held_steps = 0
+        self.command_filter = command_filter
+        self.prevented_commands = 0
+        self.unsafe_commands = 0
         self._start: float | None = None
         self._stop_requested = False
 
@@ -154,15 +165,21 @@ class InteractionLoop:
         t1 = time.perf_counter()
         result = self.mirror.step(observation.sensory)
         t2 = time.perf_counter()
+        motor, unsafe, filtered = result.motor, "", ""
+        if self.command_filter is not None:
+            decision = self.command_filter(result.motor)
+            motor, unsafe, filtered = decision.command, decision.unsafe, decision.filtered
+            self.unsafe_commands += int(bool(unsafe))
+            self.prevented_commands += int(bool(filtered))
         if self.robot is not None:
-            self.robot.send(result.motor)
+            self.robot.send(motor)
         t3 = time.perf_counter()
         record = StepRecord(
             step=self.steps, time_s=t0 - self._start, observed=observation.sensory.copy(),
             predicted=self._predicted.copy(), predicted_next=result.predicted_hands,
-            motor=result.motor, pb=result.pb, prediction_error=result.prediction_error,
+            motor=motor, pb=result.pb, prediction_error=result.prediction_error,
             window_error=result.window_error, held=result.held, truth=observation.truth,
-            frame=observation.frame, context=result.context)
+            frame=observation.frame, context=result.context, unsafe=unsafe, filtered=filtered)
         self._predicted = result.predicted_hands.copy()
         if self.recorder is not None:
             self.recorder.write(record)

@@ -5,8 +5,10 @@ not seen), the hands the network predicted for this step one step before (``pred
 motor command sent (``lshp`` … ``relp``, radians), the PB (``pb0`` …), ``prediction_error``
 (mean squared error of that prediction), ``window_error`` (after the PB regression),
 ``lost_left``/``lost_right`` (1 where the hand was not seen), ``held`` (1 where the regression
-failed numerically and the last good state was kept) and, when the source knows it, the ground
-truth ``truth_pattern``.
+failed numerically and the last good state was kept), when the source knows it, the ground
+truth ``truth_pattern``, and from the command filter (docs/safety.md) ``unsafe`` (why the
+generated command was unsafe, empty when safe) and ``filtered`` (what the filter did:
+``slowed``, ``shortened``, ``held``, or empty).
 
 Every row is flushed to the operating system when written, so a session interrupted by Ctrl-C
 or a crash keeps every step up to the last one written. A row is complete only with its line
@@ -34,7 +36,11 @@ def session_columns(pb_size: int) -> list[str]:
             *(PREDICTED_PREFIX + name for name in SENSORY_NAMES), *MOTOR_NAMES,
             *(f"{PB_COLUMNS_PREFIX}{i}" for i in range(pb_size)),
             "prediction_error", "window_error", "lost_left", "lost_right", "held",
-            "truth_pattern"]
+            "truth_pattern", "unsafe", "filtered"]
+
+
+TEXT_COLUMNS = ("truth_pattern", "unsafe", "filtered")
+"""The columns that hold words, not numbers."""
 
 
 def _fmt(value: float) -> str:
@@ -67,7 +73,8 @@ class SessionRecorder:
                *(_fmt(v) for v in record.predicted), *(f"{v:.6f}" for v in record.motor),
                *(f"{v:.6f}" for v in record.pb), _fmt(record.prediction_error),
                _fmt(record.window_error), int(not seen[:2].all()), int(not seen[2:].all()),
-               int(record.held), record.truth.get("pattern", "")]
+               int(record.held), record.truth.get("pattern", ""), record.unsafe,
+               record.filtered]
         self._writer.writerow(row)
         self._handle.flush()
         self.rows += 1
@@ -144,7 +151,7 @@ def read_session(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
             if repeated:
                 raise DataFileError(f"{path}: column(s) {', '.join(map(repr, repeated))[:200]} "
                                     "appear more than once in the header")
-            columns = {name: [] if name == "truth_pattern" else array.array("d")
+            columns = {name: [] if name in TEXT_COLUMNS else array.array("d")
                        for name in header}
             cells = list(columns.values())
             numeric = [not isinstance(cell, list) for cell in cells]

@@ -22,6 +22,7 @@ import numpy as np
 from rnnpb import _xla
 from rnnpb.errors import ConfigError
 from rnnpb.model.io import TrainedModel
+from rnnpb.model.meta import MetaParams
 from rnnpb.model.network import NetworkConfig, Params
 from rnnpb.model.online import (
     OnlineState,
@@ -104,11 +105,12 @@ def pack(outputs: StepOutputs) -> jax.Array:
 @partial(jax.jit, static_argnames=("config",))
 def _online_step_packed(params: Params, state: OnlineState, u: jax.Array, seen: jax.Array,
                         config: OnlineConfig, candidates: jax.Array | None = None,
-                        phase_candidates: jax.Array | None = None
-                        ) -> tuple[OnlineState, jax.Array]:
+                        phase_candidates: jax.Array | None = None,
+                        meta: MetaParams | None = None) -> tuple[OnlineState, jax.Array]:
     """:func:`online_step` with its outputs packed into one vector, so that they come back in
     one transfer."""
-    state, outputs = online_step(params, state, u, seen, config, candidates, phase_candidates)
+    state, outputs = online_step(params, state, u, seen, config, candidates, phase_candidates,
+                                 meta)
     return state, pack(outputs)
 
 
@@ -152,7 +154,10 @@ class MirrorSystem:
     >>> result.motor, result.pb, result.predicted_hands    # doctest: +SKIP
     """
 
-    def __init__(self, model: TrainedModel, config: OnlineConfig | None = None) -> None:
+    def __init__(self, model: TrainedModel, config: OnlineConfig | None = None,
+                 meta: MetaParams | None = None) -> None:
+        """``meta``: the risk network of a safety map (``rnnpb.safety.SafetyMap.meta``); the
+        regression uses it as ``config.safety_guard`` says. Without it the guard is off."""
         _xla.warn_if_not_configured()  # once per process, if nobody chose XLA's loop setting
         self.model = model
         self.config = config or OnlineConfig()
@@ -169,6 +174,8 @@ class MirrorSystem:
         self._phase_candidates = None
         if self.config.phase_restarts > 0:
             self._phase_candidates = jnp.asarray(phase_candidates(model), jnp.float32)
+        self._meta = None if meta is None else MetaParams(
+            *(jnp.asarray(a, jnp.float32) for a in meta))
         self.steps = 0
 
     def reset(self, initial_pb: np.ndarray | None = None) -> None:
@@ -204,7 +211,7 @@ class MirrorSystem:
         # transfer: at a few milliseconds a step, per-array round trips are worth avoiding.
         self._state, packed = _online_step_packed(
             self._params, self._state, u.astype(np.float32), seen, self.config,
-            self._candidates, self._phase_candidates)
+            self._candidates, self._phase_candidates, self._meta)
         outputs = self._layout.unpack(np.asarray(packed, dtype=np.float64))
         self.steps += 1
         prediction_error = one_step_prediction_error(self._predicted, u, seen)

@@ -50,6 +50,7 @@ import numpy as np
 
 from rnnpb.model import window
 from rnnpb.model.io import TrainedModel
+from rnnpb.model.meta import MetaParams, barrier_energy, project_out
 from rnnpb.model.network import Params, closed_loop, logit, logit_numpy
 from rnnpb.model.online_config import OnlineConfig
 from rnnpb.model.parametric_bias import pb_update
@@ -192,7 +193,7 @@ def _phase_restart(params: Params, state: OnlineState, phase_candidates: jax.Arr
 @partial(jax.jit, static_argnames=("config",))
 def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Array,
                 config: OnlineConfig, candidates: jax.Array | None = None,
-                phase_candidates: jax.Array | None = None
+                phase_candidates: jax.Array | None = None, meta: MetaParams | None = None
                 ) -> tuple[OnlineState, StepOutputs]:
     """One step of the mirror system, compiled as one call.
 
@@ -209,6 +210,10 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
         States on the learned cycles (logits of PB, motor input and context input;
         :func:`phase_candidates`) from which the window may start over
         (``config.phase_restarts``).
+    meta : MetaParams, optional
+        The risk network of a safety map (:mod:`rnnpb.model.meta`): with it and
+        ``config.safety_guard`` not "off", the regression keeps the PB out of the learned
+        unsafe region (a barrier in eq. 1 or a projection after it).
 
     Returns
     -------
@@ -234,6 +239,10 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
             best > 0, jnp.zeros_like(state.rho_velocity), state.rho_velocity))
 
     gate = _surprise_gate(params, state, config)
+    guard = config.safety_guard if meta is not None else "off"
+    barrier = None
+    if guard == "barrier" and config.barrier_weight > 0:
+        barrier = jax.grad(lambda r: barrier_energy(meta, r, config.risk_level))
 
     def iteration(_, carry):
         rho, velocity, context, motor = carry
@@ -241,6 +250,8 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
                                                      config)
         if gate is not None:
             g_rho = gate * g_rho
+        if barrier is not None:
+            g_rho = g_rho + config.barrier_weight * barrier(rho)
         rho, velocity = pb_update(rho, velocity, g_rho, config.pb, valid)
         if config.optimize_onset:
             context = context - config.onset_learning_rate * g_context
@@ -250,6 +261,10 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
     rho, velocity, context, motor = jax.lax.fori_loop(
         0, config.iterations, iteration,
         (state.rho, state.rho_velocity, state.onset_context, state.onset_motor))
+    if guard == "projection":
+        rho = jnp.where(valid[:, None], project_out(meta, rho, config.risk_level,
+                                                    config.projection_steps,
+                                                    config.projection_rate), rho)
     predictions, contexts = window.run(params, state, rho, context, motor, config)
     s = state.sensory.shape[1]
     n = state.n

@@ -53,6 +53,16 @@ class OnlineConfig:
     phase_restarts: int = 3
     phase_restart_ratio: float = 0.5
     phase_restart_level: float = 0.02
+    # The safety guard (docs/safety.md; acts only when the mirror system has a safety map):
+    # "barrier" adds barrier_weight * softplus(risk logit - logit(risk_level)) per window step
+    # to the error of eq. 1 (rnnpb.model.meta); "projection" moves each regressed PB down the
+    # risk gradient (at most projection_steps steps of projection_rate in rho) until its risk
+    # is below risk_level; "off" ignores the map.
+    safety_guard: Literal["off", "barrier", "projection"] = "off"
+    barrier_weight: float = 0.05
+    risk_level: float = 0.2
+    projection_steps: int = 10
+    projection_rate: float = 0.3
 
     def __post_init__(self) -> None:
         if self.window < 2:
@@ -78,6 +88,15 @@ class OnlineConfig:
             raise ConfigError("phase_restart_ratio must be in (0, 1]")
         if self.phase_restart_level < 0:
             raise ConfigError("phase_restart_level must be >= 0")
+        if self.safety_guard not in ("off", "barrier", "projection"):
+            raise ConfigError(f"safety_guard must be 'off', 'barrier' or 'projection', got "
+                              f"{self.safety_guard!r}")
+        if self.barrier_weight < 0:
+            raise ConfigError(f"barrier_weight must be >= 0, got {self.barrier_weight}")
+        if not 0 < self.risk_level < 1:
+            raise ConfigError(f"risk_level must be in (0, 1), got {self.risk_level}")
+        if self.projection_steps < 0 or self.projection_rate < 0:
+            raise ConfigError("projection_steps and projection_rate must be >= 0")
         if self.motor_input not in ("closed_loop", "recorded"):
             raise ConfigError(f"motor_input must be 'closed_loop' or 'recorded', got "
                               f"{self.motor_input!r}")

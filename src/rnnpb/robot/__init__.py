@@ -5,6 +5,15 @@ MuJoCo is imported, and its OpenGL chosen, only when a model is first loaded (a
 :class:`MujocoRobot` connects, a :class:`RobotRenderer` is made).
 """
 
+from rnnpb.robot._collision import (
+    COLLISION_DEPTH,
+    SERVO_NAME,
+    SERVO_NO_LOAD_SPEED,
+    Contact,
+    SelfCollision,
+    collision_pairs,
+    joint_step_limit,
+)
 from rnnpb.robot._gl import choose_gl
 from rnnpb.robot._interface import KinematicRobot, Robot
 from rnnpb.robot._kinematics import (
@@ -28,6 +37,13 @@ from rnnpb.robot.camera import RobotCamera
 
 __all__ = [
     "ARM_SIDES",
+    "COLLISION_DEPTH",
+    "SERVO_NAME",
+    "SERVO_NO_LOAD_SPEED",
+    "Contact",
+    "SelfCollision",
+    "collision_pairs",
+    "joint_step_limit",
     "ELBOW_AT_ZERO_PITCH",
     "ELBOW_PER_PITCH",
     "FOREARM_LENGTH",

@@ -1,0 +1,32 @@
+"""From experience to a stored map: explore, fit the meta-level, keep what was experienced."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import asdict
+
+from rnnpb.model import TrainedModel
+from rnnpb.safety._check import SafetyChecker, SafetyLimits
+from rnnpb.safety._explore import Experience, ExplorationConfig, explore
+from rnnpb.safety._map import SafetyMap, new_map
+from rnnpb.safety._meta import MetaConfig, fit_meta
+
+
+def learn_safety_map(model: TrainedModel, exploration: ExplorationConfig | None = None,
+                     meta: MetaConfig | None = None, limits: SafetyLimits | None = None,
+                     also: Experience | None = None,
+                     progress: Callable[[int, int], None] | None = None) -> SafetyMap:
+    """Explore the model's PB space, join ``also`` (PBs visited in interactions), fit the
+    risk network; the map to save beside the model."""
+    exploration = exploration or ExplorationConfig()
+    meta = meta or MetaConfig()
+    limits = limits or SafetyLimits()
+    experience = explore(model, exploration, SafetyChecker(limits), progress)
+    if also is not None:
+        experience = experience.joined(also)
+    params = fit_meta(experience, meta)
+    info = {"exploration": asdict(exploration), "meta": asdict(meta), "limits": asdict(limits),
+            "step_limit_rad": limits.step_limit, "counts": experience.counts,
+            "visited": int((experience.source == "visited").sum())}
+    return new_map(model, params, experience.pb, experience.unsafe, meta.familiarity_width,
+                   info)
