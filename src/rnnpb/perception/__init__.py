@@ -7,7 +7,15 @@ is a :class:`rnnpb.sources.UserSource` yielding one observation per frame. Spec 
 ``webcam:0`` are parsed by :func:`rnnpb.interaction.parse_source_spec`, the one grammar.
 """
 
-from rnnpb.perception._bench import center_errors, tracking_benchmark
+from rnnpb.perception._bench import (
+    HARD_SCENE_KINDS,
+    SceneScore,
+    center_errors,
+    clutter_benchmark,
+    hard_scene,
+    score_scene,
+    tracking_benchmark,
+)
 from rnnpb.perception._calibrate import (
     BROAD_BLUE,
     BROAD_RED,
@@ -16,6 +24,7 @@ from rnnpb.perception._calibrate import (
     calibrate_from_pixel,
     calibration_preview,
     fit_color,
+    locate_ball,
 )
 from rnnpb.perception._colors import (
     BLUE,
@@ -57,6 +66,7 @@ __all__ = [
     "BLUE",
     "BROAD_BLUE",
     "BROAD_RED",
+    "HARD_SCENE_KINDS",
     "LOST",
     "RED",
     "TRACKED",
@@ -70,6 +80,7 @@ __all__ = [
     "ImageFolderSource",
     "LimitedSource",
     "SceneConfig",
+    "SceneScore",
     "SyntheticCamera",
     "TrackedUserSource",
     "TrackerConfig",
@@ -83,13 +94,17 @@ __all__ = [
     "calibration_preview",
     "call_with_timeout",
     "center_errors",
+    "clutter_benchmark",
     "draw_tracking",
     "fit_color",
+    "hard_scene",
     "load_ball_colors",
+    "locate_ball",
     "oscillating_hands",
     "open_camera_source",
     "open_frame_source",
     "save_ball_colors",
+    "score_scene",
     "synthetic_user_hands",
     "tracking_benchmark",
 ]
