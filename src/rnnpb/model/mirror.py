@@ -117,7 +117,8 @@ def normalized_hands(values: object, sensory_size: int) -> tuple[np.ndarray, np.
     seen), shape (S,), and which were seen (finite), shape (S,)."""
     try:
         u = np.asarray(values, dtype=np.float64).reshape(-1)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
+        # OverflowError: a Python integer beyond float64's range (10**309).
         raise ConfigError(f"observed hands must be {sensory_size} numbers (lhy lhz rhy rhz), "
                           f"got {values!r:.80}") from None
     if u.shape != (sensory_size,):
@@ -137,11 +138,24 @@ def one_step_prediction_error(predicted: np.ndarray | None, u: np.ndarray,
 
 
 def motor_command(model: TrainedModel, motor: np.ndarray) -> np.ndarray:
-    """A normalized motor output (M,) as joint angles (M,), radians, within the joint limits."""
+    """A normalized motor output (M,) as joint angles (M,), radians, within the model's motor
+    bounds and always finite.
+
+    The bounds are the model's normalization of the joints; the model never sees the robot,
+    so the joint limits reach it through them (loading a model checks them against the robot's
+    limits). A non-finite output (which a held step never hands back, but a caller's model
+    might) goes to the middle of the range; the command is formed as a weighted mean of the
+    two bounds, which cannot overflow, and clipped to them.
+    """
     s = model.network.sensory_size
-    lower = np.asarray(model.lower, dtype=np.float64)[s:]
-    upper = np.asarray(model.upper, dtype=np.float64)[s:]
-    return np.clip(motor, 0.0, 1.0) * (upper - lower) + lower
+    big = np.finfo(np.float64).max
+    lower = np.clip(np.nan_to_num(np.asarray(model.lower, dtype=np.float64)[s:], nan=0.0),
+                    -big, big)
+    upper = np.clip(np.nan_to_num(np.asarray(model.upper, dtype=np.float64)[s:], nan=0.0),
+                    lower, big)
+    m = np.clip(np.nan_to_num(np.asarray(motor, dtype=np.float64), nan=0.5, posinf=1.0,
+                              neginf=0.0), 0.0, 1.0)
+    return np.clip(lower * (1.0 - m) + upper * m, lower, upper)
 
 
 class MirrorSystem:
