@@ -41,8 +41,8 @@ ALLOWED: dict[str, set[str]] = {
             "sources", "sequences", "analysis"},
     "sweeps": {"experiments", "analysis", "interaction", "model", "demonstrator", "robot",
                "sources", "sequences"},
-    "commands": {"models", "experiments", "sweeps", "web", "interaction", "analysis", "model", "memory",
-                 "safety", "perception", "demonstrator", "robot", "sources", "sequences"},
+    "commands": {"models", "experiments", "sweeps", "web", "interaction", "analysis", "model",
+                 "memory", "safety", "perception", "demonstrator", "robot", "sources", "sequences"},
     "cli": set(),
 }
 

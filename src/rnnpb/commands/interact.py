@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 
 NAME = "interact"
 SAFE_POINTS = True  # Ctrl-C stops between steps (rnnpb._interrupt)
@@ -67,7 +68,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    import contextlib
     import json
     import os
     from pathlib import Path
@@ -113,6 +113,9 @@ def run(args: argparse.Namespace) -> int:
         robot = KinematicRobot(dt=args.dt)
     mirror = MirrorSystem(model, online)
     with contextlib.ExitStack() as stack:
+        # SIGTERM (`kill`, a service manager) ends the run as Ctrl-C does: at the next step,
+        # with the recording, the summary and a playable video.
+        stack.enter_context(_terminate_as_interrupt())
         stack.enter_context(source)
         stack.enter_context(robot)
         recorder = stack.enter_context(SessionRecorder(out / "session.csv",
@@ -153,6 +156,30 @@ def run(args: argparse.Namespace) -> int:
     print(f"wrote {out / 'session.csv'}, {out / 'session.png'}, {out / 'summary.json'}"
           + (f", {out / 'session.mp4'}" if args.render else ""))
     return 0
+
+
+@contextlib.contextmanager
+def _terminate_as_interrupt():
+    """While inside: SIGTERM is handled as SIGINT is (on the main thread only)."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def on_terminate(signum, frame) -> None:
+        handler = signal.getsignal(signal.SIGINT)
+        if callable(handler):
+            handler(signal.SIGINT, frame)
+        else:
+            raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, on_terminate)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def _source_length(source) -> int | None:
