@@ -179,7 +179,7 @@ def plot_session(session: dict[str, np.ndarray], path: str | os.PathLike[str], t
         axes[3].plot(steps, pb[:, k], color=PB_COLORS[k % len(PB_COLORS)], label=f"PB{k}")
     jumps = pb_jumps(pb)
     if len(jumps):
-        axes[3].plot(steps[jumps], np.full(len(jumps), 1.09), label="PB jump", clip_on=False,
+        axes[3].plot(steps[jumps], np.full(len(jumps), 1.01), label="PB jump", clip_on=False,
                      **JUMP_MARK)
     axes[3].set_ylim(-0.05, 1.05)
     axes[3].set_ylabel("parametric bias")
@@ -283,7 +283,7 @@ def plot_switch_zoom(session: dict[str, np.ndarray], windows: SequenceABC[tuple[
                        label=f"PB{k}")
         jumps = [j for j in pb_jumps(pb) if part[j]]
         if jumps:
-            ax[3].plot(steps[jumps], np.full(len(jumps), 1.09), clip_on=False,
+            ax[3].plot(steps[jumps], np.full(len(jumps), 1.01), clip_on=False,
                        label="PB jump" if col == len(windows) - 1 else None, **JUMP_MARK)
         ax[3].set_ylim(-0.05, 1.05)
         for switch in switches:
