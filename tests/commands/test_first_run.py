@@ -44,13 +44,14 @@ def test_interact_without_a_model_runs_the_shipped_one_with_its_regression(
     assert main(["interact", "--source", "scenario:held:1", "--steps", "4",
                  "--out", "run"]) == 0
     out = capsys.readouterr().out
-    assert "on-line regression: ungated, as the model was learned with Adam" in out
+    assert ("(ungated on-line regression, chosen as the model was learned with Adam, the fast "
+            "preset; --online overrides;") in out
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())
     assert summary["model"] == str(SHIPPED_MODEL) and summary["online"] == "ungated"
     assert summary["online_config"]["surprise_gate"] == 0.0
     assert main(["interact", "--source", "scenario:held:1", "--steps", "2", "--online",
                  "default", "--out", "run2"]) == 0
-    assert "on-line regression" not in capsys.readouterr().out
+    assert "(default on-line regression; kinematic robot)" in capsys.readouterr().out
     summary = json.loads((tmp_path / "run2" / "summary.json").read_text())
     assert summary["online"] == "default" and summary["online_config"]["surprise_gate"] > 0
 

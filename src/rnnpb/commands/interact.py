@@ -96,9 +96,10 @@ def run(args: argparse.Namespace) -> int:
     if args.online == "auto":
         choice = OnlineConfig.for_model(model)
         online_name, online = choice.name, choice.config
-        print(f"on-line regression: {online_name}, as {choice.reason} (--online overrides)")
+        why = f", chosen as {choice.reason}; --online overrides"
     else:
         online_name, online = args.online, OnlineConfig.preset(args.online)
+        why = ""
     loop_config = LoopConfig(dt=args.dt, paced=args.paced, max_steps=args.steps)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -126,8 +127,10 @@ def run(args: argparse.Namespace) -> int:
 
             video = stack.enter_context(SessionVideo(out / "session.mp4", fps=1.0 / args.dt))
             loop.subscribe(video.add)
-        print(f"interacting: {args.source} -> {model_path} ({online_name} regression, "
-              f"{args.robot} robot{', paced' if args.paced else ''}); Ctrl-C stops")
+        # One line, printed just before the first compilation starts.
+        print(f"interacting: {args.source} -> {model_path} ({online_name} on-line regression"
+              f"{why}; {args.robot} robot{', paced' if args.paced else ''}); Ctrl-C stops",
+              flush=True)
         bar = stack.enter_context(progress_bar(
             total=args.steps or _source_length(source), unit="step", desc="interacting",
             disable=args.no_progress))
