@@ -37,8 +37,9 @@ def test_motor_is_finite_and_within_the_bounds_for_any_bounds(trained, twin, bou
 def test_motor_command_of_non_finite_outputs_is_finite_and_within_bounds(trained):
     model = _with_motor_bounds(trained, -1e308, 1e308)
     out = motor_command(model, np.array([np.nan, np.inf, -np.inf, 2.0, -1.0, 0.5, 0.0, 1.0]))
-    assert np.all(np.isfinite(out))
-    np.testing.assert_array_equal(out[3:], [1e308, -1e308, 0.0, -1e308, 1e308])
+    np.testing.assert_array_equal(out, [0.0, 0.0, 0.0, 1e308, -1e308, 0.0, -1e308, 1e308])
+    infinite = _with_motor_bounds(trained, -np.inf, np.inf)
+    assert np.all(np.isfinite(motor_command(infinite, np.array([0.0, 1.0, 0.3] + [0.5] * 5))))
     # Ordinary bounds: the same linear map as before.
     np.testing.assert_allclose(motor_command(trained, np.full(8, 0.25)),
                                trained.lower[4:] + 0.25 * (trained.upper[4:] - trained.lower[4:]))

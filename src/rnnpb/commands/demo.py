@@ -15,7 +15,8 @@ set) and write OUT/report.md (measure | paper | ours, figures embedded), OUT/res
 The full run learns with the paper's algorithm and also runs the paper's own on-line
 regression on the same models for comparison (about 8 minutes on 2 cores). --quick learns
 with the fast preset, keeps the lock-on and switching experiments whole and shortens the rest
-(about 2 minutes); its models go with `rnnpb interact --online ungated`.
+(about 2 minutes); its models go with the ungated on-line regression, which
+`rnnpb interact` picks for them by itself.
 
 Example:
   rnnpb demo --out results/demo

@@ -137,6 +137,9 @@ def one_step_prediction_error(predicted: np.ndarray | None, u: np.ndarray,
     return float(np.mean((predicted[seen] - u[seen]) ** 2))
 
 
+_LARGEST = float(np.finfo(np.float64).max)
+
+
 def motor_command(model: TrainedModel, motor: np.ndarray) -> np.ndarray:
     """A normalized motor output (M,) as joint angles (M,), radians, within the model's motor
     bounds and always finite.
@@ -148,13 +151,15 @@ def motor_command(model: TrainedModel, motor: np.ndarray) -> np.ndarray:
     two bounds, which cannot overflow, and clipped to them.
     """
     s = model.network.sensory_size
-    big = np.finfo(np.float64).max
-    lower = np.clip(np.nan_to_num(np.asarray(model.lower, dtype=np.float64)[s:], nan=0.0),
-                    -big, big)
-    upper = np.clip(np.nan_to_num(np.asarray(model.upper, dtype=np.float64)[s:], nan=0.0),
-                    lower, big)
-    m = np.clip(np.nan_to_num(np.asarray(motor, dtype=np.float64), nan=0.5, posinf=1.0,
-                              neginf=0.0), 0.0, 1.0)
+    lower = np.asarray(model.lower, dtype=np.float64)[s:]
+    upper = np.asarray(model.upper, dtype=np.float64)[s:]
+    if not (np.isfinite(lower).all() and np.isfinite(upper).all()):
+        # Only a model built by hand gets here: a model file's bounds are finite.
+        lower = np.clip(np.where(np.isnan(lower), 0.0, lower), -_LARGEST, _LARGEST)
+        upper = np.clip(np.where(np.isnan(upper), 0.0, upper), -_LARGEST, _LARGEST)
+    upper = np.maximum(upper, lower)
+    m = np.asarray(motor, dtype=np.float64)
+    m = np.clip(np.where(np.isfinite(m), m, 0.5), 0.0, 1.0)
     return np.clip(lower * (1.0 - m) + upper * m, lower, upper)
 
 
