@@ -524,12 +524,15 @@ class Session:
             from rnnpb.robot import JOINT_LIMITS
 
             model = TrainedModel.load(self.models[name], joint_limits=JOINT_LIMITS)
-            mirror = MirrorSystem(model, OnlineConfig())
+            # The regression that suits the model's learning (docs/model.md, "Which on-line
+            # regression"), as `rnnpb interact` picks it.
+            choice = OnlineConfig.for_model(model)
+            mirror = MirrorSystem(model, choice.config)
             started = time.perf_counter()
             mirror.step(np.full(model.network.sensory_size, 0.5))  # compiles the step
             mirror.reset()
-            log.info("model %s ready (step compiled in %.1f s)", name,
-                     time.perf_counter() - started)
+            log.info("model %s ready with the %s on-line regression (%s; step compiled in "
+                     "%.1f s)", name, choice.name, choice.reason, time.perf_counter() - started)
         except Exception as error:
             kept = f"; still using {self.model_name}" if self.model_name else ""
             self.model_error = f"model {name} cannot be used: {error}{kept}"
