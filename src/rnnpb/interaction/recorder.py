@@ -5,8 +5,11 @@ not seen), the hands the network predicted for this step one step before (``pred
 motor command sent (``lshp`` … ``relp``, radians), the PB (``pb0`` …), ``prediction_error``
 (mean squared error of that prediction), ``window_error`` (after the PB regression),
 ``lost_left``/``lost_right`` (1 where the hand was not seen), ``held`` (1 where the regression
-failed numerically and the last good state was kept) and, when the source knows it, the ground
-truth ``truth_pattern``.
+failed numerically and the last good state was kept), what the step recognised —
+``recognised`` (the learned pattern's name, empty when none), ``confidence`` (in [0, 1]) and
+``novelty`` (``familiar``, ``novel``, ``unstructured``, ``still``, or empty while undecided;
+:mod:`rnnpb.model.recognition`) — and, when the source knows it, the ground truth
+``truth_pattern``.
 
 Every row is flushed to the operating system when written, so a session interrupted by Ctrl-C
 or a crash keeps every step up to the last one written. A row is complete only with its line
@@ -28,6 +31,8 @@ from rnnpb.errors import DataFileError
 from rnnpb.vectors import MOTOR_NAMES, PREDICTED_PREFIX, SENSORY_NAMES, STEP_COLUMN
 
 PB_COLUMNS_PREFIX = "pb"
+TEXT_COLUMNS = ("recognised", "novelty", "truth_pattern")
+"""The columns that hold words, not numbers."""
 
 
 def session_columns(pb_size: int) -> list[str]:
@@ -35,7 +40,7 @@ def session_columns(pb_size: int) -> list[str]:
             *(PREDICTED_PREFIX + name for name in SENSORY_NAMES), *MOTOR_NAMES,
             *(f"{PB_COLUMNS_PREFIX}{i}" for i in range(pb_size)),
             "prediction_error", "window_error", "lost_left", "lost_right", "held",
-            "truth_pattern"]
+            *TEXT_COLUMNS[:1], "confidence", *TEXT_COLUMNS[1:2], "truth_pattern"]
 
 
 def _fmt(value: float) -> str:
@@ -68,7 +73,8 @@ class SessionRecorder:
                *(_fmt(v) for v in record.predicted), *(f"{v:.6f}" for v in record.motor),
                *(f"{v:.6f}" for v in record.pb), _fmt(record.prediction_error),
                _fmt(record.window_error), int(not seen[:2].all()), int(not seen[2:].all()),
-               int(record.held), record.truth.get("pattern", "")]
+               int(record.held), record.recognised or "", _fmt(record.confidence),
+               record.novelty, record.truth.get("pattern", "")]
         self._writer.writerow(row)
         self._handle.flush()
         self.rows += 1
@@ -138,7 +144,7 @@ def read_session(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
     out: dict[str, np.ndarray] = {}
     for j, name in enumerate(header):
         values = [row[j] for row in rows]
-        if name == "truth_pattern":
+        if name in TEXT_COLUMNS:
             out[name] = np.array(values, dtype=object)
             continue
         column = np.empty(len(values))
