@@ -14,12 +14,18 @@ the motor command, which the robot executes.
 
 Sources (--source):
   scenario:held:P | scenario:pause:P | scenario:switch:A,B,C | scenario:novel:SET
+  scenario:steps:M*N,...   movements (any demonstrator movement or pause), N steps each
   csv:FILE        a sensory stream (step,lhy,lhz,rhy,rhz; empty cell = hand not seen)
   video:FILE | images:DIR | webcam:INDEX | synthetic:P   (through the colour-ball tracker)
 
 Writes DIR/session.csv (one row per step), DIR/session.png (the paper's Figure 5 layout)
-and DIR/summary.json (timings per section, missed deadlines, config, versions); with
+and DIR/summary.json (timings per section, missed deadlines, config, versions, the
+recognition timeline); with
 --render also DIR/session.mp4: the camera frame with the tracked balls | the robot.
+
+While it runs, a step counter shows what the robot recognises (the learned pattern and
+its confidence, "new movement", "hands still", ...); at the end it prints the recognition
+timeline: which answer held from which step to which.
 
 Steps where a hand is lost are run on the network's own prediction and marked in the
 recording (lost_left, lost_right).
@@ -55,6 +61,7 @@ def run(args: argparse.Namespace) -> int:
     import contextlib
     import json
     import os
+    import sys
     from pathlib import Path
 
     from rnnpb import __version__, _interrupt
@@ -68,6 +75,7 @@ def run(args: argparse.Namespace) -> int:
         read_session,
     )
     from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel
+    from rnnpb.model.recognition import describe_answer, recognition_timeline
     from rnnpb.robot import JOINT_LIMITS, KinematicRobot
 
     model = TrainedModel.load(args.model)
@@ -99,19 +107,40 @@ def run(args: argparse.Namespace) -> int:
             loop.subscribe(video.add)
         print(f"interacting: {args.source} -> {args.model} ({args.online} regression, "
               f"{args.robot} robot{', paced' if args.paced else ''}); Ctrl-C stops")
+        answers: list[tuple[str | None, str]] = []
+        live = sys.stdout.isatty()
+
+        def on_step(record) -> None:
+            answers.append((record.recognised, record.novelty))
+            text = describe_answer(record.recognised, record.confidence, record.novelty)
+            if live:
+                print(f"\rstep {record.step + 1}: {text:<40}", end="", flush=True)
+            elif len(answers) == 1 or answers[-1] != answers[-2]:
+                print(f"step {record.step + 1}: {text}", flush=True)
+            _interrupt.check()
+
         try:
             # Between steps is the safe point: the step's results are read back from XLA.
-            summary = loop.run(on_step=lambda record: _interrupt.check())
+            summary = loop.run(on_step=on_step)
         except KeyboardInterrupt:
             summary = loop.summary()
             print("interrupted: the recording keeps every step so far")
+    if live:
+        print()
+    timeline = recognition_timeline(answers)
+    print("recognition timeline:")
+    for part in timeline:
+        text = describe_answer(part["recognised"], 1.0, part["novelty"]).split(" (")[0]
+        print(f"  steps {part['first'] + 1:>4}-{part['last'] + 1:<4} {text}")
     session = read_session(out / "session.csv")
     if len(session["step"]):
         plot_session(session, out / "session.png", title=f"{args.source} — {args.model}",
                      joint_limits=JOINT_LIMITS)
     document = {"rnnpb_version": __version__, "model": str(args.model), "source": args.source,
                 "online_config": online.to_dict(), "loop": summary.to_dict(),
-                "dt": args.dt, "paced": args.paced, "robot": args.robot}
+                "dt": args.dt, "paced": args.paced, "robot": args.robot,
+                "recognition_config": mirror.recognition.to_dict(),
+                "recognition_timeline": timeline}
     with atomic_write(out / "summary.json", "w", encoding="utf-8") as handle:
         json.dump(document, handle, indent=2)
     print(summary.describe())

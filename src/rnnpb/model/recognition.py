@@ -37,8 +37,9 @@ How it decides (docs/model.md, "Recognition and novelty", measures it):
    observations is below ``still_level``. Through a short pause (``hold_steps``) the last
    recognised pattern stays recognised: the robot keeps generating it, as in the paper's
    section 3.1.
-5. **Hysteresis.** A new answer (another pattern, or none) replaces the current one only after
-   it has been the step's evidence for ``switch_steps`` steps running.
+5. **Hysteresis.** A new answer replaces the current one only after it has been the step's
+   evidence for ``switch_steps`` steps running — ``release_steps`` when a recognised pattern
+   would give way to none: the evidence dips for a few steps as a pause begins or ends.
 
 :func:`recognise` is pure (state in, state and answer out) and NumPy only: it costs tens of
 microseconds a step. The compiled step and its NumPy twin compute the same evidence and call
@@ -73,10 +74,11 @@ class RecognitionConfig:
     structure_steps: int = 12
     lags: tuple[int, int] = (8, 18)  # smallest and largest lag tried, steps
     structure_level: float = 0.3
-    still_steps: int = 5
+    still_steps: int = 4
     still_level: float = 0.012  # RMS spread of the observations, normalized units
     hold_steps: int = 10
-    switch_steps: int = 2
+    switch_steps: int = 3
+    release_steps: int = 8
 
     def __post_init__(self) -> None:
         if self.recognition_steps < 1:
@@ -95,8 +97,8 @@ class RecognitionConfig:
             raise ConfigError("structure_steps must be >= 2 and structure_level > 0")
         if self.still_steps < 2 or self.still_level < 0:
             raise ConfigError("still_steps must be >= 2 and still_level >= 0")
-        if self.hold_steps < 0 or self.switch_steps < 1:
-            raise ConfigError("hold_steps must be >= 0 and switch_steps >= 1")
+        if self.hold_steps < 0 or self.switch_steps < 1 or self.release_steps < 1:
+            raise ConfigError("hold_steps must be >= 0, switch_steps and release_steps >= 1")
 
     @property
     def history(self) -> int:
@@ -159,23 +161,24 @@ def initial_recognition_state(sensory_size: int, pb_size: int, config: Recogniti
                             None, 0, "")
 
 
-def _structure(history: np.ndarray, config: RecognitionConfig) -> float:
+def _structure(history: np.ndarray, config: RecognitionConfig) -> tuple[float, bool]:
     """The smallest self-difference of the recent observations over the lags, relative to
     twice their variance: near 0 for a repeating movement, about 1 for one that does not
-    repeat (NaN while no lag can be measured yet)."""
+    repeat (NaN while no lag can be measured yet); and whether every lag was measured."""
     recent = config.structure_steps
     low, high = config.lags
     now = history[-recent:]
-    best, variance = np.inf, np.nan
+    best, variance, every = np.inf, np.nan, True
     for lag in range(low, high + 1):
         before = history[-(recent + lag):-lag]
         if np.isnan(before).any() or np.isnan(now).any():
+            every = False
             break
         variance = float(np.var(history[-(recent + lag):], axis=0).mean())
         best = min(best, float(np.mean((now - before) ** 2)))
     if not np.isfinite(best) or not variance > 0:
-        return float("nan")
-    return best / (2.0 * variance)
+        return float("nan"), False
+    return best / (2.0 * variance), every
 
 
 def recognise(state: RecognitionState, u: np.ndarray, seen: np.ndarray,
@@ -244,20 +247,24 @@ def recognise(state: RecognitionState, u: np.ndarray, seen: np.ndarray,
     total = likelihood.sum() + unknown
     shares = likelihood / total
     best = int(np.argmax(shares))
-    structure = _structure(filled, config)
+    structure, every_lag = _structure(filled, config)
     if shares[best] >= config.confidence_level:
         answer, confidence, novelty = names[best], float(shares[best]), "familiar"
     else:
         answer, confidence = None, float(unknown / total)
         novelty = "novel" if structure < config.structure_level else "unstructured"
-        if np.isnan(structure):
-            novelty = ""
+        if np.isnan(structure) or (novelty == "unstructured" and not every_lag):
+            novelty = ""  # a longer lag may yet show the movement repeating
     # Hysteresis: a new answer (another pattern, or none) waits for switch_steps steps running;
     # until then the last answer stands.
     candidate = answer
     candidate_run = state.candidate_run + 1 if candidate == state.candidate else 1
-    settled = state.novelty in ("familiar", "novel", "unstructured")
-    if settled and answer != state.recognised and candidate_run < config.switch_steps:
+    # Settled: there was an answer (a pattern held through a pause counts).
+    settled = (state.novelty in ("familiar", "novel", "unstructured")
+               or state.recognised is not None)
+    needed = (config.release_steps if state.recognised is not None and answer is None
+              else config.switch_steps)
+    if settled and answer != state.recognised and candidate_run < needed:
         answer = state.recognised
         if answer is not None:
             confidence, novelty = float(shares[names.index(answer)]), "familiar"
@@ -278,3 +285,26 @@ def _forward_fill(observed: np.ndarray) -> np.ndarray:
         missing = np.isnan(filled[t])
         filled[t, missing] = filled[t - 1, missing]
     return filled
+
+
+def recognition_timeline(answers: list[tuple[str | None, str]]) -> list[dict[str, Any]]:
+    """Steps ``(recognised, novelty)`` as runs of the same answer:
+    ``[{"first": 0, "last": 11, "recognised": "1" or None, "novelty": "familiar"}, …]``."""
+    runs: list[dict[str, Any]] = []
+    for step, (recognised, novelty) in enumerate(answers):
+        if runs and runs[-1]["recognised"] == recognised and runs[-1]["novelty"] == novelty:
+            runs[-1]["last"] = step
+        else:
+            runs.append({"first": step, "last": step, "recognised": recognised,
+                         "novelty": novelty})
+    return runs
+
+
+def describe_answer(recognised: str | None, confidence: float, novelty: str) -> str:
+    """One step's answer as a person reads it: ``pattern 2 (93 %)``, ``new movement``,
+    ``not sure`` …"""
+    if recognised is not None and novelty in ("familiar", "still"):
+        return f"pattern {recognised} ({100 * confidence:.0f} %)" + (
+            ", hands still" if novelty == "still" else "")
+    return {"novel": "new movement", "unstructured": "no pattern (unstructured)",
+            "still": "hands still", "": "not sure yet"}.get(novelty, "not sure")
