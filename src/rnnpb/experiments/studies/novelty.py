@@ -225,8 +225,8 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
     out = Path(out)
     (out / "figures").mkdir(parents=True, exist_ok=True)
     models = _models(out, options.quick)
-    draws = 1 if options.quick else 6
-    steps = 72 if options.quick else 96
+    draws = 1 if options.quick else 2
+    steps = 72 if options.quick else 84
     shapes = NEW_SHAPES[:2] if options.quick else NEW_SHAPES
     seeds = [options.seed + 1000 + i for i in range(draws)]  # not the draws tuned on (0-2)
     recognition = RecognitionConfig()
