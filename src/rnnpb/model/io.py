@@ -318,6 +318,7 @@ def load_archive(path: str | os.PathLike[str], fmt: str, version: int,
 def _read_archive(path: Path, archive: zipfile.ZipFile, fmt: str, version: int,
                   members: Callable[[Path, dict[str, Any]], dict[str, tuple[int, ...] | None]]
                   | None) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+    kind = fmt.removeprefix("rnnpb-")
     infos = archive.infolist()
     if len(infos) > MAX_MEMBERS:
         raise ModelFileError(f"{path}: holds {len(infos)} members, more than the "
