@@ -150,3 +150,50 @@ def read_session(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
                                     "not a number") from None
         out[name] = column
     return out
+
+
+# --- two-agent recordings ------------------------------------------------------------------
+DYAD_PREFIXES = ("a_", "b_")
+DYAD_AGENT_COLUMNS = ("intent", "initiative")
+
+
+def dyad_columns(pb_size: int) -> list[str]:
+    """A two-agent recording: ``step``, ``time_s``, then each agent's columns prefixed ``a_``
+    and ``b_``: what it saw (``lhy`` …), its hands as its partner's camera sees them
+    (``shown_lhy`` …), its motor command (a subject's is empty), its PB, its prediction and
+    window errors, the pattern it means to play (``intent``) and whether it took the
+    initiative this step (``initiative``, 1 or 0)."""
+    per_agent = [*SENSORY_NAMES, *(f"shown_{name}" for name in SENSORY_NAMES), *MOTOR_NAMES,
+                 *(f"{PB_COLUMNS_PREFIX}{i}" for i in range(pb_size)), "prediction_error",
+                 "window_error", *DYAD_AGENT_COLUMNS]
+    return [STEP_COLUMN, "time_s",
+            *(prefix + name for prefix in DYAD_PREFIXES for name in per_agent)]
+
+
+class DyadRecorder(SessionRecorder):
+    """Writes a two-agent recording row by row (:func:`dyad_columns`); rows are
+    :class:`rnnpb.interaction.dyad.DyadStep`. :func:`read_session` reads it back."""
+
+    def __init__(self, path: str | os.PathLike[str], pb_size: int = 4, dt: float = 0.4
+                 ) -> None:
+        super().__init__(path, pb_size)
+        self.columns = dyad_columns(pb_size)
+        self.pb_size = pb_size
+        self.dt = dt
+
+    def write(self, record) -> None:
+        if self._writer is None:
+            self.open()
+        row: list[object] = [record.step, f"{record.step * self.dt:.4f}"]
+        for agent, shown in ((record.a, record.shown_a), (record.b, record.shown_b)):
+            result = agent.result
+            motor = agent.motor if agent.motor is not None else np.full(len(MOTOR_NAMES), np.nan)
+            pb = agent.pb if agent.pb is not None else np.full(self.pb_size, np.nan)
+            row += [*(_fmt(v) for v in agent.view), *(_fmt(v) for v in shown),
+                    *(_fmt(v) for v in motor), *(_fmt(v) for v in pb),
+                    _fmt(result.prediction_error if result is not None else math.nan),
+                    _fmt(result.window_error if result is not None else math.nan),
+                    agent.intent, int(agent.initiative)]
+        self._writer.writerow(row)
+        self._handle.flush()
+        self.rows += 1

@@ -1,0 +1,89 @@
+"""The measures of mutual interaction give known answers on constructed signals."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rnnpb.analysis import dyad
+from rnnpb.demonstrator import PatternConfig, pattern_offsets
+from rnnpb.robot.camera import RobotCamera
+
+LEARNED = ("1", "2", "3")
+
+
+def performed(labels: list[tuple[str, int]], phase0: float = 0.0) -> np.ndarray:
+    """Ideal views of patterns one after another (``""``: still), (n, 4)."""
+    config = PatternConfig()
+    camera = RobotCamera()
+    out, theta = [], phase0
+    for label, n in labels:
+        for _ in range(n):
+            offsets = (pattern_offsets(label, np.array(theta), config) if label
+                       else np.zeros((2, 3)))
+            out.append(camera.sensory_from_hands(config.body.hand_centres + offsets))
+            theta += 2 * np.pi / 12
+    return np.array(out)
+
+
+def test_movement_class_names_each_pattern_and_stillness():
+    templates = dyad.movement_templates()
+    for name in ("1", "2", "3", "4"):
+        found = dyad.classify_movement(performed([(name, 30)], phase0=1.0), templates)
+        assert set(found.pattern[11:]) == {name}
+        assert set(found.pattern[:11]) == {""}  # not a cycle yet
+    still = dyad.classify_movement(performed([("", 30)]), templates)
+    assert set(still.pattern) == {""}
+
+
+def test_coherence_episode_and_leader_of_a_known_shift():
+    # A moves 1 then switches to 2 at step 60; B follows 5 steps later (and a step behind).
+    a = performed([("1", 60), ("2", 60)])
+    b = np.concatenate([a[:1], a[:-1]])  # one step late
+    b[60:65] = performed([("1", 65)])[60:65]  # still on 1 for five more steps
+    measures = dyad.measure_dyad(a, b, LEARNED)
+    patterns = [e.pattern for e in measures.episodes]
+    assert patterns == ["1", "2"]
+    assert len(measures.shifts) == 1
+    shift = measures.shifts[0]
+    assert (shift.before, shift.after, shift.leader) == ("1", "2", "a")
+    assert shift.lead >= 4
+    # The new episode starts once both have moved 2 for a cycle.
+    assert 65 <= shift.step <= 65 + 12 + 2
+    assert measures.phase_shifts == 3  # 1 starts (the run starts incoherent) and ends, 2 starts
+    assert measures.leader_index == 1.0
+    assert int(measures.found[-1]) == 2
+
+
+def test_no_coherence_on_a_pattern_not_learned_or_out_of_phase():
+    a = performed([("4", 60)])
+    assert not dyad.measure_dyad(a, a, LEARNED).coherent.any()
+    one = performed([("1", 60)])
+    half_cycle = performed([("1", 60)], phase0=np.pi)
+    measures = dyad.measure_dyad(one, half_cycle, LEARNED)
+    assert not measures.coherent.any()
+    assert measures.coherent_share == 0.0
+
+
+def test_transfer_entropy_finds_the_driver():
+    rng = np.random.default_rng(0)
+    x = rng.standard_normal(3000)
+    y = np.concatenate([[0.0], x[:-1]]) + 0.3 * rng.standard_normal(3000)  # y follows x
+    forward, backward = dyad.transfer_entropy(x, y), dyad.transfer_entropy(y, x)
+    assert forward > 0.3
+    assert backward < 0.05
+
+
+def test_patterns_found_counts_first_episodes_of_learned_patterns():
+    episodes = [dyad.Episode(10, 30, "2"), dyad.Episode(40, 60, "2"), dyad.Episode(70, 90, "4"),
+                dyad.Episode(100, 130, "1")]
+    found = dyad.patterns_found(episodes, 140, LEARNED)
+    assert found[28] == 0 and found[29] == 1 and found[128] == 1 and found[129] == 2
+
+
+@pytest.mark.parametrize("gap, expected", [(2, 1), (5, 2)])
+def test_short_gaps_do_not_end_an_episode(gap, expected):
+    coherent = np.ones(60, dtype=bool)
+    coherent[30:30 + gap] = False
+    joint = np.full(60, "1", dtype=object)
+    assert len(dyad.episodes(coherent, joint, min_steps=12, bridge=3)) == expected
