@@ -77,8 +77,9 @@ def test_transfer_entropy_finds_the_driver():
 def test_patterns_found_counts_first_episodes_of_learned_patterns():
     episodes = [dyad.Episode(10, 30, "2"), dyad.Episode(40, 60, "2"), dyad.Episode(70, 90, "4"),
                 dyad.Episode(100, 130, "1")]
-    found = dyad.patterns_found(episodes, 140, LEARNED)
-    assert found[28] == 0 and found[29] == 1 and found[128] == 1 and found[129] == 2
+    found = dyad.patterns_found(episodes, 140, LEARNED, min_steps=12)
+    assert found[20] == 0 and found[21] == 1 and found[110] == 1 and found[111] == 2
+    assert found[-1] == 2  # pattern 4 is not learned
 
 
 @pytest.mark.parametrize("gap, expected", [(2, 1), (5, 2)])

@@ -24,8 +24,8 @@ sees a person; a robot's body is mapped there by :mod:`rnnpb.interaction.dyad`).
   (shifts led by A − shifts led by B) / shifts, in [−1, 1];
 * **transfer entropy** ``TE(x → y)``: in bits, of the binned series, history of one step at
   ``lag``; on the agents' PB changes it says whose changes predict the other's;
-* **patterns found** over time (the subject protocol): a learned pattern is found at the end of
-  the first episode on it.
+* **patterns found** over time (the subject protocol): a learned pattern is found when the
+  first episode on it has lasted ``min_steps``.
 """
 
 from __future__ import annotations
@@ -288,14 +288,16 @@ def pb_change(pb: np.ndarray) -> np.ndarray:
     return out
 
 
-def patterns_found(found: list[Episode], n_steps: int, learned: tuple[str, ...]) -> np.ndarray:
-    """How many of the learned patterns had been found by each step (n_steps,)."""
+def patterns_found(found: list[Episode], n_steps: int, learned: tuple[str, ...],
+                   min_steps: int = MIN_EPISODE) -> np.ndarray:
+    """How many of the learned patterns had been found by each step (n_steps,): a pattern is
+    found at the step its first episode became one (``min_steps`` coherent steps)."""
     out = np.zeros(n_steps, dtype=np.int64)
     seen: set[str] = set()
-    for episode in sorted(found, key=lambda e: e.end):
+    for episode in sorted(found, key=lambda e: e.start):
         if episode.pattern in learned and episode.pattern not in seen:
             seen.add(episode.pattern)
-            out[min(episode.end, n_steps) - 1:] = len(seen)
+            out[min(episode.start + min_steps, n_steps) - 1:] = len(seen)
     return out
 
 
@@ -363,7 +365,7 @@ def measure_dyad(view_a: np.ndarray, view_b: np.ndarray, learned: tuple[str, ...
     return DyadMeasures(
         class_a=ca.pattern, class_b=cb.pattern, sync_error=sync, coherent=coherent_steps,
         episodes=found, shifts=shifts, phase_shifts=phase_shifts(coherent_steps, found),
-        found=patterns_found(found, len(coherent_steps), learned),
+        found=patterns_found(found, len(coherent_steps), learned, min_episode),
         coherent_share=float(coherent_steps.mean()) if len(coherent_steps) else 0.0,
         first_coherent=int(first[0]) if first.size else None,
         leader_index=leader_index(shifts),

@@ -9,7 +9,7 @@ robot's camera to see them as it saw its teachers (``lhy lhz rhy rhz``,
 The scale mapping between a robot's body and a person's. The robot imitates a person through
 the mirror mapping (:class:`rnnpb.demonstrator.MirrorMapping`): each person's hand, relative to
 the person's shoulder, reflected through the plane between them and scaled by
-``s = (L1 + L2) / arm_reach`` (robot arm reach over a person's, 0.39 m / 0.62 m = 0.63),
+``s = (L1 + L2) / arm_reach`` (robot arm reach over a person's, 0.21 m / 0.62 m = 0.34),
 placed at the robot's opposite-side shoulder. A robot facing a robot is seen through the
 inverse of that mapping: its hands by forward kinematics
 (:func:`rnnpb.robot.forward_kinematics`), relative to its shoulders, scaled by ``1 / s``,

@@ -89,7 +89,8 @@ class SessionRecorder:
         self.close()
 
 
-def read_session(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
+def read_session(path: str | os.PathLike[str], required: list[str] | None = None
+                 ) -> dict[str, np.ndarray]:
     """Read a session recording into arrays by column (empty cells → NaN; strings kept).
 
     A last line without its line break is a row cut short by an interrupted write and is left
@@ -119,7 +120,7 @@ def read_session(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
         if not header:
             raise DataFileError(f"{path}: empty file, expected a session recording header")
         header = [name.strip() for name in header]
-        required = [STEP_COLUMN, *SENSORY_NAMES, *MOTOR_NAMES]
+        required = required or [STEP_COLUMN, *SENSORY_NAMES, *MOTOR_NAMES]
         missing = [c for c in required if c not in header]
         if missing:
             raise DataFileError(f"{path}: not a session recording: missing column(s) "
@@ -197,3 +198,9 @@ class DyadRecorder(SessionRecorder):
         self._writer.writerow(row)
         self._handle.flush()
         self.rows += 1
+
+
+def read_dyad_session(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
+    """Read a two-agent recording (:func:`dyad_columns`) as :func:`read_session` does."""
+    return read_session(path, [STEP_COLUMN, *(prefix + name for prefix in DYAD_PREFIXES
+                                              for name in (*SENSORY_NAMES, *MOTOR_NAMES))])
