@@ -58,11 +58,23 @@ function fromCanvas(x, y) {
   return [Math.min(1, Math.max(0, x / canvas.width)), Math.min(1, Math.max(0, 1 - y / canvas.height))];
 }
 
-function dot(values, index, color, label) {
+function dot(values, index, color, label, ring = false) {
   if (!values || values[2 * index] === null || values[2 * index + 1] === null) return;
   const [x, y] = toCanvas(values[2 * index], values[2 * index + 1]);
   ctx.beginPath();
-  ctx.arc(x, y, 12, 0, 2 * Math.PI);
+  ctx.arc(x, y, ring ? 16 : 11, 0, 2 * Math.PI);
+  // The second agent is a ring around where its hand is: on top of the first, both show.
+  if (ring) {
+    ctx.lineWidth = 4;
+    ctx.strokeStyle = color;
+    ctx.stroke();
+    ctx.fillStyle = color;
+    ctx.font = "11px sans-serif";
+    ctx.textAlign = "center";
+    ctx.textBaseline = "middle";
+    ctx.fillText(label, x + 24, y);
+    return;
+  }
   ctx.fillStyle = color;
   ctx.fill();
   ctx.fillStyle = "#fff";
@@ -80,8 +92,8 @@ function draw() {
   ctx.fillText(mode === "robots" ? "robot A (orange), robot B (green)"
     : "the robot (orange) and you (blue), as the robot's camera sees you", 8, 16);
   for (const i of [0, 1]) dot(robotA, i, "#e8772e", i ? "R" : "L");
-  if (mode === "robots") for (const i of [0, 1]) dot(robotB, i, "#2e9e55", i ? "R" : "L");
-  else for (const i of [0, 1]) dot(hands, i, "#2f6fdf", i ? "R" : "L");
+  if (mode === "robots") for (const i of [0, 1]) dot(robotB, i, "#2e9e55", i ? "R" : "L", true);
+  else for (const i of [0, 1]) dot(hands, i, "#2f6fdf", i ? "R" : "L", true);
 }
 
 function nearest(px, py) {
