@@ -88,3 +88,21 @@ def test_short_gaps_do_not_end_an_episode(gap, expected):
     coherent[30:30 + gap] = False
     joint = np.full(60, "1", dtype=object)
     assert len(dyad.episodes(coherent, joint, min_steps=12, bridge=3)) == expected
+
+
+def test_the_dyad_figures_are_drawn(tmp_path):
+    from rnnpb.analysis import figures
+
+    a = performed([("1", 40), ("2", 40)])
+    run = {"a_shown": a, "b_shown": a, "a_pb": np.full((80, 4), 0.3),
+           "b_pb": np.full((80, 4), np.nan)}
+    coherent = dyad.measure_dyad(a, a, LEARNED).coherent
+    figures.plot_dyad(run, coherent, tmp_path / "run.png", shifts=[(52, "a")])
+    grid = np.array([[0.9, 0.5], [0.2, np.nan]])
+    figures.plot_phase_diagram((0.1, 1.0), {"x": {"coherent share": grid,
+                                                  "shifts per 200 steps": grid,
+                                                  "leader index": grid}},
+                               tmp_path / "phase.png")
+    figures.plot_patterns_found({"s": np.arange(80) // 30}, 0.4, 3, tmp_path / "found.png")
+    for name in ("run.png", "phase.png", "found.png"):
+        assert (tmp_path / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -436,7 +436,7 @@ def plot_phase_diagram(rates: SequenceABC[float], panels: dict[str, dict[str, np
     measures = ("coherent share", "shifts per 200 steps", "leader index")
     limits = {"coherent share": (0, 1), "shifts per 200 steps": (0, None),
               "leader index": (-1, 1)}
-    fig = Figure(figsize=(11, 3.4 * len(panels)))
+    fig = Figure(figsize=(11, 3.4 * len(panels)), layout="constrained")
     axes = np.atleast_2d(fig.subplots(len(panels), len(measures)))
     for row, (label, values) in zip(axes, panels.items(), strict=False):
         for ax, measure in zip(row, measures, strict=False):
@@ -446,8 +446,8 @@ def plot_phase_diagram(rates: SequenceABC[float], panels: dict[str, dict[str, np
                               vmax=high if high is not None else max(1.0, np.nanmax(grid)),
                               cmap="coolwarm" if measure == "leader index" else "viridis")
             for (i, j), v in np.ndenumerate(grid):
-                ax.text(j, i, "–" if not np.isfinite(v) else f"{v:.2f}", ha="center",
-                        va="center", fontsize=7, color="w")
+                ax.text(j, i, "no shift" if not np.isfinite(v) else f"{v:.2f}", ha="center",
+                        va="center", fontsize=7, color="w" if np.isfinite(v) else "k")
             ax.set_xticks(range(len(rates)), [f"{r:g}" for r in rates])
             ax.set_yticks(range(len(rates)), [f"{r:g}" for r in rates])
             ax.set_xlabel("B's adaptation")
