@@ -267,8 +267,9 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
                "alone) and a scripted subject who knows the demonstrator's four movements, "
                "not the robot's three; the subject follows a robot movement close to one of "
                "its own and initiates another when they cannot match (docs/dyad.md). A pattern "
-               f"is found at the end of the first joint-attention episode on it (≥ "
-               f"{measures.MIN_EPISODE} coherent steps). {minutes:g} simulated minutes.", "",
+               "is found once the first joint-attention episode on it has lasted "
+               f"{measures.MIN_EPISODE} coherent steps. Up to {minutes:g} simulated minutes "
+               "(a session ends once every pattern is found).", "",
                *table(["set", "seed", "found", "minutes to all", "found by minute",
                        "pattern shifts", "led by robot / subject"],
                       [[s["set"], s["seed"], s["patterns_found"], fmt(s["minutes_to_all"], 1),
