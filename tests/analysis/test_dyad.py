@@ -106,3 +106,18 @@ def test_the_dyad_figures_are_drawn(tmp_path):
     figures.plot_patterns_found({"s": np.arange(80) // 30}, 0.4, 3, tmp_path / "found.png")
     for name in ("run.png", "phase.png", "found.png"):
         assert (tmp_path / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_a_robots_own_recognition_can_stand_for_its_movement_class():
+    # Both agents move in synchrony a cycle the templates do not know (pattern 1 with the
+    # right hand's swing turned round: both hands swing together): only their own
+    # recognition makes them coherent.
+    a = performed([("1", 60)])
+    a[:, 2] = 2 * a[:, 2].mean() - a[:, 2]
+    named = np.full(60, "1", dtype=object)
+    assert not dyad.measure_dyad(a, a, LEARNED).coherent.any()
+    both = dyad.measure_dyad(a, a, LEARNED, recognised_a=named, recognised_b=named)
+    assert both.coherent[20:].all()
+    still = np.repeat(a[:1], 60, axis=0)  # named, but not moving: not a movement
+    assert not dyad.measure_dyad(still, still, LEARNED, recognised_a=named,
+                                 recognised_b=named).coherent.any()

@@ -9,11 +9,14 @@ sees a person; a robot's body is mapped there by :mod:`rnnpb.interaction.dyad`).
   demonstrator's ideal movement, :func:`movement_templates`) at every phase; the pattern whose
   best phase fits with the smallest RMS difference, if that RMS is below ``tolerance`` times
   the template's RMS, else none (``""``: still, or no known movement);
+* **recognised class** (for robots, where asked): the learned pattern nearest the agent's PB,
+  while it moves (some coordinate's spread over the last ``window`` steps above 0.02) — the
+  pattern the robot itself is on, which its closed loop may play unlike the demonstrator;
 * **synchrony error** at step t: RMS difference of the two agents' recent trajectories
   (``window`` steps), minimised over lags of at most ``max_lag`` steps (the agents see each
   other one step late, so perfect followers are a step apart);
-* **coherent** at step t (joint attention): both agents' movement classes are the same learned
-  pattern and the synchrony error is below ``sync_tolerance``;
+* **coherent** at step t (joint attention): both agents' classes (movement or recognised) are
+  the same learned pattern and the synchrony error is below ``sync_tolerance``;
 * **joint-attention episode**: a run of at least ``min_steps`` coherent steps (gaps shorter
   than ``bridge`` steps do not end it), with its pattern, start and duration;
 * **shifts**: a *pattern shift* is an episode followed by an episode on another pattern; a
@@ -43,6 +46,7 @@ SYNC_TOLERANCE = 0.03
 MAX_LAG = 2
 MIN_EPISODE = 12
 BRIDGE = 3
+MOVING_LEVEL = 0.02  # view units: below this spread over a cycle, an agent is still
 
 
 def movement_templates(patterns: tuple[str, ...] = PATTERNS, period: int = 12,
@@ -345,25 +349,53 @@ class DyadMeasures:
         }
 
 
+def moving(views: np.ndarray, window: int = CLASS_WINDOW, level: float = MOVING_LEVEL
+           ) -> np.ndarray:
+    """Per step, True where some coordinate's standard deviation over the last ``window``
+    steps exceeds ``level`` (view units). (n,)"""
+    views = np.asarray(views, dtype=np.float64)
+    out = np.zeros(len(views), dtype=bool)
+    for t in range(window - 1, len(views)):
+        spread = np.nanstd(views[t - window + 1:t + 1], axis=0) if \
+            np.isfinite(views[t - window + 1:t + 1]).any() else np.zeros(1)
+        out[t] = bool(np.nanmax(spread) > level)
+    return out
+
+
+def recognised_classes(recognised: np.ndarray, views: np.ndarray) -> np.ndarray:
+    """An agent's own recognition as its class: the pattern it names (e.g. a robot's PB
+    nearest to a learned pattern's), where it moves (:func:`moving`), else ``""``. (n,)"""
+    recognised = np.asarray(recognised, dtype=object)
+    return np.where(moving(views), recognised, "").astype(object)
+
+
 def measure_dyad(view_a: np.ndarray, view_b: np.ndarray, learned: tuple[str, ...],
                  pb_a: np.ndarray | None = None, pb_b: np.ndarray | None = None,
                  templates: dict[str, np.ndarray] | None = None,
-                 min_episode: int = MIN_EPISODE) -> DyadMeasures:
+                 min_episode: int = MIN_EPISODE, recognised_a: np.ndarray | None = None,
+                 recognised_b: np.ndarray | None = None) -> DyadMeasures:
     """All measures of a run from the two agents' movements in the person's sensory space,
     (n, 4) each, and their PBs (n, P) where they have one (the transfer entropy is on their
-    PB changes; without PBs, on how far their movement class's phase jumps)."""
+    PB changes; without PBs, on how far their movement class's phase jumps).
+
+    ``recognised_a``/``recognised_b`` (n,): where given, the pattern the agent itself is on
+    (a robot: the learned pattern nearest its PB) stands for its movement class
+    (:func:`recognised_classes`); else the movement class against the demonstrator's
+    templates."""
     templates = templates or movement_templates()
-    ca = classify_movement(view_a, templates)
-    cb = classify_movement(view_b, templates)
+    ca = classify_movement(view_a, templates).pattern if recognised_a is None \
+        else recognised_classes(recognised_a, view_a)
+    cb = classify_movement(view_b, templates).pattern if recognised_b is None \
+        else recognised_classes(recognised_b, view_b)
     sync = synchrony_error(view_a, view_b)
-    coherent_steps = coherence(ca.pattern, cb.pattern, sync, learned)
-    found = episodes(coherent_steps, ca.pattern, min_steps=min_episode)
-    shifts = pattern_shifts(found, ca.pattern, cb.pattern)
-    change_a = pb_change(pb_a) if pb_a is not None else _class_changes(ca.pattern)
-    change_b = pb_change(pb_b) if pb_b is not None else _class_changes(cb.pattern)
+    coherent_steps = coherence(ca, cb, sync, learned)
+    found = episodes(coherent_steps, ca, min_steps=min_episode)
+    shifts = pattern_shifts(found, ca, cb)
+    change_a = pb_change(pb_a) if pb_a is not None else _class_changes(ca)
+    change_b = pb_change(pb_b) if pb_b is not None else _class_changes(cb)
     first = np.flatnonzero(coherent_steps)
     return DyadMeasures(
-        class_a=ca.pattern, class_b=cb.pattern, sync_error=sync, coherent=coherent_steps,
+        class_a=ca, class_b=cb, sync_error=sync, coherent=coherent_steps,
         episodes=found, shifts=shifts, phase_shifts=phase_shifts(coherent_steps, found),
         found=patterns_found(found, len(coherent_steps), learned, min_episode),
         coherent_share=float(coherent_steps.mean()) if len(coherent_steps) else 0.0,
