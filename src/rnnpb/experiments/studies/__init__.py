@@ -24,6 +24,7 @@ from rnnpb.experiments.summary import Target
 STUDY_MODULES: dict[str, str] = {
     "safety": "rnnpb.experiments.studies.safety",
     "novelty": "rnnpb.experiments.studies.novelty",
+    "dyad": "rnnpb.experiments.studies.dyad",
 }
 
 
