@@ -21,7 +21,9 @@ from rnnpb.errors import ConfigError
 from rnnpb.experiments.summary import Target
 
 # name -> module; the order is the order of `rnnpb study --help`.
-STUDY_MODULES: dict[str, str] = {}
+STUDY_MODULES: dict[str, str] = {
+    "incremental": "rnnpb.experiments.studies.incremental",
+}
 
 
 @dataclass(frozen=True)
