@@ -343,8 +343,8 @@ def run_study(out: Path, config: IncrementalConfig, log=print) -> StudyOutcome:
 
     def write(done: int, total: int) -> StudyOutcome:
         # After every job: a run stopped early keeps what it measured, marked partial.
-        forgetting = {m: {name: after[name][m].old_generation() for name in after
-                          if m in after[name]} for m in config.methods}
+        forgetting = {m: {name: after[name][m].old_generation() for name in config.learning_sets
+                          if m in after.get(name, {})} for m in config.methods}
         plot_forgetting(forgetting, out / "figures" / "forgetting.png", GENERATION_LIMIT)
         targets = _targets(config, after, chained)
         runtime = time.perf_counter() - began
