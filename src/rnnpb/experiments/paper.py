@@ -258,8 +258,8 @@ class Attractor:
 
     motor: np.ndarray  # (T, 8) normalized joints
     context: np.ndarray  # (T, C)
-    cycle: np.ndarray  # (P, 8): the last period (or the best one, when not periodic)
-    period: int | None  # None: not periodic
+    cycle: np.ndarray  # (60, 8): the last period (or the best one, when not periodic)
+    period: float | None  # steps, possibly fractional; None: not periodic
     return_error: float
 
 
@@ -275,7 +275,7 @@ def learned_attractors(model: TrainedModel, n_steps: int, transient: int
         found = metrics.periodicity(motor)
         period = found.period or found.best_period
         out[name] = Attractor(motor=motor, context=generated.context[transient:],
-                              cycle=motor[-period:], period=found.period,
+                              cycle=metrics.last_cycle(motor, period), period=found.period,
                               return_error=found.return_error)
     return out
 
@@ -289,7 +289,7 @@ class NovelResponse:
     amplitude: float  # the pattern's size relative to the learned ones
     case: int  # 1, 2 or 3 (metrics.classify_response)
     description: str
-    period: int | None
+    period: float | None
     nearest_pattern: str | None
     distance: float
     return_error: float

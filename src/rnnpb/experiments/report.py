@@ -222,7 +222,7 @@ def run_demo(out_dir: str | os.PathLike[str], config: ExperimentConfig,
 # --- the report: one function per section --------------------------------------------------
 
 def missing_cases_explanation(novel: Sequence[NovelResponse],
-                              closed_loop_periods: dict[str, dict[str, int | None]]
+                              closed_loop_periods: dict[str, dict[str, float | None]]
                               ) -> list[str]:
     """Why a response case did not occur, from the attractor analysis's own numbers."""
     seen = {r.case for r in novel}

@@ -254,7 +254,7 @@ class DemoResults:
     config: ExperimentConfig
     default: Summary
     novel: list[NovelResponse]  # learning sets in order, then sizes
-    closed_loop_periods: dict[str, dict[str, int | None]]
+    closed_loop_periods: dict[str, dict[str, float | None]]
     switch_sequence_steps_to_follow: list[int | None]
     larger: list[LargerSetRun]  # by seed
     targets: dict[str, Target]
