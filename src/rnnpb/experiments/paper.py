@@ -296,11 +296,18 @@ class NovelResponse:
     motor: np.ndarray  # (T, 8) rad
     pb: np.ndarray  # (T, P)
     context: np.ndarray  # (T, C)
+    # None: one exact cycle repeated; else the draw of the user demonstrating it by hand
+    user_draw: int | None = None
+
+    def without_arrays(self) -> NovelResponse:
+        """The measures alone, light to send back from a worker."""
+        empty = np.zeros((0, 0))
+        return replace(self, motor=empty, pb=empty, context=empty)
 
     def to_json(self) -> dict[str, Any]:
         """The measures as ``results.json`` keeps them (the arrays stay out)."""
         return {"learning_set": self.learning_set, "novel_pattern": self.novel_pattern,
-                "amplitude": self.amplitude, "case": self.case,
+                "amplitude": self.amplitude, "user_draw": self.user_draw, "case": self.case,
                 "description": self.description, "period": self.period,
                 "nearest_pattern": self.nearest_pattern, "distance": self.distance,
                 "return_error": self.return_error}
@@ -322,6 +329,27 @@ def novel_response(model: TrainedModel, learning_set: str, online: OnlineConfig,
     cycle = make_scenario([(pattern, period)], seed=0, config=config, novel=(pattern,))
     repeats = int(math.ceil(n_steps / period))
     sensory = np.tile(cycle.sensory, (repeats, 1))[:n_steps]
+    return _classified_response(model, learning_set, pattern, amplitude, sensory, online,
+                                attractors, transient)
+
+
+def novel_by_hand(model: TrainedModel, learning_set: str, online: OnlineConfig,
+                  attractors: dict[str, Attractor], n_steps: int, transient: int,
+                  seed: int) -> NovelResponse:
+    """The user demonstrates the novel pattern by hand for ``n_steps``: imperfect cycles
+    (period, size and shape vary from cycle to cycle, drawn with ``seed``), as in the paper's
+    interaction experiment; the response is classified."""
+    from rnnpb.demonstrator import novel_pattern, novel_scenario
+
+    scenario = novel_scenario(learning_set, n_steps=n_steps, seed=seed)
+    response = _classified_response(model, learning_set, novel_pattern(learning_set), 1.0,
+                                    scenario.sensory, online, attractors, transient)
+    return replace(response, user_draw=seed)
+
+
+def _classified_response(model: TrainedModel, learning_set: str, pattern: str,
+                         amplitude: float, sensory: np.ndarray, online: OnlineConfig,
+                         attractors: dict[str, Attractor], transient: int) -> NovelResponse:
     mirror = MirrorSystem(model, online)
     motor, pbs, contexts = [], [], []
     for u in sensory:
