@@ -1,6 +1,7 @@
 """Bad sweep specs and an unreachable cluster get one clear line."""
 
 import socket
+from pathlib import Path
 
 import pytest
 
@@ -94,3 +95,15 @@ def test_a_run_that_raises_is_recorded_with_its_error(tmp_path):
     record = execute_run(run, str(tmp_path))
     assert record.status == "failed" and record.measures == []
     assert "9" in record.error and record.error.split(":")[0].endswith("Error")
+
+
+def test_the_specs_shipped_in_the_repository_load():
+    shipped = sorted((Path(__file__).parents[2] / "sweeps").glob("*.toml"))
+    assert shipped
+    specs = {path.stem: load_spec(path) for path in shipped}
+    larger = specs["larger_set_paper"]
+    assert larger.learning_sets == ("full",) and len(larger.seeds) == 10
+    assert larger.training[0].config.iterations == 100_000
+    assert larger.training[0].config.optimizer == "momentum"
+    scaling = specs["scaling"].runs()
+    assert len(scaling) == 2 * 5 * 2 and len({r.model_key for r in scaling}) == 10

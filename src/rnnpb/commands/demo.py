@@ -28,7 +28,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="output directory (default results/demo)")
     parser.add_argument("--quick", action="store_true", help="the short run (about 2 minutes)")
     parser.add_argument("--workers", type=int, default=2,
-                        help="parallel worker processes (default 2)")
+                        help="runs at once, on a local Ray instance (default 2)")
     parser.add_argument("--samples-per-pattern", type=int, default=2, metavar="N",
                         help="demonstrations of each pattern in every learning set (default 2, "
                         "as in the paper)")
@@ -41,12 +41,13 @@ def run(args: argparse.Namespace) -> int:
     os.environ.setdefault("MUJOCO_GL", "egl")
     from rnnpb.errors import ConfigError
     from rnnpb.experiments import ExperimentConfig, run_demo
+    from rnnpb.sweeps import ray_runner
 
     if args.workers < 1:
         raise ConfigError(f"--workers must be >= 1, got {args.workers}")
     config = ExperimentConfig.quick_run() if args.quick else ExperimentConfig()
     config = replace(config, workers=args.workers, samples_per_pattern=args.samples_per_pattern)
-    results = run_demo(args.out, config)
+    results = run_demo(args.out, config, runner=ray_runner(workers=args.workers))
     print(f"wrote {args.out}/report.md and {args.out}/results.json in "
           f"{results.runtime_s:.0f} s")
     for key, target in results.targets.items():
