@@ -101,35 +101,46 @@ def run_sweep(spec: SweepSpec, out: str | Path, address: str | None = None,
     for run in pending:
         groups.setdefault(run.model_key, []).append(run)
     by_id = {run.run_id: run for run in pending}
-    if pending:
-        with ray_cluster(address, workers) as capacity:
-            log(f"on Ray, {capacity} at once")
-            jobs: deque[Job] = deque((group[0].run_id, run_function, (group[0], str(out)))
-                                     for group in groups.values())
-            failures = done = 0
-            for run_id, result, error in run_tasks(jobs, capacity, spec.retries):
-                run = by_id[run_id]
-                if error is not None:
-                    first_line = str(error).strip().splitlines()[0] if str(error) else ""
-                    result = failed(run, f"{type(error).__name__}: {first_line}")
-                write_record(out, run, result)
-                records[run_id] = result
-                done += 1
-                failures += result.status != "ok"
-                group = groups[run.model_key]
-                if group and group[0].run_id == run_id:
-                    jobs.extend((r.run_id, run_function, (r, str(out))) for r in group[1:])
-                    group.clear()
-                elapsed = time.perf_counter() - start
-                progress = Progress(
-                    total=len(runs), done=finished_before + done,
-                    running=min(capacity, len(pending) - done), failed=failures,
-                    elapsed_s=elapsed,
-                    left_s=elapsed / done * (len(pending) - done))
-                log(progress.describe())
-                if on_progress is not None:
-                    on_progress(progress)
-    table = write_table(out, runs, records)
+    try:
+        if pending:
+            with ray_cluster(address, workers) as capacity:
+                log(f"on Ray, {capacity} at once")
+                jobs: deque[Job] = deque((group[0].run_id, run_function, (group[0], str(out)))
+                                         for group in groups.values())
+                failures = done = 0
+                for run_id, result, error in run_tasks(jobs, capacity, spec.retries):
+                    run = by_id[run_id]
+                    if error is not None:
+                        first_line = str(error).strip().splitlines()[0] if str(error) else ""
+                        result = failed(run, f"{type(error).__name__}: {first_line}")
+                    write_record(out, run, result)
+                    records[run_id] = result
+                    done += 1
+                    failures += result.status != "ok"
+                    group = groups[run.model_key]
+                    if group and group[0].run_id == run_id:
+                        jobs.extend((r.run_id, run_function, (r, str(out))) for r in group[1:])
+                        group.clear()
+                    elapsed = time.perf_counter() - start
+                    progress = Progress(
+                        total=len(runs), done=finished_before + done,
+                        running=min(capacity, len(pending) - done), failed=failures,
+                        elapsed_s=elapsed,
+                        left_s=elapsed / done * (len(pending) - done))
+                    log(progress.describe())
+                    if on_progress is not None:
+                        on_progress(progress)
+    except BaseException:
+        # Interrupted (Ctrl-C) or broken: the table and report still show what finished.
+        _write_outputs(out, spec, runs, records, time.perf_counter() - start)
+        raise
     runtime = time.perf_counter() - start
-    write_report(out, spec, read_table(table).to_pylist(), runtime)
+    table = _write_outputs(out, spec, runs, records, runtime)
     return SweepOutcome(records=records, table=table, ran=len(pending), runtime_s=runtime)
+
+
+def _write_outputs(out: Path, spec: SweepSpec, runs: list[RunSpec],
+                   records: dict[str, RunRecord], runtime: float) -> Path:
+    table = write_table(out, runs, records)
+    write_report(out, spec, read_table(table).to_pylist(), runtime)
+    return table
