@@ -282,19 +282,19 @@ def missing_cases_explanation(novel: Sequence[NovelResponse],
     missing = [c for c in metrics.RESPONSE_CASES if c not in seen]
     if not missing or not novel:
         return []
-    periods = sorted({r.period for r in novel if r.period is not None})
+    periods = sorted({f"{r.period:.1f}" for r in novel if r.period is not None}, key=float)
     worst_return = max(r.return_error for r in novel)
     closed = [p for periods_ in closed_loop_periods.values() for p in periods_.values()]
-    learned = sorted({p for p in closed if p is not None})
+    learned = sorted({f"{p:.1f}" for p in closed if p is not None}, key=float)
     cycles = sum(p is not None for p in closed)
     if cycles == len(closed):
         autonomous = (f"The closed-loop attractors of the learned patterns are limit cycles too "
-                      f"(periods {', '.join(map(str, learned))}), and with on-line regression "
+                      f"(periods {', '.join(learned)}), and with on-line regression "
                       "the network entrains to the period it is shown.")
     else:
         autonomous = (f"Of the learned patterns' closed-loop attractors, {cycles} of "
                       f"{len(closed)} are limit cycles (periods "
-                      f"{', '.join(map(str, learned)) or '–'}) and the others do not repeat "
+                      f"{', '.join(learned) or '–'}) and the others do not repeat "
                       f"within {metrics.MAX_PERIOD} steps; yet driven by a repeated input and "
                       "with on-line regression, the network entrains to the period it is shown.")
     lines = ["", f"**Why case {' and '.join(map(str, missing))} did not occur here.**"]
@@ -302,11 +302,15 @@ def missing_cases_explanation(novel: Sequence[NovelResponse],
         lines.append(
             f"Every response settled on a limit cycle: the largest return error over all "
             f"{len(novel)} runs is {worst_return:.3f} (a response counts as unsteady above "
-            f"{metrics.PERIODIC_TOLERANCE:g}), at period(s) {', '.join(map(str, periods))} — "
-            "the period of the repeated input cycle or a multiple of it. "
-            f"{autonomous} The input here is one exactly "
-            "repeated cycle (the paper's user demonstrated the novel patterns by hand), and "
-            "the PB, regressed every step, keeps the response on that period.")
+            f"{metrics.PERIODIC_TOLERANCE:g}), at period(s) {', '.join(periods)} — "
+            "the period of the input cycle or a multiple of it. "
+            f"{autonomous} "
+            + ("Even demonstrated by hand, with imperfect cycles, the novel pattern is close "
+               "enough to a cycle that the PB, regressed every step, keeps the response on "
+               "its period." if any(r.user_draw is not None for r in novel) else
+               "The input here is one exactly repeated cycle (the paper's user demonstrated "
+               "the novel patterns by hand), and the PB, regressed every step, keeps the "
+               "response on that period."))
     if 2 in missing:
         lines.append(f"Every periodic response lay within {metrics.SIMILAR_CYCLE:g} of a "
                      "learned pattern's cycle: the novel patterns were drawn into the learned "

@@ -119,7 +119,11 @@ def run_sweep(spec: SweepSpec, out: str | Path, address: str | None = None,
                     failures += result.status != "ok"
                     group = groups[run.model_key]
                     if group and group[0].run_id == run_id:
-                        jobs.extend((r.run_id, run_function, (r, str(out))) for r in group[1:])
+                        # The model is cached now: its other runs go first, so that every
+                        # model's runs finish together and an interrupted sweep keeps whole
+                        # models' results.
+                        jobs.extendleft((r.run_id, run_function, (r, str(out)))
+                                        for r in reversed(group[1:]))
                         group.clear()
                     elapsed = time.perf_counter() - start
                     progress = Progress(
