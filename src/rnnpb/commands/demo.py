@@ -12,10 +12,13 @@ section 3 (synchronization and pause, switching, novel patterns and attractors, 
 set) and write OUT/report.md (measure | paper | ours, figures embedded), OUT/results.json
 (every measure, the config and versions), OUT/figures/, OUT/models/ and OUT/data/.
 
-The full run learns with the paper's algorithm and also runs the paper's own on-line
-regression on the same models for comparison (about 8 minutes on 2 cores). --quick learns
-with the fast preset, keeps the lock-on and switching experiments whole and shortens the rest
-(about 2 minutes); its models go with `rnnpb interact --online ungated`.
+Every learning set is learned with three training seeds (--quick: two), and every measure is
+also reported over all networks and draws of the user, with 95 % bootstrap intervals; the
+figures show the first seed's networks. The jobs run on a local Ray instance with --workers
+workers. The full run learns with the paper's algorithm and also runs the paper's own on-line
+regression on the same models for comparison. --quick learns with the fast preset, keeps the
+lock-on and switching experiments whole and shortens the rest; its models go with
+`rnnpb interact --online ungated`.
 
 Example:
   rnnpb demo --out results/demo
@@ -26,7 +29,7 @@ Example:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", default="results/demo", metavar="DIR",
                         help="output directory (default results/demo)")
-    parser.add_argument("--quick", action="store_true", help="the short run (about 2 minutes)")
+    parser.add_argument("--quick", action="store_true", help="the short run")
     parser.add_argument("--workers", type=int, default=2,
                         help="runs at once, on a local Ray instance (default 2)")
     parser.add_argument("--samples-per-pattern", type=int, default=2, metavar="N",
