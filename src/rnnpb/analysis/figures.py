@@ -39,6 +39,7 @@ class NovelRun(Protocol):
     learning_set: str
     novel_pattern: str
     amplitude: float
+    user_draw: int | None  # None: one exact cycle repeated; else demonstrated by hand
     case: int
     motor: np.ndarray  # (T, 8) rad
     pb: np.ndarray  # (T, P)
@@ -187,8 +188,10 @@ def plot_novel_responses(runs: SequenceABC[NovelRun], path: str | os.PathLike[st
                               label=name.upper())
         for k in range(run.pb.shape[1]):
             axes[1, col].plot(run.pb[show, k], color=PB_COLORS[k], label=f"PB{k}")
+        shown = (f"x{run.amplitude:g}" if run.user_draw is None
+                 else f"by hand, draw {run.user_draw}")
         axes[0, col].set_title(f"case {run.case}: set {run.learning_set}, novel pattern "
-                               f"{run.novel_pattern} (x{run.amplitude:g})", fontsize=9)
+                               f"{run.novel_pattern} ({shown})", fontsize=9)
         axes[1, col].set_xlabel("step")
         axes[1, col].set_ylim(-0.05, 1.05)
     axes[0, 0].set_ylabel("robot joints (normalized)")

@@ -118,8 +118,12 @@ def ray_runner(address: str | None = None, workers: int | None = None, retries: 
     """A job runner for :func:`rnnpb.experiments.report.run_demo`: the demo's jobs as Ray
     tasks; a job that fails fails the demo."""
     def run(jobs: Sequence[Job]) -> Iterator[tuple[Any, Any]]:
+        import ray
+
         with ray_cluster(address, workers) as capacity:
             for key, result, error in run_tasks(deque(jobs), capacity, retries):
+                if isinstance(error, ray.exceptions.RayTaskError):
+                    raise error.as_instanceof_cause()  # the job's own error, as a pool gives
                 if error is not None:
                     raise error
                 yield key, result
