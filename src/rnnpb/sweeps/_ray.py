@@ -18,6 +18,7 @@ from typing import Any
 from rnnpb.errors import RnnpbError
 
 ADDRESS_TIMEOUT_S = 5.0
+WAIT_S = 0.5
 
 
 class ClusterError(RnnpbError, RuntimeError):
@@ -104,7 +105,8 @@ def run_tasks(jobs: deque[Job], capacity: int, retries: int = 2
         while jobs and len(running) < capacity:
             key, function, args = jobs.popleft()
             running[remote.remote(function, args)] = key
-        done, _ = ray.wait(list(running), num_returns=1)
+        # A bounded wait: Ctrl-C reaches Python between waits, not only when a task ends.
+        done, _ = ray.wait(list(running), num_returns=1, timeout=WAIT_S)
         for ref in done:
             key = running.pop(ref)
             try:
