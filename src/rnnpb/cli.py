@@ -25,6 +25,7 @@ from rnnpb.errors import RnnpbError
 COMMAND_MODULES: tuple[str, ...] = (
     "rnnpb.commands.demo",
     "rnnpb.commands.study",
+    "rnnpb.commands.sweep",
     "rnnpb.commands.train",
     "rnnpb.commands.consolidate",
     "rnnpb.commands.info",

@@ -39,6 +39,7 @@ class NovelRun(Protocol):
     learning_set: str
     novel_pattern: str
     amplitude: float
+    user_draw: int | None  # None: one exact cycle repeated; else demonstrated by hand
     case: int
     motor: np.ndarray  # (T, 8) rad
     pb: np.ndarray  # (T, P)
@@ -324,8 +325,10 @@ def plot_novel_responses(runs: SequenceABC[NovelRun], path: str | os.PathLike[st
                               label=name.upper())
         for k in range(run.pb.shape[1]):
             axes[1, col].plot(run.pb[show, k], color=PB_COLORS[k], label=f"PB{k}")
+        shown = (f"x{run.amplitude:g}" if run.user_draw is None
+                 else f"by hand, draw {run.user_draw}")
         axes[0, col].set_title(f"case {run.case}: set {run.learning_set}, novel pattern "
-                               f"{run.novel_pattern} (x{run.amplitude:g})", fontsize=9)
+                               f"{run.novel_pattern} ({shown})", fontsize=9)
         axes[1, col].set_xlabel("step")
         axes[1, col].set_ylim(-0.05, 1.05)
     axes[0, 0].set_ylabel("robot joints (normalized)")
@@ -766,4 +769,49 @@ def plot_forgetting(errors: dict[str, dict[str, SequenceABC[float]]],
         ax.set_xlabel("learning set")
     axes[0][0].set_ylabel("old pattern's cycle vs before\n(RMS, normalized joints)")
     fig.suptitle(f"Forgetting by method (target <= {limit:g})", y=1.02)
+    save(fig, path)
+
+
+class IntervalLike(Protocol):
+    """A statistic and its confidence interval (:class:`rnnpb.analysis.statistics.Interval`)."""
+
+    value: float
+    low: float
+    high: float
+    n: int
+
+
+def plot_distributions(panels: dict[str, dict[str, tuple[SequenceABC[float], IntervalLike]]],
+                       path: str | os.PathLike[str],
+                       limits: dict[str, float] | None = None) -> None:
+    """One panel per measure; in each, one column per setting: every run's value (dots,
+    jittered) and the median with its 95 % interval (bar). ``panels[measure][setting] =
+    (values, interval)``; ``limits`` draws the paper's limit of a measure as a dashed line."""
+    limits = limits or {}
+    n = max(len(panels), 1)
+    cols = min(n, 3)
+    rows = int(np.ceil(n / cols))
+    fig = Figure(figsize=(4.2 * cols, 3.2 * rows))
+    axes = fig.subplots(rows, cols, squeeze=False).ravel()
+    rng = np.random.default_rng(0)
+    for ax, (measure, settings) in zip(axes, panels.items(), strict=False):
+        for i, (values, interval) in enumerate(settings.values()):
+            values = np.asarray([v for v in values if np.isfinite(v)], dtype=np.float64)
+            ax.scatter(i + rng.uniform(-0.15, 0.15, len(values)), values, s=8, alpha=0.4,
+                       color="#1f77b4")
+            if interval.n:
+                ax.errorbar([i + 0.3], [interval.value],
+                            yerr=[[interval.value - interval.low],
+                                  [interval.high - interval.value]],
+                            fmt="o", color="black", capsize=4)
+        if measure in limits:
+            ax.axhline(limits[measure], color="#d62728", ls="--", lw=1, label="paper's limit")
+            ax.legend(fontsize=7, loc="upper right")
+        ax.set_xticks(range(len(settings)))
+        ax.set_xticklabels(list(settings), rotation=20, fontsize=7)
+        ax.set_title(measure, fontsize=9)
+        ax.grid(alpha=0.3)
+    for ax in axes[len(panels):]:
+        ax.set_visible(False)
+    fig.suptitle("every run (dots) and the median with its 95 % bootstrap interval")
     save(fig, path)
