@@ -29,6 +29,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "rnnpb.commands.generate",
     "rnnpb.commands.interact",
     "rnnpb.commands.data",
+    "rnnpb.commands.record",
     "rnnpb.commands.track",
     "rnnpb.commands.calibrate",
     "rnnpb.commands.serve",

@@ -26,6 +26,15 @@ from rnnpb.perception._colors import (
     load_ball_colors,
     save_ball_colors,
 )
+from rnnpb.perception._depth import (
+    MOUSE_PLANE_X,
+    DepthConfig,
+    depth_from_size,
+    fill_gaps,
+    hands_from_balls,
+    hands_on_plane,
+    running_median,
+)
 from rnnpb.perception._sources import (
     ArraySource,
     FrameSource,
@@ -55,6 +64,7 @@ from rnnpb.perception._user_source import (
 
 __all__ = [
     "BLUE",
+    "MOUSE_PLANE_X",
     "BROAD_BLUE",
     "BROAD_RED",
     "LOST",
@@ -65,6 +75,7 @@ __all__ = [
     "BallColor",
     "BallColors",
     "BallMeasurement",
+    "DepthConfig",
     "BallTracker",
     "FrameSource",
     "ImageFolderSource",
@@ -83,12 +94,17 @@ __all__ = [
     "calibration_preview",
     "call_with_timeout",
     "center_errors",
+    "depth_from_size",
     "draw_tracking",
+    "fill_gaps",
     "fit_color",
+    "hands_from_balls",
+    "hands_on_plane",
     "load_ball_colors",
     "oscillating_hands",
     "open_camera_source",
     "open_frame_source",
+    "running_median",
     "save_ball_colors",
     "synthetic_user_hands",
     "tracking_benchmark",
