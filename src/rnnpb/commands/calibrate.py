@@ -12,8 +12,9 @@ colour file for `rnnpb track --colors` and a preview PNG: the frame with the fou
 circled, next to the mask each fitted range gives (only the ball should light up).
 
 Give where the balls are with --left-pixel/--right-pixel X,Y (column,row of a pixel in the
-middle of the ball on the user's LEFT and RIGHT hand), or leave them out to take the largest
-round red blob as the left ball and the largest round blue blob as the right one.
+middle of the ball on the user's LEFT and RIGHT hand), or leave them out to take the red and
+the blue blob that move like hands over the frames up to --frame (use --frame 30 or so while
+moving your hands, so that a still red or blue object in the room is not taken for a ball).
 
 SOURCE is webcam:INDEX, video:PATH, images:DIR or synthetic:PATTERN.
 
@@ -63,11 +64,10 @@ def run(args: argparse.Namespace) -> int:
         BROAD_RED,
         BallColor,
         BallColors,
-        BallTracker,
-        TrackerConfig,
         calibrate_automatically,
         calibrate_from_pixel,
         calibration_preview,
+        locate_ball,
         open_frame_source,
         save_ball_colors,
     )
@@ -76,9 +76,11 @@ def run(args: argparse.Namespace) -> int:
         raise RnnpbError(f"--frame must be >= 0, got {args.frame}")
     spec = parse_source_spec(args.source, kinds=CAMERA_KINDS)
     frame = None
+    recent = []  # the last frames up to --frame: motion tells the balls from look-alikes
     with open_frame_source(spec.kind, spec.argument, steps=args.frame + 1) as source:
         for image in source:
             frame = image
+            recent = [*recent[-29:], image]
         if frame is None or source.frame_index < args.frame:
             raise RnnpbError(f"{args.source}: has no frame {args.frame}")
 
@@ -88,7 +90,7 @@ def run(args: argparse.Namespace) -> int:
         if pixel is not None:
             cal = calibrate_from_pixel(frame, pixel, name)
         else:
-            cal = calibrate_automatically(frame, broad)
+            cal = calibrate_automatically(recent, broad)
         if name and cal.color.name != name:
             c = cal.color
             cal = type(cal)(BallColor(name, c.hue, c.saturation, c.value), cal.center_px,
@@ -97,12 +99,11 @@ def run(args: argparse.Namespace) -> int:
     colors = BallColors(calibrations[0].color, calibrations[1].color)
 
     # Check the fitted ranges the way `rnnpb track` will use them.
-    result = BallTracker(TrackerConfig(colors=colors)).track(frame)
     for i, (side, cal) in enumerate(zip(("left", "right"), calibrations, strict=True)):
-        ball = result.balls[i]
-        if not ball.tracked:
+        found = locate_ball(recent, colors.balls[i])
+        if found is None:
             raise RnnpbError(f"calibration: the fitted {side} range finds no ball in the frame")
-        off = float(((ball.center_px - cal.center_px) ** 2).sum() ** 0.5)
+        off = float(((found[0] - cal.center_px) ** 2).sum() ** 0.5)
         if off > max(3.0, cal.radius_px):
             raise RnnpbError(f"calibration: with the fitted {side} range the tracker picks a "
                              f"blob {off:.0f} px away from the calibrated ball; another object "

@@ -7,7 +7,15 @@ is a :class:`rnnpb.sources.UserSource` yielding one observation per frame. Spec 
 ``webcam:0`` are parsed by :func:`rnnpb.interaction.parse_source_spec`, the one grammar.
 """
 
-from rnnpb.perception._bench import center_errors, tracking_benchmark
+from rnnpb.perception._bench import (
+    HARD_SCENE_KINDS,
+    SceneScore,
+    center_errors,
+    clutter_benchmark,
+    hard_scene,
+    score_scene,
+    tracking_benchmark,
+)
 from rnnpb.perception._calibrate import (
     BROAD_BLUE,
     BROAD_RED,
@@ -16,6 +24,7 @@ from rnnpb.perception._calibrate import (
     calibrate_from_pixel,
     calibration_preview,
     fit_color,
+    locate_ball,
 )
 from rnnpb.perception._colors import (
     BLUE,
@@ -67,6 +76,7 @@ __all__ = [
     "MOUSE_PLANE_X",
     "BROAD_BLUE",
     "BROAD_RED",
+    "HARD_SCENE_KINDS",
     "LOST",
     "RED",
     "TRACKED",
@@ -81,6 +91,7 @@ __all__ = [
     "ImageFolderSource",
     "LimitedSource",
     "SceneConfig",
+    "SceneScore",
     "SyntheticCamera",
     "TrackedUserSource",
     "TrackerConfig",
@@ -94,18 +105,22 @@ __all__ = [
     "calibration_preview",
     "call_with_timeout",
     "center_errors",
+    "clutter_benchmark",
     "depth_from_size",
     "draw_tracking",
     "fill_gaps",
     "fit_color",
     "hands_from_balls",
     "hands_on_plane",
+    "hard_scene",
     "load_ball_colors",
+    "locate_ball",
     "oscillating_hands",
     "open_camera_source",
     "open_frame_source",
     "running_median",
     "save_ball_colors",
+    "score_scene",
     "synthetic_user_hands",
     "tracking_benchmark",
 ]

@@ -5,8 +5,10 @@ Two ways, both headless:
 - from pixels: the user says where each ball is (``--left-pixel X,Y``); the hue, saturation and
   value around that pixel give a first range, the blob of that range containing the pixel is
   taken as the ball, and the final range is fitted to all of the blob's pixels;
-- automatically: the largest round blob of broad "red" and "blue" ranges is taken as the left
-  and right ball, and the range is fitted to it in the same way.
+- automatically: the blob of broad "red" and "blue" ranges that the tracker follows over the
+  frames up to the calibration frame (the one that moves like a hand; the roundest large one
+  when nothing moves) is taken as the left and right ball, and the range is fitted to it in the
+  same way.
 
 The fitted range: hue = the blob's circular median ± (its 98th-percentile deviation + a margin);
 saturation and value from a margin below their 5th percentile up to 255, so that shading and
@@ -16,6 +18,7 @@ highlights on the ball stay inside while the dull background stays out.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import cv2
@@ -130,17 +133,46 @@ def calibrate_from_pixel(frame: np.ndarray, xy: tuple[int, int], name: str | Non
     return _calibration(hsv, blob, name)
 
 
-def calibrate_automatically(frame: np.ndarray, broad: BallColor) -> BallCalibration:
-    """Fit a ball's colour range to the largest round blob within the ``broad`` range."""
-    hsv = cv2.cvtColor(frame, cv2.COLOR_BGR2HSV)
-    tracker = BallTracker(TrackerConfig(colors=BallColors(broad, broad)))
-    mask = tracker.mask(hsv, broad)
-    result = tracker._choose(mask, tracker._states[0])
-    if result is None:
+def locate_ball(frames: np.ndarray | Sequence[np.ndarray], color: BallColor
+                ) -> tuple[np.ndarray, float] | None:
+    """Where the ball of ``color`` is in the last of ``frames`` (BGR): its centre and area.
+
+    The tracker runs over all the frames, so the ball is the blob of its colour that moves
+    like a hand, not a still look-alike. When motion does not tell (a single frame, or
+    nothing moved), the roundest large blob is taken.
+    """
+    frames = [frames] if isinstance(frames, np.ndarray) and frames.ndim == 3 else list(frames)
+    tracker = BallTracker(TrackerConfig(colors=BallColors(color, color)))
+    result = None
+    for frame in frames:
+        result = tracker.track(frame)
+    if result is not None and result.balls[0].tracked:
+        ball = result.balls[0]
+        return ball.center_px, math.pi * ball.radius_px ** 2
+    mask = tracker.mask(cv2.cvtColor(frames[-1], cv2.COLOR_BGR2HSV), color)
+    contours, blobs = tracker._blobs(mask)
+    if not len(blobs):
+        return None
+    best = int(np.argmax(np.log(blobs[:, 2]) + 4.0 * np.log(blobs[:, 3])))
+    return tracker._measure(mask, contours[best])
+
+
+def calibrate_automatically(frames: np.ndarray | Sequence[np.ndarray],
+                            broad: BallColor) -> BallCalibration:
+    """Fit a ball's colour range to the ball within the ``broad`` range in the last frame.
+
+    ``frames``: one BGR frame or several in order; with several the ball is the blob that
+    moves (see :func:`locate_ball`), so a still object of the ball's colour is not taken.
+    """
+    frames = [frames] if isinstance(frames, np.ndarray) and frames.ndim == 3 else list(frames)
+    found = locate_ball(frames, broad)
+    if found is None:
         raise RnnpbError(f"calibration: no round {broad.name} blob in the frame; give the "
                          f"ball's position with --{'left' if broad is BROAD_RED else 'right'}"
                          "-pixel X,Y")
-    center, _ = result
+    center, _ = found
+    hsv = cv2.cvtColor(frames[-1], cv2.COLOR_BGR2HSV)
+    mask = BallTracker(TrackerConfig(colors=BallColors(broad, broad))).mask(hsv, broad)
     blob = _blob_at(mask, (int(center[0]), int(center[1])))
     assert blob is not None
     return _calibration(hsv, blob, broad.name)

@@ -61,6 +61,17 @@ class SceneConfig:
         addition to the random ones.
     distractors : int
         Number of small red and blue objects (not round) on the wall, to test robustness.
+    static_distractors : int
+        Objects of the balls' colours and sizes that stay put, away from the hands' path, in
+        turn: a dark-blue book, a dark-red book (rectangles about as big as a ball), a blue and a
+        red round object (shaded like the balls, 0.8-1.25 times their radius).
+    moving_distractors : int
+        Objects of the balls' colours and sizes that cross the wall on straight lines, each
+        entering at a random frame, in turn: a blue round object, a red book, a red round
+        object, a blue book. They pass behind the user (the hands and arms hide them).
+    flicker : float
+        Amplitude of a periodic change of brightness from frame to frame (mains lighting beating
+        against the frame rate), on top of ``lighting``.
     seed : int
     """
 
@@ -78,15 +89,18 @@ class SceneConfig:
     occlusion_frames: tuple[int, int] = (3, 8)
     occlusions: tuple[tuple[int, int, int], ...] = ()
     distractors: int = 0
+    static_distractors: int = 0
+    moving_distractors: int = 0
+    flicker: float = 0.0
     seed: int = 0
 
     def __post_init__(self) -> None:
         if not self.ball_radius_m > 0:
             raise ConfigError(f"scene ball_radius_m must be > 0, got {self.ball_radius_m}")
-        for name in ("clutter", "distractors"):
+        for name in ("clutter", "distractors", "static_distractors", "moving_distractors"):
             if getattr(self, name) < 0:
                 raise ConfigError(f"scene {name} must be >= 0, got {getattr(self, name)}")
-        for name in ("texture", "lighting", "noise_sigma", "blur_px"):
+        for name in ("texture", "lighting", "noise_sigma", "blur_px", "flicker"):
             if not getattr(self, name) >= 0:
                 raise ConfigError(f"scene {name} must be >= 0, got {getattr(self, name)}")
         for name in ("blur_probability", "occlusion_probability"):
@@ -173,6 +187,7 @@ class SyntheticCamera(FrameSource):
         self._occluded = self._occlusion_schedule()
         self._background: np.ndarray | None = None
         self._body = self._body_geometry()
+        self._movers = self._moving_distractor_paths()
 
     def __len__(self) -> int:
         return len(self.hands)
@@ -198,6 +213,8 @@ class SyntheticCamera(FrameSource):
         scene = self.scene
         rng = np.random.default_rng([scene.seed, 1, t])
         frame = self._background.copy()
+        for mover in self._movers:
+            self._draw_mover(frame, mover, t)
         if scene.body:
             self._draw_body(frame, t)
         centers, radii = self._centers[t], self._radii[t]
@@ -210,7 +227,7 @@ class SyntheticCamera(FrameSource):
             if self._occluded[t, i]:
                 occluders.append(self._draw_occluder(frame, centers[i], radii[i], rng))
         visible = self._visible_fraction(t, order, occluders)
-        frame = self._degrade(frame, rng)
+        frame = self._degrade(frame, rng, t)
         truth = {
             **self.extra_truth,
             "frame": t,
@@ -265,7 +282,65 @@ class SyntheticCamera(FrameSource):
             box = ((float(x), float(y)), (float(w), float(h)), float(rng.uniform(0, 180)))
             cv2.fillPoly(image, [np.round(cv2.boxPoints(box)).astype(np.int32)], color,
                          cv2.LINE_AA)
+        self._draw_static_distractors(image, rng)
         return image
+
+    def _distractor_look(self, k: int, rng: np.random.Generator
+                         ) -> tuple[str, tuple[int, int, int], float]:
+        """Kind ("book" or "round"), colour and size (radius, px) of distractor ``k``."""
+        scene = self.scene
+        kind = ("book", "round")[(k // 2) % 2]
+        base = (scene.right_ball_bgr, scene.left_ball_bgr)[k % 2]
+        hsv = cv2.cvtColor(np.array([[base]], np.uint8), cv2.COLOR_BGR2HSV)[0, 0].astype(float)
+        if kind == "book":  # a darker cover, still inside the ball's default colour range
+            hsv[1] *= rng.uniform(0.85, 1.0)
+            hsv[2] *= rng.uniform(0.45, 0.75)
+        else:
+            hsv[0] = (hsv[0] + rng.uniform(-3, 3)) % 180
+            hsv[2] *= rng.uniform(0.8, 1.0)
+        color = _bgr_from_hsv(*hsv)
+        radius = float(np.median(self._radii)) * rng.uniform(0.8, 1.25)
+        return kind, color, radius
+
+    def _draw_static_distractors(self, image: np.ndarray, rng: np.random.Generator) -> None:
+        cam = self.camera
+        path = self._centers.reshape(-1, 2)
+        reach = float(self._radii.max())
+        for k in range(self.scene.static_distractors):
+            kind, color, radius = self._distractor_look(k, rng)
+            for _ in range(200):  # away from where the hands go: a look-alike, not an overlap
+                c = np.array([rng.uniform(radius, cam.width - radius),
+                              rng.uniform(radius, cam.height - radius)])
+                if np.min(np.linalg.norm(path - c, axis=1)) > 2.0 * (reach + radius):
+                    break
+            else:
+                continue
+            _draw_distractor(image, kind, c, radius, color, float(rng.uniform(-15, 15)))
+
+    def _moving_distractor_paths(self) -> list[dict[str, Any]]:
+        cam, scene, n = self.camera, self.scene, len(self.hands)
+        rng = np.random.default_rng([scene.seed, 3])
+        movers = []
+        for k in range(scene.moving_distractors):
+            look_rng = np.random.default_rng([scene.seed, 4, k])
+            kind, color, radius = self._distractor_look((2, 1, 3, 0)[k % 4], look_rng)
+            start = int(rng.integers(0, max(1, n // 2)))
+            y0, y1 = rng.uniform(0.1, 0.9, size=2) * cam.height
+            x0, x1 = (-2 * radius, cam.width + 2 * radius)[::(1 if rng.random() < 0.5 else -1)]
+            speed = rng.uniform(3.0, 9.0)
+            steps = max(1, int(math.hypot(x1 - x0, y1 - y0) / speed))
+            movers.append({"kind": kind, "color": color, "radius": radius, "start": start,
+                           "steps": steps, "from": np.array([x0, y0]), "to": np.array([x1, y1]),
+                           "angle": float(rng.uniform(-20, 20))})
+        return movers
+
+    def _draw_mover(self, frame: np.ndarray, mover: dict[str, Any], t: int) -> None:
+        s = (t - mover["start"]) / mover["steps"]
+        if not 0.0 <= s <= 1.0:
+            return
+        center = (1 - s) * mover["from"] + s * mover["to"]
+        _draw_distractor(frame, mover["kind"], center, mover["radius"], mover["color"],
+                         mover["angle"])
 
     def _draw_clutter(self, image: np.ndarray, rng: np.random.Generator) -> None:
         h, w = image.shape[:2]
@@ -359,7 +434,7 @@ class SyntheticCamera(FrameSource):
             fractions[i] = seen.mean()
         return fractions
 
-    def _degrade(self, frame: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    def _degrade(self, frame: np.ndarray, rng: np.random.Generator, t: int) -> np.ndarray:
         scene = self.scene
         if scene.blur_probability > 0 and rng.random() < scene.blur_probability:
             length = rng.uniform(3.0, max(3.0, scene.blur_px))
@@ -372,8 +447,10 @@ class SyntheticCamera(FrameSource):
                      cv2.LINE_AA, shift=_SHIFT)
             kernel /= kernel.sum()
             frame = cv2.filter2D(frame, -1, kernel, borderType=cv2.BORDER_REFLECT)
-        if scene.lighting > 0 or scene.noise_sigma > 0:
+        if scene.lighting > 0 or scene.noise_sigma > 0 or scene.flicker > 0:
             out = frame.astype(np.float32)
+            if scene.flicker > 0:
+                out *= 1.0 + scene.flicker * math.sin(2 * math.pi * t / 3.7 + scene.seed)
             if scene.lighting > 0:
                 h, w = frame.shape[:2]
                 gain = 1.0 + rng.uniform(-scene.lighting, scene.lighting)
@@ -406,6 +483,20 @@ def _draw_ball(frame: np.ndarray, center: np.ndarray, radius: float,
     ball = np.asarray(color, np.float64) * shade
     patch = frame[y0c:y1c, x0c:x1c].astype(np.float64)
     frame[y0c:y1c, x0c:x1c] = np.round(patch * (1 - coverage) + ball * coverage).astype(np.uint8)
+
+
+def _draw_distractor(frame: np.ndarray, kind: str, center: np.ndarray, radius: float,
+                     color: tuple[int, int, int], angle: float) -> None:
+    """A look-alike of a ball: a book (rectangle of the ball's area or more) or a round object."""
+    if kind == "round":
+        _draw_ball(frame, center, radius, color)
+        return
+    side = radius * math.sqrt(math.pi)  # a square of the disk's area
+    aspect = 0.75
+    box = ((float(center[0]), float(center[1])), (side / math.sqrt(aspect) * 1.2,
+                                                  side * math.sqrt(aspect) * 1.2), angle)
+    corners = np.round(cv2.boxPoints(box) * _ONE).astype(np.int32)
+    cv2.fillPoly(frame, [corners], color, cv2.LINE_AA, shift=_SHIFT)
 
 
 def oscillating_hands(n_steps: int, period: float = 12.0, seed: int = 0,

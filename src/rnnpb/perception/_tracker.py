@@ -41,6 +41,7 @@ TRACKED = "tracked"
 LOST = "lost"
 HAND_NAMES = ("left", "right")
 _DISK_FILL = math.pi / 4.0  # area of a disk over the area of its bounding square
+_MERGED_RATIO = 1.6  # a blob this much bigger than the ball holds the ball and something else
 
 
 @dataclass(frozen=True)
@@ -78,8 +79,11 @@ class TrackerConfig:
     min_circularity: float = 0.35
     opening_px: int = 3
     search_radius_px: float = 120.0
-    lost_memory_frames: int = 15
+    lost_memory_frames: int = 30
     smoothing: float = 0.0
+    min_roundness: float = 0.45
+    move_px: float = 2.0
+    static_frames: int = 3
     camera: RobotCamera = field(default_factory=RobotCamera)
 
     def __post_init__(self) -> None:
@@ -103,6 +107,13 @@ class TrackerConfig:
                               f"{self.lost_memory_frames}")
         if not 0.0 <= self.smoothing < 1.0:
             raise ConfigError(f"tracker smoothing must be in [0, 1), got {self.smoothing}")
+        if not 0.0 <= self.min_roundness <= 1.0:
+            raise ConfigError(f"tracker min_roundness must be in [0, 1], got "
+                              f"{self.min_roundness}")
+        if not self.move_px > 0:
+            raise ConfigError(f"tracker move_px must be > 0, got {self.move_px}")
+        if self.static_frames < 1:
+            raise ConfigError(f"tracker static_frames must be >= 1, got {self.static_frames}")
 
 
 @dataclass(frozen=True)
@@ -162,24 +173,68 @@ class TrackingResult:
 _LOST = BallMeasurement(LOST, np.full(2, np.nan))
 
 
+class _Track:
+    """One blob of a ball's colour followed from frame to frame (the ball or a look-alike).
+
+    A constant-velocity Kalman filter (``cv2.KalmanFilter``, state x, y, vx, vy) predicts
+    where the blob will be; ``moving_frames`` counts the frames in which it moved by more than
+    ``move_px`` without changing its size much (a ball on a hand does; a book on a shelf does
+    not, and a blob that only grows or shrinks as something passes in front of it does not).
+    """
+
+    def __init__(self, center: np.ndarray, area: float, roundness: float) -> None:
+        kf = cv2.KalmanFilter(4, 2)
+        kf.transitionMatrix = np.array([[1, 0, 1, 0], [0, 1, 0, 1], [0, 0, 1, 0],
+                                        [0, 0, 0, 1]], np.float32)
+        kf.measurementMatrix = np.eye(2, 4, dtype=np.float32)
+        # a hand circling at 30 px/frame accelerates by ~15 px/frame^2: velocity noise 10 px
+        kf.processNoiseCov = np.diag([4.0, 4.0, 100.0, 100.0]).astype(np.float32)
+        kf.measurementNoiseCov = np.eye(2, dtype=np.float32)
+        kf.errorCovPost = np.diag([1.0, 1.0, 400.0, 400.0]).astype(np.float32)
+        kf.statePost = np.array([[center[0]], [center[1]], [0.0], [0.0]], np.float32)
+        self.kalman = kf
+        self.center = center
+        self.area = area
+        self.roundness = roundness
+        self.mean_roundness = roundness
+        self.mean_area = area
+        self.age = 1
+        self.frames_lost = 0
+        self.moving_frames = 0
+        self.prediction = center
+
+    def predict(self) -> np.ndarray:
+        self.prediction = self.kalman.predict()[:2, 0].astype(np.float64)
+        return self.prediction
+
+    def update(self, center: np.ndarray, area: float, roundness: float, move_px: float) -> None:
+        step = float(np.linalg.norm(center - self.center))
+        ratio = area / self.area
+        if step > move_px and 0.7 < ratio < 1.0 / 0.7:
+            self.moving_frames += 1
+        self.kalman.correct(np.asarray(center, np.float32).reshape(2, 1))
+        self.center, self.area, self.roundness = center, area, roundness
+        self.mean_roundness += 0.3 * (roundness - self.mean_roundness)
+        self.mean_area += 0.2 * (area - self.mean_area)
+        self.age += 1
+        self.frames_lost = 0
+
+    @property
+    def moved(self) -> bool:
+        return self.moving_frames >= 2
+
+
 class _BallState:
-    """What the tracker remembers of one ball between frames."""
+    """What the tracker remembers of one ball between frames: every blob of its colour as a
+    track, and which track is the ball (``selected``)."""
 
     def __init__(self) -> None:
         self.reset()
 
     def reset(self) -> None:
-        self.center: np.ndarray | None = None
-        self.velocity = np.zeros(2)
-        self.frames_lost = 0
+        self.tracks: list[_Track] = []
+        self.selected: _Track | None = None
         self.smoothed: np.ndarray | None = None
-
-    def predicted(self, memory: int) -> np.ndarray | None:
-        if self.center is None or self.frames_lost > memory:
-            return None
-        if self.frames_lost:
-            return self.center
-        return self.center + self.velocity
 
 
 class BallTracker:
@@ -239,35 +294,148 @@ class BallTracker:
         return TrackingResult((balls[0], balls[1]), sensory)
 
     # --- internals ------------------------------------------------------------------------
-    def _choose(self, mask: np.ndarray, state: _BallState) -> tuple[np.ndarray, float] | None:
+    def _blobs(self, mask: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
+        """The blobs that pass the size and shape checks: their contours and, per blob, a row
+        ``(x, y, area, roundness)`` (centre from the contour's moments; roundness = the blob's
+        area over that of its smallest enclosing circle, 1 for a disk, 2/pi for a square)."""
         # Contours, not connectedComponentsWithStats: on a mostly empty 640x480 mask they cost
         # a tenth as much (the labelling pass touches every pixel). The chosen blob's centroid
         # and area are then measured exactly on its pixels.
         contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
-        if not contours:
-            return None
-        n = len(contours)
-        boxes = np.array([cv2.boundingRect(c) for c in contours], dtype=np.float64).reshape(n, 4)
-        # a polygon through the boundary pixels' centres misses half a pixel all round
-        areas = np.array([cv2.contourArea(c) + 0.5 * cv2.arcLength(c, True) + 1.0
-                          for c in contours])
-        w, h = boxes[:, 2], boxes[:, 3]
-        aspect = np.minimum(w, h) / np.maximum(w, h)
-        fill = areas / (w * h) / _DISK_FILL
-        circularity = aspect * np.minimum(fill, 1.0 / fill)
-        keep = (areas >= self._min_area) & (circularity >= self.config.min_circularity)
-        if not keep.any():
-            return None
-        score = np.log(areas) + 2.0 * np.log(circularity + 1e-3)
-        predicted = state.predicted(self.config.lost_memory_frames)
-        if predicted is not None:
-            centers = boxes[:, :2] + 0.5 * boxes[:, 2:]
-            d2 = np.sum((centers - predicted) ** 2, axis=1)
-            score = score - d2 / self.config.search_radius_px ** 2
-        best = int(np.argmax(np.where(keep, score, -np.inf)))
-        x, y, bw, bh = (int(v) for v in boxes[best])
+        kept, rows = [], []
+        for contour in contours:
+            x, y, w, h = cv2.boundingRect(contour)
+            # a polygon through the boundary pixels' centres misses half a pixel all round
+            area = cv2.contourArea(contour) + 0.5 * cv2.arcLength(contour, True) + 1.0
+            if area < self._min_area:
+                continue
+            fill = area / (w * h) / _DISK_FILL
+            if min(w, h) / max(w, h) * min(fill, 1.0 / fill) < self.config.min_circularity:
+                continue
+            m = cv2.moments(contour)
+            if m["m00"] > 0:
+                center = (m["m10"] / m["m00"] + 0.5, m["m01"] / m["m00"] + 0.5)
+            else:
+                center = (x + 0.5 * w, y + 0.5 * h)
+            _, r = cv2.minEnclosingCircle(contour)
+            roundness = min(1.0, area / (math.pi * (r + 0.5) ** 2))
+            kept.append(contour)
+            rows.append((center[0], center[1], area, roundness))
+        return kept, np.array(rows, dtype=np.float64).reshape(-1, 4)
+
+    def _associate(self, state: _BallState, blobs: np.ndarray) -> list[_Track | None]:
+        """Match blobs to the colour's tracks (nearest to each track's prediction, within a
+        gate of a few radii, widening while a track is unseen); unmatched blobs start tracks,
+        tracks unseen for more than ``lost_memory_frames`` are forgotten."""
+        config = self.config
+        owners: list[_Track | None] = [None] * len(blobs)
+        pairs = []
+        for k, track in enumerate(state.tracks):
+            predicted = track.predict()
+            radius = math.sqrt(track.mean_area / math.pi)
+            gate = max(3.0 * radius, 40.0) + 15.0 * track.frames_lost
+            if len(blobs):
+                d = np.linalg.norm(blobs[:, :2] - predicted, axis=1)
+                ratio = blobs[:, 2] / track.mean_area
+                # A blob much bigger than the ball is the ball and a look-alike of its colour
+                # run together; its centroid is neither's. The ball coasts on its prediction
+                # until they part, rather than being dragged off by the look-alike.
+                if track is state.selected:
+                    fits = (ratio > 0.5) & (ratio < _MERGED_RATIO)
+                else:
+                    fits = (ratio > 0.4) & (ratio < 2.5)
+                for j in np.nonzero((d < gate) & fits)[0]:
+                    pairs.append((float(d[j]), k, int(j)))
+        used_tracks: set[int] = set()
+        for _, k, j in sorted(pairs):
+            if k in used_tracks or owners[j] is not None:
+                continue
+            track = state.tracks[k]
+            track.update(blobs[j, :2].copy(), float(blobs[j, 2]), float(blobs[j, 3]),
+                         config.move_px)
+            owners[j] = track
+            used_tracks.add(k)
+        survivors = []
+        for k, track in enumerate(state.tracks):
+            if k not in used_tracks:
+                track.frames_lost += 1
+                # coast on the prediction: the state moves on, the last measurement stays
+                track.kalman.statePost = track.kalman.statePre.copy()
+                track.kalman.errorCovPost = track.kalman.errorCovPre.copy()
+            if track.frames_lost <= config.lost_memory_frames:
+                survivors.append(track)
+        for j in range(len(blobs)):
+            if owners[j] is None:
+                owners[j] = _Track(blobs[j, :2].copy(), float(blobs[j, 2]), float(blobs[j, 3]))
+                survivors.append(owners[j])
+        state.tracks = survivors
+        if state.selected is not None and state.selected not in survivors:
+            state.selected = None
+        return owners
+
+    def _select(self, state: _BallState, owners: list[_Track | None]) -> _Track | None:
+        """Which of this frame's blobs is the ball.
+
+        The ball keeps its track while it is seen. A track that has never moved gives way to
+        one that has: a ball taken for the ball by a still look-alike is found again as soon as
+        the real one moves. Without a track (the start, or the ball lost), a blob is taken only
+        when it is unambiguous: one that moved (the nearest to where the ball was lost, and the
+        roundest), or the only blob of the colour when no lost ball is being waited for. Blobs
+        that have stayed still since they appeared are scenery while the ball is away.
+        """
+        config = self.config
+        seen = [t for t in owners if t is not None]
+        selected = state.selected
+        if selected is not None and selected.frames_lost == 0:
+            if selected.moved:
+                # a moving look-alike taken while the ball was away is not round: give it up
+                # for a round mover (the ball, back)
+                if selected.mean_roundness >= config.min_roundness + 0.2:
+                    return selected
+                movers = [t for t in seen if t.moved and t is not selected
+                          and t.mean_roundness >= selected.mean_roundness + 0.25]
+            else:
+                movers = [t for t in seen if t.moved and t.roundness >= config.min_roundness]
+            if not movers:
+                return selected
+            return max(movers, key=lambda t: t.roundness)
+        waiting = selected is not None  # the ball is unseen but remembered
+        candidates = [t for t in seen if t.roundness >= config.min_roundness
+                      and not (t.age >= config.static_frames and not t.moved)]
+        if waiting:
+            assert selected is not None
+            reach = config.search_radius_px + 20.0 * selected.frames_lost
+            scored = []
+            for t in candidates:
+                if t.roundness < config.min_roundness + 0.2:
+                    continue  # only a round blob is taken for the ball coming back
+                if t.age > selected.frames_lost + 2:
+                    continue  # it was there all the while the ball was not: not the ball
+                # the prediction drifts off while the ball is hidden; where it was last seen
+                # stays a good guess for a hand moving to and fro
+                d = float(min(np.linalg.norm(t.center - selected.prediction),
+                              np.linalg.norm(t.center - selected.center)))
+                ratio = t.area / selected.mean_area
+                if d < reach and 0.4 < ratio < 2.5:
+                    scored.append((d / config.search_radius_px - t.roundness
+                                   - 0.5 * (t.age <= selected.frames_lost + 1), t))
+            if not scored:
+                return None
+            best = min(scored, key=lambda item: item[0])[1]
+            best.moving_frames = max(best.moving_frames, selected.moving_frames)
+            return best
+        movers = [t for t in candidates if t.moved]
+        if movers:
+            return max(movers, key=lambda t: t.roundness + math.log(t.area) * 0.25)
+        plausible = [t for t in seen if t.roundness >= config.min_roundness]
+        if len(plausible) == 1:
+            return plausible[0]
+        return None
+
+    def _measure(self, mask: np.ndarray, contour: np.ndarray) -> tuple[np.ndarray, float] | None:
+        x, y, bw, bh = cv2.boundingRect(contour)
         blob = np.zeros((bh, bw), np.uint8)
-        cv2.drawContours(blob, contours, best, 255, cv2.FILLED, offset=(-x, -y))
+        cv2.drawContours(blob, [contour], 0, 255, cv2.FILLED, offset=(-x, -y))
         blob = cv2.bitwise_and(blob, mask[y:y + bh, x:x + bw])
         m = cv2.moments(blob, binaryImage=True)
         if m["m00"] <= 0:
@@ -275,21 +443,25 @@ class BallTracker:
         center = np.array([x + m["m10"] / m["m00"] + 0.5, y + m["m01"] / m["m00"] + 0.5])
         return center, float(m["m00"])
 
+    def _choose(self, mask: np.ndarray, state: _BallState) -> tuple[np.ndarray, float] | None:
+        """Update the colour's tracks with one mask; the ball's exact centre and area."""
+        contours, blobs = self._blobs(mask)
+        owners = self._associate(state, blobs)
+        chosen = self._select(state, owners)
+        if chosen is None:
+            if state.selected is not None and state.selected.frames_lost == 0:
+                state.selected.frames_lost = 0  # seen, but not taken for the ball this frame
+            return None
+        state.selected = chosen
+        return self._measure(mask, contours[owners.index(chosen)])
+
     def _track_ball(self, mask: np.ndarray, state: _BallState, width: int,
                     height: int) -> BallMeasurement:
         found = self._choose(mask, state)
         if found is None:
-            state.frames_lost += 1
             state.smoothed = None
-            state.velocity = np.zeros(2)
             return _LOST
         center, area = found
-        if state.center is not None and state.frames_lost == 0:
-            state.velocity = center - state.center
-        else:
-            state.velocity = np.zeros(2)
-        state.center = center
-        state.frames_lost = 0
         s = self.config.smoothing
         if s > 0.0 and state.smoothed is not None:
             center = (1.0 - s) * center + s * state.smoothed
