@@ -30,6 +30,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "rnnpb.commands.interact",
     "rnnpb.commands.data",
     "rnnpb.commands.record",
+    "rnnpb.commands.memory",
     "rnnpb.commands.track",
     "rnnpb.commands.calibrate",
     "rnnpb.commands.serve",
