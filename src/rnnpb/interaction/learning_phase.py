@@ -141,20 +141,24 @@ def _described(source: UserSource) -> str:
 
 def dominant_period(signal: np.ndarray, min_period: int = MIN_PERIOD,
                     max_period: int = MAX_PERIOD) -> int | None:
-    """The lag of the autocorrelation's highest peak in [min_period, max_period], or None
-    when the signal does not repeat (no peak above 0.3). ``signal`` shape (n_steps,)."""
+    """The lag of the autocorrelation's first strong peak in [min_period, max_period], or None
+    when the signal does not repeat. ``signal`` shape (n_steps,).
+
+    A peak is a local maximum inside the range, above 0.3 and at least 0.6 above the lowest
+    correlation at a shorter lag: a cycle's autocorrelation falls towards -1 at half its period
+    and comes back, while a drifting, shapeless movement's only decays (with small bumps).
+    """
     x = np.asarray(signal, dtype=np.float64)
     x = x - x.mean()
     energy = float(x @ x)
     max_period = min(max_period, len(x) // 2)
-    if energy <= 1e-12 or max_period < min_period:
+    if energy <= 1e-12 or max_period < min_period + 2:
         return None
-    lags = np.arange(min_period, max_period + 1)
+    lags = np.arange(1, max_period + 2)
     correlation = np.array([x[:-k] @ x[k:] / energy * len(x) / (len(x) - k) for k in lags])
-    peaks = [i for i in range(len(lags))
-             if (i == 0 or correlation[i] >= correlation[i - 1])
-             and (i == len(lags) - 1 or correlation[i] >= correlation[i + 1])]
-    peaks = [i for i in peaks if correlation[i] > 0.3]
+    peaks = [i for i in range(min_period - 1, len(lags) - 1)
+             if correlation[i] >= correlation[i - 1] and correlation[i] >= correlation[i + 1]
+             and correlation[i] > 0.3 and correlation[i] - correlation[:i].min() >= 0.6]
     if not peaks:
         return None
     # the first strong peak: later peaks are its multiples
