@@ -84,3 +84,30 @@ def test_a_moment_without_evidence_does_not_break_the_run_but_a_lost_hand_does()
 def test_teaching_config_is_validated():
     with pytest.raises(ConfigError, match="confirm_cycles"):
         TeachingConfig(confirm_cycles=5, episode_cycles=4)
+
+
+def test_the_keeper_stores_each_novel_movement_once_in_the_memory(tmp_path):
+    from types import SimpleNamespace
+
+    from rnnpb.interaction.teaching import EpisodeKeeper
+    from rnnpb.memory import MemoryStore
+
+    _, shape = _stream("3", 80, seed=4)
+    rng = np.random.default_rng(5)
+    walk = np.clip(0.5 + np.cumsum(0.02 * rng.standard_normal((60, 4)), axis=0), 0, 1)
+    stream = [(row, "novel") for row in shape] + [(row, "unstructured") for row in walk] \
+        + [(row, "novel") for row in shape]
+    with MemoryStore(tmp_path / "m.npz") as memory:
+        keeper = EpisodeKeeper(memory, model="m.npz", source="scenario:held:3")
+        for t, (row, word) in enumerate(stream):
+            keeper(SimpleNamespace(step=t, observed=row, novelty=word))
+        episodes = memory.episodes()
+        assert [e.pattern for e in episodes] == ["new-1", "new-2"]
+        assert all(e.status == "kept" and e.n_cycles == 4 for e in episodes)
+        assert all(e.source == "scenario:held:3" and e.model == "m.npz" for e in episodes)
+        # nothing from the unstructured stretch (steps 80-139)
+        for e in episodes:
+            first, last = (int(v) for v in e.note.removeprefix("steps ").split("-"))
+            assert last < 80 or first >= 140
+    kinds = [event.kind for event in keeper.events]
+    assert kinds.count("kept") == 2 and "recording" in kinds

@@ -185,3 +185,86 @@ class EpisodeCutter:
         self._kept = True
         return KeptMovement(sensory, motor, self.config.episode_cycles, self._steps[start],
                             self._steps[stop - 1])
+
+
+@dataclass(frozen=True)
+class TeachingEvent:
+    """Something the teacher did, for the dashboard and the log.
+
+    ``kind`` is ``recording`` (a novel movement is being recorded; ``text`` says which cycle),
+    ``kept`` (an episode was stored; ``episode_id``, ``pattern``) or ``refused`` (the memory
+    would not take it; ``text`` says why).
+    """
+
+    step: int
+    kind: str
+    text: str
+    episode_id: int | None = None
+    pattern: str = ""
+
+
+class EpisodeKeeper:
+    """A loop subscriber: cuts novel movements with an :class:`EpisodeCutter` and stores each
+    as an episode in the short-term memory, under the next free name ``new-1``, ``new-2`` ….
+
+    Parameters
+    ----------
+    memory : rnnpb.memory.MemoryStore
+        Open store (the keeper does not close it).
+    model : str
+        The running model's file (which model saw the movement).
+    source : str
+        The source's description (where the movement came from).
+    config : TeachingConfig, optional
+    hands_of : callable, optional
+        ``hands_of(record) -> array (2, 3) or None``: the 3-D hands of a step when the source
+        gives them (a camera's depth from size); else they lie on the fixed plane.
+
+    ``events`` lists what happened, newest last; ``kept`` the stored episodes' ids.
+    """
+
+    def __init__(self, memory, model: str, source: str, config: TeachingConfig | None = None,
+                 hands_of=None, mapping: MirrorMapping | None = None) -> None:
+        self.memory = memory
+        self.model = str(model)
+        self.source = str(source)
+        self.cutter = EpisodeCutter(config, mapping)
+        self.hands_of = hands_of
+        self.events: list[TeachingEvent] = []
+        self.kept: list[int] = []
+        self._last_text = ""
+
+    def next_pattern_name(self) -> str:
+        """``new-N`` for the smallest N no episode of the memory is named yet."""
+        taken = {e.pattern for e in self.memory.episodes()}
+        n = 1
+        while f"new-{n}" in taken:
+            n += 1
+        return f"new-{n}"
+
+    def __call__(self, record) -> None:
+        hands = self.hands_of(record) if self.hands_of is not None else None
+        episode = self.cutter.observe(record.step, record.observed,
+                                      getattr(record, "novelty", ""), hands)
+        text = self.cutter.status.describe()
+        if episode is None:
+            if text != self._last_text and self.cutter.status.state == RECORDING:
+                self.events.append(TeachingEvent(record.step, "recording", text))
+            self._last_text = text
+            return
+        self._last_text = text
+        pattern = self.next_pattern_name()
+        from rnnpb.errors import RnnpbError
+
+        try:
+            episode_id = self.memory.add_episode(
+                episode.sensory, episode.motor, source=self.source, model=self.model,
+                pattern=pattern, n_cycles=episode.n_cycles,
+                note=f"steps {episode.first_step}-{episode.last_step}")
+        except RnnpbError as error:
+            self.events.append(TeachingEvent(record.step, "refused", str(error)))
+            return
+        self.kept.append(episode_id)
+        self.events.append(TeachingEvent(
+            record.step, "kept", f"kept a new movement as {pattern} ({episode.n_cycles} cycles, "
+            f"{len(episode.sensory)} steps)", episode_id, pattern))
