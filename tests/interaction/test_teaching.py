@@ -111,3 +111,17 @@ def test_the_keeper_stores_each_novel_movement_once_in_the_memory(tmp_path):
             assert last < 80 or first >= 140
     kinds = [event.kind for event in keeper.events]
     assert kinds.count("kept") == 2 and "recording" in kinds
+
+
+def test_a_camera_sources_hands_reach_the_keeper():
+    from rnnpb.interaction import open_source
+    from rnnpb.interaction.teaching import tracked_hands
+
+    with open_source("synthetic:1", steps=3, seed=0) as source:
+        hands_of = tracked_hands(source)
+        assert hands_of(None) is None  # nothing read yet
+        source.read()
+        hands = hands_of(None)
+        truth = source.frames.hands[0]
+    assert hands.shape == (2, 3) and np.abs(hands - truth).max() < 0.03
+    assert tracked_hands(object())(None) is None
