@@ -147,14 +147,15 @@ def _draw_figures(figure_dir: Path, full: list, default: dict[str, LearningSetRe
     figures.plot_session(sync.run.session(), figure_dir / "figure5_synchronization.png",
                          title=f"Learning set 1: the user performs pattern {sync.pattern}, "
                          f"pauses (shaded) and goes on", joint_limits=JOINT_LIMITS,
-                         marks=[(sync.steps_to_lock or 0, "locked")])
+                         marks=[(sync.steps_to_lock or 0, "locked")],
+                         pattern_pb=set1.pattern_pb)
     sequence = set1.sequence
     session = sequence.run.session()
     switches = sequence.run.switch_steps
     figures.plot_session(session, figure_dir / "figure6_switching.png",
                          title="Learning set 1: the user switches among the learned patterns",
                          joint_limits=JOINT_LIMITS,
-                         marks=[(s, "switch") for s in switches])
+                         marks=[(s, "switch") for s in switches], pattern_pb=set1.pattern_pb)
     figures.plot_switch_zoom(session, [(s - 10, s + 30) for s in switches],
                              figure_dir / "figure7_switching_zoom.png", JOINT_LIMITS, switches)
     figures.plot_switch_matrix({k: default[k].switching.pairs for k in sorted(default)},

@@ -23,6 +23,7 @@ wait).
 from __future__ import annotations
 
 import math
+import numbers
 import time
 from collections import deque
 from collections.abc import Callable
@@ -53,10 +54,28 @@ class LoopConfig:
     max_steps: int | None = None
 
     def __post_init__(self) -> None:
-        if not self.dt > 0:
-            raise ConfigError(f"dt must be > 0 seconds, got {self.dt}")
-        if self.max_steps is not None and self.max_steps < 0:
-            raise ConfigError(f"max_steps must be >= 0, got {self.max_steps}")
+        dt = self.dt
+        # The type first: a bool is no duration, and float() of a 309-digit integer raises
+        # OverflowError; then finiteness, since inf or NaN would stall or never pace the loop.
+        if isinstance(dt, bool) or not isinstance(dt, numbers.Real):
+            raise ConfigError(f"dt must be a number of seconds, got {dt!r:.40}")
+        try:
+            finite = math.isfinite(dt)
+        except OverflowError:
+            finite = False
+        if not finite or not dt > 0:
+            raise ConfigError(f"dt must be a finite number of seconds > 0, got {dt!r:.40}")
+        object.__setattr__(self, "dt", float(dt))
+        if not isinstance(self.paced, bool):
+            raise ConfigError(f"paced must be True or False, got {self.paced!r:.40}")
+        steps = self.max_steps
+        if steps is not None:
+            if isinstance(steps, bool) or not isinstance(steps, numbers.Integral):
+                raise ConfigError(f"max_steps must be a whole number or None, got "
+                                  f"{steps!r:.40}")
+            if steps < 0:
+                raise ConfigError(f"max_steps must be >= 0, got {steps}")
+            object.__setattr__(self, "max_steps", int(steps))
 
 
 @dataclass

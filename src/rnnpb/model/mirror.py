@@ -119,7 +119,8 @@ def normalized_hands(values: object, sensory_size: int) -> tuple[np.ndarray, np.
     seen), shape (S,), and which were seen (finite), shape (S,)."""
     try:
         u = np.asarray(values, dtype=np.float64).reshape(-1)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
+        # OverflowError: a Python integer beyond float64's range (10**309).
         raise ConfigError(f"observed hands must be {sensory_size} numbers (lhy lhz rhy rhz), "
                           f"got {values!r:.80}") from None
     if u.shape != (sensory_size,):
@@ -138,12 +139,30 @@ def one_step_prediction_error(predicted: np.ndarray | None, u: np.ndarray,
     return float(np.mean((predicted[seen] - u[seen]) ** 2))
 
 
+_LARGEST = float(np.finfo(np.float64).max)
+
+
 def motor_command(model: TrainedModel, motor: np.ndarray) -> np.ndarray:
-    """A normalized motor output (M,) as joint angles (M,), radians, within the joint limits."""
+    """A normalized motor output (M,) as joint angles (M,), radians, within the model's motor
+    bounds and always finite.
+
+    The bounds are the model's normalization of the joints; the model never sees the robot,
+    so the joint limits reach it through them (loading a model checks them against the robot's
+    limits). A non-finite output (which a held step never hands back, but a caller's model
+    might) goes to the middle of the range; the command is formed as a weighted mean of the
+    two bounds, which cannot overflow, and clipped to them.
+    """
     s = model.network.sensory_size
     lower = np.asarray(model.lower, dtype=np.float64)[s:]
     upper = np.asarray(model.upper, dtype=np.float64)[s:]
-    return np.clip(motor, 0.0, 1.0) * (upper - lower) + lower
+    if not (np.isfinite(lower).all() and np.isfinite(upper).all()):
+        # Only a model built by hand gets here: a model file's bounds are finite.
+        lower = np.clip(np.where(np.isnan(lower), 0.0, lower), -_LARGEST, _LARGEST)
+        upper = np.clip(np.where(np.isnan(upper), 0.0, upper), -_LARGEST, _LARGEST)
+    upper = np.maximum(upper, lower)
+    m = np.asarray(motor, dtype=np.float64)
+    m = np.clip(np.where(np.isfinite(m), m, 0.5), 0.0, 1.0)
+    return np.clip(lower * (1.0 - m) + upper * m, lower, upper)
 
 
 class MirrorSystem:
