@@ -153,6 +153,11 @@ def test_two_clients_share_one_session_and_a_disconnect_mid_stream_is_harmless(s
         assert model.nearest_pattern(np.array(recognised["pb"]))[0] == "2"
         assert set(recognised["timings_ms"]) == {"perceive", "mirror", "act", "record"}
         assert len(recognised["arms"]["hands"]) == 2
+        # What the step recognised travels with it, in the contract's words.
+        assert recognised["novelty"] in ("familiar", "novel", "unstructured", "still", "")
+        assert recognised["recognised"] in (None, *model.pattern_pb)
+        assert 0.0 <= recognised["confidence"] <= 1.0
+        assert set(recognised["pattern_confidence"]) == set(model.pattern_pb)
         _control(a, type="control", action="stop")
         _next(b, "state", where=lambda m: not m["running"])
     deadline = time.monotonic() + 5

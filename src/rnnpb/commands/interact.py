@@ -15,12 +15,18 @@ the motor command, which the robot executes.
 
 Sources (--source):
   scenario:held:P | scenario:pause:P | scenario:switch:A,B,C | scenario:novel:SET
+  scenario:steps:M*N,...   movements (any demonstrator movement or pause), N steps each
   csv:FILE        a sensory stream (step,lhy,lhz,rhy,rhz; empty cell = hand not seen)
   video:FILE | images:DIR | webcam:INDEX | synthetic:P   (through the colour-ball tracker)
 
 Writes DIR/session.csv (one row per step), DIR/session.png (the paper's Figure 5 layout)
-and DIR/summary.json (timings per section, missed deadlines, config, versions); with
+and DIR/summary.json (timings per section, missed deadlines, config, versions, the
+recognition timeline); with
 --render also DIR/session.mp4: the camera frame with the tracked balls | the robot.
+
+While it runs, a step counter shows what the robot recognises (the learned pattern and
+its confidence, "new movement", "hands still", ...); at the end it prints the recognition
+timeline: which answer held from which step to which.
 
 Steps where a hand is lost are run on the network's own prediction and marked in the
 recording (lost_left, lost_right).
@@ -85,6 +91,7 @@ def run(args: argparse.Namespace) -> int:
         read_session,
     )
     from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel
+    from rnnpb.model.recognition import describe_answer, recognition_timeline
     from rnnpb.models import default_model, first_model_file
     from rnnpb.robot import JOINT_LIMITS, KinematicRobot
 
@@ -134,9 +141,16 @@ def run(args: argparse.Namespace) -> int:
         bar = stack.enter_context(progress_bar(
             total=args.steps or _source_length(source), unit="step", desc="interacting",
             disable=args.no_progress))
+        answers: list[tuple[str | None, str]] = []
 
         def after_step(record) -> None:
-            bar.update(1)
+            answers.append((record.recognised, record.novelty))
+            text = describe_answer(record.recognised, record.confidence, record.novelty)
+            if not bar.disable:  # a terminal: the live counter is the bar, the answer beside it
+                bar.set_postfix_str(text, refresh=False)
+                bar.update(1)
+            elif len(answers) == 1 or answers[-1] != answers[-2]:
+                print(f"step {record.step + 1}: {text}", flush=True)
             # Between steps is the safe point: the step's results are read back from XLA.
             _interrupt.check()
 
@@ -146,13 +160,20 @@ def run(args: argparse.Namespace) -> int:
             summary = loop.summary()
             bar.close()
             print("interrupted: the recording keeps every step so far")
+    timeline = recognition_timeline(answers)
+    print("recognition timeline:")
+    for part in timeline:
+        text = describe_answer(part["recognised"], 1.0, part["novelty"]).split(" (")[0]
+        print(f"  steps {part['first'] + 1:>4}-{part['last'] + 1:<4} {text}")
     session = read_session(out / "session.csv")
     if len(session["step"]):
         plot_session(session, out / "session.png", title=f"{args.source} — {model_path}",
                      joint_limits=JOINT_LIMITS)
     document = {"rnnpb_version": __version__, "model": str(model_path), "source": args.source,
                 "online": online_name, "online_config": online.to_dict(), "loop": summary.to_dict(),
-                "dt": args.dt, "paced": args.paced, "robot": args.robot}
+                "dt": args.dt, "paced": args.paced, "robot": args.robot,
+                "recognition_config": mirror.recognition.to_dict(),
+                "recognition_timeline": timeline}
     with atomic_write(out / "summary.json", "w", encoding="utf-8") as handle:
         json.dump(document, handle, indent=2)
     print(summary.describe())

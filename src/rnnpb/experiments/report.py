@@ -437,7 +437,9 @@ def _novel_section(results: DemoResults) -> list[str]:
             "", embed("novel", "figure8_novel.png"), "",
             embed("attractors", "figure9_attractors.png"), "",
             "Closed-loop periods of the learned patterns (steps; none = not periodic): "
-            + periods]
+            + periods, "",
+            "Whether the robot itself tells a novel movement from a learned one, or from noise "
+            "(section 4.1): `rnnpb study novelty --out DIR` (docs/experiments.md)."]
 
 
 def _larger_set_section(results: DemoResults) -> list[str]:

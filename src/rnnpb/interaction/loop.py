@@ -84,7 +84,9 @@ class StepRecord:
 
     ``observed`` (4,) the hands seen (NaN where lost); ``predicted`` (4,) what the network had
     predicted for this step one step before (NaN on the first step); ``motor`` (8,) the command
-    sent, radians; ``pb`` (P,); ``timings`` seconds per section.
+    sent, radians; ``pb`` (P,); ``timings`` seconds per section; ``recognised``,
+    ``confidence``, ``novelty``, ``pattern_confidence``: what the step recognised
+    (:class:`rnnpb.model.mirror.StepResult`).
     """
 
     step: int
@@ -106,6 +108,10 @@ class StepRecord:
     # is then the command the robot was sent.
     unsafe: str = ""
     filtered: str = ""
+    recognised: str | None = None
+    confidence: float = 0.0
+    novelty: str = ""
+    pattern_confidence: dict[str, float] = field(default_factory=dict)
 
 
 @dataclass
@@ -198,7 +204,9 @@ class InteractionLoop:
             predicted=self._predicted.copy(), predicted_next=result.predicted_hands,
             motor=motor, pb=result.pb, prediction_error=result.prediction_error,
             window_error=result.window_error, held=result.held, truth=observation.truth,
-            frame=observation.frame, context=result.context, unsafe=unsafe, filtered=filtered)
+            frame=observation.frame, context=result.context, unsafe=unsafe, filtered=filtered,
+            recognised=result.recognised, confidence=result.confidence, novelty=result.novelty,
+            pattern_confidence=result.pattern_confidence)
         self._predicted = result.predicted_hands.copy()
         if self.recorder is not None:
             self.recorder.write(record)

@@ -69,7 +69,7 @@ class OnlineConfig:
     def __post_init__(self) -> None:
         for item in fields(self):
             value = getattr(self, item.name)
-            if item.name in ("pb", "motor_input"):
+            if item.name in ("pb", "motor_input", "safety_guard"):  # checked below
                 continue
             if item.name == "optimize_onset":
                 if not isinstance(value, bool):

@@ -623,6 +623,13 @@ class Session:
             "pb": _listed(record.pb),
             "nearest": nearest,
             "nearest_distance": distance,
+            # What the step recognised (rnnpb.model.recognition): the readout says "not sure"
+            # or "new movement" rather than a confident wrong name.
+            "recognised": record.recognised,
+            "confidence": round(float(record.confidence), 4),
+            "novelty": record.novelty,
+            "pattern_confidence": {k: round(float(v), 4)
+                                   for k, v in record.pattern_confidence.items()},
             "prediction_error": _listed([record.prediction_error])[0],
             "window_error": _listed([record.window_error])[0],
             "held": record.held,

@@ -228,6 +228,47 @@ function buildPatternButtons(state) {
     : "";
 }
 
+// ---------------------------------------------------------------- recognition
+// What the robot says it sees: a learned pattern only when it is confident, else "not sure"
+// or "new movement" (rnnpb.model.recognition).
+function readout(step) {
+  if (step.recognised && (step.novelty === "familiar" || step.novelty === "still")) {
+    const still = step.novelty === "still" ? ", hands still" : "";
+    return `${step.recognised} — ${describe(step.recognised)} ` +
+      `(${Math.round(100 * step.confidence)} %${still})`;
+  }
+  const words = { novel: "new movement", unstructured: "not sure (no repeating pattern)",
+    still: "hands still", "": "not sure yet" };
+  return words[step.novelty] || "not sure";
+}
+
+function drawConfidenceBars(step) {
+  const box = $("confidence-bars");
+  if (!box) return;
+  const shares = step.pattern_confidence || {};
+  const names = Object.keys(shares);
+  if (box.childElementCount !== names.length) {
+    box.replaceChildren(...names.map((name) => {
+      const row = el("div", { className: "confidence-row" });
+      row.appendChild(el("span", { className: "confidence-name" }, name));
+      const bar = el("span", { className: "confidence-bar" });
+      bar.appendChild(el("span", { className: "confidence-fill" }));
+      row.appendChild(bar);
+      row.appendChild(el("span", { className: "confidence-value" }, ""));
+      return row;
+    }));
+  }
+  names.forEach((name, i) => {
+    const row = box.children[i];
+    const share = shares[name];
+    // A width set through the CSS object model, not a style attribute (the page's
+    // Content-Security-Policy forbids inline styles).
+    row.querySelector(".confidence-fill").style.width = `${Math.round(100 * share)}%`;
+    row.classList.toggle("active", name === step.recognised);
+    row.querySelector(".confidence-value").textContent = `${Math.round(100 * share)} %`;
+  });
+}
+
 // ---------------------------------------------------------------- steps
 function onStep(step) {
   dash.lastStep = step;
@@ -244,8 +285,10 @@ function onStep(step) {
 // The readouts under the robot: the last step's, marked as such while stopped.
 function showReadouts(step) {
   $("step").textContent = step.step;
-  $("nearest").textContent = `${step.nearest} — ${describe(step.nearest)}`;
-  $("nearest-distance").textContent = `(PB distance ${fmt(step.nearest_distance, 2)})`;
+  $("nearest").textContent = readout(step);
+  $("nearest-distance").textContent =
+    `(nearest learned PB ${step.nearest}, distance ${fmt(step.nearest_distance, 2)})`;
+  drawConfidenceBars(step);
   $("pred-error").textContent = step.prediction_error === null ? "—"
     : step.prediction_error.toExponential(1);
   $("truth").textContent = step.mode === "demonstrator" ? step.truth
