@@ -26,6 +26,8 @@ COMMAND_MODULES: tuple[str, ...] = (
     "rnnpb.commands.demo",
     "rnnpb.commands.study",
     "rnnpb.commands.train",
+    "rnnpb.commands.consolidate",
+    "rnnpb.commands.info",
     "rnnpb.commands.generate",
     "rnnpb.commands.interact",
     "rnnpb.commands.data",
