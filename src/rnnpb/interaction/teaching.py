@@ -24,7 +24,11 @@ autocorrelation of at most ``max_run_steps`` steps, 0.2 ms a step (median) with 
 
 from __future__ import annotations
 
+import os
+import re
+import time
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -281,3 +285,235 @@ def tracked_hands(source):
         return None if result is None else result.hands_3d
 
     return hands_of
+
+
+def version_path(model_path: str | os.PathLike[str], version: int) -> Path:
+    """The file of a model's version ``version``: ``model.npz`` → ``model.v2.npz`` (the
+    original is version 1; a version's own file name gives the same family)."""
+    path = Path(model_path)
+    stem = re.sub(r"\.v\d+$", "", path.name.removesuffix(".npz"))
+    return path.with_name(f"{stem}.v{int(version)}.npz")
+
+
+def _consolidation_worker(model_path: str, memory_path: str, episode_ids: list[int],
+                          out_path: str, queue, iterations: int | None = None) -> None:
+    """In a spawned process: consolidate the episodes into the model, write the new version,
+    record the consolidation in the memory; report progress and the outcome on ``queue``."""
+    start = time.perf_counter()
+    try:
+        from dataclasses import replace
+
+        from rnnpb.memory import MemoryStore
+        from rnnpb.model import ConsolidationConfig, TrainedModel, consolidate, rehearse
+
+        model = TrainedModel.load(model_path)
+        with MemoryStore(memory_path, create=False) as memory:
+            sequences = [memory.episode(i).sequence() for i in episode_ids]
+
+        def progress(p) -> None:
+            queue.put(("progress", int(p.iteration), int(p.total), float(p.mse)))
+
+        config = ConsolidationConfig()
+        if iterations is not None:
+            config = ConsolidationConfig(train=replace(config.learning_for(model),
+                                                       iterations=int(iterations)))
+        learned = consolidate(model, sequences, config, parent=model_path, progress=progress)
+        learned.save(out_path)
+        rehearsed = rehearse(model)
+        seconds = time.perf_counter() - start
+        with MemoryStore(memory_path, create=False) as memory:
+            memory.add_consolidation(model_before=model_path, model_after=out_path,
+                                     episode_ids=episode_ids,
+                                     rehearsed=[*rehearsed, *sequences], seconds=seconds)
+        queue.put(("done", out_path, seconds))
+    except BaseException as error:  # the parent keeps its model and says why
+        message = f"{type(error).__name__}: {error}" if not str(error).startswith("rnnpb") \
+            else str(error)
+        try:
+            from rnnpb.memory import MemoryStore
+
+            with MemoryStore(memory_path, create=False) as memory:
+                memory.add_consolidation(model_before=model_path, model_after="",
+                                         episode_ids=episode_ids, rehearsed=[],
+                                         status="failed", message=message[:500],
+                                         seconds=time.perf_counter() - start)
+        except BaseException:  # noqa: BLE001 - the message to the parent matters more
+            pass
+        queue.put(("failed", message))
+
+
+@dataclass(frozen=True)
+class ConsolidationState:
+    """Where a background consolidation is: ``running`` (``iteration`` of ``total``),
+    ``done`` (``model_path`` of the new version, ``seconds``) or ``failed`` (``message``)."""
+
+    state: str
+    iteration: int = 0
+    total: int = 0
+    model_path: str = ""
+    seconds: float = 0.0
+    message: str = ""
+
+    def describe(self) -> str:
+        if self.state == "running":
+            share = f" {100 * self.iteration / self.total:.0f} %" if self.total else ""
+            return f"consolidating{share}"
+        if self.state == "done":
+            return f"consolidated in {self.seconds:.0f} s"
+        return f"consolidation failed: {self.message}"
+
+
+class BackgroundConsolidation:
+    """A consolidation in a spawned process, so that the loop keeps its pace.
+
+    The process loads the model, reads the episodes from the memory, runs
+    :func:`rnnpb.model.consolidate` (rehearsal), writes the new version beside the model and
+    records the consolidation in the memory; :meth:`poll` never blocks, :meth:`wait` does.
+    """
+
+    def __init__(self, model_path: str | os.PathLike[str],
+                 memory_path: str | os.PathLike[str], episode_ids: list[int],
+                 out_path: str | os.PathLike[str], iterations: int | None = None) -> None:
+        import multiprocessing
+
+        context = multiprocessing.get_context("spawn")
+        self._queue = context.Queue()
+        self.out_path = str(out_path)
+        self._process = context.Process(
+            target=_consolidation_worker, daemon=True,
+            args=(str(model_path), str(memory_path), list(episode_ids), self.out_path,
+                  self._queue, iterations))
+        self.state = ConsolidationState("running")
+        self._process.start()
+
+    def poll(self) -> ConsolidationState:
+        """The latest state, reading what the process reported so far (never blocks)."""
+        import queue as queues
+
+        while self.state.state == "running":
+            try:
+                message = self._queue.get_nowait()
+            except queues.Empty:
+                if not self._process.is_alive() and self._queue.empty():
+                    code = self._process.exitcode
+                    self.state = ConsolidationState(
+                        "failed", message=f"the consolidation process ended (exit code {code})")
+                break
+            self._take(message)
+        return self.state
+
+    def wait(self, timeout_s: float | None = None) -> ConsolidationState:
+        """Block until the consolidation has finished (or ``timeout_s``)."""
+        deadline = None if timeout_s is None else time.perf_counter() + timeout_s
+        while self.poll().state == "running":
+            if deadline is not None and time.perf_counter() > deadline:
+                break
+            self._process.join(0.05)
+        return self.state
+
+    def _take(self, message: tuple) -> None:
+        kind = message[0]
+        if kind == "progress":
+            self.state = ConsolidationState("running", message[1], message[2])
+        elif kind == "done":
+            self.state = ConsolidationState("done", model_path=message[1], seconds=message[2])
+            self._process.join(5.0)
+        else:
+            self.state = ConsolidationState("failed", message=message[1])
+            self._process.join(5.0)
+
+    def cancel(self) -> None:
+        if self._process.is_alive():
+            self._process.terminate()
+            self._process.join(5.0)
+
+
+class Teacher:
+    """On-line teaching in the interaction loop (docs/teaching.md).
+
+    Subscribe it to the loop (it keeps novel movements as episodes) and pass
+    :meth:`between_steps` to ``loop.run``: there it starts a consolidation in the background
+    once an episode is kept (``auto``, else on :meth:`confirm`), swaps the new model version in
+    between two steps when it is done, and keeps every version for :meth:`undo`. With
+    ``wait`` (a run as fast as possible) it blocks until each consolidation finishes, so a
+    scripted run repeats; paced it never waits.
+    """
+
+    def __init__(self, loop, model_path: str | os.PathLike[str], memory, *,
+                 make_mirror, source: str = "", config: TeachingConfig | None = None,
+                 auto: bool = True, wait: bool | None = None, hands_of=None,
+                 iterations: int | None = None) -> None:
+        self.iterations = iterations
+        self.loop = loop
+        self.memory = memory
+        self.make_mirror = make_mirror
+        self.versions: list[str] = [str(model_path)]
+        self.keeper = EpisodeKeeper(memory, str(model_path), source, config, hands_of)
+        self.auto = auto
+        self.wait = (not loop.config.paced) if wait is None else wait
+        self.job: BackgroundConsolidation | None = None
+        self.pending: list[int] = []
+        self.events = self.keeper.events
+        self.swapped_at: list[int] = []
+        loop.subscribe(self._on_step)
+
+    @property
+    def model_path(self) -> str:
+        return self.versions[-1]
+
+    def _on_step(self, record) -> None:
+        before = len(self.keeper.kept)
+        self.keeper.model = self.model_path
+        self.keeper(record)
+        self.pending.extend(self.keeper.kept[before:])
+        if self.auto and self.pending and self.job is None:
+            self.confirm()
+
+    def confirm(self) -> None:
+        """Start consolidating the pending episodes (the person said yes)."""
+        if self.job is not None or not self.pending:
+            return
+        out = version_path(self.model_path, len(self.versions) + 1)
+        ids, self.pending = self.pending, []
+        self.job = BackgroundConsolidation(self.model_path, self.memory.path, ids, out,
+                                           self.iterations)
+        self.events.append(TeachingEvent(self.loop.steps, "consolidating",
+                                         f"consolidating {len(ids)} episode(s) into {out.name}"))
+
+    def between_steps(self, wait_s: float) -> None:
+        start = time.perf_counter()
+        if self.job is not None:
+            state = self.job.wait() if self.wait else self.job.poll()
+            if state.state == "done":
+                self._swap(state)
+            elif state.state == "failed":
+                self.events.append(TeachingEvent(self.loop.steps, "failed", state.describe()))
+                self.job = None
+        rest = wait_s - (time.perf_counter() - start)
+        if rest > 0:
+            time.sleep(min(rest, 0.02))
+
+    def _swap(self, state: ConsolidationState) -> None:
+        from rnnpb.model import TrainedModel
+
+        assert self.job is not None
+        self.job = None
+        model = TrainedModel.load(state.model_path)
+        self.loop.mirror = self.make_mirror(model)
+        self.versions.append(state.model_path)
+        self.swapped_at.append(self.loop.steps)
+        learned = ", ".join(p for p in model.patterns if p.startswith("new-")) or "?"
+        self.events.append(TeachingEvent(self.loop.steps, "learned",
+                                         f"learned as pattern {learned} "
+                                         f"({state.seconds:.0f} s, {Path(state.model_path).name})"))
+
+    def undo(self) -> None:
+        """Go back to the previous model version (the newer file stays on disk)."""
+        from rnnpb.model import TrainedModel
+
+        if len(self.versions) < 2:
+            return
+        self.versions.pop()
+        self.loop.mirror = self.make_mirror(TrainedModel.load(self.model_path))
+        self.events.append(TeachingEvent(self.loop.steps, "undone",
+                                         f"back to {Path(self.model_path).name}"))
