@@ -32,6 +32,8 @@ COMMAND_MODULES: tuple[str, ...] = (
     "rnnpb.commands.generate",
     "rnnpb.commands.interact",
     "rnnpb.commands.data",
+    "rnnpb.commands.record",
+    "rnnpb.commands.memory",
     "rnnpb.commands.track",
     "rnnpb.commands.calibrate",
     "rnnpb.commands.cameras",
