@@ -61,3 +61,46 @@ def test_teaching_consolidates_in_the_background_and_swaps_the_new_version_in(mo
         teacher.undo()
         assert "new-1" not in loop.mirror.model.patterns
     assert "new-1" in TrainedModel.load(version_path(path, 2)).patterns  # kept on disk
+
+
+def test_interact_learn_keeps_a_new_shape_writes_a_version_and_nothing_from_random(
+        model, tmp_path, capsys):
+    import json
+
+    from rnnpb.cli import main
+    from rnnpb.interaction.teaching import version_path
+    from rnnpb.memory import memory_path_for
+
+    path = tmp_path / "m.npz"
+    model.save(path)
+    out = tmp_path / "run"
+    assert main(["interact", "--model", str(path), "--source",
+                 "scenario:steps:1*30,figure-eight*90", "--seed", "2", "--learn",
+                 "--consolidation-iterations", "20", "--no-progress", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    teaching = json.loads((out / "summary.json").read_text())["teaching"]
+    (episode,) = teaching["episodes"]
+    assert episode["pattern"] == "new-1" and episode["status"] == "learned"
+    assert teaching["versions_written"] == [str(version_path(path, 2))]
+    assert version_path(path, 2).exists() and teaching["memory"] == str(memory_path_for(path))
+    for words in ("kept a new movement as new-1", "into m.v2.npz (pattern new-1)",
+                  "learned as pattern new-1"):
+        assert words in printed, printed
+
+    # unstructured movement: nothing kept, no version written, the memory untouched
+    out = tmp_path / "walk"
+    assert main(["interact", "--model", str(path), "--source", "scenario:steps:random-walk*150",
+                 "--learn", "--no-progress", "--out", str(out)]) == 0
+    teaching = json.loads((out / "summary.json").read_text())["teaching"]
+    assert teaching["episodes"] == [] and teaching["versions_written"] == []
+    assert not version_path(path, 3).exists()
+
+
+def test_consolidation_iterations_need_learn_and_a_positive_count(tmp_path, capsys):
+    from rnnpb.cli import main
+
+    for extra in (["--consolidation-iterations", "20"],
+                  ["--learn", "--consolidation-iterations", "0"]):
+        assert main(["interact", "--source", "scenario:held:1", "--out", str(tmp_path),
+                     *extra]) == 2
+        assert "--consolidation-iterations" in capsys.readouterr().err

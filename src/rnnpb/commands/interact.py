@@ -39,10 +39,21 @@ The on-line regression (--online) defaults to the one that suits how the model w
 (`auto`): `ungated` for a model learned with the fast preset (Adam), `default` for one
 learned by the paper's algorithm; the choice is printed.
 
+With --learn the robot learns new movements on-line (docs/teaching.md): when the novelty
+detector has called a structured movement `novel` for a few cycles, four whole cycles of it
+are kept in the model's short-term memory (MODEL.memory.sqlite) as pattern new-1, new-2, ...,
+consolidated into a new model version (MODEL.v2.npz, ...; the old file stays) in a
+background process, and the new version is swapped in between two steps. Run as fast as
+possible (a file or scenario source, no --paced) the loop waits for each consolidation, so a
+scripted run repeats; paced it never waits. A failed consolidation keeps the running model
+and says why. One line is printed for each episode kept and each consolidation's start and
+end; summary.json lists the episodes and the versions written.
+
 A progress bar on stderr shows the steps (only on a terminal; --no-progress turns it off).
 
 Example:
   rnnpb interact --model results/demo/models/set1.npz --source scenario:switch:1,2,3 --out run/
+  rnnpb interact --model m.npz --source scenario:steps:1*40,figure-eight*100 --learn --out run/
 """
 
 
@@ -69,6 +80,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=0, help="seed for scenario sources")
     parser.add_argument("--render", action="store_true",
                         help="also write session.mp4: camera frame | simulated robot")
+    parser.add_argument("--learn", action="store_true",
+                        help="learn new movements on-line: keep them in the short-term memory, "
+                        "consolidate them into a new model version, swap it in (see above)")
+    parser.add_argument("--consolidation-iterations", type=int, metavar="N",
+                        help="with --learn: learning iterations of each consolidation "
+                        "(default: the consolidation's own, docs/model.md)")
     parser.add_argument("--no-progress", action="store_true",
                         help="no progress bar (there is none when stderr is not a terminal)")
 
@@ -98,6 +115,11 @@ def run(args: argparse.Namespace) -> int:
     finite_seconds("--dt", args.dt)
     step_count("--steps", args.steps, low=0)
     step_count("--frame-step", args.frame_step)
+    step_count("--consolidation-iterations", args.consolidation_iterations)
+    if args.consolidation_iterations is not None and not args.learn:
+        from rnnpb.errors import ConfigError
+
+        raise ConfigError("--consolidation-iterations needs --learn")
     model_path = first_model_file(Path(args.model) if args.model else default_model())
     model = TrainedModel.load(model_path, joint_limits=JOINT_LIMITS)
     if args.online == "auto":
@@ -134,6 +156,9 @@ def run(args: argparse.Namespace) -> int:
 
             video = stack.enter_context(SessionVideo(out / "session.mp4", fps=1.0 / args.dt))
             loop.subscribe(video.add)
+        teacher = None
+        if args.learn:
+            teacher = _start_teaching(stack, loop, model_path, source, args, online)
         # One line, printed just before the first compilation starts.
         print(f"interacting: {args.source} -> {model_path} ({online_name} on-line regression"
               f"{why}; {args.robot} robot{', paced' if args.paced else ''}); Ctrl-C stops",
@@ -142,8 +167,37 @@ def run(args: argparse.Namespace) -> int:
             total=args.steps or _source_length(source), unit="step", desc="interacting",
             disable=args.no_progress))
         answers: list[tuple[str | None, str]] = []
+        said = [0]  # teaching events printed so far
+        unlearned: list[str] = []  # patterns kept and not yet in a consolidation
+
+        def say_teaching() -> None:
+            for event in teacher.events[said[0]:]:
+                if event.kind == "kept":
+                    unlearned.append(event.pattern)
+                if event.kind not in _TEACHING_LINES:
+                    continue
+                text = event.text
+                if event.kind == "consolidating":
+                    text += f" (pattern {', '.join(unlearned)})"
+                    unlearned.clear()
+                line = f"step {event.step + 1}: {text}"
+                if bar.disable:
+                    print(line, flush=True)
+                else:
+                    bar.write(line)
+            said[0] = len(teacher.events)
+
+        def between_steps(wait_s: float) -> None:
+            if teacher.wait and teacher.job is not None:
+                # Waiting for the consolidation in slices keeps Ctrl-C working meanwhile.
+                while teacher.job.wait(timeout_s=0.2).state == "running":
+                    _interrupt.check()
+            teacher.between_steps(wait_s)
+            say_teaching()
 
         def after_step(record) -> None:
+            if teacher is not None:
+                say_teaching()
             answers.append((record.recognised, record.novelty))
             text = describe_answer(record.recognised, record.confidence, record.novelty)
             if not bar.disable:  # a terminal: the live counter is the bar, the answer beside it
@@ -155,11 +209,23 @@ def run(args: argparse.Namespace) -> int:
             _interrupt.check()
 
         try:
-            summary = loop.run(on_step=after_step)
+            summary = loop.run(on_step=after_step,
+                               between_steps=between_steps if teacher is not None else None)
+            if teacher is not None and teacher.job is not None:
+                # An episode kept near the end: its consolidation finishes, so that the run
+                # leaves the version it started (paced too: the interaction is over).
+                print("waiting for the consolidation to finish", flush=True)
+                teacher.wait = True
+                between_steps(0.0)
         except KeyboardInterrupt:
             summary = loop.summary()
             bar.close()
+            if teacher is not None and teacher.job is not None:
+                teacher.job.cancel()
+                print("interrupted: the running consolidation is cancelled, the kept "
+                      "episodes stay in the memory")
             print("interrupted: the recording keeps every step so far")
+        teaching = None if teacher is None else _teaching_summary(teacher)
     timeline = recognition_timeline(answers)
     print("recognition timeline:")
     for part in timeline:
@@ -174,12 +240,55 @@ def run(args: argparse.Namespace) -> int:
                 "dt": args.dt, "paced": args.paced, "robot": args.robot,
                 "recognition_config": mirror.recognition.to_dict(),
                 "recognition_timeline": timeline}
+    if teaching is not None:
+        document["teaching"] = teaching
     with atomic_write(out / "summary.json", "w", encoding="utf-8") as handle:
         json.dump(document, handle, indent=2)
     print(summary.describe())
+    if teaching is not None:
+        versions = [Path(v).name for v in teaching["versions_written"]]
+        print(f"learned: {len(teaching['episodes'])} episode(s) kept, model versions written: "
+              + (", ".join(versions) or "none") + f"; memory {teaching['memory']}")
     print(f"wrote {out / 'session.csv'}, {out / 'session.png'}, {out / 'summary.json'}"
           + (f", {out / 'session.mp4'}" if args.render else ""))
     return 0
+
+
+# The teaching events worth a line of their own (`recording` changes every cycle: the bar's
+# or the step lines' business would be too chatty).
+_TEACHING_LINES = ("kept", "refused", "consolidating", "learned", "failed")
+
+
+def _start_teaching(stack, loop, model_path, source, args, online):
+    """Open the model's short-term memory and subscribe a Teacher to the loop."""
+    from rnnpb.interaction.teaching import Teacher, tracked_hands
+    from rnnpb.memory import MemoryStore, memory_path_for
+    from rnnpb.model import MirrorSystem
+
+    memory = stack.enter_context(MemoryStore(memory_path_for(model_path)))
+    # On cancel/exit a consolidation still running must not outlive the command.
+    teacher = Teacher(loop, model_path, memory,
+                      make_mirror=lambda model: MirrorSystem(model, online),
+                      source=args.source, hands_of=tracked_hands(source),
+                      iterations=args.consolidation_iterations)
+    stack.callback(lambda: teacher.job.cancel() if teacher.job is not None else None)
+    print(f"learning new movements: short-term memory {memory.path}"
+          + (", waiting for each consolidation" if teacher.wait else
+             ", consolidating in the background"), flush=True)
+    return teacher
+
+
+def _teaching_summary(teacher) -> dict:
+    """summary.json's ``teaching``: the episodes this run kept and the versions it wrote."""
+    kept = set(teacher.keeper.kept)
+    episodes = [{"id": e.id, "pattern": e.pattern, "status": e.status,
+                 "n_cycles": e.n_cycles, "n_steps": e.n_steps, "note": e.note}
+                for e in teacher.memory.episodes() if e.id in kept]
+    return {"memory": str(teacher.memory.path), "episodes": episodes,
+            "versions_written": [str(v) for v in teacher.versions[1:]],
+            "running_model": teacher.model_path,
+            "events": [{"step": e.step, "kind": e.kind, "text": e.text}
+                       for e in teacher.events if e.kind in _TEACHING_LINES]}
 
 
 @contextlib.contextmanager
