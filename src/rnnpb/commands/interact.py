@@ -261,10 +261,25 @@ _TEACHING_LINES = ("kept", "refused", "consolidating", "learned", "failed")
 
 def _start_teaching(stack, loop, model_path, source, args, online):
     """Open the model's short-term memory and subscribe a Teacher to the loop."""
+    from pathlib import Path
+
+    import rnnpb.models
     from rnnpb.interaction.teaching import Teacher, tracked_hands
     from rnnpb.memory import MemoryStore, memory_path_for
     from rnnpb.model import MirrorSystem
 
+    model_path = Path(model_path)
+    shipped = Path(rnnpb.models.__file__).resolve().parent
+    if model_path.resolve().parent == shipped:
+        # New versions and the memory are written beside the model: never into the installed
+        # package. Learning starts from a copy of the shipped model in the run's folder.
+        import shutil
+
+        copy = Path(args.out) / model_path.name
+        if not copy.exists():
+            shutil.copyfile(model_path, copy)
+        print(f"learning from a copy of the shipped model: {copy}", flush=True)
+        model_path = copy
     memory = stack.enter_context(MemoryStore(memory_path_for(model_path)))
     # On cancel/exit a consolidation still running must not outlive the command.
     teacher = Teacher(loop, model_path, memory,
