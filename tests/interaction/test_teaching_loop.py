@@ -104,3 +104,21 @@ def test_consolidation_iterations_need_learn_and_a_positive_count(tmp_path, caps
         assert main(["interact", "--source", "scenario:held:1", "--out", str(tmp_path),
                      *extra]) == 2
         assert "--consolidation-iterations" in capsys.readouterr().err
+
+
+def test_learning_from_the_shipped_model_works_on_a_copy_in_the_run_folder(tmp_path,
+                                                                          monkeypatch):
+    from pathlib import Path
+
+    import rnnpb.models
+    from rnnpb.cli import main
+
+    monkeypatch.chdir(tmp_path)  # no ./models or ./results here: the shipped model is used
+    shipped = Path(rnnpb.models.__file__).parent
+    before = sorted(p.name for p in shipped.iterdir())
+    out = tmp_path / "run"
+    assert main(["interact", "--source", "scenario:steps:random-walk*12", "--learn",
+                 "--out", str(out), "--no-progress"]) == 0
+    assert sorted(p.name for p in shipped.iterdir()) == before
+    assert any(p.suffix == ".npz" for p in out.iterdir())
+    assert any(p.name.endswith(".memory.sqlite") for p in out.iterdir())
