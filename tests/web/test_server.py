@@ -245,3 +245,22 @@ def test_find_models_and_the_command_line(model_dir, tmp_path, capsys):
     assert "no such model file or folder" in capsys.readouterr().err
     assert main(["serve", "--model", str(model_dir), "--dt", "0"]) == 2
     assert "--dt must be in" in capsys.readouterr().err
+
+
+def test_state_and_steps_say_what_guards_the_robot(server, model_dir):
+    from rnnpb.web import find_models
+
+    # A safety map beside a model is not offered as a model.
+    (model_dir / "set1.safety.npz").write_bytes(b"")
+    try:
+        assert list(find_models(model_dir)) == ["set1.npz"]
+    finally:
+        (model_dir / "set1.safety.npz").unlink()
+    status, body, _ = _get(server, "/api/state")
+    safety = json.loads(body)["safety"]
+    assert safety["filter"] and not safety["map"] and safety["risk"] == {}
+    with _ws(server) as ws:
+        _control(ws, type="control", action="start")
+        step = _next(ws, "step")
+        _control(ws, type="control", action="stop")
+    assert step["prevented"] >= 0 and "filtered" in step and "unsafe" in step

@@ -24,6 +24,13 @@ and DIR/summary.json (timings per section, missed deadlines, config, versions); 
 Steps where a hand is lost are run on the network's own prediction and marked in the
 recording (lost_left, lost_right).
 
+Safety (docs/safety.md): every command passes the command filter before it is sent (it
+slows a command faster than the servos and holds or shortens one that would collide; the
+recording's unsafe and filtered columns say so); with a safety map beside the model
+(MODEL.safety.npz, from `rnnpb safety learn`) the regression also keeps the PB out of the
+learned unsafe region. Without a map the filter alone guards (said once). --no-safety turns
+both off.
+
 Example:
   rnnpb interact --model results/models/set1.npz --source scenario:switch:1,2,3 --out run/
 """
@@ -49,6 +56,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=0, help="seed for scenario sources")
     parser.add_argument("--render", action="store_true",
                         help="also write session.mp4: camera frame | simulated robot")
+    parser.add_argument("--no-safety", action="store_true",
+                        help="no command filter and no PB guard (docs/safety.md)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -85,13 +94,20 @@ def run(args: argparse.Namespace) -> int:
         robot = MujocoRobot(dt=args.dt)
     else:
         robot = KinematicRobot(dt=args.dt)
-    mirror = MirrorSystem(model, online)
+    from rnnpb.safety import online_safety
+
+    safety = online_safety(args.model, model, online, enabled=not args.no_safety)
+    online = safety.config
+    mirror = MirrorSystem(model, online, meta=safety.meta)
     with contextlib.ExitStack() as stack:
         stack.enter_context(source)
         stack.enter_context(robot)
+        if safety.command_filter is not None:
+            safety.command_filter.reset(robot.read())  # the pose the first command leaves
         recorder = stack.enter_context(SessionRecorder(out / "session.csv",
                                                        model.network.pb_size))
-        loop = InteractionLoop(mirror, source, robot, recorder, loop_config)
+        loop = InteractionLoop(mirror, source, robot, recorder, loop_config,
+                               command_filter=safety.command_filter)
         if args.render:
             from rnnpb.interaction.render import SessionVideo
 
@@ -99,6 +115,7 @@ def run(args: argparse.Namespace) -> int:
             loop.subscribe(video.add)
         print(f"interacting: {args.source} -> {args.model} ({args.online} regression, "
               f"{args.robot} robot{', paced' if args.paced else ''}); Ctrl-C stops")
+        print(safety.note)
         try:
             # Between steps is the safe point: the step's results are read back from XLA.
             summary = loop.run(on_step=lambda record: _interrupt.check())
@@ -111,10 +128,15 @@ def run(args: argparse.Namespace) -> int:
                      joint_limits=JOINT_LIMITS)
     document = {"rnnpb_version": __version__, "model": str(args.model), "source": args.source,
                 "online_config": online.to_dict(), "loop": summary.to_dict(),
-                "dt": args.dt, "paced": args.paced, "robot": args.robot}
+                "dt": args.dt, "paced": args.paced, "robot": args.robot,
+                "safety": {**safety.to_dict(), "unsafe_commands": loop.unsafe_commands,
+                           "prevented_commands": loop.prevented_commands}}
     with atomic_write(out / "summary.json", "w", encoding="utf-8") as handle:
         json.dump(document, handle, indent=2)
     print(summary.describe())
+    if safety.command_filter is not None:
+        print(f"safety: {loop.unsafe_commands} unsafe commands generated, "
+              f"{loop.prevented_commands} held, shortened or slowed by the filter")
     print(f"wrote {out / 'session.csv'}, {out / 'session.png'}, {out / 'summary.json'}"
           + (f", {out / 'session.mp4'}" if args.render else ""))
     return 0

@@ -57,9 +57,12 @@ class OnlineConfig:
     # "barrier" adds barrier_weight * softplus(risk logit - logit(risk_level)) per window step
     # to the error of eq. 1 (rnnpb.model.meta); "projection" moves each regressed PB down the
     # risk gradient (at most projection_steps steps of projection_rate in rho) until its risk
-    # is below risk_level; "off" ignores the map.
+    # is below risk_level; "off" ignores the map. The barrier acts on the newest
+    # barrier_span steps of the window only (0: all of them): the command is generated from
+    # the newest PBs, and the cost grows with the steps it covers (docs/safety.md measures it).
     safety_guard: Literal["off", "barrier", "projection"] = "off"
     barrier_weight: float = 0.05
+    barrier_span: int = 3
     risk_level: float = 0.2
     projection_steps: int = 10
     projection_rate: float = 0.3
@@ -91,6 +94,8 @@ class OnlineConfig:
         if self.safety_guard not in ("off", "barrier", "projection"):
             raise ConfigError(f"safety_guard must be 'off', 'barrier' or 'projection', got "
                               f"{self.safety_guard!r}")
+        if not 0 <= self.barrier_span <= self.window:
+            raise ConfigError(f"barrier_span must be in [0, window], got {self.barrier_span}")
         if self.barrier_weight < 0:
             raise ConfigError(f"barrier_weight must be >= 0, got {self.barrier_weight}")
         if not 0 < self.risk_level < 1:

@@ -44,7 +44,8 @@ def find_models(model_or_dir: str | Path) -> dict[str, Path]:
     if path.is_file():
         return {path.name: path}
     if path.is_dir():
-        found = sorted(path.rglob("*.npz"))
+        # A model's safety map (M.safety.npz, docs/safety.md) lies beside it: not a model.
+        found = sorted(p for p in path.rglob("*.npz") if not p.name.endswith(".safety.npz"))
         if not found:
             raise ConfigError(f"{path}: no model files (*.npz) in this folder; train one with "
                               "`rnnpb train`")
@@ -127,6 +128,11 @@ class Session:
         self._closed = threading.Event()
         self._thread: threading.Thread | None = None
         self._recordings = 0
+        # Safety (docs/safety.md): the command filter always and the model's map when one
+        # lies beside it; ``rnnpb serve --no-safety`` sets this False before start().
+        self.safety_enabled = True
+        self.safety = None  # rnnpb.safety.OnlineSafety of the loaded model
+        self._risk_views: dict[str, Any] = {}
 
     # --- life cycle -----------------------------------------------------------------------
     def start(self, model_name: str | None = None) -> None:
@@ -194,6 +200,7 @@ class Session:
             "robot": {"shoulders": SHOULDERS.tolist(), "upper_arm": UPPER_ARM_LENGTH,
                       "forearm": FOREARM_LENGTH, "joint_limits": JOINT_LIMITS.tolist(),
                       "joint_names": list(MOTOR_NAMES)},
+            "safety": self._safety_state(),
         }
 
     # --- the session thread ---------------------------------------------------------------
@@ -310,7 +317,8 @@ class Session:
             from rnnpb.robot import JOINT_LIMITS
 
             model = TrainedModel.load(self.models[name], joint_limits=JOINT_LIMITS)
-            mirror = MirrorSystem(model, OnlineConfig())
+            safety, risk = self._load_safety(self.models[name], model, OnlineConfig())
+            mirror = MirrorSystem(model, safety.config, meta=safety.meta)
             started = time.perf_counter()
             mirror.step(np.full(model.network.sensory_size, 0.5))  # compiles the step
             mirror.reset()
@@ -319,6 +327,7 @@ class Session:
         finally:
             self.loading = False
         self.model, self.mirror, self.model_name = model, mirror, name
+        self.safety, self._risk_views = safety, risk
         self._new_run()
 
     def _new_run(self) -> None:
@@ -333,11 +342,33 @@ class Session:
         self.recording_path = self.workdir / f"session-{self._recordings:03d}.csv"
         self.recorder = SessionRecorder(self.recording_path, self.model.network.pb_size)
         self.recorder.open()
+        command_filter = self.safety.command_filter if self.safety is not None else None
+        if command_filter is not None:
+            command_filter.reset()
         self.loop = InteractionLoop(self.mirror, self._source, recorder=self.recorder,
-                                    config=LoopConfig(dt=self.dt, paced=True))
+                                    config=LoopConfig(dt=self.dt, paced=True),
+                                    command_filter=command_filter)
         # The loop calls subscribers once a step's timings are complete, so the step message
         # carries this step's sections.
         self.loop.subscribe(self._publish_step)
+
+    def _load_safety(self, path: Path, model, online) -> tuple[Any, dict[str, Any]]:
+        """The model's safety (filter; map if beside it) and the risk on the PB plot's
+        views, computed once per model (sent with the state message)."""
+        from rnnpb.safety import online_safety, risk_views
+
+        safety = online_safety(path, model, online, enabled=self.safety_enabled)
+        log.info("%s", safety.note)
+        views = ({} if safety.safety_map is None
+                 else risk_views(safety.safety_map, model.pattern_pb))
+        return safety, views
+
+    def _safety_state(self) -> dict[str, Any]:
+        """The ``safety`` part of the state message: what guards the robot, and the risk
+        grids of the PB plot (empty without a map)."""
+        if self.safety is None:
+            return {"map": False, "guard": "off", "filter": False, "note": "", "risk": {}}
+        return {**self.safety.to_dict(), "risk": self._risk_views}
 
     def _close_run(self) -> None:
         if self.recorder is not None:
@@ -396,10 +427,17 @@ class Session:
             "arms": {"elbows": np.round(elbows, 5).tolist(), "hands": np.round(hands, 5).tolist()},
             "timings_ms": {k: round(v * 1e3, 3) for k, v in record.timings.items()},
             "missed_deadlines": self.loop.missed_deadlines if self.loop is not None else 0,
+            **self._step_safety(record),
         }
         self._publish(message)
         if record.frame is not None and self._webcam is not None:
             self._publish_frame(record.frame)
+
+    def _step_safety(self, record) -> dict[str, Any]:
+        """The step message's safety fields: why the generated command was unsafe (empty
+        when safe), what the filter did, and how many commands it has changed this run."""
+        return {"unsafe": record.unsafe, "filtered": record.filtered,
+                "prevented": self.loop.prevented_commands if self.loop is not None else 0}
 
     def _publish_frame(self, frame: np.ndarray) -> None:
         import cv2

@@ -98,6 +98,7 @@ function onState(state) {
   $("stop").disabled = !state.running;
   updateStatus();
   drawPlots();
+  showSafety(dash.lastStep);
 }
 
 const shownMode = { server: null, view: null };
@@ -162,6 +163,7 @@ function onStep(step) {
   updateStatus();
   drawPlots();
   drawPointerPanel();
+  showSafety(step);
 }
 
 function onFrame(message) {
@@ -547,6 +549,7 @@ function drawPB() {
   g.save(); g.translate(11, 12 + ph); g.rotate(-Math.PI / 2);
   g.fillText(P.labels[1] + " →", 0, 0); g.restore();
   if (P.fixed) { g.fillText("0", m - 10, 12 + ph + 10); g.fillText("1", m + pw - 4, 12 + ph + 12); }
+  drawRisk(g, P, project, X, Y, [m, 12, pw, ph]);
   const nearest = dash.lastStep && dash.lastStep.nearest;
   for (const [name, p] of learned) {
     const x = X(p[0]), y = Y(p[1]);
@@ -567,6 +570,54 @@ function drawPB() {
     g.fillStyle = "#e07b00";
     g.beginPath(); g.arc(X(p[0]), Y(p[1]), 5, 0, 2 * Math.PI); g.fill();
   }
+}
+
+// The learned unsafe region (the safety map's risk, docs/safety.md), shaded under the trail:
+// the server sends the risk on a grid of each view's plane once, with the state message; each
+// cell's PB goes through the plot's own projection, so any view the page draws is covered.
+function drawRisk(g, P, project, X, Y, box) {
+  const safety = dash.state && dash.state.safety;
+  const view = safety && safety.risk && safety.risk[projection.mode];
+  if (!view) return;
+  const [ea0, ea1, eb0, eb1] = view.extent, n = view.grid;
+  const da = (ea1 - ea0) / n, db = (eb1 - eb0) / n;
+  const cell = (i, j) => view.origin.map((o, k) => o + (ea0 + (j + 0.5) * da) * view.axes[0][k]
+    + (eb0 + (i + 0.5) * db) * view.axes[1][k]);
+  const pixel = (pb) => { const p = project(pb); return [X(p[0]), Y(p[1])]; };
+  // One cell's size on screen: the distance to its neighbours along both axes.
+  const c0 = pixel(cell(0, 0)), ca = pixel(cell(0, 1)), cb = pixel(cell(1, 0));
+  const size = Math.ceil(Math.max(Math.hypot(ca[0] - c0[0], ca[1] - c0[1]),
+    Math.hypot(cb[0] - c0[0], cb[1] - c0[1]))) + 1;
+  g.save();
+  g.beginPath(); g.rect(...box); g.clip();
+  for (let i = 0; i < n; i++) {
+    for (let j = 0; j < n; j++) {
+      const risk = view.risk[i][j];
+      if (risk < 0.05) continue;
+      const [x, y] = pixel(cell(i, j));
+      g.fillStyle = `rgba(214, 58, 58, ${(0.5 * risk).toFixed(3)})`;
+      g.fillRect(x - size / 2, y - size / 2, size, size);
+    }
+  }
+  g.restore();
+}
+
+// What guards the robot, and how many commands the filter changed (a line under the PB plot,
+// made here so that the page's markup stays as it is).
+function showSafety(step) {
+  let line = $("safety-status");
+  if (!line) {
+    line = el("p", { id: "safety-status", className: "legend" });
+    $("plot-pb").after(line);
+  }
+  const safety = (dash.state && dash.state.safety) || {};
+  const parts = [safety.filter ? "command filter on" : "command filter off",
+    safety.map ? `PB guard: ${safety.guard} (shaded: learned risk)` : "no safety map"];
+  if (step) {
+    parts.push(`prevented commands: ${step.prevented}`);
+    if (step.filtered) parts.push(`last step ${step.filtered}: ${step.unsafe}`);
+  }
+  line.textContent = `Safety — ${parts.join(" · ")}`;
 }
 
 function drawTimings() {
