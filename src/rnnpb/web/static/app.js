@@ -573,32 +573,38 @@ function drawPB() {
 }
 
 // The learned unsafe region (the safety map's risk, docs/safety.md), shaded under the trail:
-// the server sends the risk on a grid of each view's plane once, with the state message; each
-// cell's PB goes through the plot's own projection, so any view the page draws is covered.
+// the server sends the risk on a grid of each view's plane once, with the state message. The
+// grid becomes a small image (one pixel a cell, opacity = risk) drawn through the affine map
+// that the plot's own projection makes of the grid's plane, so any view is covered exactly.
+let riskImage = null;
 function drawRisk(g, P, project, X, Y, box) {
   const safety = dash.state && dash.state.safety;
   const view = safety && safety.risk && safety.risk[projection.mode];
   if (!view) return;
   const [ea0, ea1, eb0, eb1] = view.extent, n = view.grid;
-  const da = (ea1 - ea0) / n, db = (eb1 - eb0) / n;
-  const cell = (i, j) => view.origin.map((o, k) => o + (ea0 + (j + 0.5) * da) * view.axes[0][k]
-    + (eb0 + (i + 0.5) * db) * view.axes[1][k]);
-  const pixel = (pb) => { const p = project(pb); return [X(p[0]), Y(p[1])]; };
-  // One cell's size on screen: the distance to its neighbours along both axes.
-  const c0 = pixel(cell(0, 0)), ca = pixel(cell(0, 1)), cb = pixel(cell(1, 0));
-  const size = Math.ceil(Math.max(Math.hypot(ca[0] - c0[0], ca[1] - c0[1]),
-    Math.hypot(cb[0] - c0[0], cb[1] - c0[1]))) + 1;
+  if (!riskImage || riskImage.view !== view) {
+    const canvas = document.createElement("canvas");
+    canvas.width = n; canvas.height = n;
+    const c = canvas.getContext("2d"), image = c.createImageData(n, n);
+    view.risk.forEach((row, i) => row.forEach((risk, j) => {
+      const k = 4 * (i * n + j);
+      image.data.set([214, 58, 58, Math.round(255 * 0.55 * risk)], k);
+    }));
+    c.putImageData(image, 0, 0);
+    riskImage = { view, canvas };
+  }
+  // Grid corner (a, b) of the plane → pixel: origin + a·axes[0] + b·axes[1], projected.
+  const pixel = (a, b) => {
+    const p = project(view.origin.map((o, k) => o + a * view.axes[0][k] + b * view.axes[1][k]));
+    return [X(p[0]), Y(p[1])];
+  };
+  const o = pixel(ea0, eb0), u = pixel(ea1, eb0), v = pixel(ea0, eb1);
   g.save();
   g.beginPath(); g.rect(...box); g.clip();
-  for (let i = 0; i < n; i++) {
-    for (let j = 0; j < n; j++) {
-      const risk = view.risk[i][j];
-      if (risk < 0.05) continue;
-      const [x, y] = pixel(cell(i, j));
-      g.fillStyle = `rgba(214, 58, 58, ${(0.5 * risk).toFixed(3)})`;
-      g.fillRect(x - size / 2, y - size / 2, size, size);
-    }
-  }
+  g.transform((u[0] - o[0]) / n, (u[1] - o[1]) / n, (v[0] - o[0]) / n, (v[1] - o[1]) / n,
+    o[0], o[1]);
+  g.imageSmoothingEnabled = true;
+  g.drawImage(riskImage.canvas, 0, 0);
   g.restore();
 }
 
