@@ -26,13 +26,13 @@ from rnnpb.safety._map import new_map
 @pytest.fixture(scope="module")
 def model_path(tmp_path_factory):
     model = train(learning_set("1", seed=0), JOINT_LIMITS,
-                  config=TrainConfig.fast(iterations=300, seed=0))
+                  config=TrainConfig.fast(iterations=100, seed=0))
     path = tmp_path_factory.mktemp("models") / "m.npz"
     model.save(path)
     return path
 
 
-def _map_around(model, centre, radius=0.25):
+def _map_around(model, centre, radius=0.35):
     rng = np.random.default_rng(1)
     pbs = rng.uniform(size=(1500, model.network.pb_size))
     unsafe = np.linalg.norm(pbs - centre, axis=1) < radius
@@ -61,7 +61,9 @@ def test_a_map_beside_the_model_guards_the_pb_and_a_damaged_one_is_an_error(mode
     model = TrainedModel.load(model_path)
     path = tmp_path / "m.npz"
     model.save(path)
-    centre = np.full(model.network.pb_size, 0.8)
+    # The learned mean of the PBs given below is (0.4, 0.4, 0.3, 0.4): the risky region sits
+    # in the PB0 × PB1 view's corner near (0.8, 0.8).
+    centre = np.array([0.8, 0.8, 0.3, 0.4])
     _map_around(model, centre).save(safety_map_path(path))
     safety = online_safety(path, model, OnlineConfig(safety_guard="projection"))
     assert safety.meta is not None and safety.guard == "projection"
@@ -72,9 +74,11 @@ def test_a_map_beside_the_model_guards_the_pb_and_a_damaged_one_is_an_error(mode
     for view in views.values():
         risk = np.array(view["risk"])
         assert risk.shape == (view["grid"], view["grid"]) and 0 <= risk.min() <= risk.max() <= 1
-    # PB0 × PB1 with PB2, PB3 at the learned mean (0.4): the risky corner is near (0.8, 0.8).
-    grid = np.array(views["01"]["risk"])
-    assert grid[-4, -4] > grid[2, 2]
+    grid = np.array(views["01"]["risk"])  # rows along PB1, columns along PB0
+    assert grid[-5, -5] > 0.5 > grid[2, 2]
+    # Cell 19 of 24 along both axes: its centre is PB0 = PB1 = 19.5 / 24.
+    np.testing.assert_allclose(grid[-5, -5], safety.safety_map.risk(
+        np.array([19.5 / 24, 19.5 / 24, 0.3, 0.4])), atol=1e-3)
     safety_map_path(path).write_bytes(b"not a map")
     with pytest.raises(ModelFileError, match="m.safety.npz"):
         online_safety(path, model, OnlineConfig())
