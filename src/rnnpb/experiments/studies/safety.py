@@ -30,6 +30,7 @@ import multiprocessing
 import os
 import sys
 import time
+from collections import Counter
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -195,6 +196,10 @@ def _adversarial_job(model_path: str, meta, online, guard: str, user: str, steps
         "unsafe_pb_steps": int((pb_risk > online.risk_level).sum()),
         "mean_risk": float(pb_risk.mean()),
         "ms_per_step": 1e3 * seconds / max(len(run["motor"]), 1),
+        # Which parts collided in the generated commands (what drives the robot into them).
+        "collision_parts": dict(Counter(
+            w.split(":", 1)[1] for r in run["unsafe"] for w in r.split()
+            if w.startswith("collision:")).most_common(3)),
     }
 
 
@@ -318,10 +323,11 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
             report += table(
                 ("user", "guard", "steps", "unsafe generated (collision/speed)", "limit",
                  "prevented by filter", "collision sent", "speed sent", "unsettled sent",
-                 "unsafe-PB steps"),
+                 "unsafe-PB steps", "parts colliding (generated)"),
                 [(r["user"], r["guard"], r["steps"], f"{r['collision_generated']}/"
                   f"{r['speed_generated']}", r["limit_generated"], r["prevented"],
-                  r["collision_sent"], r["speed_sent"], r["unsettled_sent"], r["unsafe_pb_steps"])
+                  r["collision_sent"], r["speed_sent"], r["unsettled_sent"], r["unsafe_pb_steps"],
+                  ", ".join(f"{k} {v}" for k, v in r["collision_parts"].items()) or "—")
                  for r in adversarial.values()])
             report += ["", "### Cost on learned patterns", ""]
             report += table(("guard", "lock-on per pattern", "switching per pair", "recognised",
