@@ -27,6 +27,7 @@ ALLOWED: dict[str, set[str]] = {
     "sequences": set(),
     "sources": {"sequences"},
     "robot": set(),
+    "models": set(),
     "model": {"sequences"},
     "memory": {"sequences"},
     "demonstrator": {"robot", "sequences", "sources"},
@@ -41,8 +42,8 @@ ALLOWED: dict[str, set[str]] = {
             "sources", "sequences", "analysis"},
     "sweeps": {"experiments", "analysis", "interaction", "model", "demonstrator", "robot",
                "sources", "sequences"},
-    "commands": {"experiments", "sweeps", "web", "interaction", "analysis", "model", "memory",
-                 "safety", "perception", "demonstrator", "robot", "sources", "sequences"},
+    "commands": {"models", "experiments", "sweeps", "web", "interaction", "analysis", "model",
+                 "memory", "safety", "perception", "demonstrator", "robot", "sources", "sequences"},
     "cli": set(),
 }
 

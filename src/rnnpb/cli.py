@@ -31,7 +31,9 @@ COMMAND_MODULES: tuple[str, ...] = (
     "rnnpb.commands.data",
     "rnnpb.commands.track",
     "rnnpb.commands.calibrate",
+    "rnnpb.commands.cameras",
     "rnnpb.commands.serve",
+    "rnnpb.commands.view",
     "rnnpb.commands.bench",
     "rnnpb.commands.safety",
 )

@@ -139,3 +139,33 @@ def test_resolve_pattern_aliases_and_errors():
         resolve_pattern("5")
     with pytest.raises(ConfigError, match="period_steps"):
         PatternConfig(period_steps=1)
+
+
+def test_new_shapes_repeat_and_unstructured_movements_do_not():
+    from rnnpb.analysis.metrics import periodicity
+    from rnnpb.demonstrator import NEW_SHAPES, PATTERNS, UNSTRUCTURED, make_scenario
+
+    config = PatternConfig(imperfection=Imperfection.none())
+    sensory = {m: make_scenario([(m, 72)], seed=2, config=config).sensory
+               for m in (*NEW_SHAPES, *UNSTRUCTURED)}
+    for shape in NEW_SHAPES:
+        assert periodicity(sensory[shape]).best_period == 12, shape
+        # Each shape differs from every paper pattern and from the other shapes.
+        for other in (*PATTERNS, *NEW_SHAPES):
+            if other != shape:
+                theirs = make_scenario([(other, 72)], seed=2, config=config).sensory
+                assert np.abs(theirs - sensory[shape]).max() > 0.05, (shape, other)
+    for movement in UNSTRUCTURED:
+        x = sensory[movement]
+        assert periodicity(x).period is None, movement
+        assert x.std(axis=0).min() > 0.02 and 0.0 <= x.min() and x.max() <= 1.0
+
+
+def test_unstructured_movements_leave_the_paper_patterns_draws_alone():
+    from rnnpb.demonstrator import make_scenario
+
+    with_walk = make_scenario([("1", 30), ("random-walk", 30)], seed=5)
+    with_pause = make_scenario([("1", 30), ("pause", 30)], seed=5)
+    np.testing.assert_array_equal(with_walk.sensory[:30], with_pause.sensory[:30])
+    again = make_scenario([("1", 30), ("random-walk", 30)], seed=5)
+    np.testing.assert_array_equal(with_walk.sensory, again.sensory)

@@ -43,6 +43,10 @@ def test_interact_writes_recording_plot_and_summary(model_path, tmp_path, capsys
         assert column in session
     assert list(session["truth_pattern"][:2]) == ["1", "1"]
     assert session["truth_pattern"][-1] == "2"
+    # What each step recognised, in exactly the contract's words.
+    assert set(session["novelty"]) <= {"familiar", "novel", "unstructured", "still", ""}
+    assert set(session["recognised"]) <= {"1", "2", "3", ""}
+    assert np.all((session["confidence"] >= 0) & (session["confidence"] <= 1))
     # Motor commands within the joint limits; the prediction error falls once locked.
     motor = np.stack([session[name] for name in MOTOR_NAMES], axis=1)
     assert np.all(motor >= JOINT_LIMITS[:, 0]) and np.all(motor <= JOINT_LIMITS[:, 1])
@@ -52,7 +56,13 @@ def test_interact_writes_recording_plot_and_summary(model_path, tmp_path, capsys
     assert summary["loop"]["steps"] == 60
     assert set(summary["loop"]["section_ms"]) == {"perceive", "mirror", "act", "record"}
     assert (out / "session.png").stat().st_size > 20_000
-    assert "mirror" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "mirror" in printed
+    assert "recognition timeline:" in printed and "step 1:" in printed
+    # The timeline covers every step once, in order.
+    timeline = summary["recognition_timeline"]
+    assert timeline[0]["first"] == 0 and timeline[-1]["last"] == 59
+    assert all(a["last"] + 1 == b["first"] for a, b in zip(timeline, timeline[1:], strict=False))
 
 
 def test_ungated_regression_is_recorded_in_the_summary(model_path, tmp_path):
@@ -112,6 +122,9 @@ def test_frame_step_keeps_every_nth_observation():
     ("scenario:held:9", "unknown movement pattern .9."),
     ("ftp:x", "unknown kind"),
     ("scenario:held", "needs an argument"),
+    ("scenario:steps:1*ten", "steps must be an integer"),
+    ("scenario:steps:figure-eight", "expected MOVEMENT.STEPS"),
+    ("scenario:steps:wave*10", "unknown movement pattern"),
 ])
 def test_bad_source_specifications(spec, message):
     with pytest.raises(ConfigError, match=message):
@@ -127,6 +140,15 @@ def test_bad_source_specifications(spec, message):
 ])
 def test_the_one_grammar_of_source_specifications(spec, parsed):
     assert parse_source_spec(spec) == parsed
+
+
+def test_a_scenario_of_any_movements_one_after_another():
+    source = open_source("scenario:steps:1*10,figure-eight*5,random-walk*4,pause*3")
+    with source:
+        labels = []
+        while (observation := source.read()) is not None:
+            labels.append(observation.truth["pattern"])
+    assert labels == ["1"] * 10 + ["figure-eight"] * 5 + ["random-walk"] * 4 + ["pause"] * 3
 
 
 @pytest.mark.parametrize("spec, message", [

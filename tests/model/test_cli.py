@@ -33,7 +33,12 @@ def test_train_then_generate(data_dir, tmp_path, capsys, monkeypatch):
     assert "pattern pat0" in out and "mean squared error" in out
     model = TrainedModel.load(model_path)
     assert model.patterns == ("pat0", "pat1", "pat2")
-    assert (tmp_path / "model.checkpoint.npz").exists()
+    # The finished model holds what the checkpoint did: it is removed unless asked for.
+    assert not (tmp_path / "model.checkpoint.npz").exists()
+    kept = tmp_path / "kept.npz"
+    assert main(["train", "--data", str(data_dir), "--out", str(kept), "--preset", "fast",
+                 "--iterations", "100", "--no-progress", "--keep-checkpoint"]) == 0
+    assert (tmp_path / "kept.checkpoint.npz").exists()
 
     gen_path = tmp_path / "gen.csv"
     assert main(["generate", "--model", str(model_path), "--pattern", "pat1", "--steps", "40",

@@ -88,9 +88,11 @@ def test_numerical_failure_holds_the_last_good_state_in_both_twins(trained):
             assert result.held and np.isnan(result.window_error)
             assert np.all(np.isfinite(result.motor)) and np.all(np.isfinite(result.pb))
         compiled, reference = results["compiled"], results["reference"]
-        for name in ("motor", "predicted_hands", "pb", "context"):
+        for name in ("motor", "predicted_hands", "pb", "context", "pattern_errors"):
             np.testing.assert_allclose(getattr(compiled, name), getattr(reference, name),
                                        atol=2e-4, err_msg=name)
+        assert compiled.novelty == reference.novelty
+        assert compiled.recognised == reference.recognised
 
 
 def test_packed_outputs_come_back_under_their_names(trained):
@@ -99,8 +101,9 @@ def test_packed_outputs_come_back_under_their_names(trained):
     outputs = StepOutputs(motor=rng.uniform(size=net.motor_size),
                           predicted_sensory=rng.uniform(size=net.sensory_size),
                           pb=rng.uniform(size=net.pb_size), window_error=np.asarray(0.25),
-                          held=np.asarray(True), context=rng.uniform(size=net.context_size))
-    unpacked = PackedLayout.for_network(net).unpack(np.asarray(pack(outputs), np.float64))
+                          held=np.asarray(True), context=rng.uniform(size=net.context_size),
+                          pattern_errors=rng.uniform(size=3))
+    unpacked = PackedLayout.for_network(net, 3).unpack(np.asarray(pack(outputs), np.float64))
     assert unpacked._fields == outputs._fields
     for name, value, back in zip(outputs._fields, outputs, unpacked, strict=True):
         np.testing.assert_allclose(back, np.reshape(value, -1).astype(np.float32), err_msg=name)
@@ -134,6 +137,8 @@ def test_compiled_step_matches_numpy_reference(trained, motor_input, optimize_on
         np.testing.assert_allclose(result.prediction_error, expected.prediction_error,
                                    atol=1e-6)
         np.testing.assert_array_equal(result.seen, expected.seen)
+        # The recognition's evidence: each learned pattern's window error.
+        np.testing.assert_allclose(result.pattern_errors, expected.pattern_errors, atol=1e-5)
         assert not result.held and not expected.held
         assert len(mirror.pb_profile) == len(ref.pb_profile)
         starts_over += len(ref.pb_profile) < min(t + 1, config.window)

@@ -76,7 +76,9 @@ def test_motor_values_outside_the_joint_limits_are_rejected():
     bad = make_sequences(n_steps=10)[:1]
     motor = bad[0].motor.copy()
     motor[3, 2] = 5.0
-    with pytest.raises(DataFileError, match="outside the normalization range"):
+    # The column by its name, with its range.
+    with pytest.raises(DataFileError, match=r"bad.csv: step 3, lshy = 5 is outside its range "
+                                            r"\[-2, 2\] \(a joint angle"):
         train([Sequence(bad[0].sensory, motor, "x", "bad.csv")], LIMITS,
               config=TrainConfig.fast(iterations=1))
 

@@ -78,3 +78,18 @@ def test_malformed_files(tmp_path):
         load_ball_colors(_write(tmp_path, {**GOOD, "colour": 1}))
     with pytest.raises(ConfigError, match="version"):
         load_ball_colors(_write(tmp_path, {**GOOD, "version": 7}))
+
+
+def test_a_calibration_error_without_a_ball_name_reads_as_english():
+    import pytest
+
+    from rnnpb.errors import RnnpbError
+    from rnnpb.perception import calibrate_from_pixel
+
+    grey = np.full((40, 40, 3), 128, np.uint8)
+    with pytest.raises(RnnpbError) as outside:
+        calibrate_from_pixel(grey, (100, 5))
+    with pytest.raises(RnnpbError) as no_colour:
+        calibrate_from_pixel(grey, (20, 20))
+    for error in (outside, no_colour):
+        assert "None" not in str(error.value) and "(the ball)" in str(error.value)

@@ -49,8 +49,8 @@ def test_saved_colours_round_trip(tmp_path):
 
 
 @pytest.mark.parametrize("content, message", [
-    (b"\x00\x01garbage", "not a readable rnnpb rnnpb-model file"),
-    (b"", "not a readable rnnpb rnnpb-model file"),
+    (b"\x00\x01garbage", "not a readable rnnpb model file"),
+    (b"", "not a readable rnnpb model file"),
 ])
 def test_cli_bad_model_is_one_line(tmp_path, capsys, content, message):
     model = tmp_path / "m.npz"

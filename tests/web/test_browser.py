@@ -223,6 +223,24 @@ def _strict_page(browser, server, route_ws=None):
     assert not errors, f"the page raised: {errors}"
 
 
+@contextlib.contextmanager
+def _strict_page_any(browser, server, route_ws=None):
+    """As :func:`_strict_page`, but ready once the first state arrived, model or not."""
+    page = browser.new_page(viewport={"width": 1400, "height": 1000})
+    errors: list[str] = []
+    page.on("pageerror", lambda error: errors.append(str(error)))
+    page.add_init_script(WATCH_CSP)
+    if route_ws is not None:
+        page.route_web_socket("**/ws", route_ws)
+    try:
+        page.goto(server.url)
+        _until(page, "window.rnnpbDashboard && rnnpbDashboard.state", 60000)
+        yield page
+    finally:
+        page.close()
+    assert not errors, f"the page raised: {errors}"
+
+
 def _send(page, message: str, condition: str) -> None:
     page.evaluate(f"rnnpbDashboard.send({message})")
     _until(page, condition)
@@ -242,8 +260,9 @@ def test_names_from_a_model_file_show_as_text_and_run_no_script(browser, server)
         page.click("#stop")
         _send(page, '{type: "model", name: "nope.npz"}', "rnnpbDashboard.errors.length > 0")
         page.wait_for_timeout(500)  # time for an image error handler to have run
-        buttons = page.locator("#patterns button").all_text_contents()
-        assert any(f"Pattern {HOSTILE_NAME}" in text for text in buttons), buttons
+        # The demonstrator cannot perform a pattern of that name: the note under its buttons
+        # names it (as a name of the user's own would be).
+        assert HOSTILE_NAME in page.text_content("#patterns-note")
         assert HOSTILE_NAME in page.text_content("#nearest")
         assert HOSTILE_NAME in page.text_content("#error")
         assert page.locator("#model option").all_text_contents() == [HOSTILE_NAME]
@@ -340,3 +359,180 @@ def test_a_page_from_another_site_cannot_drive_the_robot(browser, server, tmp_pa
         page.close()
     assert result == {"opened": False, "closed": True, "messages": 0}
     assert (server.session.dt, server.session.mode) == (dt_before, mode_before)
+
+
+# --- a dashboard that never misleads (docs/dashboard.md, "What the page tells you") -------
+def _shot(page, name: str, selector: str | None = None) -> Path:
+    """A screenshot, kept in the folder ``RNNPB_SCREENSHOTS`` names (to look at) or in a
+    temporary one."""
+    import os
+    import tempfile
+
+    folder = Path(os.environ.get("RNNPB_SCREENSHOTS") or tempfile.mkdtemp())
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / f"{name}.png"
+    (page.locator(selector) if selector else page).screenshot(path=str(path))
+    return path
+
+
+def _restyle(transform):
+    """A WebSocket route passing messages through, each state message changed by
+    ``transform(state)`` on its way to the page."""
+    def route(ws_route) -> None:
+        server = ws_route.connect_to_server()
+
+        def forward(text) -> None:
+            message = json.loads(text)
+            if message["type"] == "state":
+                transform(message)
+            ws_route.send(json.dumps(message))
+        server.on_message(forward)
+    return route
+
+
+def test_a_model_that_cannot_be_used_is_explained_and_start_is_off(browser, server):
+    reason = "models/bad.npz: not a readable rnnpb model file (truncated or not an archive)"
+
+    def no_model(state):
+        state.update(model=None, patterns=[], pattern_pb={}, model_error=reason, error=reason)
+
+    with _strict_page_any(browser, server, _restyle(no_model)) as page:
+        _until(page, "document.querySelector('#error').textContent.includes('not a readable')")
+        assert not page.locator("#error").is_hidden()
+        assert page.locator("#start").is_disabled()
+        assert "no model loaded" in page.text_content("#status")
+        assert "not a readable" in page.get_attribute("#start", "title")
+
+
+def test_user_named_patterns_offer_only_what_the_demonstrator_performs(browser, server):
+    def user_names(state):
+        pbs = list(state["pattern_pb"].values())
+        state["patterns"] = ["wave", "clap", "2"][:len(pbs)]
+        state["pattern_pb"] = dict(zip(state["patterns"], pbs, strict=False))
+
+    with _strict_page(browser, server, _restyle(user_names)) as page:
+        _until(page, "document.querySelectorAll('#patterns button').length === 5")
+        buttons = page.locator("#patterns button").all_text_contents()
+        offered = page.eval_on_selector_all("#patterns button",
+                                            "(all) => all.map((b) => b.dataset.pattern)")
+        assert offered == ["1", "2", "3", "4", "pause"]
+        assert "not learned" in buttons[0] and "not learned" not in buttons[1]
+        assert not any("wave" in b or "clap" in b for b in buttons)
+        note = page.text_content("#patterns-note")
+        assert "wave" in note and "clap" in note and "mouse" in note
+
+
+def test_a_reload_keeps_the_plots_and_reset_and_stop_say_what_the_values_are(page, browser,
+                                                                           server):
+    _set(page, f'{{type: "dt", dt: {FAST_DT}}}', f"rnnpbDashboard.state.dt === {FAST_DT}")
+    page.click("#reset")
+    page.click("#start")
+    page.wait_for_function("rnnpbDashboard.history.length >= 40", timeout=20000)
+    other = browser.new_page(viewport={"width": 1400, "height": 1000}, bypass_csp=True)
+    try:
+        other.goto(server.url)
+        # A new tab has the run's recent steps before its first live step arrives.
+        other.wait_for_function("rnnpbDashboard.replayed >= 40", timeout=10000)
+        assert other.text_content("#nearest") != "—"
+    finally:
+        other.close()
+    page.click("#stop")
+    page.wait_for_function("!rnnpbDashboard.state.running")
+    assert "stopped" in page.text_content("#readouts-note")
+    page.click("#reset")
+    page.wait_for_function("rnnpbDashboard.state.steps === 0 && rnnpbDashboard.history"
+                           ".length === 0")
+    assert page.text_content("#nearest") == "—" and page.text_content("#step") == "0"
+    assert page.text_content("#readouts-note") == ""
+
+
+def test_controls_are_off_while_disconnected_and_a_command_then_is_not_lost_silently(
+        browser, server):
+    routes = []
+
+    def keep(ws_route) -> None:
+        routes.append(ws_route)
+        ws_route.connect_to_server()
+
+    with _strict_page(browser, server, keep) as page:
+        assert page.locator("#start").is_enabled() or page.evaluate(
+            "rnnpbDashboard.state.running")
+        routes[-1].close()
+        _until(page, "!rnnpbDashboard.connected")
+        for control in ("#start", "#stop", "#reset", "#model", "#dt", "#camera-open",
+                        ".tab[data-mode=pointer]", "#patterns button >> nth=0"):
+            assert page.locator(control).is_disabled(), control
+        assert "disconnected" in page.text_content("#status")
+        assert page.evaluate("rnnpbDashboard.send({type: 'control', action: 'start'})") is False
+        assert "not connected" in page.text_content("#error")
+        _until(page, "rnnpbDashboard.connected && !document.querySelector('#reset').disabled",
+               15000)
+
+
+def test_the_plots_mark_switches_and_pauses_and_the_views_read_well(page, server):
+    _set(page, f'{{type: "dt", dt: {FAST_DT}}}', f"rnnpbDashboard.state.dt === {FAST_DT}")
+    _set(page, '{type: "mode", mode: "demonstrator"}',
+         "rnnpbDashboard.state.mode === 'demonstrator'")
+    _set(page, '{type: "pattern", pattern: "1"}',
+         "rnnpbDashboard.state.demonstrator_pattern === '1'")
+    page.click("#reset")
+    page.click("#start")
+    page.wait_for_function("rnnpbDashboard.history.length >= 30", timeout=20000)
+    page.click("#patterns button[data-pattern='2']")
+    page.wait_for_function("rnnpbDashboard.history.filter((s) => s.truth === '2').length > 25",
+                           timeout=20000)
+    page.click("#patterns button[data-pattern='pause']")
+    page.wait_for_function("rnnpbDashboard.history.filter((s) => s.truth === 'pause')"
+                           ".length > 10", timeout=20000)
+    page.click("#patterns button[data-pattern='2']")
+    page.wait_for_function("rnnpbDashboard.history.slice(-10).every((s) => s.truth === '2')",
+                           timeout=20000)
+    page.click("#stop")
+    marks = page.evaluate("rnnpbDashboard.plotMarks")
+    assert marks["switches"] >= 1 and marks["pauses"] >= 1, marks
+    page.wait_for_timeout(600)  # the 3-D view eases to the last pose
+    for name, selector in (("page", None), ("view3d", "#view3d canvas"),
+                           ("plots", ".panel.plots"), ("pb", "#plot-pb")):
+        assert _shot(page, name, selector).stat().st_size > 1000
+
+
+def test_learned_points_that_coincide_are_drawn_apart(browser, server):
+    def coincide(state):
+        pbs = list(state["pattern_pb"].values())
+        state["pattern_pb"] = {name: pbs[0] for name in state["pattern_pb"]}
+
+    with _strict_page(browser, server, _restyle(coincide)) as page:
+        _until(page, "rnnpbDashboard.pbMarkers && rnnpbDashboard.pbMarkers.length === 3")
+        markers = page.evaluate("rnnpbDashboard.pbMarkers")
+        for i, a in enumerate(markers):
+            for b in markers[i + 1:]:
+                assert np.hypot(a["x"] - b["x"], a["y"] - b["y"]) >= 16, markers
+
+
+def test_switching_models_shows_the_one_loading_and_the_robot_goes_on(browser, model_dir,
+                                                                     tmp_path):
+    import shutil
+
+    from rnnpb.web import DashboardServer, find_models
+
+    folder = tmp_path / "models"
+    folder.mkdir()
+    for name in ("a.npz", "b.npz"):
+        shutil.copy(model_dir / "set1.npz", folder / name)
+    with DashboardServer(find_models(folder), port=0, dt=FAST_DT,
+                         workdir=tmp_path / "sessions") as dashboard, \
+            _strict_page(browser, dashboard) as page:
+        page.click("#start")
+        _until(page, "rnnpbDashboard.steps > 3")
+        page.select_option("#model", "b.npz")
+        # The choice stays chosen and the status names it while it loads ...
+        _until(page, "rnnpbDashboard.state.loading || rnnpbDashboard.state.model === 'b.npz'")
+        assert page.input_value("#model") == "b.npz"
+        if page.evaluate("rnnpbDashboard.state.loading"):
+            assert "b.npz" in page.text_content("#status")
+        # ... and the robot runs on with the new model.
+        _until(page, "rnnpbDashboard.state.model === 'b.npz' && rnnpbDashboard.state.running"
+                     " && rnnpbDashboard.lastStep !== null", 60000)
+        assert page.input_value("#model") == "b.npz"
+        assert "model b.npz" in page.text_content("#status")
+        page.click("#stop")

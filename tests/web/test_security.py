@@ -27,6 +27,7 @@ from rnnpb.web import (
     CONTENT_SECURITY_POLICY,
     STATIC_DIR,
     AccessPolicy,
+    CommandLimits,
     DashboardServer,
     ProtocolError,
     Session,
@@ -35,6 +36,9 @@ from rnnpb.web import (
     parse_client_message,
 )
 
+UNLIMITED = CommandLimits(commands_per_s=1e9, command_burst=1e9, hands_per_s=1e9,
+                          hands_burst=1e9)
+"""Rate limits no test sends enough to reach (they are tested in test_session_robustness)."""
 HUGE = 10**309
 """An integer beyond the largest float (about 1.8e308)."""
 
@@ -43,7 +47,8 @@ HUGE = 10**309
 def idle_session(model_dir, tmp_path_factory):
     """A session that is never started: commands queue up and are never applied, so any
     stream of messages can be sent to its app without moving the shared robot."""
-    session = Session(find_models(model_dir), workdir=tmp_path_factory.mktemp("idle"))
+    session = Session(find_models(model_dir), workdir=tmp_path_factory.mktemp("idle"),
+                      max_queued_commands=100_000)
     yield session
     session.close()
 
@@ -323,9 +328,10 @@ def test_any_hostile_message_is_answered_or_accepted_and_the_connection_stays(
     command, a pong for a ping), on a connection that stays open, with nothing logged above a
     warning."""
     with caplog.at_level(logging.WARNING, logger="rnnpb.web"), \
-            _serving(create_app(idle_session)) as port, \
+            _serving(create_app(idle_session, limits=UNLIMITED)) as port, \
             connect(f"ws://127.0.0.1:{port}/ws", open_timeout=10) as ws:
         assert json.loads(ws.recv(timeout=10))["type"] == "state"
+        assert json.loads(ws.recv(timeout=10))["type"] == "history"
 
         @settings(max_examples=300, deadline=None,
                   suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])

@@ -153,6 +153,11 @@ def test_two_clients_share_one_session_and_a_disconnect_mid_stream_is_harmless(s
         assert model.nearest_pattern(np.array(recognised["pb"]))[0] == "2"
         assert set(recognised["timings_ms"]) == {"perceive", "mirror", "act", "record"}
         assert len(recognised["arms"]["hands"]) == 2
+        # What the step recognised travels with it, in the contract's words.
+        assert recognised["novelty"] in ("familiar", "novel", "unstructured", "still", "")
+        assert recognised["recognised"] in (None, *model.pattern_pb)
+        assert 0.0 <= recognised["confidence"] <= 1.0
+        assert set(recognised["pattern_confidence"]) == set(model.pattern_pb)
         _control(a, type="control", action="stop")
         _next(b, "state", where=lambda m: not m["running"])
     deadline = time.monotonic() + 5
@@ -239,7 +244,7 @@ def test_find_models_and_the_command_line(model_dir, tmp_path, capsys):
 
     assert list(find_models(model_dir)) == ["set1.npz"]
     assert list(find_models(model_dir / "set1.npz")) == ["set1.npz"]
-    with pytest.raises(ConfigError, match="no model files"):
+    with pytest.raises(ConfigError, match="no usable model files"):
         find_models(tmp_path)
     assert main(["serve", "--model", str(tmp_path / "missing")]) == 2
     assert "no such model file or folder" in capsys.readouterr().err
@@ -247,13 +252,103 @@ def test_find_models_and_the_command_line(model_dir, tmp_path, capsys):
     assert "--dt must be in" in capsys.readouterr().err
 
 
-def test_state_and_steps_say_what_guards_the_robot(server, model_dir):
-    from rnnpb.web import find_models
+def test_only_models_that_load_are_offered_and_a_bad_one_is_refused_at_start(
+        model_dir, tmp_path, capsys, caplog):
+    import shutil
 
-    # A safety map beside a model is not offered as a model.
+    from rnnpb.cli import main
+    from rnnpb.errors import ModelFileError
+    from rnnpb.web import offered_models
+
+    folder = tmp_path / "models"
+    folder.mkdir()
+    (folder / "a-broken.npz").write_bytes(b"not a zip file at all")
+    (folder / "b-data.npz").write_text("lhy,lhz,rhy,rhz\n0.1,0.2,0.3,0.4\n")
+    shutil.copy(model_dir / "set1.npz", folder / "set1.npz")
+    shutil.copy(model_dir / "set1.npz", folder / "set1.checkpoint.npz")
+    shutil.copy(model_dir / "set1.npz", folder / ".set1.npz")  # an unfinished write
+    models, refused = offered_models(folder)
+    # The broken first model is refused with its reason, the checkpoint is never offered.
+    assert list(models) == ["set1.npz"]
+    assert sorted(refused) == ["a-broken.npz", "b-data.npz"]
+    assert all("rnnpb" in reason for reason in refused.values())
+    with caplog.at_level(logging.WARNING, logger="rnnpb.web"):
+        assert list(find_models(folder)) == ["set1.npz"]
+    assert "not offering a-broken.npz" in caplog.text
+    # A bad --model file stops serve before it serves: one line, exit status 2.
+    for bad in ("a-broken.npz", "b-data.npz"):
+        with pytest.raises(ModelFileError):
+            find_models(folder / bad)
+        assert main(["serve", "--model", str(folder / bad), "--port", "0"]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("rnnpb: error:") and bad in err and len(err.splitlines()) == 1
+    (folder / "set1.npz").unlink()
+    with pytest.raises(ConfigError, match="no usable model files.*a-broken.npz"):
+        find_models(folder)
+
+
+def test_a_model_that_cannot_be_used_is_named_in_the_state(tmp_path):
+    from rnnpb.web import Session
+
+    bad = tmp_path / "bad.npz"
+    bad.write_bytes(b"damaged")
+    session = Session({"bad.npz": bad}, workdir=tmp_path / "sessions")
+    try:
+        session.start()
+        deadline = time.monotonic() + 30
+        while session.state()["model_error"] is None:
+            assert time.monotonic() < deadline, "no model error within 30 s"
+            time.sleep(0.05)
+        state = session.state()
+        assert state["model"] is None and not state["loading"]
+        assert "bad.npz" in state["model_error"] and "bad.npz" in state["error"]
+        session.submit({"type": "control", "action": "start"})
+        deadline = time.monotonic() + 10
+        while "no model is loaded" not in (session.state()["error"] or ""):
+            assert time.monotonic() < deadline
+            time.sleep(0.05)
+        assert "bad.npz" in session.state()["error"]  # Start says why it cannot start
+    finally:
+        session.close()
+
+
+def test_a_new_client_starts_with_the_runs_recent_steps(server):
+    from rnnpb.web import RECENT_STEPS
+
+    with _ws(server) as ws:
+        _next(ws, "state")
+        _control(ws, type="dt", dt=0.02)
+        _control(ws, type="control", action="reset")
+        _control(ws, type="control", action="start")
+        _next(ws, "step", where=lambda m: m["step"] >= 15)
+        with _ws(server) as late:
+            state = json.loads(late.recv(timeout=10))
+            history = json.loads(late.recv(timeout=10))
+            assert state["type"] == "state" and history["type"] == "history"
+            assert history["run"] == state["run"]
+            steps = [m["step"] for m in history["steps"]]
+            assert 15 <= len(steps) <= RECENT_STEPS and steps == list(range(steps[0],
+                                                                            steps[-1] + 1))
+            # Then the live steps follow on with no gap and no repeat.
+            following = _next(late, "step")["step"]
+            assert following == steps[-1] + 1
+        _control(ws, type="control", action="stop")
+        _control(ws, type="dt", dt=0.05)  # the fixture's step again
+        _control(ws, type="control", action="reset")
+        state = _next(ws, "state", where=lambda m: m["steps"] == 0 and not m["running"])
+    with _ws(server) as fresh:
+        _next(fresh, "state")
+        assert _next(fresh, "history")["steps"] == []  # a new run: no old steps replayed
+    assert state["run"] != history["run"]
+
+
+def test_state_and_steps_say_what_guards_the_robot(server, model_dir):
+    from rnnpb.web import offered_models
+
+    # A safety map beside a model is neither offered as a model nor refused as one.
     (model_dir / "set1.safety.npz").write_bytes(b"")
     try:
-        assert list(find_models(model_dir)) == ["set1.npz"]
+        assert offered_models(model_dir) == ({"set1.npz": model_dir / "set1.npz"}, {})
     finally:
         (model_dir / "set1.safety.npz").unlink()
     status, body, _ = _get(server, "/api/state")

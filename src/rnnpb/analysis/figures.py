@@ -74,12 +74,77 @@ def _segments(labels: SequenceABC[str]) -> list[tuple[int, int, str]]:
     return out
 
 
+#: A PB change larger than this in one step (any unit) is marked as a jump: the on-line
+#: regression restarted from a learned pattern's PB or from a state on a learned cycle. Between
+#: restarts the PB moves by less than about 0.08 a step (measured on the demo's sessions).
+PB_JUMP = 0.15
+JUMP_MARK = dict(marker="v", color="k", ms=5, ls="none")
+
+
+def _pb_matrix(session: dict[str, np.ndarray]) -> np.ndarray:
+    """The session's PB columns as one array, shape (T, P)."""
+    columns = []
+    while pb_column(len(columns)) in session:
+        columns.append(np.asarray(session[pb_column(len(columns))], dtype=np.float64))
+    return np.stack(columns, axis=1) if columns else np.zeros((len(session[STEP_COLUMN]), 0))
+
+
+def pb_jumps(pb: np.ndarray, threshold: float = PB_JUMP) -> np.ndarray:
+    """Indices of the steps where the PB (T, P) moved by more than ``threshold`` in some unit
+    since the step before (the first step is never one)."""
+    if len(pb) < 2:
+        return np.zeros(0, dtype=int)
+    change = np.nanmax(np.abs(np.diff(pb, axis=0)), axis=1, initial=0.0)
+    return np.flatnonzero(change > threshold) + 1
+
+
+def nearest_patterns(pb: np.ndarray, pattern_pb: dict[str, np.ndarray]) -> list[str]:
+    """Per step, the learned pattern whose PB is nearest the PB (T, P) (Euclidean)."""
+    names = list(pattern_pb)
+    learned = np.stack([np.asarray(pattern_pb[n], dtype=np.float64) for n in names])
+    distance = np.linalg.norm(pb[:, None, :] - learned[None, :, :], axis=2)
+    return [names[i] for i in np.argmin(distance, axis=1)]
+
+
+def _spans_text(spans: SequenceABC[tuple[int, int]], limit: int = 4) -> str:
+    parts = [f"{a}" if b - a == 1 else f"{a}–{b - 1}" for a, b in spans[:limit]]
+    return ", ".join(parts) + (", …" if len(spans) > limit else "")
+
+
+def _runs(flags: np.ndarray, steps: np.ndarray, minimum: int = 1) -> list[tuple[int, int]]:
+    """(first step, end step) of each run of True in ``flags`` at least ``minimum`` long."""
+    out, start = [], None
+    for t, flag in enumerate([*flags, False]):
+        if flag and start is None:
+            start = t
+        elif not flag and start is not None:
+            if t - start >= minimum:
+                out.append((int(steps[start]), int(steps[t - 1]) + 1))
+            start = None
+    return out
+
+
+def _caption(fig: Figure, text: str) -> None:
+    """What the reader sees, under the figure (kept by the tight bounding box)."""
+    fig.text(0.01, 0.03, text, ha="left", va="top", fontsize=8, wrap=True, color="#333333")
+
+
 def plot_session(session: dict[str, np.ndarray], path: str | os.PathLike[str], title: str = "",
                  joint_limits: np.ndarray | None = None,
-                 marks: SequenceABC[tuple[int, str]] = ()) -> None:
-    """The paper's Figure 5/6 layout: target hands, predicted hands, robot joints, PB."""
+                 marks: SequenceABC[tuple[int, str]] = (),
+                 pattern_pb: dict[str, np.ndarray] | None = None,
+                 caption: str | None = None) -> None:
+    """The paper's Figure 5/6 layout: target hands, predicted hands, robot joints, PB.
+
+    Jumps of the PB (more than :data:`PB_JUMP` in one step: the regression's restarts) are
+    marked ▼. With ``pattern_pb`` (the learned PB of each pattern) a strip under the PB names
+    the learned pattern whose PB is nearest at each step, hatched where that is not the
+    pattern the user performs. Under the figure a caption says what the reader sees (with
+    the counts measured on this session); ``caption`` adds a sentence of the caller's.
+    """
     steps = session[STEP_COLUMN]
-    fig = Figure(figsize=(10, 9))
+    pb = _pb_matrix(session)
+    fig = Figure(figsize=(10, 9.6 if pattern_pb else 9))
     axes = fig.subplots(4, 1, sharex=True, gridspec_kw={"height_ratios": [1, 1, 1.2, 1]})
     labels = list(session.get(TRUTH_PATTERN_COLUMN, []))
     if labels and any(labels):
@@ -110,14 +175,52 @@ def plot_session(session: dict[str, np.ndarray], path: str | os.PathLike[str], t
     axes[2].set_ylabel("robot joints\n(normalized)" if joint_limits is not None
                        else "robot joints (rad)")
     axes[2].legend(loc="upper right", ncol=6, fontsize=7, framealpha=0.8)
-    k = 0
-    while pb_column(k) in session:
-        axes[3].plot(steps, session[pb_column(k)], color=PB_COLORS[k % len(PB_COLORS)],
-                     label=f"PB{k}")
-        k += 1
+    for k in range(pb.shape[1]):
+        axes[3].plot(steps, pb[:, k], color=PB_COLORS[k % len(PB_COLORS)], label=f"PB{k}")
+    jumps = pb_jumps(pb)
+    if len(jumps):
+        axes[3].plot(steps[jumps], np.full(len(jumps), 1.01), label="PB jump", clip_on=False,
+                     **JUMP_MARK)
     axes[3].set_ylim(-0.05, 1.05)
     axes[3].set_ylabel("parametric bias")
-    axes[3].legend(loc="upper right", ncol=4, fontsize=7, framealpha=0.8)
+    sentences = ["Top to bottom: the user's hands as the robot sees them, the network's "
+                 "prediction of them made one step before, the robot's joints, and the "
+                 "parametric bias (PB)."]
+    if labels and any(label == "pause" for label in labels):
+        sentences.append("Shaded: the user pauses (holds still).")
+    if marks:
+        sentences.append("Dashed lines: " + ", ".join(sorted({t for _, t in marks})) + ".")
+    if len(jumps):
+        sentences.append(
+            f"▼ marks {len(jumps)} jump(s) of the PB by more than {PB_JUMP:g} in one step "
+            f"(steps {_spans_text([(int(steps[j]), int(steps[j]) + 1) for j in jumps], 6)}):"
+            " the on-line regression restarting from a learned pattern's PB or from a state "
+            "on a learned cycle, as it does to find the user's pattern and phase again "
+            "(docs/model.md).")
+    else:
+        sentences.append(f"The PB never jumps by more than {PB_JUMP:g} in one step.")
+    if pattern_pb and len(pb):
+        nearest = nearest_patterns(np.nan_to_num(pb, nan=0.5), pattern_pb)
+        _nearest_strip(axes[3], steps, nearest, labels)
+        if labels and any(labels):
+            performed = np.array([lab not in ("", "pause") for lab in labels])
+            other = performed & np.array([n != lab for n, lab in zip(nearest, labels,
+                                                                     strict=True)])
+            spans = _runs(other, steps)
+            if spans:
+                sentences.append(
+                    f"The strip under the PB names the learned pattern whose PB is nearest; "
+                    f"hatched ({int(other.sum())} of {int(performed.sum())} steps with a "
+                    f"pattern performed, steps {_spans_text(spans)}) where it is another "
+                    "than the user's: there the PB lies nearer that pattern's learned value. "
+                    "The PB need not sit at the learned value for the network to generate "
+                    "the pattern: the predictions and joints above show whether the "
+                    "movement followed.")
+            else:
+                sentences.append("The strip under the PB names the learned pattern whose PB "
+                                 "is nearest: always the one the user performs.")
+        axes[3].set_ylim(-0.3, 1.05)
+    axes[3].legend(loc="upper right", ncol=5, fontsize=7, framealpha=0.8)
     for step, text in marks:
         for ax in axes:
             ax.axvline(step, color="k", lw=0.8, ls="--")
@@ -127,7 +230,31 @@ def plot_session(session: dict[str, np.ndarray], path: str | os.PathLike[str], t
     if title:
         fig.suptitle(title, y=1.0)
     fig.align_ylabels(axes)
+    if caption:
+        sentences.append(caption)
+    _caption(fig, " ".join(sentences))
     save(fig, path)
+
+
+def _nearest_strip(ax, steps: np.ndarray, nearest: list[str], performed: list[str]) -> None:
+    """Under the PB (y in [-0.27, -0.12]): the nearest learned pattern per step, named where
+    its run is long enough, hatched at the steps where it is not the pattern performed."""
+    names = sorted(set(nearest))
+    cmap = colormaps["Pastel1"]
+    for start, end, name in _segments(nearest):
+        ax.broken_barh([(steps[start] - 0.5, end - start)], (-0.27, 0.15),
+                       facecolors=cmap(names.index(name) % 9), lw=0.0)
+        if end - start >= 6:
+            ax.text((steps[start] + steps[end - 1]) / 2, -0.195, name, ha="center",
+                    va="center", fontsize=7)
+    if performed:
+        other = np.array([p not in ("", "pause", n) for n, p in zip(nearest, performed,
+                                                                    strict=True)])
+        for start, end in _runs(other, np.arange(len(steps))):
+            ax.broken_barh([(steps[start] - 0.5, end - start)], (-0.27, 0.15),
+                           facecolors="none", edgecolor="#c00000", hatch="////", lw=0.0)
+    ax.text(0.0, -0.195, "nearest ", ha="right", va="center", fontsize=7,
+            transform=ax.get_yaxis_transform())
 
 
 def plot_switch_zoom(session: dict[str, np.ndarray], windows: SequenceABC[tuple[int, int]],
@@ -150,11 +277,15 @@ def plot_switch_zoom(session: dict[str, np.ndarray], windows: SequenceABC[tuple[
                 lo, hi = joint_limits[MOTOR_NAMES.index(name)]
                 values = (values - lo) / (hi - lo)
             ax[2].plot(steps[part], values[part], color=cmap(k), label=name.upper())
-        k = 0
-        while pb_column(k) in session:
-            ax[3].plot(steps[part], session[pb_column(k)][part], color=PB_COLORS[k],
+        pb = _pb_matrix(session)
+        for k in range(pb.shape[1]):
+            ax[3].plot(steps[part], pb[part, k], color=PB_COLORS[k % len(PB_COLORS)],
                        label=f"PB{k}")
-            k += 1
+        jumps = [j for j in pb_jumps(pb) if part[j]]
+        if jumps:
+            ax[3].plot(steps[jumps], np.full(len(jumps), 1.01), clip_on=False,
+                       label="PB jump" if col == len(windows) - 1 else None, **JUMP_MARK)
+        ax[3].set_ylim(-0.05, 1.05)
         for switch in switches:
             if start <= switch < end:
                 for a in ax:
@@ -166,8 +297,14 @@ def plot_switch_zoom(session: dict[str, np.ndarray], windows: SequenceABC[tuple[
         axes[row, 0].set_ylabel(label)
     axes[0, -1].legend(fontsize=7, loc="upper right", ncol=2)
     axes[2, -1].legend(fontsize=7, loc="upper right", ncol=3)
-    axes[3, -1].legend(fontsize=7, loc="upper right", ncol=2)
+    axes[3, -1].legend(fontsize=7, loc="upper right", ncol=3)
     fig.suptitle("Switching: the dashed line is the user's switch", y=1.0)
+    _caption(fig, "Each column: from 10 steps before a switch of the user's pattern (dashed) "
+             "to 30 steps after it. Rows: the hands seen, the hands predicted one step "
+             "before, the robot's joints, the PB. ▼ marks a jump of the PB by more than "
+             f"{PB_JUMP:g} in one step: the on-line regression restarting from a learned "
+             "pattern's PB or a state on a learned cycle, which is how it catches the new "
+             "pattern within a few steps (docs/model.md).")
     save(fig, path)
 
 
@@ -205,34 +342,77 @@ def context_units(attractors: dict[str, ClosedLoopRun]) -> tuple[int, int]:
     return int(order[0]), int(order[1])
 
 
+def context_plane(attractors: dict[str, ClosedLoopRun]) -> tuple[np.ndarray, np.ndarray,
+                                                                  np.ndarray]:
+    """The plane of Figure 9: the first two principal components of the context over the
+    learned attractors.
+
+    The context units that vary most move together (their plane shows each attractor as a
+    thin ellipse on the diagonal); the principal components separate the common swing from
+    what differs, and so show each attractor's shape.
+
+    Returns
+    -------
+    mean : array, shape (C,)
+    axes : array, shape (2, C)
+        The two components, unit vectors, each signed so that its largest entry is positive.
+    explained : array, shape (2,)
+        The share of the context's variance over the attractors each explains.
+    """
+    stacked = np.concatenate([a.context for a in attractors.values()])
+    mean = stacked.mean(axis=0)
+    _, singular, vt = np.linalg.svd(stacked - mean, full_matrices=False)
+    components = np.zeros((2, stacked.shape[1]))
+    components[:len(vt[:2])] = vt[:2]
+    largest = components[np.arange(2), np.argmax(np.abs(components), axis=1)]
+    components *= np.where(largest < 0, -1.0, 1.0)[:, None]
+    singular = np.pad(singular[:2], (0, max(0, 2 - len(singular))))
+    total = float(((stacked - mean) ** 2).sum())
+    return mean, components, singular ** 2 / max(total, 1e-300)
+
+
 def plot_attractors(rows: SequenceABC[tuple[NovelRun, dict[str, ClosedLoopRun]]],
                     path: str | os.PathLike[str], transient: int) -> None:
     """The paper's Figure 9: per row, the open-loop attractor while a novel pattern is
     repeated (left) and the closed-loop attractors of the learned patterns (right), in the
-    plane of two context units."""
+    plane of the context's first two principal components over that row's learned
+    attractors (:func:`context_plane`), on axes shared along the row."""
     n_cols = 1 + max(len(attractors) for _, attractors in rows)
-    fig = Figure(figsize=(2.7 * n_cols, 3.0 * len(rows)), layout="constrained")
+    fig = Figure(figsize=(2.7 * n_cols, 3.0 * len(rows) + 0.6), layout="constrained")
     axes = fig.subplots(len(rows), n_cols, squeeze=False)
     for r, (run, attractors) in enumerate(rows):
-        i, j = context_units(attractors)
-        ctx = run.context[transient:]
+        mean, plane, explained = context_plane(attractors)
+        ctx = (run.context[transient:] - mean) @ plane.T
         ax = axes[r, 0]
-        ax.plot(ctx[:, i], ctx[:, j], lw=0.6, color="#d62728")
+        ax.plot(ctx[:, 0], ctx[:, 1], lw=0.6, color="#d62728")
         ax.set_title(f"interaction: novel {run.novel_pattern}\n(set {run.learning_set}, "
                      f"case {run.case})", fontsize=8)
+        shown = [ctx]
         for c, (name, attractor) in enumerate(attractors.items(), start=1):
             a = axes[r, c]
-            a.plot(attractor.context[:, i], attractor.context[:, j], lw=0.6,
-                   color="#1f77b4")
+            xy = (attractor.context - mean) @ plane.T
+            shown.append(xy)
+            a.plot(xy[:, 0], xy[:, 1], lw=0.6, color="#1f77b4")
             a.set_title(f"closed loop: pattern {name}", fontsize=8)
+        points = np.concatenate(shown)
+        low, high = np.nanmin(points, axis=0), np.nanmax(points, axis=0)
+        pad = 0.06 * np.maximum(high - low, 1e-6)
         for a in axes[r]:
-            a.set_xlim(0, 1)
-            a.set_ylim(0, 1)
-            a.set_aspect("equal")
+            a.set_xlim(low[0] - pad[0], high[0] + pad[0])
+            a.set_ylim(low[1] - pad[1], high[1] + pad[1])
             a.tick_params(labelsize=6)
-        axes[r, 0].set_ylabel(f"context {j}", fontsize=8)
-        for a in axes[r]:
-            a.set_xlabel(f"context {i}", fontsize=7)
+            a.set_xlabel(f"context PC1 ({explained[0]:.0%} of variance)", fontsize=7)
+        for a in axes[r, len(attractors) + 1:]:
+            a.set_visible(False)
+        axes[r, 0].set_ylabel(f"context PC2 ({explained[1]:.0%})", fontsize=8)
+    _caption(fig, "Each row, one novel pattern: left (red), the context while the user "
+             "repeats the novel pattern and the PB is regressed on-line, after the "
+             f"transient of {transient} steps; right (blue), the closed-loop attractor of "
+             "each learned pattern, the network running on its own from that pattern's PB. "
+             "Axes: the context's first two principal components over the row's learned "
+             "attractors, the same along a row, so that shapes and sizes compare. Case 1: "
+             "the robot's movement settles on a learned pattern's cycle; case 2: on a new "
+             "cycle of its own; case 3: on no cycle (the paper's section 3.3).")
     save(fig, path)
 
 
@@ -414,4 +594,63 @@ def plot_pb_safety_map(slices: SequenceABC[tuple[str, np.ndarray, np.ndarray]],
             ax.set_title(f"{label}: {title}", fontsize=8)
             fig.colorbar(image, ax=ax, fraction=0.046)
     fig.tight_layout()
+    save(fig, path)
+
+
+NOVELTY_STATES_SHOWN = ("familiar", "novel", "unstructured", "still", "undecided")
+
+
+def plot_confusion(matrices: dict[str, dict[str, dict[str, int]]],
+                   path: str | os.PathLike[str]) -> None:
+    """The novelty states said (columns) per true kind of movement (rows), as shares of the
+    row's steps, one panel per learning set (``rnnpb study novelty``)."""
+    fig = Figure(figsize=(3.6 * len(matrices), 3.4))
+    axes = fig.subplots(1, len(matrices), squeeze=False)
+    for ax, (set_name, matrix) in zip(axes[0], matrices.items(), strict=True):
+        kinds = list(matrix)
+        grid = np.array([[matrix[k].get(s, 0) for s in NOVELTY_STATES_SHOWN] for k in kinds],
+                        dtype=float)
+        shares = grid / np.maximum(grid.sum(axis=1, keepdims=True), 1)
+        ax.imshow(shares, cmap=colormaps["Blues"], vmin=0, vmax=1)
+        for (a, b), value in np.ndenumerate(shares):
+            ax.text(b, a, f"{100 * value:.0f}", ha="center", va="center", fontsize=8,
+                    color="white" if value > 0.6 else "black")
+        ax.set_xticks(range(len(NOVELTY_STATES_SHOWN)), NOVELTY_STATES_SHOWN, rotation=45,
+                      ha="right", fontsize=8)
+        ax.set_yticks(range(len(kinds)), kinds, fontsize=8)
+        ax.set_title(f"learning set {set_name}", fontsize=9)
+    fig.suptitle("Novelty state said (%) per true movement", y=1.02)
+    save(fig, path)
+
+
+def plot_delays(delays: dict[str, SequenceABC[int | None]], path: str | os.PathLike[str],
+                period: int = 12) -> None:
+    """Steps from a novel movement's start until it is called ``novel``, per learning set
+    (never: drawn past the axis end)."""
+    fig = Figure(figsize=(6.0, 3.2))
+    ax = fig.subplots()
+    never = 6 * period
+    for i, values in enumerate(delays.values()):
+        shown = [never if v is None else v for v in values]
+        ax.scatter(shown, np.full(len(shown), i) + np.linspace(-0.2, 0.2, len(shown)), s=12)
+    ax.axvline(3 * period, color="tab:red", linestyle="--", label="3 cycles")
+    ax.set_yticks(range(len(delays)), [f"set {n}" for n in delays])
+    ax.set_xlabel(f"steps until called novel (cycle = {period} steps; {never} = never)")
+    ax.legend(fontsize=8)
+    save(fig, path)
+
+
+def plot_roc(curves: dict[str, SequenceABC[tuple[float, float]]],
+             path: str | os.PathLike[str]) -> None:
+    """ROC of the novelty score (novel movements against learned ones), per learning set."""
+    fig = Figure(figsize=(3.6, 3.4))
+    ax = fig.subplots()
+    for set_name, points in curves.items():
+        xy = np.array(sorted(points))
+        if len(xy):
+            ax.plot(xy[:, 0], xy[:, 1], label=f"set {set_name}")
+    ax.plot([0, 1], [0, 1], color="#aaaaaa", linestyle=":")
+    ax.set_xlabel("learned steps called novel (false positive rate)")
+    ax.set_ylabel("novel steps called novel")
+    ax.legend(fontsize=8)
     save(fig, path)

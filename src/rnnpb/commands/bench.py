@@ -40,6 +40,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--reference-steps", type=int, default=5,
                         help="timed NumPy reference steps (default 5)")
     parser.add_argument("--no-tracking", action="store_true", help="skip the tracking bench")
+    parser.add_argument("--no-progress", action="store_true",
+                        help="no progress bar (there is none when stderr is not a terminal)")
 
 
 def _single_core() -> str:
@@ -62,6 +64,11 @@ def _single_core() -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    from rnnpb.commands._checks import step_count
+
+    # Before the half-minute of timing: a median of no steps is no figure.
+    step_count("--steps", args.steps, high=1_000_000)
+    step_count("--reference-steps", args.reference_steps, high=10_000)
     note = _single_core()
     import json
     import platform
@@ -73,6 +80,7 @@ def run(args: argparse.Namespace) -> int:
 
     from rnnpb import __version__
     from rnnpb._atomic import atomic_write
+    from rnnpb.commands._progress import progress_bar
     from rnnpb.demonstrator import learning_set
     from rnnpb.model import (
         MIRROR_SYSTEMS,
@@ -85,6 +93,18 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb.model.network import init_params
     from rnnpb.robot import JOINT_LIMITS
 
+    parts = ["learning", "on-line step", "NumPy reference"] + (
+        [] if args.no_tracking else ["tracking"])
+    bar = progress_bar(total=len(parts), unit="part", desc="bench", disable=args.no_progress,
+                       bar_format="{desc}: {n}/{total} parts [{elapsed}]{postfix}")
+
+    def next_part(done: bool = True) -> None:
+        if done:
+            bar.update(1)
+        if bar.n < len(parts):
+            bar.set_postfix_str(parts[bar.n])
+
+    next_part(done=False)
     network = NetworkConfig()
     sequences = learning_set("1", seed=0)
     data = learning.prepare_data(sequences, JOINT_LIMITS)
@@ -101,6 +121,7 @@ def run(args: argparse.Namespace) -> int:
         state = jax.block_until_ready(run_chunk(state, inputs, valid, chunk))
         chunk_times.append((time.perf_counter() - t0) / chunk * 1e3)
     train_ms = float(np.median(chunk_times))
+    next_part()
 
     # The on-line step costs the same for any weights: time it with a fresh network.
     params = init_params(network, jax.random.PRNGKey(0))
@@ -156,6 +177,7 @@ def run(args: argparse.Namespace) -> int:
             guarded_times[name].append((t1 - t0) * 1e3)
             filter_times[name].append((t2 - t1) * 1e3)
     step_times = np.asarray(step_times)
+    next_part()
 
     # The same step, same model and config, in the NumPy twin.
     reference = MIRROR_SYSTEMS["reference"](model, online)
@@ -171,6 +193,7 @@ def run(args: argparse.Namespace) -> int:
         reference.step(stream[online.window + t])
         reference_times.append((time.perf_counter() - t0) * 1e3)
     reference_ms = float(np.median(reference_times))
+    next_part()
 
     figures = {
         "train_iteration_ms_median": train_ms,
@@ -198,6 +221,8 @@ def run(args: argparse.Namespace) -> int:
         figures["tracking_ms_median"] = float(tracking["median_ms"])
         figures["tracking_clean_error_px"] = float(tracking["clean_error_px"])
         figures["tracking_noisy_error_px"] = float(tracking["noisy_error_px"])
+        next_part()
+    bar.close()
 
     print(f"rnnpb {__version__} bench — {note}, jax {jax.__version__}, "
           f"{platform.processor() or platform.machine()}")

@@ -72,8 +72,8 @@ def run(args: argparse.Namespace) -> int:
         save_ball_colors,
     )
 
-    if args.frame < 0:
-        raise RnnpbError(f"--frame must be >= 0, got {args.frame}")
+    if not 0 <= args.frame <= 1_000_000:
+        raise RnnpbError(f"--frame must be in [0, 1,000,000], got {args.frame}")
     spec = parse_source_spec(args.source, kinds=CAMERA_KINDS)
     frame = None
     recent = []  # the last frames up to --frame: motion tells the balls from look-alikes
@@ -85,9 +85,13 @@ def run(args: argparse.Namespace) -> int:
             raise RnnpbError(f"{args.source}: has no frame {args.frame}")
 
     calibrations = []
-    for pixel, broad, name in ((args.left_pixel, BROAD_RED, args.left_name),
-                               (args.right_pixel, BROAD_BLUE, args.right_name)):
+    for side, pixel, broad, name in (("left", args.left_pixel, BROAD_RED, args.left_name),
+                                     ("right", args.right_pixel, BROAD_BLUE, args.right_name)):
         if pixel is not None:
+            height, width = frame.shape[:2]
+            if not (0 <= pixel[0] < width and 0 <= pixel[1] < height):
+                raise RnnpbError(f"--{side}-pixel {pixel[0]},{pixel[1]} is outside the "
+                                 f"{width}x{height} frame")
             cal = calibrate_from_pixel(frame, pixel, name)
         else:
             cal = calibrate_automatically(recent, broad)

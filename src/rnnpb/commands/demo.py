@@ -15,7 +15,8 @@ set) and write OUT/report.md (measure | paper | ours, figures embedded), OUT/res
 The full run learns with the paper's algorithm and also runs the paper's own on-line
 regression on the same models for comparison (about 8 minutes on 2 cores). --quick learns
 with the fast preset, keeps the lock-on and switching experiments whole and shortens the rest
-(about 2 minutes); its models go with `rnnpb interact --online ungated`.
+(about 2 minutes); its models go with the ungated on-line regression, which
+`rnnpb interact` picks for them by itself.
 
 Example:
   rnnpb demo --out results/demo
@@ -34,8 +35,23 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         "as in the paper)")
 
 
+#: Minutes the run took on the 2-core reference machine with 2 workers (docs/experiments.md).
+MEASURED_MINUTES = {"full": 8.0, "quick": 2.0}
+
+
+def _estimate(config) -> str:
+    """What to expect: the measured time, scaled by the workers (the work is the same)."""
+    base = MEASURED_MINUTES["quick" if config.quick else "full"]
+    minutes = base * 2 / min(config.workers, 2)
+    more = (f", longer with {config.samples_per_pattern} demonstrations per pattern"
+            if config.samples_per_pattern > 2 else "")
+    return (f"about {minutes:.0f} minutes on 2 cores with {config.workers} worker(s)"
+            f"{more} (longer while other programs use the cores)")
+
+
 def run(args: argparse.Namespace) -> int:
     import os
+    import time
     from dataclasses import replace
 
     os.environ.setdefault("MUJOCO_GL", "egl")
@@ -46,7 +62,16 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(f"--workers must be >= 1, got {args.workers}")
     config = ExperimentConfig.quick_run() if args.quick else ExperimentConfig()
     config = replace(config, workers=args.workers, samples_per_pattern=args.samples_per_pattern)
-    results = run_demo(args.out, config)
+    print(f"rnnpb demo ({'quick' if args.quick else 'full'} run): {_estimate(config)}",
+          flush=True)
+    started = time.monotonic()
+
+    def log(message: str) -> None:
+        # Elapsed time on every line, so a reader can set the progress against the estimate.
+        minutes, seconds = divmod(int(time.monotonic() - started), 60)
+        print(f"[{minutes:2d}:{seconds:02d}] {message}", flush=True)
+
+    results = run_demo(args.out, config, log=log)
     print(f"wrote {args.out}/report.md and {args.out}/results.json in "
           f"{results.runtime_s:.0f} s")
     for key, target in results.targets.items():

@@ -31,10 +31,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
+    from rnnpb.commands._checks import MAX_STEPS, step_count
     from rnnpb.errors import ConfigError
     from rnnpb.model import TrainedModel, generate
     from rnnpb.sequences import Sequence, write_sequence
 
+    # Before the model is read: a mistyped count is one line, not an allocation that fails.
+    step_count("--steps", args.steps, low=2)
+    step_count("--transient", args.transient, low=0)
+    if args.steps + args.transient > MAX_STEPS:
+        raise ConfigError(f"--steps plus --transient must be at most {MAX_STEPS:,}, got "
+                          f"{args.steps + args.transient:,}")
     model = TrainedModel.load(args.model)
     if args.pattern is not None:
         if args.pattern not in model.pattern_pb:
@@ -50,10 +57,6 @@ def run(args: argparse.Namespace) -> int:
             raise ConfigError(f"--pb {args.pb!r}: expected comma-separated numbers") from None
         context = None
         label = "pb"
-    if args.steps < 2:
-        raise ConfigError(f"--steps must be at least 2, got {args.steps}")
-    if args.transient < 0:
-        raise ConfigError(f"--transient must be >= 0, got {args.transient}")
     generated = generate(model, pb, args.steps + args.transient, initial_context=context)
     k = args.transient
     write_sequence(args.out, Sequence(generated.sensory[k:], generated.motor[k:], label,

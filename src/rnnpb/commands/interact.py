@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 
 NAME = "interact"
 SAFE_POINTS = True  # Ctrl-C stops between steps (rnnpb._interrupt)
@@ -14,15 +15,31 @@ the motor command, which the robot executes.
 
 Sources (--source):
   scenario:held:P | scenario:pause:P | scenario:switch:A,B,C | scenario:novel:SET
+  scenario:steps:M*N,...   movements (any demonstrator movement or pause), N steps each
   csv:FILE        a sensory stream (step,lhy,lhz,rhy,rhz; empty cell = hand not seen)
   video:FILE | images:DIR | webcam:INDEX | synthetic:P   (through the colour-ball tracker)
 
 Writes DIR/session.csv (one row per step), DIR/session.png (the paper's Figure 5 layout)
-and DIR/summary.json (timings per section, missed deadlines, config, versions); with
+and DIR/summary.json (timings per section, missed deadlines, config, versions, the
+recognition timeline); with
 --render also DIR/session.mp4: the camera frame with the tracked balls | the robot.
+
+While it runs, a step counter shows what the robot recognises (the learned pattern and
+its confidence, "new movement", "hands still", ...); at the end it prints the recognition
+timeline: which answer held from which step to which.
 
 Steps where a hand is lost are run on the network's own prediction and marked in the
 recording (lost_left, lost_right).
+
+Without --model: the first model (by name) in ./models/, else in ./results/demo/models/
+(what `make demo` writes), else the small model shipped with rnnpb (learning set 1 — patterns
+1, 2, 3 — learned with the fast preset).
+
+The on-line regression (--online) defaults to the one that suits how the model was learned
+(`auto`): `ungated` for a model learned with the fast preset (Adam), `default` for one
+learned by the paper's algorithm; the choice is printed.
+
+A progress bar on stderr shows the steps (only on a terminal; --no-progress turns it off).
 
 Safety (docs/safety.md): every command passes the command filter before it is sent (it
 slows a command faster than the servos and holds or shortens one that would collide; the
@@ -32,20 +49,23 @@ learned unsafe region. Without a map the filter alone guards (said once). --no-s
 both off.
 
 Example:
-  rnnpb interact --model results/models/set1.npz --source scenario:switch:1,2,3 --out run/
+  rnnpb interact --model results/demo/models/set1.npz --source scenario:switch:1,2,3 --out run/
 """
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--model", required=True, help="trained model (.npz)")
+    parser.add_argument("--model", help="trained model (.npz) or a folder of them (default: "
+                        "./models/, ./results/demo/models/, else the shipped model)")
     parser.add_argument("--source", required=True, help="what drives the robot (see above)")
     parser.add_argument("--out", required=True, metavar="DIR", help="output directory")
     parser.add_argument("--robot", choices=("kinematic", "mujoco"), default="kinematic",
                         help="simulated robot (default kinematic: instant, no physics)")
-    parser.add_argument("--online", choices=("default", "paper", "ungated"), default="default",
-                        help="on-line regression settings (default: the best measured; "
-                        "ungated: without the surprise gate, for models learned with "
-                        "--preset fast; paper: the paper's)")
+    parser.add_argument("--online", choices=("auto", "default", "paper", "ungated"),
+                        default="auto",
+                        help="on-line regression settings (auto, the default: the one that "
+                        "suits how the model was learned; default: the best measured for the "
+                        "paper's algorithm; ungated: without the surprise gate, for models "
+                        "learned with --preset fast; paper: the paper's)")
     parser.add_argument("--paced", action="store_true",
                         help="run in real time, one step every --dt seconds")
     parser.add_argument("--dt", type=float, default=0.4, help="seconds per step (default 0.4)")
@@ -58,10 +78,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="also write session.mp4: camera frame | simulated robot")
     parser.add_argument("--no-safety", action="store_true",
                         help="no command filter and no PB guard (docs/safety.md)")
+    parser.add_argument("--no-progress", action="store_true",
+                        help="no progress bar (there is none when stderr is not a terminal)")
 
 
 def run(args: argparse.Namespace) -> int:
-    import contextlib
     import json
     import os
     from pathlib import Path
@@ -69,6 +90,8 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb import __version__, _interrupt
     from rnnpb._atomic import atomic_write
     from rnnpb.analysis.figures import plot_session
+    from rnnpb.commands._checks import finite_seconds, step_count
+    from rnnpb.commands._progress import progress_bar
     from rnnpb.interaction import (
         InteractionLoop,
         LoopConfig,
@@ -77,11 +100,22 @@ def run(args: argparse.Namespace) -> int:
         read_session,
     )
     from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel
+    from rnnpb.model.recognition import describe_answer, recognition_timeline
+    from rnnpb.models import default_model, first_model_file
     from rnnpb.robot import JOINT_LIMITS, KinematicRobot
 
-    model = TrainedModel.load(args.model, joint_limits=JOINT_LIMITS)
-    online = {"paper": OnlineConfig.paper, "ungated": OnlineConfig.ungated}.get(
-        args.online, OnlineConfig)()
+    finite_seconds("--dt", args.dt)
+    step_count("--steps", args.steps, low=0)
+    step_count("--frame-step", args.frame_step)
+    model_path = first_model_file(Path(args.model) if args.model else default_model())
+    model = TrainedModel.load(model_path, joint_limits=JOINT_LIMITS)
+    if args.online == "auto":
+        choice = OnlineConfig.for_model(model)
+        online_name, online = choice.name, choice.config
+        why = f", chosen as {choice.reason}; --online overrides"
+    else:
+        online_name, online = args.online, OnlineConfig.preset(args.online)
+        why = ""
     loop_config = LoopConfig(dt=args.dt, paced=args.paced, max_steps=args.steps)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -96,10 +130,13 @@ def run(args: argparse.Namespace) -> int:
         robot = KinematicRobot(dt=args.dt)
     from rnnpb.safety import online_safety
 
-    safety = online_safety(args.model, model, online, enabled=not args.no_safety)
+    safety = online_safety(model_path, model, online, enabled=not args.no_safety)
     online = safety.config
     mirror = MirrorSystem(model, online, meta=safety.meta)
     with contextlib.ExitStack() as stack:
+        # SIGTERM (`kill`, a service manager) ends the run as Ctrl-C does: at the next step,
+        # with the recording, the summary and a playable video.
+        stack.enter_context(_terminate_as_interrupt())
         stack.enter_context(source)
         stack.enter_context(robot)
         if safety.command_filter is not None:
@@ -113,22 +150,47 @@ def run(args: argparse.Namespace) -> int:
 
             video = stack.enter_context(SessionVideo(out / "session.mp4", fps=1.0 / args.dt))
             loop.subscribe(video.add)
-        print(f"interacting: {args.source} -> {args.model} ({args.online} regression, "
-              f"{args.robot} robot{', paced' if args.paced else ''}); Ctrl-C stops")
-        print(safety.note)
-        try:
+        # One line, printed just before the first compilation starts.
+        print(f"interacting: {args.source} -> {model_path} ({online_name} on-line regression"
+              f"{why}; {args.robot} robot{', paced' if args.paced else ''}); Ctrl-C stops",
+              flush=True)
+        print(safety.note, flush=True)
+        bar = stack.enter_context(progress_bar(
+            total=args.steps or _source_length(source), unit="step", desc="interacting",
+            disable=args.no_progress))
+        answers: list[tuple[str | None, str]] = []
+
+        def after_step(record) -> None:
+            answers.append((record.recognised, record.novelty))
+            text = describe_answer(record.recognised, record.confidence, record.novelty)
+            if not bar.disable:  # a terminal: the live counter is the bar, the answer beside it
+                bar.set_postfix_str(text, refresh=False)
+                bar.update(1)
+            elif len(answers) == 1 or answers[-1] != answers[-2]:
+                print(f"step {record.step + 1}: {text}", flush=True)
             # Between steps is the safe point: the step's results are read back from XLA.
-            summary = loop.run(on_step=lambda record: _interrupt.check())
+            _interrupt.check()
+
+        try:
+            summary = loop.run(on_step=after_step)
         except KeyboardInterrupt:
             summary = loop.summary()
+            bar.close()
             print("interrupted: the recording keeps every step so far")
+    timeline = recognition_timeline(answers)
+    print("recognition timeline:")
+    for part in timeline:
+        text = describe_answer(part["recognised"], 1.0, part["novelty"]).split(" (")[0]
+        print(f"  steps {part['first'] + 1:>4}-{part['last'] + 1:<4} {text}")
     session = read_session(out / "session.csv")
     if len(session["step"]):
-        plot_session(session, out / "session.png", title=f"{args.source} — {args.model}",
+        plot_session(session, out / "session.png", title=f"{args.source} — {model_path}",
                      joint_limits=JOINT_LIMITS)
-    document = {"rnnpb_version": __version__, "model": str(args.model), "source": args.source,
-                "online_config": online.to_dict(), "loop": summary.to_dict(),
+    document = {"rnnpb_version": __version__, "model": str(model_path), "source": args.source,
+                "online": online_name, "online_config": online.to_dict(), "loop": summary.to_dict(),
                 "dt": args.dt, "paced": args.paced, "robot": args.robot,
+                "recognition_config": mirror.recognition.to_dict(),
+                "recognition_timeline": timeline,
                 "safety": {**safety.to_dict(), "unsafe_commands": loop.unsafe_commands,
                            "prevented_commands": loop.prevented_commands}}
     with atomic_write(out / "summary.json", "w", encoding="utf-8") as handle:
@@ -140,3 +202,38 @@ def run(args: argparse.Namespace) -> int:
     print(f"wrote {out / 'session.csv'}, {out / 'session.png'}, {out / 'summary.json'}"
           + (f", {out / 'session.mp4'}" if args.render else ""))
     return 0
+
+
+@contextlib.contextmanager
+def _terminate_as_interrupt():
+    """While inside: SIGTERM is handled as SIGINT is (on the main thread only)."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def on_terminate(signum, frame) -> None:
+        handler = signal.getsignal(signal.SIGINT)
+        if callable(handler):
+            handler(signal.SIGINT, frame)
+        else:
+            raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, on_terminate)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _source_length(source) -> int | None:
+    """How many steps a source will deliver, when it knows (a scenario, a CSV stream)."""
+    sensory = getattr(source, "sensory", None)  # an in-memory or CSV stream
+    if sensory is None:
+        scenario = getattr(source, "scenario", None)
+        sensory = getattr(scenario, "sensory", None)
+        if getattr(source, "loop", False):
+            return None
+    return None if sensory is None else len(sensory)

@@ -22,7 +22,12 @@ browser can neither drive the robot nor see the camera. To reach it from other m
 under a name, list the name with --allow-host (the page served under it is then its own);
 a page at another origin (a proxy) needs --allow-origin.
 
+Without --model: the models in ./models/, else in ./results/demo/models/ (what `make demo`
+writes), else the small model shipped with rnnpb (learning set 1 — patterns 1, 2, 3 —
+learned with the fast preset).
+
 Examples:
+  rnnpb serve
   rnnpb serve --model models/set1.npz
   rnnpb serve --model models/ --port 9000 --dt 0.2
   rnnpb serve --model models/ --host 192.168.1.20   # reachable as http://192.168.1.20:8765
@@ -33,9 +38,10 @@ Examples:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--model", default="models", metavar="MODEL_OR_DIR",
+    parser.add_argument("--model", metavar="MODEL_OR_DIR",
                         help="a trained model (.npz) or a folder searched for *.npz "
-                             "(default: models)")
+                             "(default: ./models/, ./results/demo/models/, else the model "
+                             "shipped with rnnpb)")
     parser.add_argument("--host", default="127.0.0.1",
                         help="address to listen on (default 127.0.0.1: this computer only)")
     parser.add_argument("--port", type=int, default=8765, help="port (default 8765; 0: any free)")
@@ -62,16 +68,22 @@ def run(args: argparse.Namespace) -> int:
     import logging
 
     from rnnpb.errors import ConfigError
+
+    if not 0 <= args.port <= 65535:
+        raise ConfigError(f"--port must be in [0, 65535], got {args.port}")
+    # Before the dashboard's imports and the first model's compilation (seconds): a port in
+    # use is one line, at once.
+    _check_port_free(args.host, args.port)
     from rnnpb.web import MAX_DT, MIN_DT, AccessPolicy, DashboardServer, find_models
 
     if not MIN_DT <= args.dt <= MAX_DT:
         raise ConfigError(f"--dt must be in [{MIN_DT}, {MAX_DT}] seconds, got {args.dt}")
-    if not 0 <= args.port <= 65535:
-        raise ConfigError(f"--port must be in [0, 65535], got {args.port}")
     # Checked before anything starts, so a mistyped name is one clear error line.
     access = AccessPolicy.for_address(args.host, args.allow_host, args.allow_origin)
     logging.basicConfig(level=args.log_level.upper(), format="%(levelname)s %(name)s: %(message)s")
-    models = find_models(args.model)
+    from rnnpb.models import default_model
+
+    models = find_models(args.model if args.model is not None else default_model())
     server = DashboardServer(models, host=args.host, port=args.port, dt=args.dt,
                              log_level=args.log_level, allow_hosts=access.hosts,
                              allow_origins=access.origins)
@@ -88,6 +100,33 @@ def run(args: argparse.Namespace) -> int:
     finally:
         server.stop()
     return 0
+
+
+def _check_port_free(host: str, port: int) -> None:
+    """Raise ConfigError if nothing can listen on ``host:port`` (in use, or not this
+    machine's address). Binds as uvicorn will (SO_REUSEADDR), then lets go at once."""
+    import errno
+    import socket
+
+    from rnnpb.errors import ConfigError
+
+    if port == 0:
+        return
+    try:
+        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE)
+    except socket.gaierror as error:
+        raise ConfigError(f"--host {host}: {error.strerror}") from None
+    family, kind, proto, _, address = infos[0]
+    with socket.socket(family, kind, proto) as probe:
+        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            probe.bind(address)
+        except OSError as error:
+            reason = error.strerror or str(error)
+            if error.errno == errno.EADDRINUSE:
+                reason = ("the port is in use (another `rnnpb serve`?); choose another with "
+                          "--port, or --port 0 for any free one")
+            raise ConfigError(f"cannot serve on {host}:{port}: {reason}") from None
 
 
 def _print_safety(models: dict, off: bool) -> None:

@@ -40,13 +40,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--smoothing", type=float, default=0.0,
                         help="exponential smoothing of the ball centres in [0, 1) (default 0)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the synthetic source")
+    parser.add_argument("--no-progress", action="store_true",
+                        help="no progress bar (there is none when stderr is not a terminal)")
 
 
 def run(args: argparse.Namespace) -> int:
+    import math
     from dataclasses import replace
 
     import numpy as np
 
+    from rnnpb.commands._checks import step_count
+    from rnnpb.commands._progress import progress_bar
+    from rnnpb.errors import ConfigError
     from rnnpb.interaction import CAMERA_KINDS, parse_source_spec
     from rnnpb.perception import (
         TrackerConfig,
@@ -57,6 +63,11 @@ def run(args: argparse.Namespace) -> int:
     )
     from rnnpb.sequences import write_sensory_stream
 
+    step_count("--steps", args.steps)
+    if not (math.isfinite(args.fps) and 0 < args.fps <= 1000):
+        raise ConfigError(f"--fps must be in (0, 1000] frames per second, got {args.fps}")
+    if not (math.isfinite(args.smoothing) and 0 <= args.smoothing < 1):
+        raise ConfigError(f"--smoothing must be in [0, 1), got {args.smoothing}")
     spec = parse_source_spec(args.source, kinds=CAMERA_KINDS)
     config = TrackerConfig(smoothing=args.smoothing)
     if args.colors:
@@ -67,9 +78,11 @@ def run(args: argparse.Namespace) -> int:
     writer = VideoWriter(args.render, args.fps) if args.render else None
     ok = False
     try:
-        with source:
+        with source, progress_bar(total=args.steps, unit="frame", desc="tracking",
+                                  disable=args.no_progress) as bar:
             while (observation := source.read()) is not None:
                 rows.append(observation.sensory)
+                bar.update(1)
                 if writer is not None and source.last_result is not None:
                     writer.write(draw_tracking(observation.frame, source.last_result,
                                                config.colors))

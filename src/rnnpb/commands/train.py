@@ -22,7 +22,8 @@ iterations); `fast` uses Adam with noise on the inputs and needs about 3,000 ite
 Options given explicitly override the preset.
 
 A checkpoint is written next to the model (MODEL.checkpoint.npz) every
---checkpoint-every iterations; --resume continues from it.
+--checkpoint-every iterations; --resume continues from it. Once the model is written the
+checkpoint is removed (--keep-checkpoint keeps it); an interrupted run keeps it.
 
 Example:
   rnnpb data --out data/
@@ -54,7 +55,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="write a checkpoint every N iterations (default 5000)")
     parser.add_argument("--resume", action="store_true",
                         help="continue from MODEL.checkpoint.npz if it exists")
-    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument("--keep-checkpoint", action="store_true",
+                        help="keep MODEL.checkpoint.npz after the model is written")
+    parser.add_argument("--no-progress", action="store_true",
+                        help="no progress bar (there is none when stderr is not a terminal)")
 
 
 def checkpoint_path_for(model_path: str) -> str:
@@ -69,15 +73,21 @@ def run(args: argparse.Namespace) -> int:
     check_writable(args.out, "model")
 
     from dataclasses import replace
+    from pathlib import Path
 
     import numpy as np
 
     from rnnpb import _interrupt
+    from rnnpb.commands._checks import step_count
+    from rnnpb.commands._progress import progress_bar
     from rnnpb.model import NetworkConfig, TrainConfig, train
     from rnnpb.robot import JOINT_LIMITS
     from rnnpb.sequences import read_sequence_files
     from rnnpb.vectors import MOTOR_NAMES, SENSORY_NAMES
 
+    # Before the data are read: an untrained model written as if it had learned is no result.
+    step_count("--iterations", args.iterations, high=10_000_000)
+    step_count("--checkpoint-every", args.checkpoint_every, high=10_000_000)
     sequences = read_sequence_files(args.data)
     config = TrainConfig.paper() if args.preset == "paper" else TrainConfig.fast()
     changes = {k: v for k, v in {
@@ -96,27 +106,27 @@ def run(args: argparse.Namespace) -> int:
     print(f"training on {len(sequences)} sequences of {len(patterns)} pattern(s): "
           f"{', '.join(patterns)}; {config.iterations} iterations ({args.preset} preset, "
           f"{config.optimizer})")
-    bar = None
-    if not args.no_progress:
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=config.iterations, unit="it", desc="training", dynamic_ncols=True)
+    bar = progress_bar(total=config.iterations, unit="it", desc="training",
+                       disable=args.no_progress)
 
     def after_chunk(progress) -> None:
-        if bar is not None:
-            bar.update(progress.iteration - bar.n)
-            bar.set_postfix(mse=f"{progress.mse:.2e}")
+        bar.update(progress.iteration - bar.n)
+        bar.set_postfix(mse=f"{progress.mse:.2e}")
         # A safe point: the chunk's error has been read back, so no XLA work is in flight.
         _interrupt.check()
 
+    checkpoint = Path(checkpoint_path_for(args.out))
     try:
         model = train(sequences, JOINT_LIMITS, network, config, progress=after_chunk,
-                      checkpoint_path=checkpoint_path_for(args.out), resume=args.resume)
+                      checkpoint_path=checkpoint, resume=args.resume)
     finally:
-        if bar is not None:
-            bar.close()
+        bar.close()
     _interrupt.check()  # interrupted during the last chunk: no model file
     model.save(args.out)
+    if not args.keep_checkpoint:
+        # The finished model holds all the checkpoint did; left beside it, it is a second file
+        # that looks like a model (and the dashboard would offer it).
+        checkpoint.unlink(missing_ok=True)
     info = model.meta["training"]
     mse = np.asarray(info["mse_per_output"])
     names = (*SENSORY_NAMES, *MOTOR_NAMES)

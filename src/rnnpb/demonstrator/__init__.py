@@ -1,4 +1,5 @@
-"""The synthetic user: the paper's four movement patterns with human imperfection, the
+"""The synthetic user: the paper's four movement patterns (and more movements: new cyclic
+shapes, unstructured movement) with human imperfection, the
 training datasets and the scripted interaction scenarios (docs/robot-and-demonstrator.md)."""
 
 from rnnpb.demonstrator._datafiles import write_dataset
@@ -24,10 +25,15 @@ from rnnpb.demonstrator._scenarios import (
     switch_scenario,
 )
 from rnnpb.demonstrator._user import (
+    MOVEMENT_DESCRIPTIONS,
+    MOVEMENTS,
+    NEW_SHAPES,
     PATTERN_ALIASES,
     PATTERN_DESCRIPTIONS,
     PATTERNS,
     PAUSE,
+    SHAPES,
+    UNSTRUCTURED,
     HandMotion,
     Imperfection,
     PatternConfig,
@@ -35,6 +41,7 @@ from rnnpb.demonstrator._user import (
     pattern_offsets,
     perform,
     resolve_pattern,
+    unstructured_offsets,
 )
 from rnnpb.demonstrator.source import ScenarioSource
 
@@ -42,10 +49,15 @@ __all__ = [
     "DEFAULT_SAMPLES",
     "DEFAULT_STEPS",
     "LEARNING_SETS",
+    "MOVEMENTS",
+    "MOVEMENT_DESCRIPTIONS",
+    "NEW_SHAPES",
     "PATTERN_ALIASES",
     "PATTERN_DESCRIPTIONS",
     "PATTERNS",
     "PAUSE",
+    "SHAPES",
+    "UNSTRUCTURED",
     "HandMotion",
     "Imperfection",
     "MirrorMapping",
@@ -68,5 +80,6 @@ __all__ = [
     "sample_rng",
     "scenario_arrays",
     "switch_scenario",
+    "unstructured_offsets",
     "write_dataset",
 ]

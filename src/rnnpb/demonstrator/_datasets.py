@@ -13,7 +13,7 @@ from rnnpb.robot.camera import RobotCamera
 from rnnpb.sequences import Sequence
 
 from ._mapping import MirrorMapping
-from ._user import PATTERNS, PatternConfig, perform, resolve_pattern
+from ._user import MOVEMENTS, PATTERNS, PatternConfig, perform, resolve_pattern
 
 LEARNING_SETS: dict[str, tuple[str, ...]] = {
     "1": ("1", "2", "3"),
@@ -48,7 +48,7 @@ def novel_pattern(learning_set: str | int) -> str:
 
 def sample_rng(seed: int, pattern: str, sample: int) -> np.random.Generator:
     """The random stream of one demonstration."""
-    return np.random.default_rng([int(seed), PATTERNS.index(resolve_pattern(pattern)),
+    return np.random.default_rng([int(seed), MOVEMENTS.index(resolve_pattern(pattern)),
                                   int(sample)])
 
 

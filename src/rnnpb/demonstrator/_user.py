@@ -18,6 +18,22 @@ name   alias                  hands (offsets in the robot camera's view: Y to th
 4      rotation-in-phase      both hands circle counter-clockwise together, like wiping a window
 =====  =====================  ===================================================================
 
+Beyond the paper's four, the user knows more movements (:data:`MOVEMENTS`): new cyclic shapes
+(:data:`NEW_SHAPES`) to test what a robot does with a structured movement it never learned,
+and unstructured movement (:data:`UNSTRUCTURED`) to test that it tells such a movement from
+noise:
+
+============  ===================================================================================
+name          hands
+============  ===================================================================================
+one-arm       the user's left hand swings up and down; the right hand stays at its centre
+asymmetric    the left hand swings sideways while the right hand swings up and down
+figure-eight  both hands trace a figure-eight (sideways once, up and down twice a cycle), mirrored
+diagonal      both hands swing along the same diagonal (up-right to down-left), in phase
+random-walk   each hand wanders in the view plane as a bounded random walk (no cycle)
+jerky         each hand jumps to a random target every few steps and holds it (no cycle)
+============  ===================================================================================
+
 ``direction=-1`` turns the circles clockwise. "Phase" is that of each view-plane coordinate:
 in phase means LHY follows RHY and LHZ follows RHZ; opposite phase means they mirror each other.
 
@@ -47,17 +63,36 @@ PATTERN_DESCRIPTIONS: dict[str, str] = {
     "3": "rotation, opposite phase",
     "4": "rotation, in phase",
 }
+NEW_SHAPES: tuple[str, ...] = ("one-arm", "asymmetric", "figure-eight", "diagonal")
+"""Cyclic movements beyond the paper's four (none of them is in a learning set)."""
+UNSTRUCTURED: tuple[str, ...] = ("random-walk", "jerky")
+"""Movements without repeating structure."""
+SHAPES: tuple[str, ...] = PATTERNS + NEW_SHAPES
+"""Every cyclic movement the user can perform."""
+MOVEMENTS: tuple[str, ...] = SHAPES + UNSTRUCTURED
+"""Every movement the user can perform (a pause is none of them)."""
+MOVEMENT_DESCRIPTIONS: dict[str, str] = {
+    **PATTERN_DESCRIPTIONS,
+    "one-arm": "one arm only: the left hand swings up and down",
+    "asymmetric": "asymmetric arms: left hand sideways, right hand up and down",
+    "figure-eight": "figure-eight, mirrored hands",
+    "diagonal": "diagonal swing, in phase",
+    "random-walk": "random walk of both hands (unstructured)",
+    "jerky": "jerky random targets (unstructured)",
+}
 PAUSE = "pause"
 
 
 def resolve_pattern(name: str) -> str:
-    """A pattern name or alias → the pattern name ``"1"`` … ``"4"``."""
+    """A movement name or alias → its name: ``"1"`` … ``"4"`` for the paper's patterns
+    (aliases such as ``horizontal-opposite`` allowed), else one of :data:`NEW_SHAPES` or
+    :data:`UNSTRUCTURED`."""
     key = str(name).strip().lower()
-    if key in PATTERNS:
+    if key in MOVEMENTS:
         return key
     if key in PATTERN_ALIASES:
         return PATTERN_ALIASES[key]
-    known = ", ".join([*PATTERNS, *PATTERN_ALIASES])
+    known = ", ".join([*PATTERNS, *PATTERN_ALIASES, *NEW_SHAPES, *UNSTRUCTURED])
     raise ConfigError(f"unknown movement pattern {name!r} (known: {known})")
 
 
@@ -202,13 +237,31 @@ class PatternConfig:
 def pattern_offsets(pattern: str, theta: np.ndarray, config: PatternConfig) -> np.ndarray:
     """Hand offsets from their centres for phases ``theta`` (n,), shape (n, 2, 3).
 
-    The offsets of the ideal pattern, without imperfection. ``theta`` in radians.
+    The offsets of the ideal cyclic movement (one of :data:`SHAPES`), without imperfection.
+    ``theta`` in radians.
     """
     pattern = resolve_pattern(pattern)
+    if pattern in UNSTRUCTURED:
+        raise ConfigError(f"movement {pattern!r} has no cycle: it has no offsets per phase")
     theta = np.asarray(theta, dtype=np.float64)
     out = np.zeros((*theta.shape, 2, 3))
+    a_h, a_v = config.horizontal_amplitude, config.vertical_amplitude
     # View-plane Y grows to the robot's right, i.e. along -y of the robot frame.
-    if pattern == "1":
+    if pattern == "one-arm":
+        out[..., 0, 2] = a_v * np.sin(theta)
+    elif pattern == "asymmetric":
+        out[..., 0, 1] = -a_h * np.sin(theta)
+        out[..., 1, 2] = a_v * np.sin(theta)
+    elif pattern == "figure-eight":
+        sideways = a_h * np.sin(theta)
+        out[..., 0, 1] = sideways
+        out[..., 1, 1] = -sideways
+        out[..., 0, 2] = out[..., 1, 2] = 0.6 * a_v * np.sin(2 * theta)
+    elif pattern == "diagonal":
+        swing = np.sin(theta) / np.sqrt(2.0)
+        out[..., 0, 1] = out[..., 1, 1] = -a_h * swing   # view Y to the right
+        out[..., 0, 2] = out[..., 1, 2] = a_v * swing    # and up
+    elif pattern == "1":
         swing = config.horizontal_amplitude * np.sin(theta)
         out[..., 0, 1] = swing
         out[..., 1, 1] = -swing
@@ -233,6 +286,39 @@ def _smooth_noise(rng: np.random.Generator, n: int, steps: float, shape: tuple) 
     out[0] = white[0]
     for t in range(1, n):
         out[t] = a * out[t - 1] + np.sqrt(1 - a * a) * white[t]
+    return out
+
+
+def unstructured_offsets(movement: str, n_steps: int, config: PatternConfig,
+                         rng: np.random.Generator) -> np.ndarray:
+    """Hand offsets of an unstructured movement (one of :data:`UNSTRUCTURED`), shape
+    (n_steps, 2, 3), within the pattern amplitudes about the hands' centres.
+
+    ``random-walk``: each view-plane coordinate takes steps of a fifth of the amplitude
+    (normal), reflected at the amplitude; ``jerky``: each hand holds a random target for 2–5
+    steps (uniform in the amplitude box), then jumps to the next within one step.
+    """
+    movement = resolve_pattern(movement)
+    box = np.array([config.horizontal_amplitude, config.vertical_amplitude])
+    out = np.zeros((n_steps, 2, 3))
+    if movement == "random-walk":
+        position = rng.uniform(-0.5, 0.5, (2, 2)) * box
+        for t in range(n_steps):
+            position = position + 0.2 * box * rng.standard_normal((2, 2))
+            # Reflect at the box's walls so the walk stays in view.
+            position = np.where(position > box, 2 * box - position, position)
+            position = np.where(position < -box, -2 * box - position, position)
+            out[t, :, 1:] = np.clip(position, -box, box)
+    elif movement == "jerky":
+        for hand in range(2):
+            t = 0
+            while t < n_steps:
+                hold = int(rng.integers(2, 6))
+                out[t:t + hold, hand, 1:] = rng.uniform(-1.0, 1.0, 2) * box
+                t += hold
+    else:
+        raise ConfigError(f"movement {movement!r} is not unstructured "
+                          f"(unstructured: {', '.join(UNSTRUCTURED)})")
     return out
 
 
@@ -265,7 +351,8 @@ def perform(segments: list[tuple[str, int]], config: PatternConfig, rng: np.rand
     Parameters
     ----------
     segments : list of (label, n_steps)
-        Pattern names (or aliases) or ``"pause"`` (hands held still where they are), in order.
+        Movement names (:data:`MOVEMENTS`, or aliases) or ``"pause"`` (hands held still where
+        they are), in order.
     config : PatternConfig
     rng : numpy.random.Generator
     phase : float, optional
@@ -296,6 +383,10 @@ def perform(segments: list[tuple[str, int]], config: PatternConfig, rng: np.rand
     drift = imp.drift * _smooth_noise(rng, n_steps, imp.drift_steps, (2, 3))
     drift[..., 0] *= 0.5  # people wander less in depth than across the view
     noise = imp.sensor_noise * rng.standard_normal((n_steps, 2, 3))
+    # Drawn after everything else, and only when needed, so that a performance of the paper's
+    # patterns draws the same numbers as before these movements existed.
+    tracks = {m: unstructured_offsets(m, n_steps, config, rng)
+              for m in UNSTRUCTURED if m in labels}
 
     def per_cycle(values: np.ndarray, theta: float) -> np.ndarray:
         c = (theta - theta0) / (2 * np.pi)
@@ -316,6 +407,11 @@ def perform(segments: list[tuple[str, int]], config: PatternConfig, rng: np.rand
         thetas[t] = theta
         if label == PAUSE:
             current = previous
+        elif label in tracks:
+            current = tracks[label][t]
+            if blend_from is not None and since_switch < transition_steps:
+                w = (since_switch + 1) / (transition_steps + 1)
+                current = (1 - w) * blend_from + w * current
         else:
             size = per_cycle(size_per_cycle, theta) * per_cycle(hand_size_per_cycle, theta)
             current = pattern_offsets(label, np.array(theta), config) * size[:, None]

@@ -147,14 +147,15 @@ def _draw_figures(figure_dir: Path, full: list, default: dict[str, LearningSetRe
     figures.plot_session(sync.run.session(), figure_dir / "figure5_synchronization.png",
                          title=f"Learning set 1: the user performs pattern {sync.pattern}, "
                          f"pauses (shaded) and goes on", joint_limits=JOINT_LIMITS,
-                         marks=[(sync.steps_to_lock or 0, "locked")])
+                         marks=[(sync.steps_to_lock or 0, "locked")],
+                         pattern_pb=set1.pattern_pb)
     sequence = set1.sequence
     session = sequence.run.session()
     switches = sequence.run.switch_steps
     figures.plot_session(session, figure_dir / "figure6_switching.png",
                          title="Learning set 1: the user switches among the learned patterns",
                          joint_limits=JOINT_LIMITS,
-                         marks=[(s, "switch") for s in switches])
+                         marks=[(s, "switch") for s in switches], pattern_pb=set1.pattern_pb)
     figures.plot_switch_zoom(session, [(s - 10, s + 30) for s in switches],
                              figure_dir / "figure7_switching_zoom.png", JOINT_LIMITS, switches)
     figures.plot_switch_matrix({k: default[k].switching.pairs for k in sorted(default)},
@@ -436,7 +437,9 @@ def _novel_section(results: DemoResults) -> list[str]:
             "", embed("novel", "figure8_novel.png"), "",
             embed("attractors", "figure9_attractors.png"), "",
             "Closed-loop periods of the learned patterns (steps; none = not periodic): "
-            + periods]
+            + periods, "",
+            "Whether the robot itself tells a novel movement from a learned one, or from noise "
+            "(section 4.1): `rnnpb study novelty --out DIR` (docs/experiments.md)."]
 
 
 def _larger_set_section(results: DemoResults) -> list[str]:

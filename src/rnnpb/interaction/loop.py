@@ -23,6 +23,7 @@ wait).
 from __future__ import annotations
 
 import math
+import numbers
 import time
 from collections import deque
 from collections.abc import Callable
@@ -53,10 +54,28 @@ class LoopConfig:
     max_steps: int | None = None
 
     def __post_init__(self) -> None:
-        if not self.dt > 0:
-            raise ConfigError(f"dt must be > 0 seconds, got {self.dt}")
-        if self.max_steps is not None and self.max_steps < 0:
-            raise ConfigError(f"max_steps must be >= 0, got {self.max_steps}")
+        dt = self.dt
+        # The type first: a bool is no duration, and float() of a 309-digit integer raises
+        # OverflowError; then finiteness, since inf or NaN would stall or never pace the loop.
+        if isinstance(dt, bool) or not isinstance(dt, numbers.Real):
+            raise ConfigError(f"dt must be a number of seconds, got {dt!r:.40}")
+        try:
+            finite = math.isfinite(dt)
+        except OverflowError:
+            finite = False
+        if not finite or not dt > 0:
+            raise ConfigError(f"dt must be a finite number of seconds > 0, got {dt!r:.40}")
+        object.__setattr__(self, "dt", float(dt))
+        if not isinstance(self.paced, bool):
+            raise ConfigError(f"paced must be True or False, got {self.paced!r:.40}")
+        steps = self.max_steps
+        if steps is not None:
+            if isinstance(steps, bool) or not isinstance(steps, numbers.Integral):
+                raise ConfigError(f"max_steps must be a whole number or None, got "
+                                  f"{steps!r:.40}")
+            if steps < 0:
+                raise ConfigError(f"max_steps must be >= 0, got {steps}")
+            object.__setattr__(self, "max_steps", int(steps))
 
 
 @dataclass
@@ -65,7 +84,9 @@ class StepRecord:
 
     ``observed`` (4,) the hands seen (NaN where lost); ``predicted`` (4,) what the network had
     predicted for this step one step before (NaN on the first step); ``motor`` (8,) the command
-    sent, radians; ``pb`` (P,); ``timings`` seconds per section.
+    sent, radians; ``pb`` (P,); ``timings`` seconds per section; ``recognised``,
+    ``confidence``, ``novelty``, ``pattern_confidence``: what the step recognised
+    (:class:`rnnpb.model.mirror.StepResult`).
     """
 
     step: int
@@ -87,6 +108,10 @@ class StepRecord:
     # is then the command the robot was sent.
     unsafe: str = ""
     filtered: str = ""
+    recognised: str | None = None
+    confidence: float = 0.0
+    novelty: str = ""
+    pattern_confidence: dict[str, float] = field(default_factory=dict)
 
 
 @dataclass
@@ -179,7 +204,9 @@ class InteractionLoop:
             predicted=self._predicted.copy(), predicted_next=result.predicted_hands,
             motor=motor, pb=result.pb, prediction_error=result.prediction_error,
             window_error=result.window_error, held=result.held, truth=observation.truth,
-            frame=observation.frame, context=result.context, unsafe=unsafe, filtered=filtered)
+            frame=observation.frame, context=result.context, unsafe=unsafe, filtered=filtered,
+            recognised=result.recognised, confidence=result.confidence, novelty=result.novelty,
+            pattern_confidence=result.pattern_confidence)
         self._predicted = result.predicted_hands.copy()
         if self.recorder is not None:
             self.recorder.write(record)

@@ -5,8 +5,11 @@ not seen), the hands the network predicted for this step one step before (``pred
 motor command sent (``lshp`` … ``relp``, radians), the PB (``pb0`` …), ``prediction_error``
 (mean squared error of that prediction), ``window_error`` (after the PB regression),
 ``lost_left``/``lost_right`` (1 where the hand was not seen), ``held`` (1 where the regression
-failed numerically and the last good state was kept), when the source knows it, the ground
-truth ``truth_pattern``, and from the command filter (docs/safety.md) ``unsafe`` (why the
+failed numerically and the last good state was kept), what the step recognised —
+``recognised`` (the learned pattern's name, empty when none), ``confidence`` (in [0, 1]) and
+``novelty`` (``familiar``, ``novel``, ``unstructured``, ``still``, or empty while undecided;
+:mod:`rnnpb.model.recognition`) —, when the source knows it, the ground truth
+``truth_pattern``, and from the command filter (docs/safety.md) ``unsafe`` (why the
 generated command was unsafe, empty when safe) and ``filtered`` (what the filter did:
 ``slowed``, ``shortened``, ``held``, or empty).
 
@@ -29,6 +32,8 @@ from rnnpb.errors import DataFileError
 from rnnpb.vectors import MOTOR_NAMES, PREDICTED_PREFIX, SENSORY_NAMES, STEP_COLUMN
 
 PB_COLUMNS_PREFIX = "pb"
+TEXT_COLUMNS = ("recognised", "novelty", "truth_pattern", "unsafe", "filtered")
+"""The columns that hold words, not numbers."""
 
 
 def session_columns(pb_size: int) -> list[str]:
@@ -36,11 +41,7 @@ def session_columns(pb_size: int) -> list[str]:
             *(PREDICTED_PREFIX + name for name in SENSORY_NAMES), *MOTOR_NAMES,
             *(f"{PB_COLUMNS_PREFIX}{i}" for i in range(pb_size)),
             "prediction_error", "window_error", "lost_left", "lost_right", "held",
-            "truth_pattern", "unsafe", "filtered"]
-
-
-TEXT_COLUMNS = ("truth_pattern", "unsafe", "filtered")
-"""The columns that hold words, not numbers."""
+            "recognised", "confidence", "novelty", "truth_pattern", "unsafe", "filtered"]
 
 
 def _fmt(value: float) -> str:
@@ -73,8 +74,8 @@ class SessionRecorder:
                *(_fmt(v) for v in record.predicted), *(f"{v:.6f}" for v in record.motor),
                *(f"{v:.6f}" for v in record.pb), _fmt(record.prediction_error),
                _fmt(record.window_error), int(not seen[:2].all()), int(not seen[2:].all()),
-               int(record.held), record.truth.get("pattern", ""), record.unsafe,
-               record.filtered]
+               int(record.held), record.recognised or "", _fmt(record.confidence),
+               record.novelty, record.truth.get("pattern", ""), record.unsafe, record.filtered]
         self._writer.writerow(row)
         self._handle.flush()
         self.rows += 1

@@ -13,12 +13,25 @@ LEFT_BGR = (40, 40, 220)  # the user's left hand: red ball
 RIGHT_BGR = (220, 90, 30)  # the user's right hand: blue ball
 
 
+def partial_video_path(path: str | os.PathLike[str]) -> Path:
+    """Where :class:`rnnpb.perception.VideoWriter` writes ``path`` until it is closed: a
+    hidden file beside it, renamed to ``path`` once the video is complete."""
+    path = Path(path)
+    return path.with_name(f".{path.stem}.partial{path.suffix}")
+
+
 class SessionVideo:
     """Subscribe ``add`` to an :class:`InteractionLoop`; each step becomes one video frame.
 
     Left: the camera frame (or, for sources without images, the camera's view plane) with the
     observed hands as filled discs and the network's prediction for them as rings; right: the
     simulated robot executing the motor command, rendered by MuJoCo.
+
+    The video is written under a hidden partial name and renamed when the session ends,
+    however it ends (the source ran out, Ctrl-C, SIGTERM, an error after some frames): then it
+    is a complete, playable file. A process killed outright (SIGKILL, a power cut) cannot
+    finish an MP4 and leaves the hidden partial behind; the next video written to the same
+    path removes it first.
     """
 
     def __init__(self, path: str | os.PathLike[str], fps: float = 2.5,
@@ -28,6 +41,8 @@ class SessionVideo:
 
         self.camera = camera or RobotCamera()
         self.path = Path(path)
+        # What a killed run left: an MP4 without its index, which no player opens.
+        partial_video_path(self.path).unlink(missing_ok=True)
         self._writer = VideoWriter(self.path, fps=fps)
         self._renderer = RobotRenderer(self.camera.width, self.camera.height)
         self._ok = False

@@ -5,6 +5,8 @@
 ``scenario:pause:P``       pattern ``P`` with a 5-step pause in the middle (paper 3.1)
 ``scenario:switch:A,B,…``  the patterns one after another, 50 steps each (paper 3.2)
 ``scenario:novel:SET``     the pattern learning set ``SET`` left out (paper 3.3)
+``scenario:steps:M*N,…``   movements ``M`` (any demonstrator movement, or ``pause``) for ``N``
+                           steps each, one after another: ``steps:1*60,random-walk*60``
 ``csv:FILE``               a sensory stream file (``step lhy lhz rhy rhz``; empty = not seen)
 ``video:FILE``             a video, through the colour-ball tracker
 ``images:DIR``             a folder of images, through the tracker
@@ -32,7 +34,7 @@ from rnnpb.errors import ConfigError, RnnpbError
 from rnnpb.sources import CsvSensorySource, FrameStepSource, UserSource
 
 SOURCE_FORMS = {
-    "scenario": "scenario:held|pause|switch|novel:ARGUMENT",
+    "scenario": "scenario:held|pause|switch|novel|steps:ARGUMENT",
     "csv": "csv:FILE",
     "video": "video:PATH",
     "images": "images:DIR",
@@ -45,7 +47,7 @@ SOURCE_KINDS = tuple(SOURCE_FORMS)
 CAMERA_KINDS = ("webcam", "video", "images", "synthetic")
 """The kinds read through a camera and the colour-ball tracker."""
 
-SCENARIO_KINDS = ("held", "pause", "switch", "novel")
+SCENARIO_KINDS = ("held", "pause", "switch", "novel", "steps")
 
 
 @dataclass(frozen=True)
@@ -111,11 +113,30 @@ def parse_scenario(spec: str, seed: int = 0):
             return demonstrator.pause_scenario(argument, seed=seed)
         if kind == "switch":
             return demonstrator.switch_scenario(tuple(argument.split(",")), seed=seed)
+        if kind == "steps":
+            return demonstrator.make_scenario(_segments(argument), seed=seed)
         return demonstrator.novel_scenario(argument, seed=seed)
     except (KeyError, ValueError) as error:
         if isinstance(error, RnnpbError):
             raise
         raise ConfigError(f"scenario {spec!r}: {error}") from None
+
+
+def _segments(argument: str) -> list[tuple[str, int]]:
+    """``"1*60,pause*10"`` → ``[("1", 60), ("pause", 10)]``."""
+    segments = []
+    for part in argument.split(","):
+        name, star, count = part.strip().rpartition("*")
+        if not star or not name:
+            raise ConfigError(f"scenario steps: expected MOVEMENT*STEPS, got {part!r}")
+        try:
+            n = int(count)
+        except ValueError:
+            raise ConfigError(f"scenario steps: {part!r}: steps must be an integer") from None
+        if n < 1:
+            raise ConfigError(f"scenario steps: {part!r}: steps must be >= 1")
+        segments.append((name.strip().lower(), n))
+    return segments
 
 
 def open_source(spec: str, *, seed: int = 0, dt: float = 0.4, frame_step: int | None = None,

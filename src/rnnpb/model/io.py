@@ -290,12 +290,13 @@ def load_archive(path: str | os.PathLike[str], fmt: str, version: int,
     data is read. Any problem raises :class:`ModelFileError` naming the file.
     """
     path = Path(path)
-    handle = open_regular_file(path, ModelFileError, f"an rnnpb {fmt} file (.npz)",
+    kind = fmt.removeprefix("rnnpb-")  # what the messages call the file: "model", "checkpoint"
+    handle = open_regular_file(path, ModelFileError, f"an rnnpb {kind} file (.npz)",
                                MAX_ARCHIVE_BYTES, "rb")
     with handle:
         if handle.read(len(_NPY_MAGIC)) == _NPY_MAGIC:
             raise ModelFileError(f"{path}: is a single .npy array, not an .npz archive (an "
-                                 f"rnnpb {fmt} file is a zip of .npy arrays)")
+                                 f"rnnpb {kind} file is a zip of .npy arrays)")
         handle.seek(0)
         try:
             with zipfile.ZipFile(handle) as archive:
@@ -310,17 +311,18 @@ def load_archive(path: str | os.PathLike[str], fmt: str, version: int,
                 OSError, ValueError, tokenize.TokenError, SyntaxError) as error:
             if isinstance(error, ModelFileError):
                 raise
-            raise ModelFileError(f"{path}: not a readable rnnpb {fmt} file (truncated or not "
+            raise ModelFileError(f"{path}: not a readable rnnpb {kind} file (truncated or not "
                                  f"an .npz archive: {_one_line(error)})") from None
 
 
 def _read_archive(path: Path, archive: zipfile.ZipFile, fmt: str, version: int,
                   members: Callable[[Path, dict[str, Any]], dict[str, tuple[int, ...] | None]]
                   | None) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+    kind = fmt.removeprefix("rnnpb-")
     infos = archive.infolist()
     if len(infos) > MAX_MEMBERS:
         raise ModelFileError(f"{path}: holds {len(infos)} members, more than the "
-                             f"{MAX_MEMBERS} an rnnpb {fmt} file may have")
+                             f"{MAX_MEMBERS} an rnnpb {kind} file may have")
     by_name: dict[str, zipfile.ZipInfo] = {}
     for info in infos:
         if not info.filename.endswith(".npy"):
@@ -334,10 +336,10 @@ def _read_archive(path: Path, archive: zipfile.ZipFile, fmt: str, version: int,
     if total > MAX_ARCHIVE_BYTES:
         raise ModelFileError(f"{path}: its members would take {total / 2**20:.0f} MiB "
                              f"uncompressed, more than the {MAX_ARCHIVE_BYTES // 2**20} MiB "
-                             f"an rnnpb {fmt} file may hold")
+                             f"an rnnpb {kind} file may hold")
     meta_info = by_name.pop("meta.json", None)
     if meta_info is None:
-        raise ModelFileError(f"{path}: not an rnnpb {fmt} file (no meta.json inside)")
+        raise ModelFileError(f"{path}: not an rnnpb {kind} file (no meta.json inside)")
     if meta_info.file_size > MAX_META_BYTES:
         raise ModelFileError(f"{path}: meta.json is {meta_info.file_size / 2**20:.0f} MiB, more "
                              f"than the {MAX_META_BYTES // 2**20} MiB allowed")
@@ -354,9 +356,9 @@ def _read_archive(path: Path, archive: zipfile.ZipFile, fmt: str, version: int,
                              f"({_one_line(error)})") from None
     if not isinstance(meta, dict) or meta.get("format") != fmt:
         found = meta.get("format") if isinstance(meta, dict) else None
-        raise ModelFileError(f"{path}: not an rnnpb {fmt} file (format is {_shown(found)})")
+        raise ModelFileError(f"{path}: not an rnnpb {kind} file (format is {_shown(found)})")
     if meta.get("format_version") != version:
-        raise ModelFileError(f"{path}: {fmt} format version "
+        raise ModelFileError(f"{path}: {kind} format version "
                              f"{_shown(meta.get('format_version'))} is not supported by rnnpb "
                              f"{__version__} (expects {version})")
     shapes: dict[str, tuple[int, ...] | None] = (
@@ -364,7 +366,7 @@ def _read_archive(path: Path, archive: zipfile.ZipFile, fmt: str, version: int,
     unknown = [name for name in by_name if name not in shapes]
     if unknown:
         raise ModelFileError(f"{path}: holds the unexpected member(s) "
-                             f"{', '.join(_shown(n) for n in unknown[:5])}; an rnnpb {fmt} file "
+                             f"{', '.join(_shown(n) for n in unknown[:5])}; an rnnpb {kind} file "
                              "holds only its own arrays")
     for name, shape in shapes.items():
         if name not in by_name:

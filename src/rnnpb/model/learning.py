@@ -31,7 +31,7 @@ from rnnpb.errors import ConfigError, DataFileError
 from rnnpb.model.network import NetworkConfig, Params, init_params, open_loop
 from rnnpb.model.parametric_bias import PBUpdateConfig, pb_update
 from rnnpb.sequences import Sequence
-from rnnpb.vectors import SENSORY_SIZE
+from rnnpb.vectors import MOTOR_NAMES, SENSORY_NAMES, SENSORY_SIZE
 
 
 @dataclass(frozen=True)
@@ -149,10 +149,14 @@ def prepare_data(sequences: SequenceABC[Sequence], joint_limits: np.ndarray) -> 
         x = (raw - lower) / (upper - lower)
         if np.any(x < -1e-9) or np.any(x > 1 + 1e-9):
             bad = np.argwhere((x < -1e-9) | (x > 1 + 1e-9))[0]
+            names = (*SENSORY_NAMES, *MOTOR_NAMES)
+            column = names[bad[1]] if len(names) == io else f"column {bad[1]}"
+            kind = "a hand position" if bad[1] < seq.sensory.shape[1] else "a joint angle"
             raise DataFileError(
-                f"{seq.source or 'sequence'}: step {bad[0]} has a value outside the normalization "
-                f"range (sensory must be in [0, 1], motor within the joint limits): "
-                f"{raw[bad[0], bad[1]]:.4g} in column {bad[1]}")
+                f"{seq.source or 'sequence'}: step {bad[0]}, {column} = "
+                f"{raw[bad[0], bad[1]]:.4g} is outside its range [{lower[bad[1]]:.4g}, "
+                f"{upper[bad[1]]:.4g}] ({kind}: hands in [0, 1], joints within the robot's "
+                "limits, radians)")
         inputs[i, :seq.n_steps] = x
         valid[i, :seq.n_steps - 1] = True
     return TrainingData(inputs, valid, tuple(s.pattern for s in sequences), lower, upper)

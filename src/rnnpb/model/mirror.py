@@ -11,7 +11,7 @@ constructor, same :class:`StepResult`.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import partial
 from typing import NamedTuple
 
@@ -33,6 +33,11 @@ from rnnpb.model.online import (
     restart_candidates,
 )
 from rnnpb.model.online_config import OnlineConfig
+from rnnpb.model.recognition import (
+    RecognitionConfig,
+    initial_recognition_state,
+    recognise,
+)
 
 
 @dataclass(frozen=True)
@@ -58,6 +63,18 @@ class StepResult:
         The regression failed numerically this step and the last good state was kept.
     context : array, shape (C,)
         The context units after the current step (for phase-space analysis).
+    recognised : str or None
+        The learned pattern the user performs, or None (:mod:`rnnpb.model.recognition`).
+    confidence : float
+        How sure ``recognised`` is, in [0, 1] (for None: that no learned pattern fits).
+    novelty : str
+        ``familiar``, ``novel``, ``unstructured``, ``still``, or ``""`` (no evidence yet).
+    pattern_confidence : dict of str to float
+        Each learned pattern's share of the evidence, in [0, 1].
+    pattern_errors : array, shape (K,)
+        The evidence: for each learned pattern (in the model's order), the window's mean
+        squared sensory error over its last predictions with that pattern's PB
+        (:func:`rnnpb.model.online.pattern_errors`; NaN when the step was held).
     """
 
     motor: np.ndarray
@@ -68,6 +85,11 @@ class StepResult:
     seen: np.ndarray
     held: bool = False
     context: np.ndarray | None = None
+    recognised: str | None = None
+    confidence: float = 0.0
+    novelty: str = ""
+    pattern_confidence: dict[str, float] = field(default_factory=dict)
+    pattern_errors: np.ndarray | None = None
 
 
 class PackedLayout(NamedTuple):
@@ -80,12 +102,14 @@ class PackedLayout(NamedTuple):
     window_error: slice  # (1,)
     held: slice  # (1,) 1.0 when held
     context: slice  # (C,)
+    pattern_errors: slice  # (K,)
 
     @classmethod
-    def for_network(cls, network: NetworkConfig) -> PackedLayout:
+    def for_network(cls, network: NetworkConfig, patterns: int = 0) -> PackedLayout:
+        """The layout for a network's sizes and ``patterns`` learned patterns (K)."""
         sizes = {"motor": network.motor_size, "predicted_sensory": network.sensory_size,
                  "pb": network.pb_size, "window_error": 1, "held": 1,
-                 "context": network.context_size}
+                 "context": network.context_size, "pattern_errors": patterns}
         parts, start = {}, 0
         for name in cls._fields:
             parts[name] = slice(start, start + sizes[name])
@@ -102,15 +126,16 @@ def pack(outputs: StepOutputs) -> jax.Array:
     return jnp.concatenate([jnp.reshape(value, (-1,)).astype(jnp.float32) for value in outputs])
 
 
-@partial(jax.jit, static_argnames=("config",))
+@partial(jax.jit, static_argnames=("config", "recognition_steps"))
 def _online_step_packed(params: Params, state: OnlineState, u: jax.Array, seen: jax.Array,
                         config: OnlineConfig, candidates: jax.Array | None = None,
                         phase_candidates: jax.Array | None = None,
-                        meta: MetaParams | None = None) -> tuple[OnlineState, jax.Array]:
+                        meta: MetaParams | None = None, pattern_rho: jax.Array | None = None,
+                        recognition_steps: int = 12) -> tuple[OnlineState, jax.Array]:
     """:func:`online_step` with its outputs packed into one vector, so that they come back in
     one transfer."""
     state, outputs = online_step(params, state, u, seen, config, candidates, phase_candidates,
-                                 meta)
+                                 meta, pattern_rho, recognition_steps)
     return state, pack(outputs)
 
 
@@ -119,7 +144,8 @@ def normalized_hands(values: object, sensory_size: int) -> tuple[np.ndarray, np.
     seen), shape (S,), and which were seen (finite), shape (S,)."""
     try:
         u = np.asarray(values, dtype=np.float64).reshape(-1)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
+        # OverflowError: a Python integer beyond float64's range (10**309).
         raise ConfigError(f"observed hands must be {sensory_size} numbers (lhy lhz rhy rhz), "
                           f"got {values!r:.80}") from None
     if u.shape != (sensory_size,):
@@ -138,16 +164,37 @@ def one_step_prediction_error(predicted: np.ndarray | None, u: np.ndarray,
     return float(np.mean((predicted[seen] - u[seen]) ** 2))
 
 
+_LARGEST = float(np.finfo(np.float64).max)
+
+
 def motor_command(model: TrainedModel, motor: np.ndarray) -> np.ndarray:
-    """A normalized motor output (M,) as joint angles (M,), radians, within the joint limits."""
+    """A normalized motor output (M,) as joint angles (M,), radians, within the model's motor
+    bounds and always finite.
+
+    The bounds are the model's normalization of the joints; the model never sees the robot,
+    so the joint limits reach it through them (loading a model checks them against the robot's
+    limits). A non-finite output (which a held step never hands back, but a caller's model
+    might) goes to the middle of the range; the command is formed as a weighted mean of the
+    two bounds, which cannot overflow, and clipped to them.
+    """
     s = model.network.sensory_size
     lower = np.asarray(model.lower, dtype=np.float64)[s:]
     upper = np.asarray(model.upper, dtype=np.float64)[s:]
-    return np.clip(motor, 0.0, 1.0) * (upper - lower) + lower
+    if not (np.isfinite(lower).all() and np.isfinite(upper).all()):
+        # Only a model built by hand gets here: a model file's bounds are finite.
+        lower = np.clip(np.where(np.isnan(lower), 0.0, lower), -_LARGEST, _LARGEST)
+        upper = np.clip(np.where(np.isnan(upper), 0.0, upper), -_LARGEST, _LARGEST)
+    upper = np.maximum(upper, lower)
+    m = np.asarray(motor, dtype=np.float64)
+    m = np.clip(np.where(np.isfinite(m), m, 0.5), 0.0, 1.0)
+    return np.clip(lower * (1.0 - m) + upper * m, lower, upper)
 
 
 class MirrorSystem:
     """On-line recognition and generation with a trained RNNPB (weights frozen).
+
+    Each step also says what it sees (``recognised``, ``confidence``, ``novelty``:
+    :mod:`rnnpb.model.recognition`, with the settings ``recognition``).
 
     >>> mirror = MirrorSystem(model)                       # doctest: +SKIP
     >>> result = mirror.step([0.4, 0.6, 0.6, 0.6])         # doctest: +SKIP
@@ -155,13 +202,22 @@ class MirrorSystem:
     """
 
     def __init__(self, model: TrainedModel, config: OnlineConfig | None = None,
-                 meta: MetaParams | None = None) -> None:
+                 meta: MetaParams | None = None,
+                 recognition: RecognitionConfig | None = None) -> None:
         """``meta``: the risk network of a safety map (``rnnpb.safety.SafetyMap.meta``); the
-        regression uses it as ``config.safety_guard`` says. Without it the guard is off."""
+        regression uses it as ``config.safety_guard`` says. Without it the guard is off.
+        ``recognition``: the settings of what each step says it sees (the default
+        :class:`RecognitionConfig` when None)."""
         _xla.warn_if_not_configured()  # once per process, if nobody chose XLA's loop setting
         self.model = model
         self.config = config or OnlineConfig()
-        self._layout = PackedLayout.for_network(model.network)
+        self.recognition = recognition or RecognitionConfig()
+        self.patterns = tuple(model.pattern_pb)
+        self._learned_pb = np.array([model.pattern_pb[name] for name in self.patterns])
+        self._layout = PackedLayout.for_network(model.network, len(self.patterns))
+        self._pattern_rho = jnp.asarray(restart_candidates(model), jnp.float32)
+        self._recognition = initial_recognition_state(
+            model.network.sensory_size, model.network.pb_size, self.recognition)
         self._params = jax.tree_util.tree_map(lambda a: jnp.asarray(a, jnp.float32),
                                               model.params)
         self._state = initial_state(model, self.config)
@@ -182,6 +238,8 @@ class MirrorSystem:
         """Forget the window: the next step starts a new interaction."""
         self._state = initial_state(self.model, self.config, initial_pb)
         self._predicted = None
+        self._recognition = initial_recognition_state(
+            self.model.network.sensory_size, self.model.network.pb_size, self.recognition)
         self.steps = 0
 
     @property
@@ -211,11 +269,15 @@ class MirrorSystem:
         # transfer: at a few milliseconds a step, per-array round trips are worth avoiding.
         self._state, packed = _online_step_packed(
             self._params, self._state, u.astype(np.float32), seen, self.config,
-            self._candidates, self._phase_candidates, self._meta)
+            self._candidates, self._phase_candidates, self._meta, self._pattern_rho,
+            self.recognition.recognition_steps)
         outputs = self._layout.unpack(np.asarray(packed, dtype=np.float64))
         self.steps += 1
         prediction_error = one_step_prediction_error(self._predicted, u, seen)
         self._predicted = outputs.predicted_sensory
+        self._recognition, seen_now = recognise(
+            self._recognition, u, seen, outputs.pattern_errors, outputs.pb, self._learned_pb,
+            self.patterns, self.recognition)
         return StepResult(
             motor=motor_command(self.model, outputs.motor),
             predicted_hands=outputs.predicted_sensory,
@@ -225,4 +287,9 @@ class MirrorSystem:
             seen=seen,
             held=bool(outputs.held[0]),
             context=outputs.context,
+            recognised=seen_now.recognised,
+            confidence=seen_now.confidence,
+            novelty=seen_now.novelty,
+            pattern_confidence=seen_now.confidences,
+            pattern_errors=outputs.pattern_errors,
         )

@@ -86,6 +86,10 @@ class StepOutputs(NamedTuple):
     window_error: jax.Array  # () mean squared sensory error over the window after regression
     held: jax.Array  # () bool: the regression failed numerically, the last state was kept
     context: jax.Array  # (C,) the context after the current step (for phase-space plots)
+    # (K,) for each learned pattern, the window's mean squared sensory error over its last
+    # ``recognition_steps`` predictions with that pattern's PB in place of the regressed
+    # profile (the evidence of rnnpb.model.recognition); (0,) without learned PBs given.
+    pattern_errors: jax.Array
 
 
 def initial_state(model: TrainedModel, config: OnlineConfig,
@@ -205,10 +209,36 @@ def _barrier_gradient(meta: MetaParams, config: OnlineConfig, n: jax.Array,
     return jax.lax.dynamic_update_slice_in_dim(jnp.zeros_like(rho), grad, start, axis=0)
 
 
-@partial(jax.jit, static_argnames=("config",))
+def pattern_errors(params: Params, state: OnlineState, pattern_rho: jax.Array,
+                   onset_context: jax.Array, onset_motor: jax.Array, config: OnlineConfig,
+                   steps: int) -> jax.Array:
+    """How well each learned pattern's own dynamics predict the recent window, shape (K,):
+    the window run from the regressed onset with pattern ``k``'s PB at every step, its last
+    ``steps`` steps not seen (the network generates them from its own predictions, as in
+    closed loop), and the mean squared error of those predictions against what was observed.
+    ``pattern_rho`` (K, P): the learned PBs' logits.
+
+    Generating, not one-step predicting: one step ahead, with the observations as inputs,
+    every learned PB predicts about equally well; a few steps on, only the pattern's own
+    dynamics stay on the observed path.
+    """
+    length = state.sensory.shape[0]
+    blind = state._replace(seen=state.seen & (jnp.arange(length) < state.n - steps)[:, None])
+
+    def one(rho_k: jax.Array) -> jax.Array:
+        predictions, _ = window.run(params, blind, jnp.broadcast_to(rho_k, state.rho.shape),
+                                    onset_context, onset_motor, config)
+        return window.mean_squared(*window.prediction_errors(predictions, state,
+                                                             since=state.n - 1 - steps))
+
+    return jax.lax.map(one, pattern_rho)
+
+
+@partial(jax.jit, static_argnames=("config", "recognition_steps"))
 def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Array,
                 config: OnlineConfig, candidates: jax.Array | None = None,
-                phase_candidates: jax.Array | None = None, meta: MetaParams | None = None
+                phase_candidates: jax.Array | None = None, meta: MetaParams | None = None,
+                pattern_rho: jax.Array | None = None, recognition_steps: int = 12
                 ) -> tuple[OnlineState, StepOutputs]:
     """One step of the mirror system, compiled as one call.
 
@@ -287,6 +317,8 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
                           jax.nn.sigmoid(motor))
     predicted_next = predictions[n - 1, :s]
     window_error = window.mean_squared(*window.prediction_errors(predictions, state))
+    evidence = (jnp.zeros((0,), jnp.float32) if pattern_rho is None else pattern_errors(
+        params, state, pattern_rho, context, motor, config, recognition_steps))
     new_state = state._replace(
         rho=rho, rho_velocity=velocity, onset_context=context, onset_motor=motor,
         motor_sent=state.motor_sent.at[n - 1].set(motor_now),
@@ -294,7 +326,8 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
         predicted_sensory=predicted_next)
     outputs = StepOutputs(motor=motor_now, predicted_sensory=predicted_next,
                           pb=jax.nn.sigmoid(rho[n - 1]), window_error=window_error,
-                          held=jnp.asarray(False), context=contexts[n - 1])
+                          held=jnp.asarray(False), context=contexts[n - 1],
+                          pattern_errors=evidence)
     # Numerical safety: never hand out NaN. Keep the last good state and repeat its command.
     finite = (jnp.all(jnp.isfinite(rho)) & jnp.all(jnp.isfinite(motor_now))
               & jnp.all(jnp.isfinite(context)) & jnp.all(jnp.isfinite(predicted_next)))
@@ -310,7 +343,8 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
         predicted_sensory=previous.predicted_sensory,
         pb=jax.nn.sigmoid(state.rho[n - 1]),
         window_error=jnp.asarray(jnp.nan, jnp.float32), held=jnp.asarray(True),
-        context=jax.nn.sigmoid(previous.next_onset_context))
+        context=jax.nn.sigmoid(previous.next_onset_context),
+        pattern_errors=jnp.full_like(evidence, jnp.nan))
     pick = partial(jax.tree_util.tree_map, lambda a, b: jnp.where(finite, a, b))
     return pick(new_state, held_state), pick(outputs, held_outputs)
 

@@ -6,7 +6,9 @@ measured (docs/model.md), ``OnlineConfig.ungated()`` the same without the surpri
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field, replace
+import math
+import numbers
+from dataclasses import asdict, dataclass, field, fields, replace
 from typing import Any, Literal
 
 from rnnpb.errors import ConfigError
@@ -70,6 +72,26 @@ class OnlineConfig:
     projection_rate: float = 0.3
 
     def __post_init__(self) -> None:
+        for item in fields(self):
+            value = getattr(self, item.name)
+            if item.name in ("pb", "motor_input", "safety_guard"):  # checked below
+                continue
+            if item.name == "optimize_onset":
+                if not isinstance(value, bool):
+                    raise ConfigError(f"optimize_onset must be True or False, got {value!r:.40}")
+                continue
+            # Checked before any comparison: NaN passes every `<` test below, and a bool or a
+            # string is no setting.
+            if isinstance(value, bool) or not isinstance(value, numbers.Real):
+                raise ConfigError(f"{item.name} must be a number, got {value!r:.40}")
+            if item.type in ("int", int) and not isinstance(value, numbers.Integral):
+                raise ConfigError(f"{item.name} must be a whole number, got {value!r:.40}")
+            try:
+                finite = math.isfinite(value)
+            except OverflowError:  # an integer beyond float range
+                finite = False
+            if not finite:
+                raise ConfigError(f"{item.name} must be finite, got {value!r:.40}")
         if self.window < 2:
             raise ConfigError(f"regression window must be >= 2 steps, got {self.window}")
         if self.iterations < 0:
@@ -125,6 +147,19 @@ class OnlineConfig:
         PB never settles (docs/model.md)."""
         return replace(cls(surprise_gate=0.0), **changes)
 
+    @classmethod
+    def preset(cls, name: str) -> OnlineConfig:
+        """The preset called ``name``: one of :data:`ONLINE_PRESETS`."""
+        if name not in ONLINE_PRESETS:
+            raise ConfigError(f"unknown on-line regression {name!r}; choose one of "
+                              f"{', '.join(ONLINE_PRESETS)}")
+        return {"default": cls, "paper": cls.paper, "ungated": cls.ungated}[name]()
+
+    @classmethod
+    def for_model(cls, model: Any) -> OnlineChoice:
+        """The regression that suits ``model``: see :func:`suggested_online_config`."""
+        return suggested_online_config(model)
+
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
 
@@ -133,3 +168,52 @@ class OnlineConfig:
         data = dict(data)
         data["pb"] = PBUpdateConfig(**data["pb"])
         return cls(**data)
+
+
+#: The on-line regression presets by name, as ``--online`` takes them.
+ONLINE_PRESETS: tuple[str, ...] = ("default", "paper", "ungated")
+
+
+@dataclass(frozen=True)
+class OnlineChoice:
+    """Which on-line regression goes with a model, and why.
+
+    Attributes
+    ----------
+    name : str
+        One of :data:`ONLINE_PRESETS`.
+    config : OnlineConfig
+    reason : str
+        One line for the user: what in the model decided it.
+    """
+
+    name: str
+    config: OnlineConfig
+    reason: str
+
+
+def suggested_online_config(model: Any) -> OnlineChoice:
+    """The on-line regression that suits a model's recorded learning.
+
+    A model learned with ``TrainConfig.fast()`` (Adam, noise on the inputs) locks on and
+    switches best without the surprise gate (``OnlineConfig.ungated()``); one learned by the
+    paper's algorithm (momentum descent), or one whose learning is not recorded, takes the
+    default (docs/model.md, "On-line regression"). The model's ``meta["train_config"]`` is
+    what it records of its learning (:class:`rnnpb.model.TrainConfig` as a dict).
+
+    Parameters
+    ----------
+    model : TrainedModel
+        Anything with a ``meta`` dict.
+    """
+    meta = getattr(model, "meta", None) or {}
+    learned = meta.get("train_config") if isinstance(meta, dict) else None
+    if not isinstance(learned, dict):
+        return OnlineChoice("default", OnlineConfig(),
+                            "the model does not record how it was learned")
+    optimizer = learned.get("optimizer")
+    if optimizer == "adam":
+        return OnlineChoice("ungated", OnlineConfig.ungated(),
+                            "the model was learned with Adam, the fast preset")
+    return OnlineChoice("default", OnlineConfig(),
+                        f"the model was learned with {optimizer} descent, the paper's algorithm")

@@ -27,6 +27,7 @@ from rnnpb.model.network import Params, logit_numpy
 from rnnpb.model.online import phase_candidates, restart_candidates
 from rnnpb.model.online_config import OnlineConfig
 from rnnpb.model.parametric_bias import PBUpdateConfig
+from rnnpb.model.recognition import RecognitionConfig, initial_recognition_state, recognise
 
 
 def sigmoid(z: np.ndarray) -> np.ndarray:
@@ -253,9 +254,14 @@ class ReferenceMirrorSystem:
     """
 
     def __init__(self, model: TrainedModel, config: OnlineConfig | None = None,
-                 meta: MetaParams | None = None) -> None:
+                 meta: MetaParams | None = None,
+                 recognition: RecognitionConfig | None = None) -> None:
         self.model = model
         self.config = config or OnlineConfig()
+        self.recognition = recognition or RecognitionConfig()
+        self.patterns = tuple(model.pattern_pb)
+        self.learned_pb = np.array([model.pattern_pb[name] for name in self.patterns])
+        self.pattern_rho = restart_candidates(model)
         self.params = model.params
         # The safety guard's risk network, as the compiled step takes it (docs/safety.md).
         self.meta = None if meta is None else MetaParams(
@@ -285,6 +291,8 @@ class ReferenceMirrorSystem:
         self.next_onset_motor = self.onset_motor.copy()
         self.predicted_sensory = np.full(net.sensory_size, 0.5)
         self._predicted: np.ndarray | None = None
+        self.recognition_state = initial_recognition_state(net.sensory_size, net.pb_size,
+                                                           self.recognition)
         self.steps = 0
 
     @property
@@ -301,13 +309,19 @@ class ReferenceMirrorSystem:
         """Observe the user's hands for this step; regress the PB; return the motor command
         (as :meth:`rnnpb.model.mirror.MirrorSystem.step`)."""
         u, seen = normalized_hands(observed_hands, self.model.network.sensory_size)
-        motor, predicted, pb, window_error, held, context = self._regress(u, seen)
+        motor, predicted, pb, window_error, held, context, errors = self._regress(u, seen)
         self.steps += 1
         prediction_error = one_step_prediction_error(self._predicted, u, seen)
         self._predicted = predicted
+        self.recognition_state, seen_now = recognise(
+            self.recognition_state, u, seen, errors, pb, self.learned_pb, self.patterns,
+            self.recognition)
         return StepResult(motor=motor_command(self.model, motor), predicted_hands=predicted,
                           pb=pb, prediction_error=prediction_error, window_error=window_error,
-                          seen=seen, held=held, context=context)
+                          seen=seen, held=held, context=context,
+                          recognised=seen_now.recognised, confidence=seen_now.confidence,
+                          novelty=seen_now.novelty, pattern_confidence=seen_now.confidences,
+                          pattern_errors=errors)
 
     def _recent_mse(self, predictions: np.ndarray, sensory: np.ndarray, seen: np.ndarray,
                     first: int, last: int) -> float:
@@ -355,11 +369,30 @@ class ReferenceMirrorSystem:
         self.onset_motor = best[n_pb:n_pb + n_m].copy()
         self.onset_context = best[n_pb + n_m:].copy()
 
+    def _pattern_errors(self, motor_inputs: np.ndarray | None) -> np.ndarray:
+        """Each learned pattern's PB in place of the profile, from the regressed onset, the
+        window's last ``recognition_steps`` steps generated (not seen): mean squared error of
+        those predictions against the observations, (K,)."""
+        n = self.n
+        first = max(n - 1 - self.recognition.recognition_steps, 0)
+        # The last recognition_steps steps not seen: the network generates them.
+        blind = self.seen & (np.arange(len(self.seen)) < n - self.recognition.recognition_steps
+                             )[:, None]
+        errors = []
+        for rho_k in self.pattern_rho:
+            predictions = window_error_and_gradients(
+                self.params, self.sensory, blind, n, np.tile(rho_k, (len(self.rho), 1)),
+                self.onset_context, self.onset_motor, motor_inputs)[4]
+            errors.append(self._recent_mse(predictions, self.sensory, self.seen, first, n - 1))
+        return np.array(errors)
+
     def _regress(self, u: np.ndarray, seen: np.ndarray
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, bool, np.ndarray]:
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, bool, np.ndarray,
+                            np.ndarray]:
         """One on-line step on normalized hands ``u`` (S,) (0 where not ``seen``): the motor
         command (M,), the predicted hands (S,), the PB (P,), the window's error, whether the
-        last good state was kept, and the context after the step (C,)."""
+        last good state was kept, the context after the step (C,) and each learned pattern's
+        evidence (K,)."""
         cfg = self.config
         length = cfg.window
         last = max(min(self.n, length) - 1, 0)
@@ -446,14 +479,15 @@ class ReferenceMirrorSystem:
             self.onset_context, self.onset_motor = start_context, start_motor
             self.motor_sent[n - 1] = held_motor
             return (held_motor, self.predicted_sensory.copy(), sigmoid(self.rho[n - 1]),
-                    math.nan, True, sigmoid(self.next_onset_context))
+                    math.nan, True, sigmoid(self.next_onset_context),
+                    np.full(len(self.patterns), np.nan))
         self.motor_sent[n - 1] = motor
         self.next_onset_context = logit_numpy(contexts[0])
         self.next_onset_motor = logit_numpy(predictions[0, s:])
         self.predicted_sensory = predicted
         window_error = self._recent_mse(predictions, self.sensory, self.seen, 0, n - 1)
         return (motor, predicted, sigmoid(self.rho[n - 1]), window_error, False,
-                contexts[n - 1])
+                contexts[n - 1], self._pattern_errors(motor_inputs))
 
 
 #: The mirror system's twins by name, so that a test or the bench swaps one for the other.

@@ -107,8 +107,9 @@ def calibrate_from_pixel(frame: np.ndarray, xy: tuple[int, int], name: str | Non
     """
     h, w = frame.shape[:2]
     x, y = int(xy[0]), int(xy[1])
+    ball = f"the {name} ball" if name else "the ball"
     if not (0 <= x < w and 0 <= y < h):
-        raise RnnpbError(f"calibration ({name} ball): pixel {x},{y} is outside the "
+        raise RnnpbError(f"calibration ({ball}): pixel {x},{y} is outside the "
                          f"{w}x{h} frame")
     hsv = cv2.cvtColor(frame, cv2.COLOR_BGR2HSV)
     r = neighbourhood_px
@@ -116,7 +117,7 @@ def calibrate_from_pixel(frame: np.ndarray, xy: tuple[int, int], name: str | Non
     disk = (xs - x) ** 2 + (ys - y) ** 2 <= r * r
     samples = hsv[ys[disk], xs[disk]]
     if np.median(samples[:, 1]) < 60:
-        raise RnnpbError(f"calibration ({name} ball): the pixels around {x},{y} are grey "
+        raise RnnpbError(f"calibration ({ball}): the pixels around {x},{y} are grey "
                          f"(median saturation {int(np.median(samples[:, 1]))} of 255); point "
                          "at the middle of a coloured ball")
     samples = samples[samples[:, 1] >= np.median(samples[:, 1]) * 0.6]
@@ -129,7 +130,7 @@ def calibrate_from_pixel(frame: np.ndarray, xy: tuple[int, int], name: str | Non
         (max(40, first.saturation[0] - 50), 255), (max(20, first.value[0] - 60), 255)))
     blob = _blob_at(mask, (x, y))
     if blob is None:
-        raise RnnpbError(f"calibration ({name} ball): found no ball-coloured blob at {x},{y}")
+        raise RnnpbError(f"calibration ({ball}): found no ball-coloured blob at {x},{y}")
     return _calibration(hsv, blob, name)
 
 

@@ -10,8 +10,15 @@ from rnnpb.web._protocol import (
     ProtocolError,
     parse_client_message,
 )
-from rnnpb.web._server import STATIC_DIR, DashboardServer, create_app
-from rnnpb.web._session import Session, find_models
+from rnnpb.web._server import STATIC_DIR, CommandLimits, DashboardServer, create_app
+from rnnpb.web._session import (
+    MAX_QUEUED_COMMANDS,
+    RECENT_STEPS,
+    RecordingLimits,
+    Session,
+    find_models,
+    offered_models,
+)
 from rnnpb.web._sources import DemonstratorSource, PointerSource
 
 __all__ = [
@@ -19,15 +26,20 @@ __all__ = [
     "LOOPBACK_HOSTS",
     "MAX_DT",
     "MAX_MESSAGE_BYTES",
+    "MAX_QUEUED_COMMANDS",
     "MIN_DT",
+    "RECENT_STEPS",
     "STATIC_DIR",
     "AccessPolicy",
+    "CommandLimits",
     "DashboardServer",
     "DemonstratorSource",
     "PointerSource",
     "ProtocolError",
+    "RecordingLimits",
     "Session",
     "create_app",
     "find_models",
+    "offered_models",
     "parse_client_message",
 ]

@@ -14,6 +14,8 @@ import contextlib
 import json
 import logging
 import threading
+import time
+from dataclasses import dataclass
 from pathlib import Path
 
 from starlette.applications import Starlette
@@ -27,7 +29,7 @@ from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from rnnpb.web._access import ANY_ADDRESS, AccessPolicy, SecurityHeadersMiddleware, normalize_host
 from rnnpb.web._protocol import ProtocolError, parse_client_message
-from rnnpb.web._session import Session
+from rnnpb.web._session import RecordingLimits, Session
 
 log = logging.getLogger("rnnpb.web")
 
@@ -40,10 +42,52 @@ WS_MAX_SIZE = 65536
 1009); smaller ones over the message limit get an error reply."""
 
 
-def create_app(session: Session, access: AccessPolicy | None = None) -> Starlette:
+@dataclass(frozen=True)
+class CommandLimits:
+    """How many messages one connection may send (token buckets: ``rate`` a second on
+    average, ``burst`` at once). A message beyond them gets an error reply and is dropped,
+    so a flood costs the robot nothing but the parsing.
+
+    Attributes
+    ----------
+    commands_per_s, command_burst : float
+        Control messages (start, stop, reset, mode, pattern, dt, model, camera): each is
+        applied by the session thread between two steps, and a reset or a model change
+        starts a new recording. A person clicking fast sends a few a second.
+    hands_per_s, hands_burst : float
+        Pointer positions and pings, answered in place: the page sends at most one per
+        animation frame (60 a second), two fingers included.
+    """
+
+    commands_per_s: float = 10.0
+    command_burst: float = 20.0
+    hands_per_s: float = 120.0
+    hands_burst: float = 120.0
+
+
+class _TokenBucket:
+    def __init__(self, rate: float, burst: float) -> None:
+        self.rate, self.burst = float(rate), float(burst)
+        self.tokens = self.burst
+        self.last = time.monotonic()
+
+    def take(self) -> bool:
+        now = time.monotonic()
+        self.tokens = min(self.burst, self.tokens + (now - self.last) * self.rate)
+        self.last = now
+        if self.tokens < 1.0:
+            return False
+        self.tokens -= 1.0
+        return True
+
+
+def create_app(session: Session, access: AccessPolicy | None = None,
+               limits: CommandLimits | None = None) -> Starlette:
     """The ASGI app serving ``session`` (already started) to the hosts and origins
-    ``access`` allows (default: this computer's loopback names only)."""
+    ``access`` allows (default: this computer's loopback names only), each connection within
+    ``limits`` (default :class:`CommandLimits`)."""
     access = access or AccessPolicy()
+    limits = limits or CommandLimits()
 
     async def index(request: Request) -> Response:
         return FileResponse(STATIC_DIR / "index.html", media_type="text/html")
@@ -88,8 +132,10 @@ def create_app(session: Session, access: AccessPolicy | None = None) -> Starlett
             while True:
                 await ws.send_text(await outbox.get())
 
-        put(json.dumps(session.state()))
-        unsubscribe = session.subscribe(from_session)
+        commands = _TokenBucket(limits.commands_per_s, limits.command_burst)
+        light = _TokenBucket(limits.hands_per_s, limits.hands_burst)
+        # The state and the run's recent steps first, so a new tab starts with full plots.
+        unsubscribe = session.subscribe(from_session, replay=True)
         sending = asyncio.create_task(sender())
         log.info("%s connected (%d watching)", client, session.subscriber_count)
         try:
@@ -108,12 +154,20 @@ def create_app(session: Session, access: AccessPolicy | None = None) -> Starlett
                     put(json.dumps({"type": "error", "message": "rejected: the server could "
                                     "not check this message"}))
                     continue
-                if message["type"] == "hands":
+                kind = message["type"]
+                if not (light if kind in ("hands", "ping") else commands).take():
+                    what = (f"at most {limits.hands_per_s:g} hands or ping messages"
+                            if kind in ("hands", "ping")
+                            else f"at most {limits.commands_per_s:g} commands")
+                    put(json.dumps({"type": "error", "message": f"rejected: too many "
+                                    f"messages ({what} a second); {kind} dropped"}))
+                elif kind == "hands":
                     session.pointer.set_hands(message["hands"])
-                elif message["type"] == "ping":
+                elif kind == "ping":
                     put('{"type":"pong"}')
-                else:
-                    session.submit(message)
+                elif not session.submit(message):
+                    put(json.dumps({"type": "error", "message": "rejected: the session has "
+                                    f"too many commands waiting; {kind} dropped"}))
         except WebSocketDisconnect:
             pass
         finally:
@@ -154,13 +208,15 @@ class DashboardServer:
     def __init__(self, models: dict[str, Path], host: str = "127.0.0.1", port: int = 8765,
                  dt: float = 0.4, model: str | None = None, workdir: str | Path | None = None,
                  log_level: str = "warning", allow_hosts: tuple[str, ...] = (),
-                 allow_origins: tuple[str, ...] = ()) -> None:
+                 allow_origins: tuple[str, ...] = (), limits: CommandLimits | None = None,
+                 recording_limits: RecordingLimits | None = None) -> None:
         import uvicorn
 
         self.access = AccessPolicy.for_address(host, allow_hosts, allow_origins)
-        self.session = Session(models, dt=dt, workdir=workdir)
+        self.session = Session(models, dt=dt, workdir=workdir,
+                               recording_limits=recording_limits)
         self._first_model = model
-        self.app = create_app(self.session, self.access)
+        self.app = create_app(self.session, self.access, limits)
         config = uvicorn.Config(self.app, host=host, port=port, log_level=log_level,
                                 ws="websockets-sansio", ws_max_size=WS_MAX_SIZE,
                                 lifespan="off")

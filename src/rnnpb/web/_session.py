@@ -11,18 +11,29 @@ The loop drives itself: while the session runs, its thread is inside
 subscribes to the loop's step records and publishes one JSON message per step to its own
 subscribers (the WebSocket connections), which only observe. While stopped, the thread waits
 for commands and applies them itself.
+
+Nothing a step or a command raises ends the session thread: a failed step stops the robot
+and says why on every page (``error`` message, ``state.error``), a failed recording turns
+recording off and the robot goes on, and later commands are applied as before. Recordings are
+bounded (:class:`RecordingLimits`) and the session removes what it made (docs/robustness.md,
+"The dashboard's session: errors, recordings, command limits").
 """
 
 from __future__ import annotations
 
 import base64
+import contextlib
 import json
 import logging
 import math
 import queue
+import secrets
+import shutil
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -36,21 +47,139 @@ log = logging.getLogger("rnnpb.web")
 
 FRAME_WIDTH = 320
 """Width (pixels) of the camera image sent to the page."""
+RECENT_STEPS = 120
+"""Step messages kept for a tab that connects (the page plots this many steps)."""
+MAX_QUEUED_COMMANDS = 64
+"""Commands waiting for the session thread; more are refused with an error reply."""
+
+
+def offered_models(model_or_dir: str | Path) -> tuple[dict[str, Path], dict[str, str]]:
+    """The models ``--model`` offers, each loaded once to check it, and those it refuses.
+
+    A ``.npz`` file is offered if it loads; otherwise its one-line error is raised. A folder
+    offers every ``*.npz`` under it that loads, except training checkpoints
+    (``*.checkpoint.npz``) and hidden files (``.name``: unfinished writes); the others are
+    refused with their reason. A folder with nothing to offer is an error.
+
+    Returns
+    -------
+    models : dict of name → path
+        Names are paths relative to the folder (the file's name for a file).
+    refused : dict of name → reason
+    """
+    from rnnpb.model import TrainedModel
+
+    path = Path(model_or_dir)
+    if path.is_file():
+        TrainedModel.load(path)  # a bad model is its one-line error, before serving
+        return {path.name: path}, {}
+    if not path.is_dir():
+        raise ConfigError(f"{path}: no such model file or folder")
+    models: dict[str, Path] = {}
+    refused: dict[str, str] = {}
+    for found in sorted(path.rglob("*.npz")):
+        name = str(found.relative_to(path))
+        # A checkpoint, or a model's safety map (M.safety.npz, docs/safety.md): not models.
+        if found.name.endswith((".checkpoint.npz", ".safety.npz")) or any(
+                part.startswith(".") for part in found.relative_to(path).parts):
+            continue
+        try:
+            TrainedModel.load(found)
+        except RnnpbError as error:
+            refused[name] = str(error)
+            continue
+        models[name] = found
+    if not models:
+        reasons = "; ".join(f"{reason}" for reason in refused.values())
+        raise ConfigError(f"{path}: no usable model files (*.npz) in this folder"
+                          + (f" ({reasons})" if reasons else "; train one with `rnnpb train`"))
+    return models, refused
 
 
 def find_models(model_or_dir: str | Path) -> dict[str, Path]:
-    """The models ``--model`` offers: a ``.npz`` file, or every ``*.npz`` under a folder."""
-    path = Path(model_or_dir)
-    if path.is_file():
-        return {path.name: path}
-    if path.is_dir():
-        # A model's safety map (M.safety.npz, docs/safety.md) lies beside it: not a model.
-        found = sorted(p for p in path.rglob("*.npz") if not p.name.endswith(".safety.npz"))
-        if not found:
-            raise ConfigError(f"{path}: no model files (*.npz) in this folder; train one with "
-                              "`rnnpb train`")
-        return {str(p.relative_to(path)): p for p in found}
-    raise ConfigError(f"{path}: no such model file or folder")
+    """The models ``--model`` offers (:func:`offered_models`); each refused model is logged
+    as a warning with its reason."""
+    models, refused = offered_models(model_or_dir)
+    for name, reason in refused.items():
+        log.warning("not offering %s: %s", name, reason)
+    return models
+
+
+@dataclass(frozen=True)
+class RecordingLimits:
+    """How much the dashboard keeps on disk.
+
+    Attributes
+    ----------
+    rows_per_file : int
+        A recording that reaches this many rows (steps) goes on in a new file (the next part
+        of the same run). 50,000 rows are about 12 MB: 17 minutes at ``dt`` 0.02, 5.5 hours
+        at the paper's 0.4.
+    keep_files : int
+        Recording files kept; the oldest beyond this number are deleted (the newest, being
+        written, is always kept). So the session's files are bounded by
+        ``keep_files × rows_per_file`` rows, about 60 MB with the defaults.
+    """
+
+    rows_per_file: int = 50_000
+    keep_files: int = 5
+
+    def __post_init__(self) -> None:
+        if self.rows_per_file < 1 or self.keep_files < 1:
+            raise ConfigError("recording limits must be >= 1 row per file and >= 1 file kept")
+
+
+class _Recording:
+    """The recorder the loop writes to: the session's CSV in parts of at most
+    ``limits.rows_per_file`` rows, the oldest files deleted beyond ``limits.keep_files``. A
+    write that fails (a full disk) turns the recording off and reports it through
+    ``on_failure``; the robot is not stopped for it."""
+
+    def __init__(self, session: Session, run: int) -> None:
+        self.session = session
+        self.run = run
+        self.part = 0
+        self.failed: str | None = None
+        self.rows = 0
+        self._recorder = None
+        self._next_part()
+
+    def _next_part(self) -> None:
+        from rnnpb.interaction import SessionRecorder
+
+        self._close_part()
+        self.part += 1
+        suffix = "" if self.part == 1 else f"-part{self.part}"
+        path = self.session.workdir / f"session-{self.run:03d}{suffix}.csv"
+        recorder = SessionRecorder(path, self.session.model.network.pb_size)
+        recorder.open()
+        self._recorder = recorder
+        self.path = path
+        self.session._keep_recording(path)
+
+    def write(self, record) -> None:
+        if self.failed is not None:
+            return
+        try:
+            if self._recorder.rows >= self.session.recording_limits.rows_per_file:
+                self._next_part()
+            self._recorder.write(record)
+            self.rows += 1
+        except OSError as error:
+            self.failed = f"recording stopped: {self.path.name}: {error.strerror or error}"
+            with contextlib.suppress(OSError):  # already reported
+                self._close_part()
+            self.session._error(f"{self.failed}; the robot goes on without recording "
+                                "(Reset starts a new recording)")
+
+    def _close_part(self) -> None:
+        recorder, self._recorder = self._recorder, None
+        if recorder is not None:
+            recorder.close()
+
+    def close(self) -> None:
+        with contextlib.suppress(OSError):  # already reported
+            self._close_part()
 
 
 class _UserView:
@@ -92,18 +221,25 @@ class Session:
     models : dict of name → path
     dt : float
         Seconds per step (the loop paces itself at it).
-    workdir : path
-        Where session recordings are written.
+    workdir : path, optional
+        Where session recordings are written; by default a temporary folder the session
+        makes and deletes when it closes.
+    recording_limits : RecordingLimits, optional
+    max_queued_commands : int
+        Commands waiting for the session thread; :meth:`submit` refuses more.
     """
 
     def __init__(self, models: dict[str, Path], dt: float = 0.4,
-                 workdir: str | Path | None = None) -> None:
+                 workdir: str | Path | None = None,
+                 recording_limits: RecordingLimits | None = None,
+                 max_queued_commands: int = MAX_QUEUED_COMMANDS) -> None:
         if not models:
             raise ConfigError("the dashboard needs at least one model")
         import tempfile
 
         self.models = dict(models)
         self.dt = float(dt)
+        self.recording_limits = recording_limits or RecordingLimits()
         self._own_workdir = workdir is None
         self.workdir = Path(workdir or tempfile.mkdtemp(prefix="rnnpb-serve-"))
         self.pointer = PointerSource()
@@ -112,22 +248,28 @@ class Session:
         self.mode = "demonstrator"
         self.running = False
         self.loading = False
+        self.loading_model: str | None = None
         self.model_name: str | None = None
         self.model = None
         self.mirror = None
         self.loop = None
-        self.recorder = None
-        self.recording_path: Path | None = None
+        self.recorder: _Recording | None = None
         self.last_error: str | None = None
+        self.model_error: str | None = None
         self._webcam: UserSource | None = None
         self._source = SwitchableSource(self.demonstrator)
         self._user_view = _UserView()
-        self._commands: queue.Queue[dict[str, Any]] = queue.Queue()
+        self._commands: queue.Queue[dict[str, Any]] = queue.Queue(maxsize=max_queued_commands)
         self._subscribers: list[Callable[[str], None]] = []
         self._subscribers_lock = threading.Lock()
+        self._recent: deque[str] = deque(maxlen=RECENT_STEPS)
         self._closed = threading.Event()
         self._thread: threading.Thread | None = None
         self._recordings = 0
+        self._recording_files: deque[Path] = deque()
+        # Names this server's runs, so a page that reconnects to a restarted server knows
+        # its plots belong to another run even when the run numbers coincide.
+        self._token = secrets.token_hex(4)
         # Safety (docs/safety.md): the command filter always and the model's map when one
         # lies beside it; ``rnnpb serve --no-safety`` sets this False before start().
         self.safety_enabled = True
@@ -143,21 +285,42 @@ class Session:
         self._thread.start()
 
     def close(self) -> None:
+        """Stop the session thread, close the recording and the camera, and delete the
+        session's own temporary folder (a ``workdir`` given by the caller is left, with at
+        most ``recording_limits.keep_files`` recordings in it)."""
         self._closed.set()
-        self._commands.put({"type": "_wake"})
+        with contextlib.suppress(queue.Full):
+            self._commands.put_nowait({"type": "_wake"})
         if self._thread is not None:
             self._thread.join(timeout=10)
         self._close_run()
         self._close_webcam()
+        if self._own_workdir:
+            shutil.rmtree(self.workdir, ignore_errors=True)
 
     # --- what clients use -----------------------------------------------------------------
-    def submit(self, command: dict[str, Any]) -> None:
-        """Queue a validated control message for the session thread."""
-        self._commands.put(command)
+    def submit(self, command: dict[str, Any]) -> bool:
+        """Queue a validated control message for the session thread; ``False`` (and nothing
+        queued) when :data:`MAX_QUEUED_COMMANDS` are already waiting."""
+        try:
+            self._commands.put_nowait(command)
+        except queue.Full:
+            return False
+        return True
 
-    def subscribe(self, callback: Callable[[str], None]) -> Callable[[], None]:
-        """``callback(json_text)`` for every message the session publishes."""
+    def subscribe(self, callback: Callable[[str], None], replay: bool = False
+                  ) -> Callable[[], None]:
+        """``callback(json_text)`` for every message the session publishes.
+
+        With ``replay``, ``callback`` first gets the state and a ``history`` message with the
+        current run's last :data:`RECENT_STEPS` steps, so a new tab starts with full plots;
+        no step is both replayed and published to it, nor missed.
+        """
         with self._subscribers_lock:
+            if replay:
+                callback(json.dumps(self.state(), separators=(",", ":")))
+                run, steps = json.dumps(self.run_id), ",".join(self._recent)
+                callback(f'{{"type":"history","run":{run},"steps":[{steps}]}}')
             self._subscribers.append(callback)
 
         def unsubscribe() -> None:
@@ -171,32 +334,59 @@ class Session:
         with self._subscribers_lock:
             return len(self._subscribers)
 
+    @property
+    def run_id(self) -> str:
+        """Names the current run (changes at every Reset, model change and server start)."""
+        return f"{self._token}-{self._recordings}"
+
+    @property
+    def recording_path(self) -> Path | None:
+        """The recording file being written (``None`` before the first run, or after the
+        recording failed)."""
+        recorder = self.recorder
+        if recorder is None or recorder.failed is not None:
+            return None
+        return recorder.path
+
+    @property
+    def recording_files(self) -> list[Path]:
+        """The recordings the session keeps, oldest first."""
+        return list(self._recording_files)
+
     def state(self) -> dict[str, Any]:
         """The session's state as the ``state`` message carries it."""
+        from rnnpb.demonstrator import UserBody
         from rnnpb.robot import FOREARM_LENGTH, JOINT_LIMITS, SHOULDERS, UPPER_ARM_LENGTH
         from rnnpb.vectors import MOTOR_NAMES
 
         model = self.model
         learned = list(model.patterns) if model is not None else []
+        recording = self.recording_path
         return {
             "type": "state",
             "models": list(self.models),
             "model": self.model_name,
             "loading": self.loading,
+            "loading_model": self.loading_model,
             "running": self.running,
+            "run": self.run_id,
             "mode": self.mode,
             "dt": self.dt,
             "camera_index": self.camera_index,
             "demonstrator_pattern": PAUSE if self.demonstrator.paused
             else self.demonstrator.pattern,
             "patterns": learned,
+            "demonstrator_patterns": list(self.demonstrator.patterns),
             "novel_patterns": [p for p in self.demonstrator.patterns if p not in learned],
             "pattern_pb": {k: _listed(v) for k, v in model.pattern_pb.items()}
             if model is not None else {},
             "steps": self.loop.steps if self.loop is not None else 0,
-            "recording": self.recording_path is not None and self.recording_path.exists(),
+            "recording": recording is not None and recording.exists(),
+            "recording_error": self.recorder.failed if self.recorder is not None else None,
             "error": self.last_error,
+            "model_error": self.model_error,
             "rest_hands": _listed(self._user_view.rest),
+            "user_shoulders": UserBody().shoulders.tolist(),
             "robot": {"shoulders": SHOULDERS.tolist(), "upper_arm": UPPER_ARM_LENGTH,
                       "forearm": FOREARM_LENGTH, "joint_limits": JOINT_LIMITS.tolist(),
                       "joint_names": list(MOTOR_NAMES)},
@@ -207,6 +397,8 @@ class Session:
     def _publish(self, message: dict[str, Any]) -> None:
         text = json.dumps(message, separators=(",", ":"))
         with self._subscribers_lock:
+            if message["type"] == "step":
+                self._recent.append(text)
             callbacks = list(self._subscribers)
         for callback in callbacks:
             try:
@@ -224,15 +416,25 @@ class Session:
 
     def _run(self) -> None:
         while not self._closed.is_set():
-            loop = self.loop
-            if self.running and loop is not None:
-                self._drive(loop)
-            else:
-                self._apply_commands(timeout_s=0.5)
+            try:
+                loop = self.loop
+                if self.running and loop is not None:
+                    self._drive(loop)
+                else:
+                    self._apply_commands(timeout_s=0.5)
+            except Exception as error:  # the thread must outlive anything a step raises
+                log.exception("session: unexpected failure")
+                self.running = False
+                self._error(f"the session stopped the robot: {type(error).__name__}: {error}")
+                with contextlib.suppress(Exception):
+                    self._publish_state()
+                time.sleep(0.05)  # a failure that repeats must not spin
 
     def _drive(self, loop) -> None:
         """Let ``loop`` run (it paces itself) until a command stops or replaces it, the session
-        closes, or its source ends or fails; the queued commands are applied between steps."""
+        closes, or its source ends or fails; the queued commands are applied between steps.
+        Whatever a step raises stops the robot with the reason on every page; the session
+        goes on taking commands (Start tries again)."""
 
         def between_steps(wait_s: float) -> None:
             self._apply_commands(timeout_s=wait_s)
@@ -244,6 +446,13 @@ class Session:
         except RnnpbError as error:
             self.running = False
             self._error(f"the {self.mode} source failed: {error}")
+            self._publish_state()
+            return
+        except Exception as error:  # an OSError, a bug, a failing camera driver...
+            log.exception("session: step %d failed", loop.steps)
+            self.running = False
+            self._error(f"step {loop.steps} failed, the robot is stopped: "
+                        f"{type(error).__name__}: {error}")
             self._publish_state()
             return
         if self.running and self.loop is loop and not self._closed.is_set():
@@ -285,7 +494,8 @@ class Session:
             action = command["action"]
             if action == "start":
                 if self.mirror is None:
-                    raise ConfigError("no model is loaded yet")
+                    raise ConfigError("no model is loaded"
+                                      + (f": {self.model_error}" if self.model_error else ""))
                 if self.loop is None:
                     self._new_run()
                 self.running = True
@@ -305,43 +515,70 @@ class Session:
                 self.loop.set_dt(self.dt)
 
     def _load_model(self, name: str) -> None:
+        """Load and compile model ``name``; a running robot goes on running with it. A model
+        that fails leaves the previous one (if any) in place, with the reason."""
         from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel
 
         if name not in self.models:
             raise ConfigError(f"no model {name!r} (this server offers: "
                               f"{', '.join(self.models)})")
+        was_running = self.running
         self.running = False
         self.loading = True
+        self.loading_model = name
         self._publish_state()
         try:
             from rnnpb.robot import JOINT_LIMITS
 
             model = TrainedModel.load(self.models[name], joint_limits=JOINT_LIMITS)
-            safety, risk = self._load_safety(self.models[name], model, OnlineConfig())
+            # The regression that suits the model's learning (docs/model.md, "Which on-line
+            # regression"), as `rnnpb interact` picks it.
+            choice = OnlineConfig.for_model(model)
+            safety, risk = self._load_safety(self.models[name], model, choice.config)
             mirror = MirrorSystem(model, safety.config, meta=safety.meta)
             started = time.perf_counter()
             mirror.step(np.full(model.network.sensory_size, 0.5))  # compiles the step
             mirror.reset()
-            log.info("model %s ready (step compiled in %.1f s)", name,
-                     time.perf_counter() - started)
+            log.info("model %s ready with the %s on-line regression (%s; step compiled in "
+                     "%.1f s)", name, choice.name, choice.reason, time.perf_counter() - started)
+        except Exception as error:
+            kept = f"; still using {self.model_name}" if self.model_name else ""
+            self.model_error = f"model {name} cannot be used: {error}{kept}"
+            self.running = was_running and self.mirror is not None
+            raise ConfigError(self.model_error) from None
         finally:
             self.loading = False
+            self.loading_model = None
         self.model, self.mirror, self.model_name = model, mirror, name
         self.safety, self._risk_views = safety, risk
+        self.model_error = None
         self._new_run()
+        self.running = was_running
+
+    def _keep_recording(self, path: Path) -> None:
+        """Note a new recording file; delete the oldest beyond ``keep_files``."""
+        self._recording_files.append(path)
+        while len(self._recording_files) > self.recording_limits.keep_files:
+            old = self._recording_files.popleft()
+            with contextlib.suppress(FileNotFoundError):
+                old.unlink()
 
     def _new_run(self) -> None:
         """Forget the interaction so far: fresh window, new loop and a new recording."""
-        from rnnpb.interaction import InteractionLoop, LoopConfig, SessionRecorder
+        from rnnpb.interaction import InteractionLoop, LoopConfig
 
         self._close_run()
         if self.mirror is None:
             return
         self.mirror.reset()
-        self._recordings += 1
-        self.recording_path = self.workdir / f"session-{self._recordings:03d}.csv"
-        self.recorder = SessionRecorder(self.recording_path, self.model.network.pb_size)
-        self.recorder.open()
+        with self._subscribers_lock:
+            self._recent.clear()
+            self._recordings += 1
+        try:
+            self.recorder = _Recording(self, self._recordings)
+        except OSError as error:
+            self.recorder = None
+            self._error(f"cannot record this run: {error}; the robot runs without recording")
         command_filter = self.safety.command_filter if self.safety is not None else None
         if command_filter is not None:
             command_filter.reset()
@@ -373,7 +610,6 @@ class Session:
     def _close_run(self) -> None:
         if self.recorder is not None:
             self.recorder.close()
-            self.recorder = None
         self.loop = None
 
     def _set_mode(self, mode: str) -> None:
@@ -418,6 +654,13 @@ class Session:
             "pb": _listed(record.pb),
             "nearest": nearest,
             "nearest_distance": distance,
+            # What the step recognised (rnnpb.model.recognition): the readout says "not sure"
+            # or "new movement" rather than a confident wrong name.
+            "recognised": record.recognised,
+            "confidence": round(float(record.confidence), 4),
+            "novelty": record.novelty,
+            "pattern_confidence": {k: round(float(v), 4)
+                                   for k, v in record.pattern_confidence.items()},
             "prediction_error": _listed([record.prediction_error])[0],
             "window_error": _listed([record.window_error])[0],
             "held": record.held,

@@ -23,6 +23,7 @@ from rnnpb.experiments.summary import Target
 # name -> module; the order is the order of `rnnpb study --help`.
 STUDY_MODULES: dict[str, str] = {
     "safety": "rnnpb.experiments.studies.safety",
+    "novelty": "rnnpb.experiments.studies.novelty",
 }
 
 

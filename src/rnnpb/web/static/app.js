@@ -5,7 +5,7 @@
 import * as THREE from "/static/vendor/three.module.min.js";
 
 const RED = "#d63a3a", BLUE = "#2f6fd6";
-const HISTORY = 120;                      // steps kept for the plots
+const HISTORY = 120;                      // steps kept for the plots (the server replays as many)
 const PATTERN_NAMES = {
   "1": "horizontal swing, opposite phase", "2": "vertical swing, in phase",
   "3": "rotation, opposite phase", "4": "rotation, in phase",
@@ -28,7 +28,7 @@ const fmt = (v, digits = 3) => (v === null || v === undefined || Number.isNaN(v)
 // Shared with tests and the console: what the page knows.
 const dash = window.rnnpbDashboard = {
   connected: false, state: null, lastStep: null, steps: 0, history: [], errors: [],
-  rendered3d: 0, markers: null,
+  rendered3d: 0, markers: null, run: null, refusedSends: 0, replayed: 0,
 };
 
 // ---------------------------------------------------------------- connection
@@ -38,34 +38,63 @@ function connect() {
   ws = new WebSocket(`${proto}//${location.host}/ws`);
   ws.onopen = () => { dash.connected = true; updateStatus(); };
   ws.onclose = () => {
-    dash.connected = false; updateStatus();
+    dash.connected = false;
+    setControlsEnabled(false);
+    updateStatus();
     setTimeout(connect, 1000);
   };
   ws.onmessage = (event) => {
     const message = JSON.parse(event.data);
     if (message.type === "state") onState(message);
+    else if (message.type === "history") onHistory(message);
     else if (message.type === "step") onStep(message);
     else if (message.type === "frame") onFrame(message);
     else if (message.type === "error") showError(message.message);
   };
 }
+// A command sent while disconnected would be lost: say so instead (the controls are
+// disabled then, this covers scripted sends and the moment the connection drops).
 function send(message) {
-  if (ws && ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify(message));
+  if (ws && ws.readyState === WebSocket.OPEN) { ws.send(JSON.stringify(message)); return true; }
+  dash.refusedSends += 1;
+  if (message.type !== "hands") showError("not connected to the server: not sent, try again "
+    + "once reconnected");
+  return false;
 }
 dash.send = send;
 
+// Every control that sends a command; disabled while there is no connection.
+function setControlsEnabled(enabled) {
+  document.querySelectorAll("#model, #start, #stop, #reset, #dt, .tab, #camera, "
+    + "#camera-open, #patterns button").forEach((node) => { node.disabled = !enabled; });
+  document.body.classList.toggle("offline", !enabled);
+}
+
+// Transient errors (a command's answer) show for a while; the state's standing problems (a
+// model that cannot be used, a failed step, a recording that stopped) stay until resolved.
+let transientError = null;
 function showError(text) {
   dash.errors.push(text);
-  const box = $("error");
-  box.textContent = text;
-  box.hidden = false;
+  transientError = text;
   clearTimeout(showError.timer);
-  showError.timer = setTimeout(() => { box.hidden = true; }, 8000);
+  showError.timer = setTimeout(() => { transientError = null; showProblems(); }, 8000);
+  showProblems();
   if (/camera/i.test(text)) {
     const mode = dash.state ? dash.state.mode : "demonstrator";
     $("camera-message").textContent = `${text}. The robot is still driven by the ${mode}; `
       + "connect a camera or try another index.";
   }
+}
+function standingProblems(state) {
+  if (!state) return [];
+  return [...new Set([state.model_error, state.error, state.recording_error].filter(Boolean))];
+}
+function showProblems() {
+  const problems = standingProblems(dash.state);
+  if (transientError && !problems.includes(transientError)) problems.unshift(transientError);
+  const box = $("error");
+  box.replaceChildren(...problems.map((p) => el("div", {}, p)));
+  box.hidden = problems.length === 0;
 }
 
 // ---------------------------------------------------------------- state
@@ -73,12 +102,7 @@ function onState(state) {
   const first = dash.state === null;
   const previousModel = dash.state && dash.state.model;
   dash.state = state;
-  const select = $("model");
-  if (select.options.length !== state.models.length) {
-    select.replaceChildren();
-    for (const name of state.models) select.add(new Option(name, name));
-  }
-  if (state.model) select.value = state.model;
+  showModels(state);
   if (document.activeElement !== $("dt")) $("dt").value = state.dt;
   // Another tab (or a successful switch) changed the mode: show it. A failed switch to the
   // webcam leaves the webcam panel shown, with the reason.
@@ -93,12 +117,54 @@ function onState(state) {
       drawPointerPanel();
     }
   }
-  if (state.steps === 0) { dash.history = []; dash.lastStep = null; }
-  $("start").disabled = state.running || state.loading || !state.model;
+  if (state.run !== dash.run) startRun(state.run);
+  setControlsEnabled(true);
+  const canStart = !state.running && !state.loading && !!state.model;
+  $("start").disabled = !canStart;
+  $("start").title = state.model ? "" : `no model loaded${state.model_error ? `: ${state.model_error}` : ""}`;
   $("stop").disabled = !state.running;
+  showReadoutsState(state);
+  showProblems();
   updateStatus();
   drawPlots();
   showSafety(dash.lastStep);
+}
+
+// The model list, and the one chosen: while a model loads, the one being loaded.
+function showModels(state) {
+  const select = $("model");
+  const names = [...select.options].map((o) => o.value);
+  if (JSON.stringify(names) !== JSON.stringify(state.models)) {
+    select.replaceChildren();
+    for (const name of state.models) select.add(new Option(name, name));
+  }
+  const shown = state.loading_model || state.model;
+  if (shown) select.value = shown;
+}
+
+// A new run (Reset, a model change, a restarted server): the plots and readouts start over.
+function startRun(run) {
+  dash.run = run;
+  dash.history = [];
+  dash.lastStep = null;
+  clearReadouts();
+  robotView.clear();
+}
+
+function onHistory(message) {
+  if (message.run !== dash.run) return;
+  const known = new Set(dash.history.map((s) => s.step));
+  const steps = message.steps.filter((s) => !known.has(s.step));
+  dash.replayed = steps.length;
+  dash.history = [...steps, ...dash.history].slice(-HISTORY);
+  if (dash.history.length) {
+    dash.lastStep = dash.history[dash.history.length - 1];
+    showReadouts(dash.lastStep);
+    robotView.push(dash.lastStep);
+  }
+  updateStatus();
+  drawPlots();
+  drawPointerPanel();
 }
 
 const shownMode = { server: null, view: null };
@@ -113,37 +179,95 @@ function showMode(mode) {
 function updateStatus() {
   const el = $("status"), s = dash.state;
   el.className = "status";
-  if (!dash.connected) { el.textContent = "disconnected — reconnecting…"; return; }
+  if (!dash.connected) {
+    el.textContent = "disconnected — reconnecting… (controls are off until then)";
+    el.classList.add("offline");
+    return;
+  }
   if (!s) { el.textContent = "connected"; return; }
   if (s.loading) {
-    el.textContent = `loading model ${s.model || ""}… (compiling the network, a few seconds)`;
+    el.textContent = `loading model ${s.loading_model || ""}… (compiling the network, a few `
+      + "seconds)";
     el.classList.add("loading");
   } else if (s.running) {
-    el.textContent = `running · driven by ${s.mode} · step ${dash.lastStep ? dash.lastStep.step : 0}`;
+    el.textContent = `running · model ${s.model} · driven by ${s.mode} · step `
+      + `${dash.lastStep ? dash.lastStep.step : 0}`;
     el.classList.add("running");
+  } else if (!s.model) {
+    el.textContent = `no model loaded${s.model_error ? " (see the message above)" : ""}`;
+    el.classList.add("problem");
   } else {
-    el.textContent = s.model ? `stopped · model ${s.model} · press Start` : "no model";
+    el.textContent = `stopped · model ${s.model} · press Start`;
   }
 }
 
+// The demonstrator performs patterns 1-4 only: those are its buttons, each saying whether the
+// model learned it. Learned patterns it cannot perform are listed, for the mouse or webcam.
 function buildPatternButtons(state) {
   const box = $("patterns");
-  const key = JSON.stringify([state.patterns, state.novel_patterns, state.demonstrator_pattern]);
+  const key = JSON.stringify([state.patterns, state.demonstrator_patterns,
+    state.demonstrator_pattern]);
   if (box.dataset.key === key) return;
   box.dataset.key = key;
   box.replaceChildren();
-  const all = [...state.patterns, ...state.novel_patterns].sort();
-  for (const p of [...all, "pause"]) {
-    const novel = state.novel_patterns.includes(p);
+  for (const p of [...state.demonstrator_patterns, "pause"]) {
+    const learned = state.patterns.includes(p);
     const button = p === "pause"
       ? el("button", {}, "❚❚ Pause", el("small", {}, "hands held still"))
-      : el("button", {}, `Pattern ${p}${novel ? " (novel)" : ""}`,
-        el("small", {}, `${describe(p)}${novel ? " — not learned" : ""}`));
+      : el("button", {}, `Pattern ${p}${learned ? "" : " (novel)"}`,
+        el("small", {}, `${describe(p)}${learned ? "" : " — not learned by this model"}`));
     button.dataset.pattern = p;
     button.classList.toggle("active", state.demonstrator_pattern === p);
     button.onclick = () => send({ type: "pattern", pattern: p });
     box.appendChild(button);
   }
+  const others = state.patterns.filter((p) => !state.demonstrator_patterns.includes(p));
+  $("patterns-note").textContent = others.length
+    ? `This model also learned ${others.join(", ")}: the demonstrator cannot perform `
+      + `${others.length > 1 ? "them" : "it"}; trace ${others.length > 1 ? "them" : "it"} with `
+      + "the mouse or in front of the webcam."
+    : "";
+}
+
+// ---------------------------------------------------------------- recognition
+// What the robot says it sees: a learned pattern only when it is confident, else "not sure"
+// or "new movement" (rnnpb.model.recognition).
+function readout(step) {
+  if (step.recognised && (step.novelty === "familiar" || step.novelty === "still")) {
+    const still = step.novelty === "still" ? ", hands still" : "";
+    return `${step.recognised} — ${describe(step.recognised)} ` +
+      `(${Math.round(100 * step.confidence)} %${still})`;
+  }
+  const words = { novel: "new movement", unstructured: "not sure (no repeating pattern)",
+    still: "hands still", "": "not sure yet" };
+  return words[step.novelty] || "not sure";
+}
+
+function drawConfidenceBars(step) {
+  const box = $("confidence-bars");
+  if (!box) return;
+  const shares = step.pattern_confidence || {};
+  const names = Object.keys(shares);
+  if (box.childElementCount !== names.length) {
+    box.replaceChildren(...names.map((name) => {
+      const row = el("div", { className: "confidence-row" });
+      row.appendChild(el("span", { className: "confidence-name" }, name));
+      const bar = el("span", { className: "confidence-bar" });
+      bar.appendChild(el("span", { className: "confidence-fill" }));
+      row.appendChild(bar);
+      row.appendChild(el("span", { className: "confidence-value" }, ""));
+      return row;
+    }));
+  }
+  names.forEach((name, i) => {
+    const row = box.children[i];
+    const share = shares[name];
+    // A width set through the CSS object model, not a style attribute (the page's
+    // Content-Security-Policy forbids inline styles).
+    row.querySelector(".confidence-fill").style.width = `${Math.round(100 * share)}%`;
+    row.classList.toggle("active", name === step.recognised);
+    row.querySelector(".confidence-value").textContent = `${Math.round(100 * share)} %`;
+  });
 }
 
 // ---------------------------------------------------------------- steps
@@ -153,17 +277,37 @@ function onStep(step) {
   dash.history.push(step);
   if (dash.history.length > HISTORY) dash.history.shift();
   robotView.push(step);
-  $("step").textContent = step.step;
-  $("nearest").textContent = `${step.nearest} — ${describe(step.nearest)}`;
-  $("nearest-distance").textContent = `(PB distance ${fmt(step.nearest_distance, 2)})`;
-  $("pred-error").textContent = step.prediction_error === null ? "—"
-    : step.prediction_error.toExponential(1);
-  $("truth").textContent = step.mode === "demonstrator" ? step.truth
-    : step.mode === "pointer" ? "you (mouse)" : "you (webcam)";
+  showReadouts(step);
   updateStatus();
   drawPlots();
   drawPointerPanel();
   showSafety(step);
+}
+
+// The readouts under the robot: the last step's, marked as such while stopped.
+function showReadouts(step) {
+  $("step").textContent = step.step;
+  $("nearest").textContent = readout(step);
+  $("nearest-distance").textContent =
+    `(nearest learned PB ${step.nearest}, distance ${fmt(step.nearest_distance, 2)})`;
+  drawConfidenceBars(step);
+  $("pred-error").textContent = step.prediction_error === null ? "—"
+    : step.prediction_error.toExponential(1);
+  $("truth").textContent = step.mode === "demonstrator" ? step.truth
+    : step.mode === "pointer" ? "you (mouse)" : "you (webcam)";
+}
+function clearReadouts() {
+  for (const id of ["nearest", "pred-error", "truth"]) $(id).textContent = "—";
+  $("step").textContent = "0";
+  $("nearest-distance").textContent = "";
+  $("readouts-note").textContent = "";
+}
+function showReadoutsState(state) {
+  const box = document.querySelector(".recognised");
+  const stale = !state.running && dash.lastStep !== null;
+  box.classList.toggle("stale", stale);
+  $("readouts-note").textContent = state.loading ? "loading another model…"
+    : stale ? `stopped: these are the values of step ${dash.lastStep.step}` : "";
 }
 
 function onFrame(message) {
@@ -184,7 +328,7 @@ const robotView = (() => {
   container.appendChild(renderer.domElement);
   const scene = new THREE.Scene();
   scene.background = new THREE.Color("#e9edf2");
-  const camera = new THREE.PerspectiveCamera(38, 1, 0.01, 20);
+  const camera = new THREE.PerspectiveCamera(30, 1, 0.01, 20);
   scene.add(new THREE.HemisphereLight(0xffffff, 0x8899aa, 2.2));
   const sun = new THREE.DirectionalLight(0xffffff, 1.6);
   sun.position.set(1, 2, 2);
@@ -194,6 +338,7 @@ const robotView = (() => {
   const dark = new THREE.MeshStandardMaterial({ color: 0x3b4350, roughness: 0.6 });
   const joint = new THREE.MeshStandardMaterial({ color: 0x8792a5, roughness: 0.4 });
   const grid = new THREE.GridHelper(2.4, 24, 0xb6bdc8, 0xd3d8df);
+  grid.position.z = 0.5;  // the floor between the robot and the person
   scene.add(grid);
 
   const add = (geometry, material, position) => {
@@ -213,8 +358,8 @@ const robotView = (() => {
   add(new THREE.SphereGeometry(0.05, 24, 16), shell, [-0.025, 0, 0.52]);        // head
   add(new THREE.BoxGeometry(0.07, 0.036, 0.012), dark, [0.016, 0, 0.52]);       // visor
 
-  const limb = (radius) => {
-    const mesh = new THREE.Mesh(new THREE.CylinderGeometry(radius, radius, 1, 16), shell);
+  const limb = (radius, material = shell) => {
+    const mesh = new THREE.Mesh(new THREE.CylinderGeometry(radius, radius, 1, 16), material);
     scene.add(mesh);
     return mesh;
   };
@@ -224,9 +369,61 @@ const robotView = (() => {
     hand: add(new THREE.SphereGeometry(0.024, 16, 12), dark),
     upper: limb(0.022), fore: limb(0.019),
   }));
+
+  // The person (rnnpb.demonstrator.UserBody: a kneeling adult facing the robot), drawn
+  // translucent so the robot stays in view behind: torso, head, and each arm from the
+  // shoulder to the hand the robot perceives (the elbow is placed for the look only).
+  const skin = new THREE.MeshStandardMaterial({ color: 0xc9a88e, roughness: 0.7,
+    transparent: true, opacity: 0.55 });
+  const cloth = new THREE.MeshStandardMaterial({ color: 0x6d7f99, roughness: 0.8,
+    transparent: true, opacity: 0.35 });
+  const person = { parts: [], arms: [] };
+  const userShoulders = () => (dash.state && dash.state.user_shoulders)
+    || [[1, -0.19, 0.95], [1, 0.19, 0.95]];
+  function buildPerson() {
+    // Kneeling, as UserBody's shoulder height says: head, torso, thighs, shins on the floor.
+    const [l, r] = userShoulders();
+    const mid = [(l[0] + r[0]) / 2, (l[1] + r[1]) / 2, (l[2] + r[2]) / 2];
+    const width = Math.abs(r[1] - l[1]), hips = mid[2] - 0.5;
+    person.parts.push(add(new THREE.BoxGeometry(width + 0.04, 0.52, 0.16), cloth,
+      [mid[0] + 0.03, mid[1], mid[2] - 0.24]));
+    person.parts.push(add(new THREE.BoxGeometry(width - 0.04, hips - 0.1, 0.15), cloth,
+      [mid[0] + 0.03, mid[1], 0.1 + (hips - 0.1) / 2]));                     // thighs
+    person.parts.push(add(new THREE.BoxGeometry(width - 0.04, 0.1, 0.4), cloth,
+      [mid[0] + 0.22, mid[1], 0.05]));                                       // shins
+    person.parts.push(add(new THREE.CylinderGeometry(0.04, 0.045, 0.08, 14), skin,
+      [mid[0] + 0.03, mid[1], mid[2] + 0.05]));
+    person.parts.push(add(new THREE.SphereGeometry(0.09, 20, 14), skin,
+      [mid[0] + 0.03, mid[1], mid[2] + 0.17]));
+    for (let side = 0; side < 2; side++) {
+      person.arms.push({ upper: limb(0.035, cloth), fore: limb(0.03, skin),
+        shoulder: add(new THREE.SphereGeometry(0.045, 14, 10), cloth, [l, r][side]) });
+    }
+  }
+  buildPerson();
   const userHands = [RED, BLUE].map((color) => add(new THREE.SphereGeometry(0.035, 20, 14),
     new THREE.MeshStandardMaterial({ color, roughness: 0.35 })));
-  userHands.forEach((h) => { h.visible = false; });
+  const UPPER = 0.3, FORE = 0.3;  // the person's arm (UserBody.arm_reach is about 0.62)
+  function userElbow(s, h, side) {
+    // Bend away from the body and down: the elbow of a relaxed arm reaching forward.
+    const d = new THREE.Vector3().subVectors(h, s), len = Math.min(d.length(), UPPER + FORE - 1e-3);
+    const along = d.clone().normalize();
+    const out = new THREE.Vector3(side === 0 ? -0.6 : 0.6, -1, 0);
+    out.addScaledVector(along, -out.dot(along)).normalize();
+    const a = (UPPER * UPPER - FORE * FORE + len * len) / (2 * len);
+    const bend = Math.sqrt(Math.max(UPPER * UPPER - a * a, 0));
+    return s.clone().addScaledVector(along, a).addScaledVector(out, bend);
+  }
+  function placePersonArm(side, hand) {
+    const arm = person.arms[side];
+    arm.upper.visible = arm.fore.visible = !!hand;
+    userHands[side].visible = !!hand;
+    if (!hand) return;
+    const s = v3(userShoulders()[side]), h = v3(hand), e = userElbow(s, h, side);
+    placeLimb(arm.upper, s, e);
+    placeLimb(arm.fore, e, h);
+    userHands[side].position.copy(h);
+  }
 
   const up = new THREE.Vector3(0, 1, 0);
   function placeLimb(mesh, a, b) {
@@ -236,9 +433,11 @@ const robotView = (() => {
     mesh.quaternion.setFromUnitVectors(up, d.clone().normalize());
   }
 
-  // Orbit: drag turns, wheel zooms (no controls library needed for this much).
-  let azimuth = 0.85, elevation = 0.22, distance = 1.55;
-  const target = new THREE.Vector3(0, 0.5, 0.36);  // between the robot and the hands
+  // Orbit: drag turns, wheel zooms (no controls library needed for this much). The first
+  // view looks over the person's right shoulder at the robot, which faces it: the mirror.
+  const VIEW = { azimuth: 0.95, elevation: 0.16, distance: 2.45 };
+  let { azimuth, elevation, distance } = VIEW;
+  const target = v3([0.45, 0, 0.62]);  // between the robot and the person
   function placeCamera() {
     camera.position.set(
       target.x + distance * Math.cos(elevation) * Math.sin(azimuth),
@@ -259,6 +458,10 @@ const robotView = (() => {
     needsDraw = true;
   });
   renderer.domElement.addEventListener("pointerup", () => { dragging = null; });
+  renderer.domElement.addEventListener("dblclick", () => {
+    ({ azimuth, elevation, distance } = VIEW);
+    needsDraw = true;
+  });
   renderer.domElement.addEventListener("wheel", (e) => {
     e.preventDefault();
     distance = Math.min(5, Math.max(0.6, distance * Math.exp(e.deltaY * 0.001)));
@@ -282,6 +485,7 @@ const robotView = (() => {
     received = performance.now();
     needsDraw = true;
   }
+  function clear() { previous = current = null; needsDraw = true; }
   function lerp(a, b, t) { return a.map((v, i) => v + (b[i] - v) * t); }
 
   // Draw only while something moves (easing between poses, turning the view), at most
@@ -320,15 +524,14 @@ const robotView = (() => {
       placeLimb(arm.fore, e, h);
       const user = b.user && b.user[side];
       const before = a.user && a.user[side];
-      userHands[side].visible = !!user;
-      if (user) userHands[side].position.copy(v3(before ? lerp(before, user, t) : user));
+      placePersonArm(side, user ? (before ? lerp(before, user, t) : user) : null);
     }
     placeCamera();
     renderer.render(scene, camera);
     dash.rendered3d += 1;
   }
   requestAnimationFrame(frame);
-  return { push };
+  return { push, clear };
 })();
 
 // ---------------------------------------------------------------- pointer panel
@@ -449,41 +652,104 @@ function setupCanvas(canvas) {
   return g;
 }
 
-function timePlot(canvas, { title, ymin, ymax, yunit, series }) {
+// Round tick values: steps of 1, 2 or 5 times a power of ten, or of 15/30/45/90 for degrees,
+// so that no tick reads like 112.5°.
+function niceTicks(lo, hi, count, steps = null) {
+  const raw = (hi - lo) / Math.max(count, 1);
+  let step;
+  if (steps) step = steps.find((s) => s >= raw) || steps[steps.length - 1];
+  else {
+    const p = 10 ** Math.floor(Math.log10(raw || 1));
+    step = [1, 2, 5, 10].map((m) => m * p).find((s) => s >= raw);
+  }
+  const ticks = [];
+  for (let v = Math.ceil(lo / step - 1e-9) * step; v <= hi + 1e-9; v += step) {
+    ticks.push(Math.abs(v) < step * 1e-9 ? 0 : v);
+  }
+  return ticks;
+}
+
+// Where the performer changed: a switch of the demonstrator's pattern or of who drives, and
+// the stretches in pause (the demonstrator's pause, or the PB held while nothing is seen).
+function plotEvents(steps) {
+  const switches = [], pauses = [];
+  let start = null;
+  steps.forEach((s, i) => {
+    const prev = steps[i - 1];
+    if (prev && prev.step === s.step - 1 && (prev.truth !== s.truth || prev.mode !== s.mode)
+        && s.truth !== "pause" && prev.truth !== "pause") {
+      switches.push({ step: s.step, label: s.mode === "demonstrator" ? s.truth : s.mode });
+    }
+    const paused = s.truth === "pause" || s.held;
+    if (paused && start === null) start = s.step;
+    if (!paused && start !== null) { pauses.push([start, s.step - 1]); start = null; }
+  });
+  if (start !== null) pauses.push([start, steps[steps.length - 1].step]);
+  return { switches, pauses };
+}
+
+function timePlot(canvas, { title, ymin, ymax, yunit, ysteps, yticks = 4, series }) {
   const g = setupCanvas(canvas), w = canvas.width, h = canvas.height;
-  const left = 42, right = 8, top = 16, bottom = 18;
+  const left = 44, right = 10, top = 16, bottom = 30;
   const pw = w - left - right, ph = h - top - bottom;
   g.fillStyle = "#1d2430";
   g.fillText(title, left, 11);
+  const steps = dash.history;
+  const last = steps.length ? steps[steps.length - 1].step : HISTORY - 1;
+  const first = Math.max(0, last - HISTORY + 1);
+  const x = (step) => left + (pw * (step - first)) / (HISTORY - 1);
+  const y = (v) => top + ph - (ph * (v - ymin)) / (ymax - ymin);
   g.strokeStyle = "#e3e6eb";
   g.fillStyle = "#6b7483";
-  for (let i = 0; i <= 4; i++) {
-    const v = ymin + ((ymax - ymin) * i) / 4, y = top + ph - (ph * i) / 4;
-    g.beginPath(); g.moveTo(left, y); g.lineTo(left + pw, y); g.stroke();
-    g.fillText(`${+v.toFixed(2)}${yunit || ""}`, 2, y + 4);
+  g.textAlign = "right";
+  for (const v of niceTicks(ymin, ymax, yticks, ysteps)) {
+    g.beginPath(); g.moveTo(left, y(v)); g.lineTo(left + pw, y(v)); g.stroke();
+    g.fillText(`${+v.toFixed(2)}${yunit || ""}`, left - 4, y(v) + 4);
   }
-  const steps = dash.history;
-  g.fillText(steps.length ? `steps ${steps[0].step}–${steps[steps.length - 1].step}` : "steps",
-    left + pw - 80, h - 4);
-  const x = (i) => left + (pw * i) / (HISTORY - 1);
-  const y = (v) => top + ph - (ph * (v - ymin)) / (ymax - ymin);
+  // Step ticks along the bottom; the axis name sits under the value labels, left of the
+  // plot, where no tick label can reach it (a 5-digit step included).
+  g.textAlign = "center";
+  for (const s of niceTicks(first, first + HISTORY - 1, 6)) {
+    g.strokeStyle = "#c5cbd4";
+    g.beginPath(); g.moveTo(x(s), top + ph); g.lineTo(x(s), top + ph + 4); g.stroke();
+    g.fillText(String(s), Math.min(Math.max(x(s), left + 12), w - 16), top + ph + 15);
+  }
+  g.textAlign = "left";
+  g.fillText("step", 2, top + ph + 15);
+  const { switches, pauses } = plotEvents(steps);
   g.save();
   g.beginPath(); g.rect(left, top, pw, ph); g.clip();
+  g.fillStyle = "rgba(120, 130, 150, 0.13)";
+  for (const [a, b] of pauses) g.fillRect(x(a - 0.5), top, x(b + 0.5) - x(a - 0.5), ph);
   for (const s of series) {
     g.strokeStyle = s.color;
     g.lineWidth = s.width || 1.6;
     g.setLineDash(s.dash || []);
     g.beginPath();
-    let started = false;
-    steps.forEach((step, i) => {
+    let started = false, previous = null;
+    for (const step of steps) {
       const v = s.value(step);
-      if (v === null || v === undefined || Number.isNaN(v)) { started = false; return; }
-      if (started) g.lineTo(x(i), y(v)); else { g.moveTo(x(i), y(v)); started = true; }
-    });
+      const gap = previous !== null && step.step !== previous + 1;
+      previous = step.step;
+      if (v === null || v === undefined || Number.isNaN(v) || gap) { started = false; }
+      if (v === null || v === undefined || Number.isNaN(v)) continue;
+      if (started) g.lineTo(x(step.step), y(v)); else { g.moveTo(x(step.step), y(v)); started = true; }
+    }
     g.stroke();
+  }
+  g.setLineDash([3, 3]);
+  g.strokeStyle = "#127a5a";
+  g.lineWidth = 1.2;
+  g.fillStyle = "#127a5a";
+  for (const sw of switches) {
+    const sx = x(sw.step - 0.5);
+    g.beginPath(); g.moveTo(sx, top); g.lineTo(sx, top + ph); g.stroke();
+    g.fillText(`→ ${sw.label}`, sx + 3, top + 10);
   }
   g.restore();
   g.setLineDash([]);
+  g.textAlign = "start";
+  dash.plotMarks = { switches: switches.length, pauses: pauses.length };
 }
 
 let projection = null;
@@ -519,6 +785,30 @@ function pbProjection(mode) {
   return { origin: mean, axes, labels: ["direction 1", "direction 2"], fixed: false };
 }
 
+// Learned points closer than a marker's size are drawn apart, each tied by a line to its
+// true place (a small dot), so that no two markers hide each other.
+function spreadMarkers(points, size) {
+  const placed = points.map((p) => ({ ...p, lx: p.x, ly: p.y }));
+  for (let round = 0; round < 30; round++) {
+    let moved = false;
+    for (let i = 0; i < placed.length; i++) {
+      for (let j = i + 1; j < placed.length; j++) {
+        const a = placed[i], b = placed[j];
+        let dx = b.lx - a.lx, dy = b.ly - a.ly;
+        const d = Math.hypot(dx, dy);
+        if (d >= size) continue;
+        if (d < 1e-6) { dx = 1; dy = -1; }
+        const push = (size - d) / 2 + 0.5, n = Math.hypot(dx, dy);
+        a.lx -= (dx / n) * push; a.ly -= (dy / n) * push;
+        b.lx += (dx / n) * push; b.ly += (dy / n) * push;
+        moved = true;
+      }
+    }
+    if (!moved) break;
+  }
+  return placed;
+}
+
 function drawPB() {
   const canvas = $("plot-pb"), g = setupCanvas(canvas), w = canvas.width, h = canvas.height;
   const mode = $("pb-projection").value;
@@ -545,30 +835,52 @@ function drawPB() {
   g.strokeStyle = "#d9dde4";
   g.strokeRect(m, 12, pw, ph);
   g.fillStyle = "#6b7483";
-  g.fillText(P.labels[0] + " →", m + pw - 80, h - 4);
+  g.textAlign = "right";
+  g.fillText(`${P.labels[0]} →`, m + pw, h - 4);
+  g.textAlign = "start";
   g.save(); g.translate(11, 12 + ph); g.rotate(-Math.PI / 2);
-  g.fillText(P.labels[1] + " →", 0, 0); g.restore();
+  g.fillText(`${P.labels[1]} →`, 0, 0); g.restore();
   if (P.fixed) { g.fillText("0", m - 10, 12 + ph + 10); g.fillText("1", m + pw - 4, 12 + ph + 12); }
   drawRisk(g, P, project, X, Y, [m, 12, pw, ph]);
-  const nearest = dash.lastStep && dash.lastStep.nearest;
-  for (const [name, p] of learned) {
-    const x = X(p[0]), y = Y(p[1]);
-    g.fillStyle = name === nearest ? "#127a5a" : "#9aa3b2";
-    g.fillRect(x - 7, y - 7, 14, 14);
-    g.fillStyle = "#fff";
-    g.font = "bold 11px system-ui, sans-serif";
-    g.textAlign = "center"; g.fillText(name, x, y + 4); g.textAlign = "start";
-    g.font = "11px system-ui, sans-serif";
-  }
-  g.strokeStyle = "#e07b00";
+  // The trail first, the learned markers over it: the markers are what the trail is read by.
+  g.strokeStyle = "rgba(224, 123, 0, 0.75)";
   g.lineWidth = 1.5;
   g.beginPath();
   trail.forEach((p, i) => (i ? g.lineTo(X(p[0]), Y(p[1])) : g.moveTo(X(p[0]), Y(p[1]))));
   g.stroke();
+  const nearest = dash.lastStep && dash.lastStep.nearest;
+  const SIZE = 16;
+  const markers = spreadMarkers(learned.map(([name, p]) => ({ name, x: X(p[0]), y: Y(p[1]) })),
+    SIZE + 2);
+  for (const mk of markers) {
+    if (Math.hypot(mk.lx - mk.x, mk.ly - mk.y) > 1) {
+      g.strokeStyle = "#6b7483"; g.lineWidth = 1;
+      g.beginPath(); g.moveTo(mk.x, mk.y); g.lineTo(mk.lx, mk.ly); g.stroke();
+      g.fillStyle = "#1d2430";
+      g.beginPath(); g.arc(mk.x, mk.y, 2.5, 0, 2 * Math.PI); g.fill();
+    }
+  }
+  g.font = "bold 11px system-ui, sans-serif";
+  g.textAlign = "center";
+  for (const mk of markers) {
+    const label = mk.name.length > 3 ? `${mk.name.slice(0, 2)}…` : mk.name;
+    g.fillStyle = mk.name === nearest ? "#127a5a" : "#8a93a3";
+    g.strokeStyle = "#fff"; g.lineWidth = 2;
+    g.beginPath(); g.rect(mk.lx - SIZE / 2, mk.ly - SIZE / 2, SIZE, SIZE); g.fill(); g.stroke();
+    g.fillStyle = "#fff";
+    g.fillText(label, mk.lx, mk.ly + 4);
+  }
+  g.textAlign = "start";
+  g.font = "11px system-ui, sans-serif";
+  dash.pbMarkers = markers.map((mk) => ({ name: mk.name, x: mk.lx, y: mk.ly }));
   if (trail.length) {
+    // The newest PB: a ring around its point, so that on a learned marker (recognition)
+    // the marker's label still shows through.
     const p = trail[trail.length - 1];
+    g.strokeStyle = "#e07b00"; g.lineWidth = 2.5;
+    g.beginPath(); g.arc(X(p[0]), Y(p[1]), 12, 0, 2 * Math.PI); g.stroke();
     g.fillStyle = "#e07b00";
-    g.beginPath(); g.arc(X(p[0]), Y(p[1]), 5, 0, 2 * Math.PI); g.fill();
+    g.beginPath(); g.arc(X(p[0]), Y(p[1]), 2, 0, 2 * Math.PI); g.fill();
   }
 }
 
@@ -665,11 +977,12 @@ function drawPlots() {
     series.push({ color: JOINT_COLORS[j % 4], dash: j < 4 ? [] : [5, 3],
       value: (s) => s.motor[j] * deg });
   }
-  // Range: the angles shown, rounded out to 30 degrees.
+  // Range: the angles shown, rounded out to 30 degrees; ticks at 15, 30, 45 or 90 degrees.
   const angles = dash.history.flatMap((s) => s.motor.map((v) => v * deg));
   const ymin = angles.length ? Math.floor(Math.min(...angles) / 30) * 30 - 30 : -90;
   const ymax = angles.length ? Math.ceil(Math.max(...angles) / 30) * 30 + 30 : 90;
-  timePlot($("plot-joints"), { title: "degrees", ymin, ymax, yunit: "°", series });
+  timePlot($("plot-joints"), { title: "degrees", ymin, ymax, yunit: "°",
+    ysteps: [15, 30, 45, 90, 180], yticks: 6, series });
   drawPB();
   drawTimings();
 }
@@ -688,7 +1001,12 @@ function jointLegend() {
 $("start").onclick = () => send({ type: "control", action: "start" });
 $("stop").onclick = () => send({ type: "control", action: "stop" });
 $("reset").onclick = () => send({ type: "control", action: "reset" });
-$("model").onchange = (e) => send({ type: "model", name: e.target.value });
+$("model").onchange = (e) => {
+  // Shown as loading at once; the server's state then confirms (or names the failure).
+  if (send({ type: "model", name: e.target.value })) {
+    $("status").textContent = `loading model ${e.target.value}…`;
+  } else if (dash.state) showModels(dash.state);
+};
 $("dt").onchange = (e) => {
   const dt = parseFloat(e.target.value);
   if (dt >= 0.02 && dt <= 5) send({ type: "dt", dt }); else showError("dt must be 0.02–5 s");
@@ -710,5 +1028,6 @@ $("camera-open").onclick = () => {
 };
 jointLegend();
 drawPointerPanel();
+setControlsEnabled(false);
 drawPlots();
 connect();

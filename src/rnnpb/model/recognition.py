@@ -1,0 +1,310 @@
+"""Know what you see: on-line recognition with a confidence, and a novelty detector that tells
+a new movement from noise (the paper's section 4.1 asks for both).
+
+Every step of the mirror system (:meth:`rnnpb.model.mirror.MirrorSystem.step`) also says
+
+* ``recognised``: which learned pattern the user performs, or None;
+* ``confidence``: how sure that answer is, in [0, 1] (for a pattern, its share of the
+  evidence; for None, the share of "no learned pattern fits");
+* ``novelty``: ``familiar`` (a learned pattern), ``novel`` (a structured, repeating movement no
+  learned pattern fits), ``unstructured`` (movement without repeating structure), ``still``
+  (the hands at rest), or ``""`` while there is not yet evidence (too few seen steps, every
+  hand lost).
+
+How it decides (docs/model.md, "Recognition and novelty", measures it):
+
+1. **Each learned pattern's own dynamics.** In the compiled step, after the regression, the
+   window is run again from its regressed onset with each learned pattern's PB in place of
+   the regressed profile (:func:`rnnpb.model.online.pattern_errors`): the RMS error ``d_k``
+   of its last ``recognition_steps`` sensory predictions says how well pattern ``k``'s
+   dynamics predict what was just seen. This is stronger evidence than the distance of the
+   regressed PB to the learned ones: two learned PBs can lie close together while their
+   dynamics differ clearly, and a PB between them predicts nothing well.
+2. **Confidence.** Each pattern's likelihood is ``exp(-d_k² / 2σ² - e_k² / 2τ²)``
+   (σ = ``match_scale``), where ``e_k`` is the distance of the PB, averaged over the last
+   ``pb_steps`` steps, to pattern ``k``'s learned PB (τ = ``pb_scale``): over a few steps the
+   regressed PB is steadier than in one. A pattern nobody learned has the likelihood of a fit
+   at ``match_level`` and ``pb_level``. Each share of the
+   sum is a pattern's confidence; the best pattern is recognised when its share is at least
+   ``confidence_level``.
+3. **Structure.** Where no pattern is recognised, the movement is ``novel`` if what is seen
+   repeats itself: the smallest mean squared difference between the last ``structure_steps``
+   observations and the same steps one lag back, for lags in ``lags``, relative to twice the
+   variance of what is seen, is below ``structure_level``. A cycle repeats at its period; a
+   random walk or jumps between random targets do not repeat at any lag. Else it is
+   ``unstructured``.
+4. **Stillness.** The hands are ``still`` when the spread of the last ``still_steps``
+   observations is below ``still_level``. Through a short pause (``hold_steps``) the last
+   recognised pattern stays recognised: the robot keeps generating it, as in the paper's
+   section 3.1.
+5. **Hysteresis.** A new answer replaces the current one only after it has been the step's
+   evidence for ``switch_steps`` steps running — ``release_steps`` when a recognised pattern
+   would give way to none: the evidence dips for a few steps as a pause begins or ends.
+
+:func:`recognise` is pure (state in, state and answer out) and NumPy only: it costs tens of
+microseconds a step. The compiled step and its NumPy twin compute the same evidence and call
+the same function, so both give the same answer for the same observations.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from rnnpb.errors import ConfigError
+
+NOVELTY_STATES: tuple[str, ...] = ("familiar", "novel", "unstructured", "still")
+"""The words of the novelty state (besides ``""``, no evidence yet), as recordings carry them."""
+
+
+@dataclass(frozen=True)
+class RecognitionConfig:
+    """The detector's settings (see the module doc for how each is used; chosen on draws of
+    the user the study then does not measure on: docs/model.md)."""
+
+    recognition_steps: int = 12  # predictions each pattern's evidence is measured on
+    match_scale: float = 0.02  # σ of the likelihoods, RMS error in normalized units
+    match_level: float = 0.04  # RMS error at which "none learned" is as likely
+    pb_steps: int = 6  # steps the PB is averaged over
+    pb_scale: float = 0.06  # σ of the PB's likelihoods (distance to a learned PB)
+    pb_level: float = 0.12  # PB distance at which "none learned" is as likely
+    confidence_level: float = 0.5
+    structure_steps: int = 12
+    lags: tuple[int, int] = (8, 18)  # smallest and largest lag tried, steps
+    structure_level: float = 0.3
+    still_steps: int = 4
+    still_level: float = 0.012  # RMS spread of the observations, normalized units
+    hold_steps: int = 10
+    switch_steps: int = 3
+    release_steps: int = 8
+
+    def __post_init__(self) -> None:
+        if self.recognition_steps < 1:
+            raise ConfigError(f"recognition_steps must be >= 1, got {self.recognition_steps}")
+        if self.match_scale <= 0 or self.match_level <= 0:
+            raise ConfigError("match_scale and match_level must be > 0")
+        if self.pb_steps < 1 or self.pb_scale <= 0 or self.pb_level <= 0:
+            raise ConfigError("pb_steps must be >= 1, pb_scale and pb_level > 0")
+        if not 0 < self.confidence_level <= 1:
+            raise ConfigError(f"confidence_level must be in (0, 1], got "
+                              f"{self.confidence_level}")
+        low, high = self.lags
+        if not 1 <= low <= high:
+            raise ConfigError(f"lags must be 1 <= smallest <= largest, got {self.lags}")
+        if self.structure_steps < 2 or self.structure_level <= 0:
+            raise ConfigError("structure_steps must be >= 2 and structure_level > 0")
+        if self.still_steps < 2 or self.still_level < 0:
+            raise ConfigError("still_steps must be >= 2 and still_level >= 0")
+        if self.hold_steps < 0 or self.switch_steps < 1 or self.release_steps < 1:
+            raise ConfigError("hold_steps must be >= 0, switch_steps and release_steps >= 1")
+
+    @property
+    def history(self) -> int:
+        """Observed steps the detector keeps."""
+        return max(self.lags[1] + self.structure_steps, self.still_steps)
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> RecognitionConfig:
+        data = dict(data)
+        data["lags"] = tuple(data["lags"])
+        return cls(**data)
+
+
+class Recognition(NamedTuple):
+    """What one step recognises.
+
+    Attributes
+    ----------
+    recognised : str or None
+    confidence : float in [0, 1]
+    novelty : str
+        One of :data:`NOVELTY_STATES` or ``""``.
+    confidences : dict of str to float
+        Each learned pattern's share of the evidence (all 0 while there is none).
+    distances : dict of str to float
+        Each learned pattern's best-fit RMS distance (NaN while there is none).
+    structure : float
+        The movement's self-difference at its best lag (NaN when not measured): low repeats.
+    """
+
+    recognised: str | None
+    confidence: float
+    novelty: str
+    confidences: dict[str, float]
+    distances: dict[str, float]
+    structure: float
+
+
+class RecognitionState(NamedTuple):
+    """What the detector carries from step to step (host arrays; never changed in place)."""
+
+    observed: np.ndarray  # (H, S) the last H observations, NaN where not seen; oldest first
+    pb: np.ndarray  # (pb_steps, P) the last PBs, NaN before the first; oldest first
+    recognised: str | None
+    confidence: float
+    still_run: int  # steps the hands have been still
+    candidate: str | None  # the answer the evidence gives, waiting for switch_steps
+    candidate_run: int
+    novelty: str
+
+
+def initial_recognition_state(sensory_size: int, pb_size: int, config: RecognitionConfig
+                              ) -> RecognitionState:
+    """Nothing seen yet."""
+    return RecognitionState(np.full((config.history, sensory_size), np.nan),
+                            np.full((config.pb_steps, pb_size), np.nan), None, 0.0, 0,
+                            None, 0, "")
+
+
+def _structure(history: np.ndarray, config: RecognitionConfig) -> tuple[float, bool]:
+    """The smallest self-difference of the recent observations over the lags, relative to
+    twice their variance: near 0 for a repeating movement, about 1 for one that does not
+    repeat (NaN while no lag can be measured yet); and whether every lag was measured."""
+    recent = config.structure_steps
+    low, high = config.lags
+    now = history[-recent:]
+    best, variance, every = np.inf, np.nan, True
+    for lag in range(low, high + 1):
+        before = history[-(recent + lag):-lag]
+        if np.isnan(before).any() or np.isnan(now).any():
+            every = False
+            break
+        variance = float(np.var(history[-(recent + lag):], axis=0).mean())
+        best = min(best, float(np.mean((now - before) ** 2)))
+    if not np.isfinite(best) or not variance > 0:
+        return float("nan"), False
+    return best / (2.0 * variance), every
+
+
+def recognise(state: RecognitionState, u: np.ndarray, seen: np.ndarray,
+              pattern_errors: np.ndarray, pb: np.ndarray, learned_pb: np.ndarray,
+              names: tuple[str, ...], config: RecognitionConfig
+              ) -> tuple[RecognitionState, Recognition]:
+    """One step of recognition and novelty detection.
+
+    Parameters
+    ----------
+    state : RecognitionState
+    u : array, shape (S,)
+        This step's observed hands, normalized (ignored where ``seen`` is False).
+    seen : array of bool, shape (S,)
+    pattern_errors : array, shape (K,)
+        The step's :func:`rnnpb.model.online.pattern_errors` (mean squared; NaN when the step
+        was held).
+    pb : array, shape (P,)
+        The step's regressed PB.
+    learned_pb : array, shape (K, P)
+        The learned patterns' PBs.
+    names : tuple of str, length K
+        The learned patterns, in the order of ``pattern_errors``.
+
+    Returns
+    -------
+    state : RecognitionState
+    recognition : Recognition
+    """
+    observation = np.where(seen, u, np.nan)
+    observed = np.concatenate([state.observed[1:], observation[None]])
+    pbs = np.concatenate([state.pb[1:], np.asarray(pb, dtype=np.float64)[None]])
+    state = state._replace(pb=pbs)
+    none = {name: 0.0 for name in names}
+    no_distance = {name: float("nan") for name in names}
+    if not seen.any():
+        # Nothing seen this step (every hand lost): no evidence, no answer.
+        empty = RecognitionState(observed, pbs, None, 0.0, 0, None, 0, "")
+        return empty, Recognition(None, 0.0, "", none, no_distance, float("nan"))
+    # Fill unseen values from the last seen ones, so a hand lost for a step does not end the
+    # evidence; the steps before the first seen one stay NaN.
+    filled = _forward_fill(observed)
+    errors = np.asarray(pattern_errors, dtype=np.float64)
+    if np.isnan(filled[-config.still_steps:]).any() or not np.all(np.isfinite(errors)):
+        waiting = state._replace(observed=observed, novelty="")
+        return waiting, Recognition(None, 0.0, "", none, no_distance, float("nan"))
+
+    recent = filled[-config.still_steps:]
+    spread = float(np.sqrt(np.mean(np.var(recent, axis=0))))
+    if spread < config.still_level:
+        still_run = state.still_run + 1
+        keep = state.recognised if still_run <= config.hold_steps else None
+        confidence = state.confidence if keep is not None else 1.0
+        new = RecognitionState(observed, pbs, keep, confidence, still_run, keep, 0, "still")
+        return new, Recognition(keep, confidence, "still", none, no_distance, float("nan"))
+
+    d = np.sqrt(np.maximum(errors, 0.0))
+    recent_pb = pbs[~np.isnan(pbs).any(axis=1)]
+    e = np.linalg.norm(np.asarray(learned_pb) - recent_pb.mean(axis=0)[None], axis=1)
+    # Log-likelihoods, shifted by their largest so that the exponentials cannot underflow.
+    log_l = -0.5 * ((d / config.match_scale) ** 2 + (e / config.pb_scale) ** 2)
+    log_unknown = -0.5 * ((config.match_level / config.match_scale) ** 2
+                          + (config.pb_level / config.pb_scale) ** 2)
+    top = max(log_l.max(), log_unknown)
+    likelihood, unknown = np.exp(log_l - top), float(np.exp(log_unknown - top))
+    total = likelihood.sum() + unknown
+    shares = likelihood / total
+    best = int(np.argmax(shares))
+    structure, every_lag = _structure(filled, config)
+    if shares[best] >= config.confidence_level:
+        answer, confidence, novelty = names[best], float(shares[best]), "familiar"
+    else:
+        answer, confidence = None, float(unknown / total)
+        novelty = "novel" if structure < config.structure_level else "unstructured"
+        if np.isnan(structure) or (novelty == "unstructured" and not every_lag):
+            novelty = ""  # a longer lag may yet show the movement repeating
+    # Hysteresis: a new answer (another pattern, or none) waits for switch_steps steps running;
+    # until then the last answer stands.
+    candidate = answer
+    candidate_run = state.candidate_run + 1 if candidate == state.candidate else 1
+    # Settled: there was an answer (a pattern held through a pause counts).
+    settled = (state.novelty in ("familiar", "novel", "unstructured")
+               or state.recognised is not None)
+    needed = (config.release_steps if state.recognised is not None and answer is None
+              else config.switch_steps)
+    if settled and answer != state.recognised and candidate_run < needed:
+        answer = state.recognised
+        if answer is not None:
+            confidence, novelty = float(shares[names.index(answer)]), "familiar"
+        else:
+            confidence, novelty = float(unknown / total), state.novelty
+    new = RecognitionState(observed, pbs, answer, confidence, 0, candidate, candidate_run,
+                           novelty)
+    return new, Recognition(answer, confidence, novelty,
+                            {name: float(c) for name, c in zip(names, shares, strict=True)},
+                            {name: float(x) for name, x in zip(names, d, strict=True)},
+                            float(structure))
+
+
+def _forward_fill(observed: np.ndarray) -> np.ndarray:
+    """NaN entries take the column's last finite value before them (NaN if none)."""
+    filled = observed.copy()
+    for t in range(1, len(filled)):
+        missing = np.isnan(filled[t])
+        filled[t, missing] = filled[t - 1, missing]
+    return filled
+
+
+def recognition_timeline(answers: list[tuple[str | None, str]]) -> list[dict[str, Any]]:
+    """Steps ``(recognised, novelty)`` as runs of the same answer:
+    ``[{"first": 0, "last": 11, "recognised": "1" or None, "novelty": "familiar"}, …]``."""
+    runs: list[dict[str, Any]] = []
+    for step, (recognised, novelty) in enumerate(answers):
+        if runs and runs[-1]["recognised"] == recognised and runs[-1]["novelty"] == novelty:
+            runs[-1]["last"] = step
+        else:
+            runs.append({"first": step, "last": step, "recognised": recognised,
+                         "novelty": novelty})
+    return runs
+
+
+def describe_answer(recognised: str | None, confidence: float, novelty: str) -> str:
+    """One step's answer as a person reads it: ``pattern 2 (93 %)``, ``new movement``,
+    ``not sure`` …"""
+    if recognised is not None and novelty in ("familiar", "still"):
+        return f"pattern {recognised} ({100 * confidence:.0f} %)" + (
+            ", hands still" if novelty == "still" else "")
+    return {"novel": "new movement", "unstructured": "no pattern (unstructured)",
+            "still": "hands still", "": "not sure yet"}.get(novelty, "not sure")

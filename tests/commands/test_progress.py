@@ -1,0 +1,34 @@
+"""Long commands show progress on a terminal, and nothing in a log or with --no-progress."""
+
+import io
+import sys
+
+from rnnpb.commands import demo
+from rnnpb.commands._progress import progress_bar
+from rnnpb.experiments import ExperimentConfig
+
+
+class _Terminal(io.StringIO):
+    def isatty(self):
+        return True
+
+
+def _drawn(monkeypatch, stream, **options):
+    monkeypatch.setattr(sys, "stderr", stream)
+    with progress_bar(total=5, unit="step", desc="interacting", **options) as bar:
+        for _ in range(5):
+            bar.update(1)
+    return stream.getvalue()
+
+
+def test_the_bar_is_drawn_on_a_terminal_only(monkeypatch):
+    assert "interacting" in _drawn(monkeypatch, _Terminal())
+    assert _drawn(monkeypatch, io.StringIO()) == ""
+    assert _drawn(monkeypatch, _Terminal(), disable=True) == ""
+
+
+def test_the_demo_says_how_long_it_takes():
+    assert demo._estimate(ExperimentConfig()).startswith("about 8 minutes on 2 cores with 2")
+    assert demo._estimate(ExperimentConfig(workers=1)).startswith("about 16 minutes")
+    quick = ExperimentConfig.quick_run()
+    assert demo._estimate(quick).startswith("about 2 minutes")

@@ -1,0 +1,40 @@
+"""`rnnpb study novelty`: its measures from stream runs, and its registration."""
+
+import numpy as np
+
+from rnnpb.experiments.studies import load_study, study_names
+from rnnpb.experiments.studies.novelty import SETTLE_STEPS, StreamRun, judge, measure
+
+
+def _run(kind, movement, novelty, recognised, start=0, score=0.05):
+    n = len(novelty)
+    return StreamRun("1", kind, movement, 0, start, tuple(novelty), tuple(recognised),
+                     tuple(["1"] * n), np.full(n, score), np.zeros((n, 4)), np.zeros((n, 3)),
+                     np.zeros((n, 4)))
+
+
+def test_the_measures_count_what_each_step_said():
+    n = SETTLE_STEPS + 20
+    learned = _run("learned", "1", ["familiar"] * n, ["1"] * (n - 5) + ["2"] * 5, score=0.02)
+    # Called novel 30 steps after it starts, then on every step.
+    novel = _run("novel", "figure-eight", ["familiar"] * 66 + ["novel"] * 30,
+                 ["1"] * 66 + [None] * 30, start=36, score=0.08)
+    late = _run("novel", "one-arm", ["familiar"] * 96, ["1"] * 96, start=36, score=0.02)
+    walk = _run("unstructured", "random-walk", ["unstructured"] * n, [None] * n)
+    still = _run("still", "pause", ["still"] * n, [None] * n)
+    m = measure([learned, novel, late, walk, still])
+    assert m["learned_recognised"] == 15 / 20
+    assert m["learned_nearest_pb"] == 1.0 and m["learned_called_novel"] == 0.0
+    assert m["novel_delay_steps"] == [30, None]
+    assert m["novel_within_3_cycles"] == 0.5 and m["novel_after_detection"] == 0.5
+    assert m["unstructured_called_novel"] == 0.0 and m["still_called_still"] == 1.0
+    assert m["confusion"]["still"]["still"] == 20
+    # Half the judged novel steps score above every learned step, half tie with them.
+    assert m["roc_auc"] == 0.75
+    targets = judge(m)
+    assert not targets["learned_recognised"].met and targets["still_called_still"].met
+
+
+def test_the_study_is_registered():
+    assert "novelty" in study_names()
+    assert load_study("novelty").NAME == "novelty"
