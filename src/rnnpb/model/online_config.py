@@ -59,14 +59,13 @@ class OnlineConfig:
     # "barrier" adds barrier_weight * softplus(risk logit - logit(risk_level)) per window step
     # to the error of eq. 1 (rnnpb.model.meta); "projection" moves each regressed PB down the
     # risk gradient (at most projection_steps steps of projection_rate in rho) until its risk
-    # is below risk_level; "off" ignores the map. The default, "projection", costs about
-    # 0.1 ms a step and changed no lock-on, switch or recognition of the learned patterns
-    # (docs/safety.md); it acts only where a map is given. The barrier acts on the newest
-    # barrier_span steps of the window only (0: all of them): the command is generated from
-    # the newest PBs, and the cost grows with the steps it covers (docs/safety.md measures it).
-    safety_guard: Literal["off", "barrier", "projection"] = "projection"
+    # is below risk_level; "off" ignores the map. The default, the barrier on the newest
+    # step (barrier_span 1; 0: the whole window), keeps the PB out of the learned region on
+    # 10^4-step adversarial runs where the projection let it in, for about 0.2 ms a step
+    # (docs/safety.md measures the choices); it acts only where a map is given.
+    safety_guard: Literal["off", "barrier", "projection"] = "barrier"
     barrier_weight: float = 0.05
-    barrier_span: int = 3
+    barrier_span: int = 1
     risk_level: float = 0.2
     projection_steps: int = 10
     projection_rate: float = 0.3
