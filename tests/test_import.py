@@ -105,3 +105,15 @@ def test_the_command_line_makes_the_xla_choice_before_jax_starts():
 def test_the_test_suite_made_the_choice_itself():
     # tests/conftest.py, before any computation: the suite runs as the command line does.
     assert _xla.active() and rnnpb.configure_xla is _xla.configure
+
+
+def test_the_command_line_lists_its_commands_without_loading_jax():
+    # `rnnpb --help` and every command's options are built before any command runs: the heavy
+    # libraries are imported by the command that needs them, when it runs.
+    result = _python("""
+        import sys
+        from rnnpb.cli import build_parser
+        build_parser()
+        print(sorted(m for m in ("jax", "mujoco", "cv2", "ray", "pyarrow") if m in sys.modules))
+    """)
+    assert result.stdout.strip().splitlines()[-1] == "[]"

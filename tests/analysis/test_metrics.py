@@ -94,3 +94,19 @@ def test_the_targets_are_the_papers():
     # 9 of 10 seeds; with fewer runs, the same share rounded up.
     assert metrics.larger_set_share_met(9, 10) and not metrics.larger_set_share_met(8, 10)
     assert metrics.larger_set_share_met(3, 3) and not metrics.larger_set_share_met(2, 3)
+
+
+def test_a_cycle_of_eleven_and_a_half_steps_is_periodic():
+    # Read at whole periods only, this cycle returns every 23 steps, beyond the 20 allowed.
+    x = _cycle(400, period=11.5)
+    found = metrics.periodicity(x, max_period=20)
+    assert found.period is not None and abs(found.period - 11.5) < 0.05
+    assert found.return_error < 0.01
+    assert metrics.return_error(x, 11) > 0.1 and metrics.return_error(x, 12) > 0.1
+
+
+def test_a_fractional_cycle_is_classified_like_the_learned_one():
+    learned = {"a": metrics.last_cycle(_cycle(200, period=11.5), 11.5)}
+    response = metrics.classify_response(_cycle(400, period=11.5, shift=4), learned)
+    assert response.case == 1 and abs(response.period - 11.5) < 0.05
+    assert response.distance < 0.01

@@ -41,8 +41,8 @@ def test_report_results_and_files(demo):
     # The kept models and data are what results.json says they are.
     for key, path in results["files"]["models"].items():
         model = TrainedModel.load(out / path)
-        if key.startswith("set"):
-            expected = results["files"]["learning_sets"][key]["patterns"]
+        if key.startswith("set"):  # setK, or setK_seedS for the other training seeds
+            expected = results["files"]["learning_sets"][key.split("_")[0]]["patterns"]
             assert list(model.patterns) == expected
     assert len(list((out / "data" / "set1").glob("*.csv"))) == 6
     # The lock-on, pause, switching and larger-set measures are repeated with another draw of
@@ -90,3 +90,25 @@ def test_switching_within_15_steps_for_every_pair(demo):
     steps = _values(results["switch_steps"])
     assert len(steps) == 24
     assert all(v is not None and v <= 15 for v in steps), results["switch_steps"]
+
+
+def test_every_measure_over_networks_and_draws_with_intervals(demo):
+    out, results, _ = demo
+    found = results["distributions"]["default"]
+    assert found["training_seeds"] == [0, 1] and found["scenario_seeds"] == [100, 200]
+    assert "set1_seed1" in results["files"]["models"]
+    measures = found["measures"]
+    # 4 learning sets x 3 patterns (or 6 ordered pairs) x 2 networks x 2 draws
+    assert measures["steps_to_lock"]["n"] == 48 and measures["switch_steps"]["n"] == 96
+    assert measures["steps_to_follow"]["n"] == 3 * 2 * 4  # larger set: seeds x draws x patterns
+    for measure in measures.values():
+        median = measure["median"]
+        if median["n"]:
+            assert median["low"] <= median["value"] <= median["high"]
+    lock = measures["steps_to_lock"]["within"]
+    assert 0 <= lock["low"] <= lock["value"] <= lock["high"] <= 1
+    cases = found["novel_cases"]
+    assert sum(cases["repeated cycle"].values()) == 4 * 2  # one size, per set and network
+    assert sum(cases["by hand"].values()) == 4 * 2 * 2  # one demonstration per draw
+    report = (out / "report.md").read_text()
+    assert "## Over every network and draw of the user" in report and "95 %" in report

@@ -83,8 +83,8 @@ def test_the_missing_case_explanation_counts_the_closed_loop_cycles():
     periodic = {"1": {"1": 12, "2": 12, "3": 23}}
     text = " ".join(missing_cases_explanation(runs, periodic))
     assert "Why case 3 did not occur" in text
-    assert "are limit cycles too (periods 12, 23)" in text
+    assert "are limit cycles too (periods 12.0, 23.0)" in text
     assert "counts as unsteady above 0.1" in text
     text = " ".join(missing_cases_explanation(runs, {"1": {"1": 12, "2": None, "3": 37}}))
-    assert "2 of 3 are limit cycles (periods 12, 37)" in text
+    assert "2 of 3 are limit cycles (periods 12.0, 37.0)" in text
     assert missing_cases_explanation(runs + [_novel(3, None, 0.4)], periodic) == []

@@ -39,6 +39,7 @@ class NovelRun(Protocol):
     learning_set: str
     novel_pattern: str
     amplitude: float
+    user_draw: int | None  # None: one exact cycle repeated; else demonstrated by hand
     case: int
     motor: np.ndarray  # (T, 8) rad
     pb: np.ndarray  # (T, P)
@@ -324,8 +325,10 @@ def plot_novel_responses(runs: SequenceABC[NovelRun], path: str | os.PathLike[st
                               label=name.upper())
         for k in range(run.pb.shape[1]):
             axes[1, col].plot(run.pb[show, k], color=PB_COLORS[k], label=f"PB{k}")
+        shown = (f"x{run.amplitude:g}" if run.user_draw is None
+                 else f"by hand, draw {run.user_draw}")
         axes[0, col].set_title(f"case {run.case}: set {run.learning_set}, novel pattern "
-                               f"{run.novel_pattern} (x{run.amplitude:g})", fontsize=9)
+                               f"{run.novel_pattern} ({shown})", fontsize=9)
         axes[1, col].set_xlabel("step")
         axes[1, col].set_ylim(-0.05, 1.05)
     axes[0, 0].set_ylabel("robot joints (normalized)")
@@ -653,4 +656,162 @@ def plot_roc(curves: dict[str, SequenceABC[tuple[float, float]]],
     ax.set_xlabel("learned steps called novel (false positive rate)")
     ax.set_ylabel("novel steps called novel")
     ax.legend(fontsize=8)
+    save(fig, path)
+
+
+# --- mutual interaction (docs/dyad.md) -------------------------------------------------------
+def plot_dyad(run: dict[str, np.ndarray], coherent: np.ndarray, path: str | os.PathLike[str],
+              title: str = "", names: tuple[str, str] = ("A", "B"),
+              shifts: SequenceABC[tuple[int, str]] = ()) -> None:
+    """A two-agent run like the paper's figures: each agent's hands (``x_shown``) and PB
+    (``x_pb``), coherent steps shaded, pattern shifts marked with their leader."""
+    fig = Figure(figsize=(9, 7))
+    axes = fig.subplots(4, 1, sharex=True)
+    spans, start = [], None
+    for t, c in enumerate(list(coherent) + [False]):
+        if c and start is None:
+            start = t
+        elif not c and start is not None:
+            spans.append((start, t))
+            start = None
+    for i, (side, name) in enumerate(zip(("a", "b"), names, strict=False)):
+        ax_hands, ax_pb = axes[2 * i], axes[2 * i + 1]
+        for j, label in enumerate(SENSORY_NAMES):
+            ax_hands.plot(run[f"{side}_shown"][:, j], color=SENSORY_COLORS[j], lw=0.9,
+                          label=label)
+        ax_hands.set_ylabel(f"{name}: hands")
+        pb = run[f"{side}_pb"]
+        if np.isfinite(pb).any():
+            for j in range(pb.shape[1]):
+                ax_pb.plot(pb[:, j], color=PB_COLORS[j % len(PB_COLORS)], lw=0.9,
+                           label=f"pb{j}")
+            ax_pb.set_ylim(-0.05, 1.05)
+        ax_pb.set_ylabel(f"{name}: PB")
+        for ax in (ax_hands, ax_pb):
+            _shade(ax, spans, color="#dff0d8", label="coherent" if ax is axes[0] else None)
+            for step, leader in shifts:
+                ax.axvline(step, color="k", lw=0.7, ls="--")
+                if ax is axes[0]:
+                    ax.annotate(f"led by {leader or '?'}", (step, 1.0), fontsize=7,
+                                xycoords=("data", "axes fraction"), va="bottom")
+    axes[0].legend(fontsize=7, ncol=5, loc="upper right")
+    axes[1].legend(fontsize=7, ncol=4, loc="upper right")
+    axes[-1].set_xlabel("step")
+    if title:
+        fig.suptitle(title)
+    save(fig, path)
+
+
+def plot_phase_diagram(rates: SequenceABC[float], panels: dict[str, dict[str, np.ndarray]],
+                       path: str | os.PathLike[str]) -> None:
+    """Heat maps over agent A's (rows) and B's (columns) adaptation: one row of panels per
+    setting (``panels[label][measure]``, each (len(rates), len(rates)))."""
+    measures = ("coherent share", "shifts per 200 steps", "leader index")
+    limits = {"coherent share": (0, 1), "shifts per 200 steps": (0, None),
+              "leader index": (-1, 1)}
+    fig = Figure(figsize=(11, 3.4 * len(panels)), layout="constrained")
+    axes = np.atleast_2d(fig.subplots(len(panels), len(measures)))
+    for row, (label, values) in zip(axes, panels.items(), strict=False):
+        for ax, measure in zip(row, measures, strict=False):
+            grid = np.asarray(values[measure], dtype=np.float64)
+            low, high = limits[measure]
+            image = ax.imshow(grid, origin="lower", vmin=low,
+                              vmax=high if high is not None else max(1.0, np.nanmax(grid)),
+                              cmap="coolwarm" if measure == "leader index" else "viridis")
+            for (i, j), v in np.ndenumerate(grid):
+                ax.text(j, i, "no shift" if not np.isfinite(v) else f"{v:.2f}", ha="center",
+                        va="center", fontsize=7, color="w" if np.isfinite(v) else "k")
+            ax.set_xticks(range(len(rates)), [f"{r:g}" for r in rates])
+            ax.set_yticks(range(len(rates)), [f"{r:g}" for r in rates])
+            ax.set_xlabel("B's adaptation")
+            ax.set_ylabel("A's adaptation")
+            ax.set_title(f"{measure}\n({label})", fontsize=8)
+            fig.colorbar(image, ax=ax, shrink=0.8)
+    save(fig, path)
+
+
+def plot_patterns_found(curves: dict[str, np.ndarray], dt: float, total: int,
+                        path: str | os.PathLike[str]) -> None:
+    """Patterns found over simulated time, one line per run (``curves[label]`` (n,))."""
+    fig = Figure(figsize=(7, 3.5))
+    ax = fig.subplots()
+    cmap = colormaps["tab10"]
+    for i, (label, found) in enumerate(curves.items()):
+        minutes = np.arange(len(found)) * dt / 60.0
+        ax.step(minutes, found, where="post", color=cmap(i % 10), lw=1, label=label)
+    ax.axhline(total, color="k", ls="--", lw=0.8, label="all learned patterns")
+    ax.set_xlabel("simulated minutes")
+    ax.set_ylabel("patterns found")
+    ax.set_ylim(-0.1, total + 0.3)
+    if len(curves) <= 12:
+        ax.legend(fontsize=6, ncol=2)
+    save(fig, path)
+
+
+def plot_forgetting(errors: dict[str, dict[str, SequenceABC[float]]],
+                    path: str | os.PathLike[str], limit: float) -> None:
+    """Forgetting per consolidation method: how far each old pattern's closed-loop cycle
+    moved from the starting model's (RMS, normalized joints), one panel per method, one
+    column of points per learning set, the target ``limit`` dashed."""
+    fig = Figure(figsize=(2.6 * max(len(errors), 1), 3.2))
+    axes = fig.subplots(1, max(len(errors), 1), squeeze=False, sharey=True)
+    values = [v for sets in errors.values() for vs in sets.values() for v in vs]
+    top = max([limit * 2, *values])
+    bottom = min([limit / 50, *(v for v in values if v > 0)])
+    for ax, (method, sets) in zip(axes[0], errors.items(), strict=False):
+        for k, values in enumerate(sets.values()):
+            ax.plot([k] * len(values), values, "o", color="tab:blue", alpha=0.7)
+        ax.set_xticks(range(len(sets)), list(sets))
+        ax.axhline(limit, color="k", ls="--", lw=0.8)
+        ax.set_yscale("log")
+        ax.set_ylim(bottom / 1.5, top * 1.5)
+        ax.set_title(method)
+        ax.set_xlabel("learning set")
+    axes[0][0].set_ylabel("old pattern's cycle vs before\n(RMS, normalized joints)")
+    fig.suptitle(f"Forgetting by method (target <= {limit:g})", y=1.02)
+    save(fig, path)
+
+
+class IntervalLike(Protocol):
+    """A statistic and its confidence interval (:class:`rnnpb.analysis.statistics.Interval`)."""
+
+    value: float
+    low: float
+    high: float
+    n: int
+
+
+def plot_distributions(panels: dict[str, dict[str, tuple[SequenceABC[float], IntervalLike]]],
+                       path: str | os.PathLike[str],
+                       limits: dict[str, float] | None = None) -> None:
+    """One panel per measure; in each, one column per setting: every run's value (dots,
+    jittered) and the median with its 95 % interval (bar). ``panels[measure][setting] =
+    (values, interval)``; ``limits`` draws the paper's limit of a measure as a dashed line."""
+    limits = limits or {}
+    n = max(len(panels), 1)
+    cols = min(n, 3)
+    rows = int(np.ceil(n / cols))
+    fig = Figure(figsize=(4.2 * cols, 3.2 * rows))
+    axes = fig.subplots(rows, cols, squeeze=False).ravel()
+    rng = np.random.default_rng(0)
+    for ax, (measure, settings) in zip(axes, panels.items(), strict=False):
+        for i, (values, interval) in enumerate(settings.values()):
+            values = np.asarray([v for v in values if np.isfinite(v)], dtype=np.float64)
+            ax.scatter(i + rng.uniform(-0.15, 0.15, len(values)), values, s=8, alpha=0.4,
+                       color="#1f77b4")
+            if interval.n:
+                ax.errorbar([i + 0.3], [interval.value],
+                            yerr=[[interval.value - interval.low],
+                                  [interval.high - interval.value]],
+                            fmt="o", color="black", capsize=4)
+        if measure in limits:
+            ax.axhline(limits[measure], color="#d62728", ls="--", lw=1, label="paper's limit")
+            ax.legend(fontsize=7, loc="upper right")
+        ax.set_xticks(range(len(settings)))
+        ax.set_xticklabels(list(settings), rotation=20, fontsize=7)
+        ax.set_title(measure, fontsize=9)
+        ax.grid(alpha=0.3)
+    for ax in axes[len(panels):]:
+        ax.set_visible(False)
+    fig.suptitle("every run (dots) and the median with its 95 % bootstrap interval")
     save(fig, path)

@@ -14,12 +14,15 @@ Definitions (written down once, used everywhere):
 * **PB settled** at step t: the PB changes by less than ``bound`` (max over units, per step)
   for ``hold`` consecutive steps from t;
 * **periodicity** of a trajectory: the smallest period P ≤ ``max_period`` whose return error
-  ``RMS(x[t+P] − x[t]) / RMS(x − mean)`` is below ``tolerance``;
+  ``RMS(x[t+P] − x[t]) / RMS(x − mean)`` is below ``tolerance``. P need not be a whole number
+  of steps (a cycle of 11.5 steps returns only every 23): at each local minimum of the return
+  error over whole periods, the period is refined by parabolic interpolation and
+  ``x[t+P]`` read off a cubic spline through the trajectory;
 * **response case** to a novel pattern (paper section 3.3): 3 (unsteady) if the motor
   trajectory is not periodic; else 1 (a limit cycle like a learned one) if its cycle lies
   within ``similar`` of a learned pattern's closed-loop cycle in the cycle distance, else 2
   (a new limit cycle);
-* **cycle distance**: both cycles resampled to 60 points of one period, the RMS difference
+* **cycle distance**: both cycles sampled at 60 points of one period, the RMS difference
   minimized over circular shifts.
 """
 
@@ -132,39 +135,91 @@ def pb_settle_step(pbs: np.ndarray, bound: float = 0.02, hold: int = 5,
     return None
 
 
-def return_error(x: np.ndarray, period: int) -> float:
-    """``RMS(x[t+P] − x[t]) / RMS(x − mean)``: 0 for an exactly periodic trajectory."""
+def _shifted(x: np.ndarray, period: float) -> np.ndarray:
+    """``x[t + period]`` for every t it exists, shape (T - ceil(period), D); between steps read
+    off a cubic spline through ``x`` (shape (T, D))."""
+    whole = int(math.floor(period))
+    if period == whole:
+        return x[whole:]
+    from scipy.interpolate import CubicSpline
+
+    n = len(x) - int(math.ceil(period))
+    return CubicSpline(np.arange(len(x)), x, axis=0)(np.arange(n) + period)
+
+
+def return_error(x: np.ndarray, period: float) -> float:
+    """``RMS(x[t+P] − x[t]) / RMS(x − mean)``: 0 for an exactly periodic trajectory; ``P`` may
+    be fractional (see :func:`periodicity`)."""
     x = np.asarray(x, dtype=np.float64)
+    if x.ndim == 1:
+        x = x[:, None]
     spread = np.sqrt(np.mean((x - x.mean(axis=0)) ** 2))
     if spread < 1e-9:
         return 0.0
-    return float(np.sqrt(np.mean((x[period:] - x[:-period]) ** 2)) / spread)
+    ahead = _shifted(x, period)
+    return float(np.sqrt(np.mean((ahead - x[:len(ahead)]) ** 2)) / spread)
 
 
 @dataclass(frozen=True)
 class Periodicity:
-    period: int | None  # None: not periodic within the tolerance
+    period: float | None  # steps, possibly fractional; None: not periodic within the tolerance
     return_error: float  # at the best period
-    best_period: int
+    best_period: float
+
+
+def _refined(errors: dict[int, float], p: int) -> float:
+    """The whole period ``p`` at a local minimum of ``errors``, moved to the vertex of the
+    parabola through its neighbours."""
+    if p - 1 not in errors or p + 1 not in errors:
+        return float(p)
+    left, mid, right = errors[p - 1], errors[p], errors[p + 1]
+    curvature = left - 2 * mid + right
+    if curvature <= 0:
+        return float(p)
+    return p + float(np.clip(0.5 * (left - right) / curvature, -0.5, 0.5))
 
 
 def periodicity(x: np.ndarray, max_period: int = MAX_PERIOD,
                 tolerance: float = PERIODIC_TOLERANCE) -> Periodicity:
-    """The smallest period whose return error is below ``tolerance`` (see module doc)."""
+    """The smallest period, whole or fractional, whose return error is below ``tolerance``
+    (see module doc); shape (T, D) or (T,)."""
     x = np.asarray(x, dtype=np.float64)
     if x.ndim == 1:
         x = x[:, None]
     max_period = min(max_period, len(x) // 3)
     errors = {p: return_error(x, p) for p in range(1, max_period + 1)}
-    best = min(errors, key=errors.get)
+    best_period, best_error = float(min(errors, key=errors.get)), min(errors.values())
     for p in sorted(errors):
-        if errors[p] < tolerance:
-            return Periodicity(p, errors[p], best)
-    return Periodicity(None, errors[best], best)
+        at_minimum = errors[p] <= errors.get(p - 1, math.inf) and \
+            errors[p] <= errors.get(p + 1, math.inf)
+        if not at_minimum:
+            continue
+        refined = _refined(errors, p)
+        refined_error = return_error(x, refined) if refined != p else errors[p]
+        period, error = (refined, refined_error) if refined_error < errors[p] else \
+            (float(p), errors[p])
+        if error < best_error:
+            best_period, best_error = period, error
+        if error < tolerance:
+            return Periodicity(period, error, period)
+    return Periodicity(None, best_error, best_period)
+
+
+def last_cycle(x: np.ndarray, period: float, n: int = 60) -> np.ndarray:
+    """The last ``period`` steps of ``x`` (shape (T, D)) sampled at ``n`` evenly spaced
+    points, shape (n, D); a fractional period is read off a cubic spline."""
+    from scipy.interpolate import CubicSpline
+
+    x = np.asarray(x, dtype=np.float64)
+    end = len(x) - 1
+    times = end - period + np.arange(n) * period / n
+    return CubicSpline(np.arange(len(x)), x, axis=0)(times)
 
 
 def _resample_cycle(cycle: np.ndarray, n: int = 60) -> np.ndarray:
     cycle = np.asarray(cycle, dtype=np.float64)
+    if len(cycle) == n:
+        return cycle
     period = len(cycle)
     closed = np.concatenate([cycle, cycle[:1]])
     positions = np.linspace(0, period, n, endpoint=False)
@@ -176,7 +231,8 @@ def _resample_cycle(cycle: np.ndarray, n: int = 60) -> np.ndarray:
 
 def cycle_distance(a: np.ndarray, b: np.ndarray, n: int = 60) -> float:
     """RMS difference of two cycles (P_a, D) and (P_b, D) after resampling both to ``n``
-    points of one period, minimized over circular shifts."""
+    points of one period (a cycle of ``n`` points, as :func:`last_cycle` gives, is taken as
+    sampled already), minimized over circular shifts."""
     ra, rb = _resample_cycle(a, n), _resample_cycle(b, n)
     return float(min(np.sqrt(np.mean((ra - np.roll(rb, k, axis=0)) ** 2)) for k in range(n)))
 
@@ -184,7 +240,7 @@ def cycle_distance(a: np.ndarray, b: np.ndarray, n: int = 60) -> float:
 @dataclass(frozen=True)
 class ResponseCase:
     case: int  # 1 like a learned limit cycle, 2 new limit cycle, 3 unsteady
-    period: int | None
+    period: float | None
     return_error: float
     nearest_pattern: str | None
     distance: float  # cycle distance to the nearest learned cycle (nan when unsteady)
@@ -193,9 +249,9 @@ class ResponseCase:
         if self.case == 3:
             return f"case 3: unsteady (return error {self.return_error:.2f} at best period)"
         if self.case == 1:
-            return (f"case 1: limit cycle of period {self.period} like learned pattern "
+            return (f"case 1: limit cycle of period {self.period:g} like learned pattern "
                     f"{self.nearest_pattern} (distance {self.distance:.3f})")
-        return (f"case 2: new limit cycle of period {self.period} (nearest learned pattern "
+        return (f"case 2: new limit cycle of period {self.period:g} (nearest learned pattern "
                 f"{self.nearest_pattern} at distance {self.distance:.3f})")
 
 
@@ -206,7 +262,7 @@ def classify_response(response: np.ndarray, learned_cycles: dict[str, np.ndarray
     found = periodicity(response, max_period=max_period, tolerance=tolerance)
     if found.period is None:
         return ResponseCase(3, None, found.return_error, None, math.nan)
-    cycle = np.asarray(response)[-found.period:]
+    cycle = last_cycle(response, found.period)
     distances = {name: cycle_distance(cycle, learned) for name, learned in
                  learned_cycles.items()}
     nearest = min(distances, key=distances.get)

@@ -21,7 +21,8 @@ single-threaded, after warm-up:
     window, the projection);
   - the same on-line step in a straightforward NumPy implementation (the reference the
     tests hold the compiled one to), and the ratio;
-  - colour-ball tracking of 640x480 frames.
+  - colour-ball tracking of 640x480 frames;
+  - two coupled agents (docs/dyad.md): one step of both against one agent's on-line step.
 
 --json FILE writes the same figures (keys train_iteration_ms_median,
 online_step_ms_median, online_step_ms_p99, ...) with the machine and versions.
@@ -196,6 +197,24 @@ def run(args: argparse.Namespace) -> int:
     reference_ms = float(np.median(reference_times))
     next_part()
 
+    # Two coupled agents (rnnpb.interaction.dyad): a whole step of both — two on-line steps,
+    # forward kinematics and the cameras — against one agent's on-line step, alternately.
+    from rnnpb.interaction.dyad import Dyad, RobotAgent
+
+    pair = Dyad(RobotAgent(model, online=online, name="a"),
+                RobotAgent(model, online=online, name="b"))
+    for _ in range(40):
+        pair.step()
+    dyad_times, single_times = [], []
+    for t in range(args.steps):
+        t0 = time.perf_counter()
+        pair.step()
+        dyad_times.append((time.perf_counter() - t0) * 1e3)
+        t0 = time.perf_counter()
+        mirror.step(stream[(40 + t) % len(stream)])
+        single_times.append((time.perf_counter() - t0) * 1e3)
+    dyad_ms = float(np.median(dyad_times))
+
     figures = {
         "train_iteration_ms_median": train_ms,
         "train_50k_iterations_s_estimate": train_ms * 50.0,
@@ -213,6 +232,8 @@ def run(args: argparse.Namespace) -> int:
            for name, times in cpu_times.items()},
         "online_step_reference_numpy_ms_median": reference_ms,
         "online_speedup_vs_numpy": reference_ms / float(np.median(step_times)),
+        "dyad_step_ms_median": dyad_ms,
+        "dyad_step_vs_one_agent": dyad_ms / float(np.median(single_times)),
     }
     if not args.no_tracking:
         from rnnpb.perception import tracking_benchmark
@@ -251,6 +272,8 @@ def run(args: argparse.Namespace) -> int:
     print(f"  on-line step, NumPy reference:           {reference_ms:8.1f} ms median "
           f"(over {args.reference_steps} steps) — compiled is "
           f"{figures['online_speedup_vs_numpy']:.0f}x faster")
+    print(f"  two coupled agents, one step of both:    {dyad_ms:8.3f} ms median "
+          f"({figures['dyad_step_vs_one_agent']:.2f}x one agent's step, timed alternately)")
     if "tracking_frames_per_s" in figures:
         print(f"  colour-ball tracking 640x480:            {figures['tracking_ms_median']:8.3f} "
               f"ms median ({figures['tracking_frames_per_s']:.0f} frames/s); centre error "

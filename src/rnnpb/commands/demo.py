@@ -12,11 +12,13 @@ section 3 (synchronization and pause, switching, novel patterns and attractors, 
 set) and write OUT/report.md (measure | paper | ours, figures embedded), OUT/results.json
 (every measure, the config and versions), OUT/figures/, OUT/models/ and OUT/data/.
 
-The full run learns with the paper's algorithm and also runs the paper's own on-line
-regression on the same models for comparison (about 8 minutes on 2 cores). --quick learns
-with the fast preset, keeps the lock-on and switching experiments whole and shortens the rest
-(about 2 minutes); its models go with the ungated on-line regression, which
-`rnnpb interact` picks for them by itself.
+Every learning set is learned with three training seeds (--quick: two), and every measure is
+also reported over all networks and draws of the user, with 95 % bootstrap intervals; the
+figures show the first seed's networks. The jobs run on a local Ray instance with --workers
+workers. The full run learns with the paper's algorithm and also runs the paper's own on-line
+regression on the same models for comparison. --quick learns with the fast preset, keeps the
+lock-on and switching experiments whole and shortens the rest; its models go with
+the ungated on-line regression, which `rnnpb interact` picks for them by itself.
 
 Example:
   rnnpb demo --out results/demo
@@ -27,9 +29,9 @@ Example:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", default="results/demo", metavar="DIR",
                         help="output directory (default results/demo)")
-    parser.add_argument("--quick", action="store_true", help="the short run (about 2 minutes)")
+    parser.add_argument("--quick", action="store_true", help="the short run")
     parser.add_argument("--workers", type=int, default=2,
-                        help="parallel worker processes (default 2)")
+                        help="runs at once, on a local Ray instance (default 2)")
     parser.add_argument("--samples-per-pattern", type=int, default=2, metavar="N",
                         help="demonstrations of each pattern in every learning set (default 2, "
                         "as in the paper)")
@@ -57,6 +59,7 @@ def run(args: argparse.Namespace) -> int:
     os.environ.setdefault("MUJOCO_GL", "egl")
     from rnnpb.errors import ConfigError
     from rnnpb.experiments import ExperimentConfig, run_demo
+    from rnnpb.sweeps import ray_runner
 
     if args.workers < 1:
         raise ConfigError(f"--workers must be >= 1, got {args.workers}")
@@ -71,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
         minutes, seconds = divmod(int(time.monotonic() - started), 60)
         print(f"[{minutes:2d}:{seconds:02d}] {message}", flush=True)
 
-    results = run_demo(args.out, config, log=log)
+    results = run_demo(args.out, config, log=log, runner=ray_runner(workers=args.workers))
     print(f"wrote {args.out}/report.md and {args.out}/results.json in "
           f"{results.runtime_s:.0f} s")
     for key, target in results.targets.items():

@@ -17,13 +17,12 @@ Example:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from rnnpb.experiments.studies import STUDY_MODULES, load_study
+    # Names only: a study's module (and JAX with it) is imported when it runs, so that
+    # `rnnpb --help` stays fast. docs/experiments.md describes each study.
+    from rnnpb.experiments.studies import study_names
 
-    choices = []
-    for name in STUDY_MODULES:
-        choices.append(f"{name}: {load_study(name).SUMMARY}")
-    parser.add_argument("name", metavar="NAME",
-                        help="the study: " + ("; ".join(choices) if choices else "none"))
+    parser.add_argument("name", metavar="NAME", choices=study_names(),
+                        help="the study: " + ", ".join(study_names()))
     parser.add_argument("--out", required=True, metavar="DIR", help="output directory")
     parser.add_argument("--quick", action="store_true", help="the short form")
     parser.add_argument("--workers", type=int, default=2,

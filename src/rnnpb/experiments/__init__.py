@@ -5,47 +5,107 @@
 :mod:`~rnnpb.experiments.report` the demo and its report, and
 :mod:`~rnnpb.experiments.reporting` what every report shares (tables, figures, versions,
 writing ``report.md`` and ``results.json``).
+
+The names below are imported when first used, so that importing a part of this package (a
+study's options for the command line, say) does not load JAX.
 """
 
-from rnnpb.experiments.paper import (
-    Attractor,
-    Draw,
-    ExperimentConfig,
-    FollowsEveryPattern,
-    LargerSetRun,
-    LearningSetResult,
-    NovelResponse,
-    Run,
-    Switching,
-    SwitchingSequence,
-    Synchronization,
-    follows_every_pattern,
-    larger_set_job,
-    learned_attractors,
-    learning_set_job,
-    novel_response,
-    run_scenario,
-    switching,
-    switching_sequence,
-    synchronization,
-)
-from rnnpb.experiments.report import (
-    describe_configuration,
-    missing_cases_explanation,
-    report_lines,
-    run_demo,
-    write_report,
-)
-from rnnpb.experiments.summary import (
-    DemoResults,
-    DrawsSummary,
-    DrawSummary,
-    Summary,
-    Target,
-    draws_summary,
-    summarize,
-    targets,
-)
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from rnnpb.experiments.paper import (
+        Attractor,
+        Draw,
+        ExperimentConfig,
+        FollowsEveryPattern,
+        LargerSetRun,
+        LearningSetResult,
+        NovelResponse,
+        Run,
+        Switching,
+        SwitchingSequence,
+        Synchronization,
+        follows_every_pattern,
+        larger_set_job,
+        learned_attractors,
+        learning_set_job,
+        novel_response,
+        run_scenario,
+        switching,
+        switching_sequence,
+        synchronization,
+    )
+    from rnnpb.experiments.report import (
+        describe_configuration,
+        missing_cases_explanation,
+        report_lines,
+        run_demo,
+        write_report,
+    )
+    from rnnpb.experiments.summary import (
+        DemoResults,
+        DrawsSummary,
+        DrawSummary,
+        Summary,
+        Target,
+        draws_summary,
+        summarize,
+        targets,
+    )
+
+# name -> the module of this package that defines it
+_EXPORTS: dict[str, str] = {
+    "Attractor": "paper",
+    "Draw": "paper",
+    "ExperimentConfig": "paper",
+    "FollowsEveryPattern": "paper",
+    "LargerSetRun": "paper",
+    "LearningSetResult": "paper",
+    "NovelResponse": "paper",
+    "Run": "paper",
+    "Switching": "paper",
+    "SwitchingSequence": "paper",
+    "Synchronization": "paper",
+    "follows_every_pattern": "paper",
+    "larger_set_job": "paper",
+    "learned_attractors": "paper",
+    "learning_set_job": "paper",
+    "novel_response": "paper",
+    "run_scenario": "paper",
+    "switching": "paper",
+    "switching_sequence": "paper",
+    "synchronization": "paper",
+    "describe_configuration": "report",
+    "missing_cases_explanation": "report",
+    "report_lines": "report",
+    "run_demo": "report",
+    "write_report": "report",
+    "DemoResults": "summary",
+    "DrawsSummary": "summary",
+    "DrawSummary": "summary",
+    "Summary": "summary",
+    "Target": "summary",
+    "draws_summary": "summary",
+    "summarize": "summary",
+    "targets": "summary",
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_EXPORTS})
+
 
 __all__ = [
     "Attractor",

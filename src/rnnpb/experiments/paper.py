@@ -38,8 +38,9 @@ SWITCH_STEPS_EACH = 50
 @dataclass(frozen=True)
 class ExperimentConfig:
     """What ``rnnpb demo`` runs. ``quick`` keeps the lock-on and switching experiments whole
-    and shortens the rest (fewer seeds for the larger set, shorter attractor runs, no paper
-    comparison) and learns with the fast preset, which needs a twelfth of the iterations."""
+    and shortens the rest (fewer seeds for the larger set and the learning sets, shorter
+    attractor runs, no paper comparison) and learns with the fast preset, which needs a
+    twelfth of the iterations."""
 
     quick: bool = False
     # The paper's learning: its networks entrain better than those of the fast preset, and the
@@ -61,6 +62,9 @@ class ExperimentConfig:
     # measures are repeated with each (no figures), because they depend on the draw.
     extra_scenario_seeds: tuple[int, ...] = (200, 300)
     larger_set_seeds: int = 10
+    # Networks learned per learning set: every measure is reported over them (and the draws) as
+    # a distribution; the figures show the first seed's.
+    training_seeds: tuple[int, ...] = (0, 1, 2)
     attractor_steps: int = 1000
     attractor_transient: int = 300
     novel_amplitudes: tuple[float, ...] = (1.0, 0.7, 1.3)
@@ -73,13 +77,17 @@ class ExperimentConfig:
         seeds = (self.scenario_seed, *self.extra_scenario_seeds)
         if len(set(seeds)) != len(seeds):
             raise ConfigError(f"scenario seeds must differ from each other, got {seeds}")
+        if not self.training_seeds or len(set(self.training_seeds)) != len(self.training_seeds):
+            raise ConfigError(f"training seeds must be one or more distinct seeds, got "
+                              f"{self.training_seeds}")
 
     @classmethod
     def quick_run(cls) -> ExperimentConfig:
         return cls(quick=True, train=TrainConfig.fast(iterations=4000),
                    larger_train=TrainConfig.fast(iterations=6000), online=OnlineConfig.ungated(),
                    larger_set_seeds=3, attractor_steps=400, attractor_transient=150,
-                   novel_amplitudes=(1.0,), compare_paper=False, extra_scenario_seeds=(200,))
+                   novel_amplitudes=(1.0,), compare_paper=False, extra_scenario_seeds=(200,),
+                   training_seeds=(0, 1))
 
 
 # --- running a scenario ------------------------------------------------------------------
@@ -255,6 +263,10 @@ class Draw:
     synchronization: list[Synchronization]
     switching: Switching
 
+    def without_runs(self) -> Draw:
+        """The measures alone, light to send back from a worker."""
+        return Draw([s.without_run() for s in self.synchronization], self.switching)
+
 
 # --- 3.3 novel patterns and attractors -----------------------------------------------------
 
@@ -264,8 +276,8 @@ class Attractor:
 
     motor: np.ndarray  # (T, 8) normalized joints
     context: np.ndarray  # (T, C)
-    cycle: np.ndarray  # (P, 8): the last period (or the best one, when not periodic)
-    period: int | None  # None: not periodic
+    cycle: np.ndarray  # (60, 8): the last period (or the best one, when not periodic)
+    period: float | None  # steps, possibly fractional; None: not periodic
     return_error: float
 
 
@@ -281,7 +293,7 @@ def learned_attractors(model: TrainedModel, n_steps: int, transient: int
         found = metrics.periodicity(motor)
         period = found.period or found.best_period
         out[name] = Attractor(motor=motor, context=generated.context[transient:],
-                              cycle=motor[-period:], period=found.period,
+                              cycle=metrics.last_cycle(motor, period), period=found.period,
                               return_error=found.return_error)
     return out
 
@@ -295,18 +307,25 @@ class NovelResponse:
     amplitude: float  # the pattern's size relative to the learned ones
     case: int  # 1, 2 or 3 (metrics.classify_response)
     description: str
-    period: int | None
+    period: float | None
     nearest_pattern: str | None
     distance: float
     return_error: float
     motor: np.ndarray  # (T, 8) rad
     pb: np.ndarray  # (T, P)
     context: np.ndarray  # (T, C)
+    # None: one exact cycle repeated; else the draw of the user demonstrating it by hand
+    user_draw: int | None = None
+
+    def without_arrays(self) -> NovelResponse:
+        """The measures alone, light to send back from a worker."""
+        empty = np.zeros((0, 0))
+        return replace(self, motor=empty, pb=empty, context=empty)
 
     def to_json(self) -> dict[str, Any]:
         """The measures as ``results.json`` keeps them (the arrays stay out)."""
         return {"learning_set": self.learning_set, "novel_pattern": self.novel_pattern,
-                "amplitude": self.amplitude, "case": self.case,
+                "amplitude": self.amplitude, "user_draw": self.user_draw, "case": self.case,
                 "description": self.description, "period": self.period,
                 "nearest_pattern": self.nearest_pattern, "distance": self.distance,
                 "return_error": self.return_error}
@@ -328,6 +347,27 @@ def novel_response(model: TrainedModel, learning_set: str, online: OnlineConfig,
     cycle = make_scenario([(pattern, period)], seed=0, config=config, novel=(pattern,))
     repeats = int(math.ceil(n_steps / period))
     sensory = np.tile(cycle.sensory, (repeats, 1))[:n_steps]
+    return _classified_response(model, learning_set, pattern, amplitude, sensory, online,
+                                attractors, transient)
+
+
+def novel_by_hand(model: TrainedModel, learning_set: str, online: OnlineConfig,
+                  attractors: dict[str, Attractor], n_steps: int, transient: int,
+                  seed: int) -> NovelResponse:
+    """The user demonstrates the novel pattern by hand for ``n_steps``: imperfect cycles
+    (period, size and shape vary from cycle to cycle, drawn with ``seed``), as in the paper's
+    interaction experiment; the response is classified."""
+    from rnnpb.demonstrator import novel_pattern, novel_scenario
+
+    scenario = novel_scenario(learning_set, n_steps=n_steps, seed=seed)
+    response = _classified_response(model, learning_set, novel_pattern(learning_set), 1.0,
+                                    scenario.sensory, online, attractors, transient)
+    return replace(response, user_draw=seed)
+
+
+def _classified_response(model: TrainedModel, learning_set: str, pattern: str,
+                         amplitude: float, sensory: np.ndarray, online: OnlineConfig,
+                         attractors: dict[str, Attractor], transient: int) -> NovelResponse:
     mirror = MirrorSystem(model, online)
     motor, pbs, contexts = [], [], []
     for u in sensory:
@@ -409,6 +449,25 @@ class LearningSetResult:
     sequence: SwitchingSequence | None = None
     attractors: dict[str, Attractor] = field(default_factory=dict)
     novel: list[NovelResponse] = field(default_factory=list)
+    training_seed: int = 0
+    compare_draws: dict[int, Draw] = field(default_factory=dict)  # compared, other draws
+    compare_novel: list[NovelResponse] = field(default_factory=list)
+
+    def without_arrays(self) -> LearningSetResult:
+        """The measures alone (no runs or trajectories for the figures)."""
+        def light(draw: Draw | None) -> Draw | None:
+            return None if draw is None else draw.without_runs()
+
+        return replace(self, synchronization=[s.without_run() for s in self.synchronization],
+                       compare=light(self.compare), sequence=None,
+                       novel=[r.without_arrays() for r in self.novel],
+                       compare_novel=[r.without_arrays() for r in self.compare_novel])
+
+    def compared_draws_by_seed(self) -> dict[int, Draw]:
+        """Every draw with the compared on-line regression, this result's own first."""
+        if self.compare is None:
+            return {}
+        return {self.scenario_seed: self.compare, **self.compare_draws}
 
     def draws_by_seed(self) -> dict[int, Draw]:
         """Every draw, this result's own first, by scenario seed."""
@@ -419,15 +478,20 @@ class LearningSetResult:
         if self.compare is None:
             raise ValueError("this job ran no comparison")
         return replace(self, label=label, synchronization=self.compare.synchronization,
-                       switching=self.compare.switching, compare=None)
+                       switching=self.compare.switching, compare=None,
+                       draws=self.compare_draws, compare_draws={}, novel=self.compare_novel,
+                       compare_novel=[])
 
 
 def learning_set_job(set_name: str, train_config: TrainConfig, online: OnlineConfig,
                      config: ExperimentConfig, model_path: str, data_dir: str | None,
-                     label: str, full: bool = True, compare: OnlineConfig | None = None
-                     ) -> LearningSetResult:
+                     label: str, full: bool = True, compare: OnlineConfig | None = None,
+                     light: bool = False) -> LearningSetResult:
     """Train on one learning set and run experiments 3.1–3.3 on it; with ``compare``, also
-    run 3.1 and 3.2 with that on-line regression (``result.compare``)."""
+    run them with that on-line regression (``result.compare``, ``compare_draws``,
+    ``compare_novel``). ``full`` adds the other draws of the user, the attractors and the novel
+    patterns (repeated cycles at every size, and by hand in every draw); ``light`` keeps the
+    measures only (no arrays for the figures, no switching sequence)."""
     from rnnpb.demonstrator import learning_set
     from rnnpb.sequences import write_sequence
 
@@ -452,26 +516,37 @@ def learning_set_job(set_name: str, train_config: TrainConfig, online: OnlineCon
     if compare is not None:
         extra["compare"] = draw(compare, seed)
     if full:
-        extra["draws"] = {}
+        extra["draws"], extra["compare_draws"] = {}, {}
         for other in config.extra_scenario_seeds:
-            measured = draw(online, other)
-            extra["draws"][other] = Draw([s.without_run() for s in measured.synchronization],
-                                         measured.switching)
-        extra["sequence"] = switching_sequence(model, online, limits, seed=seed)
+            extra["draws"][other] = draw(online, other).without_runs()
+            if compare is not None:
+                extra["compare_draws"][other] = draw(compare, other).without_runs()
+        if not light:
+            extra["sequence"] = switching_sequence(model, online, limits, seed=seed)
         attractors = learned_attractors(model, config.attractor_steps,
                                         config.attractor_transient)
         extra["attractors"] = attractors
-        extra["novel"] = [novel_response(model, set_name, online, limits, attractors,
-                                         config.attractor_steps, config.attractor_transient,
-                                         amplitude)
-                          for amplitude in config.novel_amplitudes]
-    return LearningSetResult(
+        steps, transient = config.attractor_steps, config.attractor_transient
+        draws = (seed, *config.extra_scenario_seeds)
+        extra["novel"] = [
+            *(novel_response(model, set_name, online, limits, attractors, steps, transient,
+                             amplitude) for amplitude in config.novel_amplitudes),
+            *(novel_by_hand(model, set_name, online, attractors, steps, transient, seed=d)
+              for d in draws)]
+        if compare is not None:
+            # The paper's regression: the exact cycle at the learned size, and by hand.
+            extra["compare_novel"] = [
+                novel_response(model, set_name, compare, limits, attractors, steps, transient),
+                *(novel_by_hand(model, set_name, compare, attractors, steps, transient, seed=d)
+                  for d in draws)]
+    result = LearningSetResult(
         label=label, learning_set=set_name, model=model_path, patterns=list(model.patterns),
         pattern_pb={k: v.tolist() for k, v in model.pattern_pb.items()},
         train_mse_per_output=info["mse_per_output"], train_mse_max=info["mse_max"],
         train_rms_max=math.sqrt(info["mse_max"]), train_seconds=info["seconds"],
-        train_history=info["history"], scenario_seed=seed,
+        train_history=info["history"], scenario_seed=seed, training_seed=train_config.seed,
         synchronization=primary.synchronization, switching=primary.switching, **extra)
+    return result.without_arrays() if light else result
 
 
 @dataclass(frozen=True)

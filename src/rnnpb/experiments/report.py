@@ -15,8 +15,9 @@ from __future__ import annotations
 import multiprocessing
 import os
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -49,10 +50,12 @@ from rnnpb.experiments.reporting import (
 from rnnpb.experiments.summary import (
     STEP_TARGETS,
     DemoResults,
+    Distribution,
     LearningSetFiles,
     OutputFiles,
     Summary,
     Target,
+    distributions,
     draws_summary,
     flat,
     summarize,
@@ -72,49 +75,86 @@ def _worker_init() -> None:
     _xla.single_threaded()
 
 
-def run_jobs(out: Path, config: ExperimentConfig, log: Callable[[str], None]
-             ) -> tuple[dict[str, LearningSetResult], list[LargerSetRun],
-                        dict[str, LearningSetResult]]:
-    """Every job of the demo in worker processes: per learning set, the default's results
-    and (with ``config.compare_paper``) the paper's regression's; the larger-set runs by
-    seed."""
+# A job of the demo: (key, function, arguments); a runner runs jobs and yields (key, result)
+# as each ends. The command line runs them on Ray (rnnpb.sweeps.ray_runner); this default
+# runs them in a local process pool.
+Job = tuple[Any, Callable[..., Any], tuple[Any, ...]]
+JobRunner = Callable[[Sequence[Job]], Iterator[tuple[Any, Any]]]
+
+
+def process_pool_runner(workers: int) -> JobRunner:
+    """Jobs in ``workers`` local processes, each keeping JAX to one core."""
+    def run(jobs: Sequence[Job]) -> Iterator[tuple[Any, Any]]:
+        context = multiprocessing.get_context("spawn")
+        with ProcessPoolExecutor(max_workers=workers, mp_context=context,
+                                 initializer=_worker_init) as pool:
+            futures = {pool.submit(function, *args): key for key, function, args in jobs}
+            for future in as_completed(futures):
+                yield futures[future], future.result()
+    return run
+
+
+@dataclass(frozen=True)
+class DemoJobs:
+    """What the demo's jobs returned: per training seed, every learning set's results with
+    the default on-line regression (with the compared one inside); the larger-set runs."""
+
+    by_seed: dict[int, dict[str, LearningSetResult]]
+    larger: list[LargerSetRun]
+
+    @property
+    def default(self) -> dict[str, LearningSetResult]:
+        """The first seed's: the networks the figures show."""
+        return next(iter(self.by_seed.values()))
+
+    @property
+    def paper(self) -> dict[str, LearningSetResult]:
+        return {k: r.compared("paper") for k, r in self.default.items() if r.compare is not None}
+
+
+def model_name(set_name: str, seed: int, first: int) -> str:
+    """``setK`` for the first training seed (the figures' networks), ``setK_seedS`` else."""
+    return f"set{set_name}" if seed == first else f"set{set_name}_seed{seed}"
+
+
+def run_jobs(out: Path, config: ExperimentConfig, log: Callable[[str], None],
+             runner: JobRunner | None = None) -> DemoJobs:
+    """Every job of the demo: per learning set and training seed, the default's results and
+    (with ``config.compare_paper``) the paper's regression's; the larger-set runs by seed."""
     models, data = out / "models", out / "data"
     models.mkdir(parents=True, exist_ok=True)
-    jobs: dict[Any, tuple[str, Any]] = {}
-    default: dict[str, LearningSetResult] = {}
-    paper: dict[str, LearningSetResult] = {}
-    larger: list[LargerSetRun] = []
-    _worker_init()
-    context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=config.workers, mp_context=context,
-                             initializer=_worker_init) as pool:
-        compare = config.paper_online if config.compare_paper else None
+    runner = runner or process_pool_runner(config.workers)
+    compare = config.paper_online if config.compare_paper else None
+    first = config.training_seeds[0]
+    jobs: list[Job] = []
+    for seed in config.training_seeds:
         for name in LEARNING_SETS:
-            data_dir = data / f"set{name}"
-            data_dir.mkdir(parents=True, exist_ok=True)
-            future = pool.submit(learning_set_job, name, config.train, config.online, config,
-                                 str(models / f"set{name}.npz"), str(data_dir), "default", True,
-                                 compare)
-            jobs[future] = ("default", name)
-        for seed in range(config.larger_set_seeds):
-            future = pool.submit(larger_set_job, seed, config.larger_train, config.online, config,
-                                 str(models / f"full_seed{seed}.npz"))
-            jobs[future] = ("larger", seed)
-        for done, future in enumerate(as_completed(jobs), start=1):
-            kind, key = jobs[future]
-            result = future.result()
-            if kind == "default":
-                default[key] = result
-                if result.compare is not None:  # the same model, the paper's regression
-                    paper[key] = result.compared("paper")
-            else:
-                larger.append(result)
-            log(f"  [{done}/{len(jobs)}] {kind} {'seed ' if kind == 'larger' else 'set '}"
-                f"{key} done")
+            data_dir = None
+            if seed == first:
+                data_dir = data / f"set{name}"
+                data_dir.mkdir(parents=True, exist_ok=True)
+            train = replace(config.train, seed=seed)
+            jobs.append((("default", name, seed), learning_set_job, (
+                name, train, config.online, config,
+                str(models / f"{model_name(name, seed, first)}.npz"),
+                None if data_dir is None else str(data_dir), "default", True, compare,
+                seed != first)))
+    for seed in range(config.larger_set_seeds):
+        jobs.append((("larger", seed, None), larger_set_job, (
+            seed, config.larger_train, config.online, config,
+            str(models / f"full_seed{seed}.npz"))))
+    by_seed: dict[int, dict[str, LearningSetResult]] = {s: {} for s in config.training_seeds}
+    larger: list[LargerSetRun] = []
+    for done, ((kind, key, seed), result) in enumerate(runner(jobs), start=1):
+        if kind == "default":
+            by_seed[seed][key] = result
+            what = f"set {key}, training seed {seed}"
+        else:
+            larger.append(result)
+            what = f"larger set, seed {key}"
+        log(f"  [{done}/{len(jobs)}] {what} done")
     larger.sort(key=lambda r: r.seed)
-    return default, larger, paper
-
-
+    return DemoJobs({s: {k: v[k] for k in sorted(v)} for s, v in by_seed.items()}, larger)
 
 
 # --- running the demo --------------------------------------------------------------------
@@ -172,8 +212,10 @@ def _draw_figures(figure_dir: Path, full: list, default: dict[str, LearningSetRe
 
 
 def run_demo(out_dir: str | os.PathLike[str], config: ExperimentConfig,
-             log: Callable[[str], None] = print) -> DemoResults:
-    """Run everything; write the report, the results and the figures; return the results."""
+             log: Callable[[str], None] = print, runner: JobRunner | None = None
+             ) -> DemoResults:
+    """Run everything (the jobs with ``runner``, default a local process pool); write the
+    report, the results and the figures; return the results."""
     from rnnpb.demonstrator import learning_set
     from rnnpb.sequences import write_sequence
 
@@ -188,7 +230,8 @@ def run_demo(out_dir: str | os.PathLike[str], config: ExperimentConfig,
         write_sequence(full_dir / sequence_file_name(seq), seq)
     log(f"training and running the experiments ({'quick' if config.quick else 'full'} run, "
         f"{config.workers} workers) …")
-    default, larger, paper = run_jobs(out, config, log)
+    jobs = run_jobs(out, config, log, runner)
+    default, larger, paper = jobs.default, jobs.larger, jobs.paper
     log("drawing the figures …")
     _draw_figures(figure_dir, full, default, config)
 
@@ -196,8 +239,11 @@ def run_demo(out_dir: str | os.PathLike[str], config: ExperimentConfig,
     summary = summarize(default)
     novel = [run for r in ordered.values() for run in r.novel]
     paper_summary = summarize(paper) if paper else None
+    scenario_seeds = (config.scenario_seed, *config.extra_scenario_seeds)
+    first = config.training_seeds[0]
     files = OutputFiles(
-        models={**{f"set{k}": f"models/set{k}.npz" for k in ordered},
+        models={**{model_name(k, s, first): f"models/{model_name(k, s, first)}.npz"
+                   for s in config.training_seeds for k in ordered},
                 **{f"full_seed{r.seed}": f"models/full_seed{r.seed}.npz" for r in larger}},
         learning_sets={**{f"set{k}": LearningSetFiles(r.patterns, f"data/set{k}/")
                           for k, r in ordered.items()},
@@ -215,6 +261,13 @@ def run_demo(out_dir: str | os.PathLike[str], config: ExperimentConfig,
                             (config.scenario_seed, *config.extra_scenario_seeds)),
         files=files, paper=paper_summary,
         paper_targets=targets(paper_summary, [], []) if paper_summary else None,
+        distributions=distributions(jobs.by_seed, larger, scenario_seeds),
+        novel_all=[n.without_arrays() for results in jobs.by_seed.values()
+                   for r in results.values() for n in r.novel],
+        paper_distributions=(distributions(
+            {s: {k: r.compared("paper") for k, r in results.items()}
+             for s, results in jobs.by_seed.items()}, [], scenario_seeds)
+            if config.compare_paper else None),
         runtime_s=time.perf_counter() - start)
     write_outputs(out, report_lines(results), results.to_json())
     return results
@@ -223,26 +276,26 @@ def run_demo(out_dir: str | os.PathLike[str], config: ExperimentConfig,
 # --- the report: one function per section --------------------------------------------------
 
 def missing_cases_explanation(novel: Sequence[NovelResponse],
-                              closed_loop_periods: dict[str, dict[str, int | None]]
+                              closed_loop_periods: dict[str, dict[str, float | None]]
                               ) -> list[str]:
     """Why a response case did not occur, from the attractor analysis's own numbers."""
     seen = {r.case for r in novel}
     missing = [c for c in metrics.RESPONSE_CASES if c not in seen]
     if not missing or not novel:
         return []
-    periods = sorted({r.period for r in novel if r.period is not None})
+    periods = sorted({f"{r.period:.1f}" for r in novel if r.period is not None}, key=float)
     worst_return = max(r.return_error for r in novel)
     closed = [p for periods_ in closed_loop_periods.values() for p in periods_.values()]
-    learned = sorted({p for p in closed if p is not None})
+    learned = sorted({f"{p:.1f}" for p in closed if p is not None}, key=float)
     cycles = sum(p is not None for p in closed)
     if cycles == len(closed):
         autonomous = (f"The closed-loop attractors of the learned patterns are limit cycles too "
-                      f"(periods {', '.join(map(str, learned))}), and with on-line regression "
+                      f"(periods {', '.join(learned)}), and with on-line regression "
                       "the network entrains to the period it is shown.")
     else:
         autonomous = (f"Of the learned patterns' closed-loop attractors, {cycles} of "
                       f"{len(closed)} are limit cycles (periods "
-                      f"{', '.join(map(str, learned)) or '–'}) and the others do not repeat "
+                      f"{', '.join(learned) or '–'}) and the others do not repeat "
                       f"within {metrics.MAX_PERIOD} steps; yet driven by a repeated input and "
                       "with on-line regression, the network entrains to the period it is shown.")
     lines = ["", f"**Why case {' and '.join(map(str, missing))} did not occur here.**"]
@@ -250,11 +303,15 @@ def missing_cases_explanation(novel: Sequence[NovelResponse],
         lines.append(
             f"Every response settled on a limit cycle: the largest return error over all "
             f"{len(novel)} runs is {worst_return:.3f} (a response counts as unsteady above "
-            f"{metrics.PERIODIC_TOLERANCE:g}), at period(s) {', '.join(map(str, periods))} — "
-            "the period of the repeated input cycle or a multiple of it. "
-            f"{autonomous} The input here is one exactly "
-            "repeated cycle (the paper's user demonstrated the novel patterns by hand), and "
-            "the PB, regressed every step, keeps the response on that period.")
+            f"{metrics.PERIODIC_TOLERANCE:g}), at period(s) {', '.join(periods)} — "
+            "the period of the input cycle or a multiple of it. "
+            f"{autonomous} "
+            + ("Even demonstrated by hand, with imperfect cycles, the novel pattern is close "
+               "enough to a cycle that the PB, regressed every step, keeps the response on "
+               "its period." if any(r.user_draw is not None for r in novel) else
+               "The input here is one exactly repeated cycle (the paper's user demonstrated "
+               "the novel patterns by hand), and the PB, regressed every step, keeps the "
+               "response on that period."))
     if 2 in missing:
         lines.append(f"Every periodic response lay within {metrics.SIMILAR_CYCLE:g} of a "
                      "learned pattern's cycle: the novel patterns were drawn into the learned "
@@ -433,7 +490,8 @@ def _novel_section(results: DemoResults) -> list[str]:
             "regressed on-line; the robot's response after the transient is classified "
             "(case 1: a limit cycle like a learned one; 2: a new limit cycle; 3: unsteady).",
             "", *table(("set", "novel pattern", "size", "response"), rows),
-            *missing_cases_explanation(results.novel, results.closed_loop_periods),
+            *missing_cases_explanation(results.novel_all or results.novel,
+                                       results.closed_loop_periods),
             "", embed("novel", "figure8_novel.png"), "",
             embed("attractors", "figure9_attractors.png"), "",
             "Closed-loop periods of the learned patterns (steps; none = not periodic): "
@@ -449,6 +507,81 @@ def _larger_set_section(results: DemoResults) -> list[str]:
     return ["", "## 3.4 The larger set", "",
             *table(("seed", "training MSE", "steps to follow 1 / 2 / 3 / 4", "follows all"),
                    rows)]
+
+
+DISTRIBUTION_NAMES = {
+    "steps_to_lock": ("steps until locked on a learned pattern", f"about {metrics.LOCK_LIMIT}"),
+    "pb_settle_steps": ("steps until the PB settles", f"about {metrics.SETTLE_LIMIT}"),
+    "phase_lag_steps": ("phase lag once locked (steps)", "mostly synchronous"),
+    "pause_relative_motion": ("robot motion during the pause (relative)", "keeps moving"),
+    "pause_steps_to_relock": ("steps to re-lock after the pause",
+                              f"a few (≤ {metrics.RELOCK_LIMIT})"),
+    "switch_steps": ("steps until the robot follows a switch",
+                     f"several (≤ {metrics.SWITCH_LIMIT})"),
+    "steps_to_follow": ("larger set: steps until the robot follows each pattern",
+                        f"≤ {metrics.SWITCH_LIMIT}"),
+}
+
+
+def _share(interval) -> str:
+    if interval is None or interval.n == 0:
+        return "–"
+    return f"{interval.value:.0%} [{interval.low:.0%}, {interval.high:.0%}]"
+
+
+def _distribution_cells(found: Distribution | None) -> tuple[str, str]:
+    if found is None:
+        return "–", "–"
+    digits = 2 if found.measure in ("phase_lag_steps", "pause_relative_motion") else 1
+    never = f", never {found.never}/{found.n}" if found.never else ""
+    return f"{found.median.describe(digits)}{never}", _share(found.within)
+
+
+def _distributions_section(results: DemoResults) -> list[str]:
+    ours, theirs = results.distributions, results.paper_distributions
+    if ours is None:
+        return []
+    rows = []
+    for measure, (name, paper) in DISTRIBUTION_NAMES.items():
+        if measure not in ours.measures:
+            continue
+        compared = theirs.measures.get(measure) if theirs else None
+        rows.append((name, paper, *_distribution_cells(ours.measures[measure]),
+                     *_distribution_cells(compared)))
+    rows.append(("learned pattern recognised (nearest learned PB)", "all", "–",
+                 _share(ours.recognised), "–", _share(theirs.recognised) if theirs else "–"))
+    rows.append((f"networks whose final error is below {sci(metrics.TRAIN_ERROR_TARGET)}",
+                 "all", "–", _share(ours.train_below_target), "–", "–"))
+    if ours.larger_set_follows is not None:
+        rows.append(("larger set: (seed, draw) runs that follow every pattern",
+                     f"{metrics.LARGER_SET_FOLLOWS} of {metrics.LARGER_SET_RUNS}", "–",
+                     _share(ours.larger_set_follows), "–", "–"))
+    cases = []
+    for label, found in (("default", ours), ("paper's regression", theirs)):
+        if found is None:
+            continue
+        for kind, counts in found.novel_cases.items():
+            if sum(counts.values()):
+                cases.append((label, kind, *(counts[c] for c in metrics.RESPONSE_CASES)))
+    periodic, total = ours.closed_loop_periodic
+    return ["", "## Over every network and draw of the user", "",
+            f"Every measure of section 3 over {len(ours.training_seeds)} networks per learning "
+            f"set (training seeds {', '.join(map(str, ours.training_seeds))}) and "
+            f"{len(ours.scenario_seeds)} draws of the user's imperfection (scenario seeds "
+            f"{', '.join(map(str, ours.scenario_seeds))}), every pattern and ordered pair pooled; "
+            f"the larger set over its {len(results.larger)} seeds and the same draws. Medians "
+            "are over the runs where the event happened (never: how many it did not); the "
+            "share counts values within the paper's limit (never counts as outside). "
+            "Brackets: 95 % percentile bootstrap intervals (`rnnpb.analysis.statistics`). The "
+            "sections above show the first seed's networks.", "",
+            *table(("measure", "paper", "default: median [95 % CI]", "default: within",
+                    "paper's regression: median", "paper's regression: within"), rows),
+            "", "Novel-pattern responses over every network and draw (the repeated cycle is "
+            "one exact cycle at each size; by hand, the user demonstrates the novel pattern "
+            "with imperfect cycles, one demonstration per draw, as in the paper's interaction "
+            f"experiment). Learned attractors that are limit cycles: {periodic} of {total} "
+            "(the period may be fractional, `metrics.periodicity`).", "",
+            *table(("regression", "input", "case 1", "case 2", "case 3"), cases)]
 
 
 def _draws_section(results: DemoResults) -> list[str]:
@@ -483,7 +616,8 @@ def _files_section(results: DemoResults) -> list[str]:
             "Learning sets as sequence CSVs: `data/set1/` … `data/set4/`, `data/full/`.", ""]
 
 
-SECTIONS = (_header, _summary_section, _targets_section, _patterns_section,
+SECTIONS = (_header, _summary_section, _targets_section, _distributions_section,
+            _patterns_section,
             _learning_section, _synchronization_section, _switching_section, _novel_section,
             _larger_set_section, _draws_section, _files_section)
 

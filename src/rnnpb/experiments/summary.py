@@ -7,11 +7,15 @@ order it holds them. The targets' limits are the measures' own
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, field, fields
 from typing import Any
 
+import numpy as np
+
 from rnnpb.analysis import metrics
+from rnnpb.analysis.statistics import Interval, bootstrap_interval, median_interval, share_within
 from rnnpb.experiments.paper import (
     Draw,
     ExperimentConfig,
@@ -225,6 +229,111 @@ def draws_summary(sets: Mapping[str, Mapping[int, Draw]],
     return DrawsSummary([int(s) for s in by_seed], by_seed, pooled)
 
 
+# --- distributions over training seeds and draws of the user --------------------------------
+
+# The synchronization measures of 3.1 (a Synchronization field each) and their limits.
+SYNC_MEASURES: dict[str, float | None] = {
+    "steps_to_lock": metrics.LOCK_LIMIT, "pb_settle_steps": metrics.SETTLE_LIMIT,
+    "phase_lag_steps": None, "pause_relative_motion": None,
+    "pause_steps_to_relock": metrics.RELOCK_LIMIT}
+NOVEL_INPUTS = ("repeated cycle", "by hand")
+
+
+@dataclass(frozen=True)
+class Distribution:
+    """One measure over every network, draw and pattern (or pair): its median over the runs
+    where the event happened, and its share within the paper's limit, each with its 95 %
+    bootstrap interval (:mod:`rnnpb.analysis.statistics`)."""
+
+    measure: str
+    n: int
+    never: int  # runs where the event never happened
+    median: Interval
+    limit: float | None
+    within: Interval | None  # share at most ``limit``; never counts as outside
+
+    def to_json(self) -> dict[str, Any]:
+        return {"measure": self.measure, "n": self.n, "never": self.never,
+                "median": asdict(self.median), "limit": self.limit,
+                "within": asdict(self.within) if self.within else None}
+
+
+def distribution(measure: str, values: Sequence[Any], limit: float | None) -> Distribution:
+    return Distribution(measure, len(values), sum(v is None for v in values),
+                        median_interval(values), limit,
+                        None if limit is None else share_within(values, limit))
+
+
+@dataclass(frozen=True)
+class Distributions:
+    """Every measure of section 3 over the training seeds (per learning set) and the draws of
+    the user, for one on-line regression."""
+
+    training_seeds: list[int]
+    scenario_seeds: list[int]
+    measures: dict[str, Distribution]
+    recognised: Interval  # share of synchronization runs whose nearest learned PB is right
+    train_below_target: Interval  # share of networks whose final error meets the paper's
+    novel_cases: dict[str, dict[int, int]]  # input (NOVEL_INPUTS) -> case -> count
+    closed_loop_periodic: tuple[int, int]  # learned attractors that are cycles, of all
+    larger_set_follows: Interval | None  # share of larger-set (seed, draw) runs that follow all
+
+    def to_json(self) -> dict[str, Any]:
+        return {"training_seeds": self.training_seeds, "scenario_seeds": self.scenario_seeds,
+                "measures": {k: d.to_json() for k, d in self.measures.items()},
+                "recognised": asdict(self.recognised),
+                "train_below_target": asdict(self.train_below_target),
+                "novel_cases": self.novel_cases,
+                "closed_loop_periodic": list(self.closed_loop_periodic),
+                "larger_set_follows": (asdict(self.larger_set_follows)
+                                       if self.larger_set_follows else None)}
+
+
+def distributions(by_seed: Mapping[int, Mapping[str, LearningSetResult]],
+                  larger: Sequence[LargerSetRun], scenario_seeds: Sequence[int]
+                  ) -> Distributions:
+    """Pool every learning set's results over training seeds and draws (each result's
+    :meth:`~LearningSetResult.draws_by_seed`) and the larger set's over seeds and draws."""
+    sync: dict[str, list[Any]] = {m: [] for m in SYNC_MEASURES}
+    switches: list[Any] = []
+    recognised: list[float] = []
+    errors: list[float] = []
+    cases: dict[str, dict[int, int]] = {k: dict.fromkeys(metrics.RESPONSE_CASES, 0)
+                                        for k in NOVEL_INPUTS}
+    periods: list[Any] = []
+    for results in by_seed.values():
+        for result in results.values():
+            errors.append(result.train_mse_max)
+            for draw in result.draws_by_seed().values():
+                for run in draw.synchronization:
+                    for measure in SYNC_MEASURES:
+                        value = getattr(run, measure)
+                        sync[measure].append(None if isinstance(value, float)
+                                             and math.isnan(value) else value)
+                    recognised.append(float(run.recognized_pattern == run.pattern))
+                switches.extend(draw.switching.pairs.values())
+            for response in result.novel:
+                kind = NOVEL_INPUTS[1] if response.user_draw is not None else NOVEL_INPUTS[0]
+                cases[kind][response.case] += 1
+            periods.extend(a.period for a in result.attractors.values())
+    measures = {m: distribution(m, v, SYNC_MEASURES[m]) for m, v in sync.items()}
+    measures["switch_steps"] = distribution("switch_steps", switches, metrics.SWITCH_LIMIT)
+    follows = [f for run in larger for f in run.draws_by_seed().values()]
+    if follows:
+        measures["steps_to_follow"] = distribution(
+            "steps_to_follow", [v for f in follows for v in f.steps_to_follow.values()],
+            metrics.SWITCH_LIMIT)
+    return Distributions(
+        training_seeds=list(by_seed), scenario_seeds=list(scenario_seeds), measures=measures,
+        recognised=bootstrap_interval(recognised, np.mean),
+        train_below_target=bootstrap_interval(
+            [float(e < metrics.TRAIN_ERROR_TARGET) for e in errors], np.mean),
+        novel_cases=cases,
+        closed_loop_periodic=(sum(p is not None for p in periods), len(periods)),
+        larger_set_follows=(bootstrap_interval([float(f.follows_all) for f in follows], np.mean)
+                            if follows else None))
+
+
 @dataclass(frozen=True)
 class LearningSetFiles:
     patterns: list[str]
@@ -254,7 +363,7 @@ class DemoResults:
     config: ExperimentConfig
     default: Summary
     novel: list[NovelResponse]  # learning sets in order, then sizes
-    closed_loop_periods: dict[str, dict[str, int | None]]
+    closed_loop_periods: dict[str, dict[str, float | None]]
     switch_sequence_steps_to_follow: list[int | None]
     larger: list[LargerSetRun]  # by seed
     targets: dict[str, Target]
@@ -263,6 +372,10 @@ class DemoResults:
     paper: Summary | None  # the paper's on-line regression on the same models
     paper_targets: dict[str, Target] | None
     runtime_s: float
+    # Over every training seed and draw of the user (the fields above: the first seed's).
+    distributions: Distributions | None = None
+    paper_distributions: Distributions | None = None
+    novel_all: list[NovelResponse] = field(default_factory=list)  # every seed's and draw's
 
     @property
     def novel_cases_seen(self) -> list[int]:
@@ -292,5 +405,10 @@ class DemoResults:
             out["paper_regression"] = {
                 **self.paper.to_json(),
                 "targets": {k: t.to_json() for k, t in (self.paper_targets or {}).items()}}
+        if self.distributions is not None:
+            out["distributions"] = {"default": self.distributions.to_json(),
+                                    "novel_case": [r.to_json() for r in self.novel_all]}
+            if self.paper_distributions is not None:
+                out["distributions"]["paper_regression"] = self.paper_distributions.to_json()
         out["runtime_s"] = self.runtime_s
         return out

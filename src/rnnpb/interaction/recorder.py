@@ -34,6 +34,16 @@ from rnnpb.vectors import MOTOR_NAMES, PREDICTED_PREFIX, SENSORY_NAMES, STEP_COL
 PB_COLUMNS_PREFIX = "pb"
 TEXT_COLUMNS = ("recognised", "novelty", "truth_pattern", "unsafe", "filtered")
 """The columns that hold words, not numbers."""
+DYAD_PREFIXES = ("a_", "b_")
+"""Each agent's columns in a two-agent recording (:func:`dyad_columns`)."""
+
+
+def _is_text(name: str) -> bool:
+    """Whether column ``name`` holds words (an agent's ``a_``/``b_`` columns included)."""
+    for prefix in DYAD_PREFIXES:
+        if name.startswith(prefix):
+            return name[len(prefix):] in (*TEXT_COLUMNS, "intent")
+    return name in TEXT_COLUMNS
 
 
 def session_columns(pb_size: int) -> list[str]:
@@ -96,7 +106,8 @@ class SessionRecorder:
         self.close()
 
 
-def read_session(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
+def read_session(path: str | os.PathLike[str], required: list[str] | None = None
+                 ) -> dict[str, np.ndarray]:
     """Read a session recording into arrays by column (empty cells → NaN; strings kept).
 
     A last line without its line break is a row cut short by an interrupted write and is left
@@ -143,7 +154,7 @@ def read_session(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
             if not header:
                 raise DataFileError(f"{path}: empty file, expected a session recording header")
             header = [name.strip() for name in header]
-            required = [STEP_COLUMN, *SENSORY_NAMES, *MOTOR_NAMES]
+            required = required or [STEP_COLUMN, *SENSORY_NAMES, *MOTOR_NAMES]
             missing = [c for c in required if c not in header]
             if missing:
                 raise DataFileError(f"{path}: not a session recording: missing column(s) "
@@ -152,7 +163,7 @@ def read_session(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
             if repeated:
                 raise DataFileError(f"{path}: column(s) {', '.join(map(repr, repeated))[:200]} "
                                     "appear more than once in the header")
-            columns = {name: [] if name in TEXT_COLUMNS else array.array("d")
+            columns = {name: [] if _is_text(name) else array.array("d")
                        for name in header}
             cells = list(columns.values())
             numeric = [not isinstance(cell, list) for cell in cells]
@@ -178,3 +189,55 @@ def read_session(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
         raise DataFileError(f"{path}: cannot read: {error.strerror or error}") from None
     return {name: np.array(cell, dtype=object) if isinstance(cell, list)
             else np.frombuffer(cell, dtype=np.float64) for name, cell in columns.items()}
+
+
+# --- two-agent recordings ------------------------------------------------------------------
+DYAD_AGENT_COLUMNS = ("intent", "initiative")
+
+
+def dyad_columns(pb_size: int) -> list[str]:
+    """A two-agent recording: ``step``, ``time_s``, then each agent's columns prefixed ``a_``
+    and ``b_``: what it saw (``lhy`` …), its hands as its partner's camera sees them
+    (``shown_lhy`` …), its motor command (a subject's is empty), its PB, its prediction and
+    window errors, the pattern it means to play (``intent``) and whether it took the
+    initiative this step (``initiative``, 1 or 0)."""
+    per_agent = [*SENSORY_NAMES, *(f"shown_{name}" for name in SENSORY_NAMES), *MOTOR_NAMES,
+                 *(f"{PB_COLUMNS_PREFIX}{i}" for i in range(pb_size)), "prediction_error",
+                 "window_error", *DYAD_AGENT_COLUMNS]
+    return [STEP_COLUMN, "time_s",
+            *(prefix + name for prefix in DYAD_PREFIXES for name in per_agent)]
+
+
+class DyadRecorder(SessionRecorder):
+    """Writes a two-agent recording row by row (:func:`dyad_columns`); rows are
+    :class:`rnnpb.interaction.dyad.DyadStep`. :func:`read_session` reads it back."""
+
+    def __init__(self, path: str | os.PathLike[str], pb_size: int = 4, dt: float = 0.4
+                 ) -> None:
+        super().__init__(path, pb_size)
+        self.columns = dyad_columns(pb_size)
+        self.pb_size = pb_size
+        self.dt = dt
+
+    def write(self, record) -> None:
+        if self._writer is None:
+            self.open()
+        row: list[object] = [record.step, f"{record.step * self.dt:.4f}"]
+        for agent, shown in ((record.a, record.shown_a), (record.b, record.shown_b)):
+            result = agent.result
+            motor = agent.motor if agent.motor is not None else np.full(len(MOTOR_NAMES), np.nan)
+            pb = agent.pb if agent.pb is not None else np.full(self.pb_size, np.nan)
+            row += [*(_fmt(v) for v in agent.view), *(_fmt(v) for v in shown),
+                    *(_fmt(v) for v in motor), *(_fmt(v) for v in pb),
+                    _fmt(result.prediction_error if result is not None else math.nan),
+                    _fmt(result.window_error if result is not None else math.nan),
+                    agent.intent, int(agent.initiative)]
+        self._writer.writerow(row)
+        self._handle.flush()
+        self.rows += 1
+
+
+def read_dyad_session(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
+    """Read a two-agent recording (:func:`dyad_columns`) as :func:`read_session` does."""
+    return read_session(path, [STEP_COLUMN, *(prefix + name for prefix in DYAD_PREFIXES
+                                              for name in (*SENSORY_NAMES, *MOTOR_NAMES))])

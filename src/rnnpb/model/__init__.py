@@ -1,12 +1,19 @@
 """The RNNPB: network, learning, generation and on-line PB regression.
 
 Pure functions and their configs, with no I/O or clocks, except where a module says why in its
-docstring: model files (``io.py``) and the training driver's checkpoints and clock
-(``training.py``). ``reference.py`` is the NumPy twin the compiled code is held to.
+docstring: model files (``io.py``), the training driver's checkpoints and clock
+(``training.py``) and the clock of consolidation's history (``consolidation.py``).
+``reference.py`` is the NumPy twin the compiled code is held to.
 """
 
+from rnnpb.model.consolidation import (
+    CONSOLIDATION_METHODS,
+    ConsolidationConfig,
+    consolidate,
+    rehearse,
+)
 from rnnpb.model.generation import Generated, generate
-from rnnpb.model.io import TrainedModel
+from rnnpb.model.io import HistoryEntry, TrainedModel
 from rnnpb.model.learning import TrainConfig
 from rnnpb.model.mirror import MirrorSystem, StepResult
 from rnnpb.model.network import (
@@ -24,8 +31,11 @@ from rnnpb.model.reference import MIRROR_SYSTEMS, ReferenceMirrorSystem
 from rnnpb.model.training import TrainingProgress, train
 
 __all__ = [
+    "CONSOLIDATION_METHODS",
     "MIRROR_SYSTEMS",
+    "ConsolidationConfig",
     "Generated",
+    "HistoryEntry",
     "MirrorSystem",
     "NetworkConfig",
     "OnlineConfig",
@@ -37,11 +47,13 @@ __all__ = [
     "TrainedModel",
     "TrainingProgress",
     "closed_loop",
+    "consolidate",
     "generate",
     "init_params",
     "mixed_loop",
     "open_loop",
     "pb_update",
+    "rehearse",
     "step",
     "train",
 ]

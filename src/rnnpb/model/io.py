@@ -3,8 +3,12 @@
 A model file is a single ``.npz`` archive (NumPy's zip of ``.npy`` arrays, readable without
 rnnpb) holding the weights, each training sequence's learned PB and initial context, the
 normalization and a JSON document ``meta.json`` with the format name and version, the network
-config, the pattern names, the training config and the training results. It is read with
-``allow_pickle=False``: a model file cannot run code. Writes are atomic.
+config, the pattern names, the training config, the training results and the model's history
+(:class:`HistoryEntry`: which patterns were learned when, by which method, from which model).
+It is read with ``allow_pickle=False``: a model file cannot run code. Writes are atomic.
+
+Format 2 added the history; a file of format 1 still loads, with the history its training
+record implies (one ``train`` entry, time unknown).
 
 Reading trusts nothing in the file. Before an array is decompressed the zip's central directory
 is checked: only the members the format names (``meta.json`` and, for a model, exactly the
@@ -15,6 +19,7 @@ The limits and what they refuse are in docs/robustness.md.
 
 from __future__ import annotations
 
+import hashlib
 import io
 import json
 import math
@@ -44,7 +49,14 @@ from rnnpb.sequences import pattern_name_problem
 from rnnpb.vectors import MOTOR_NAMES
 
 MODEL_FORMAT = "rnnpb-model"
-MODEL_FORMAT_VERSION = 1
+MODEL_FORMAT_VERSION = 2
+READABLE_MODEL_FORMAT_VERSIONS = (1, 2)
+"""Format versions :meth:`TrainedModel.load` reads (1: before the history was recorded)."""
+HISTORY_METHODS = ("train", "rehearsal", "finetune", "replay", "scratch")
+"""How a model's patterns were learned: a first training, or a consolidation method
+(:mod:`rnnpb.model.consolidation`)."""
+MAX_HISTORY = 1000
+"""Most history entries a model file may hold."""
 
 MAX_ARCHIVE_BYTES = 512 * 2**20
 """Largest total uncompressed size of a model or checkpoint archive (512 MiB)."""
@@ -61,6 +73,115 @@ NETWORK_DTYPE = np.float32
 JOINT_LIMIT_TOLERANCE = 1e-9
 """Radians a motor normalization bound may lie outside the robot's joint limit (rounding)."""
 _NPY_MAGIC = b"\x93NUMPY"
+
+
+@dataclass(frozen=True)
+class HistoryEntry:
+    """One step of a model's life: its first training, or one consolidation.
+
+    Attributes
+    ----------
+    method : str
+        One of :data:`HISTORY_METHODS`.
+    added : tuple of str
+        The patterns this step learned anew (a first training: all of them).
+    patterns : tuple of str
+        The model's patterns after this step.
+    parent, parent_fingerprint : str or None
+        The file name and :attr:`TrainedModel.fingerprint` of the model this step started from
+        (None for a first training).
+    train_config : dict
+        The :class:`~rnnpb.model.TrainConfig` of this step, as a dict.
+    data_fingerprint : str or None
+        :attr:`~rnnpb.model.learning.TrainingData.fingerprint` of what this step learned on
+        (for rehearsal: the rehearsed and the new sequences).
+    added_data_fingerprint : str or None
+        The same of the real sequences of the ``added`` patterns alone, in the order given: what
+        a later replay compares its data with.
+    iterations : int
+    seconds : float
+    created : str or None
+        When the step ended, UTC, ISO 8601; None where not recorded (a file of format 1).
+    details : dict
+        What the method adds (replay: whether the replayed data matched the record).
+    """
+
+    method: str
+    added: tuple[str, ...]
+    patterns: tuple[str, ...]
+    parent: str | None = None
+    parent_fingerprint: str | None = None
+    train_config: dict[str, Any] = field(default_factory=dict)
+    data_fingerprint: str | None = None
+    added_data_fingerprint: str | None = None
+    iterations: int = 0
+    seconds: float = 0.0
+    created: str | None = None
+    details: dict[str, Any] = field(default_factory=dict)
+
+    def to_json(self) -> dict[str, Any]:
+        out = asdict(self)
+        out["added"], out["patterns"] = list(self.added), list(self.patterns)
+        return out
+
+    @classmethod
+    def from_json(cls, path: Path | str, data: object) -> HistoryEntry:
+        """An entry of a model file's meta.json, checked; :class:`ModelFileError` otherwise."""
+        if not isinstance(data, dict):
+            raise ModelFileError(f"{path}: a history entry is {type(data).__name__}, not an "
+                                 "object")
+        known = {f for f in cls.__dataclass_fields__}
+        unknown = sorted(set(data) - known)
+        if unknown:
+            raise ModelFileError(f"{path}: a history entry has unknown field(s) "
+                                 f"{', '.join(_shown(k) for k in unknown[:5])}")
+        method = data.get("method")
+        if method not in HISTORY_METHODS:
+            raise ModelFileError(f"{path}: history method {_shown(method)} is not one of "
+                                 f"{', '.join(HISTORY_METHODS)}")
+        names: dict[str, tuple[str, ...]] = {}
+        for key in ("added", "patterns"):
+            value = data.get(key)
+            if not isinstance(value, list):
+                raise ModelFileError(f"{path}: history field {key!r} is not a list")
+            for name in value:
+                problem = pattern_name_problem(name)
+                if problem:
+                    raise ModelFileError(f"{path}: history pattern name {_shown(name)} "
+                                         f"{problem}")
+            names[key] = tuple(value)
+        kinds = {"parent": str, "parent_fingerprint": str, "data_fingerprint": str,
+                 "added_data_fingerprint": str, "created": str}
+        for key, kind in kinds.items():
+            value = data.get(key)
+            if value is not None and (not isinstance(value, kind) or len(value) > 4096):
+                raise ModelFileError(f"{path}: history field {key!r} is not a short text")
+        for key in ("train_config", "details"):
+            if not isinstance(data.get(key, {}), dict):
+                raise ModelFileError(f"{path}: history field {key!r} is not an object")
+        iterations, seconds = data.get("iterations", 0), data.get("seconds", 0.0)
+        if not isinstance(iterations, int) or isinstance(iterations, bool) or iterations < 0:
+            raise ModelFileError(f"{path}: history field 'iterations' is {_shown(iterations)}")
+        if not isinstance(seconds, (int, float)) or isinstance(seconds, bool) or not (
+                math.isfinite(seconds) and seconds >= 0):
+            raise ModelFileError(f"{path}: history field 'seconds' is {_shown(seconds)}")
+        return cls(**{**data, **names, "seconds": float(seconds)})
+
+
+def first_training_entry(meta: dict[str, Any], patterns: tuple[str, ...]) -> HistoryEntry:
+    """The history a model has without a recorded one: its first training, as its training
+    record says (a model just trained, or a file of format 1)."""
+    training = meta.get("training") if isinstance(meta.get("training"), dict) else {}
+    config = meta.get("train_config") if isinstance(meta.get("train_config"), dict) else {}
+    iterations = training.get("iterations", 0)
+    seconds = training.get("seconds", 0.0)
+    fingerprint = training.get("data_fingerprint")
+    return HistoryEntry(
+        method="train", added=patterns, patterns=patterns, train_config=dict(config),
+        data_fingerprint=fingerprint if isinstance(fingerprint, str) else None,
+        added_data_fingerprint=fingerprint if isinstance(fingerprint, str) else None,
+        iterations=iterations if isinstance(iterations, int) else 0,
+        seconds=float(seconds) if isinstance(seconds, (int, float)) else 0.0)
 
 
 @dataclass(frozen=True)
@@ -82,7 +203,8 @@ class TrainedModel:
     initial_context : array, shape (S, C)
         The learned initial context of each training sequence.
     meta : dict
-        Training config, results and provenance (JSON-serializable).
+        Training config, results and provenance (JSON-serializable); ``meta["history"]``, a
+        list of :meth:`HistoryEntry.to_json`, once the model has been consolidated or saved.
     """
 
     network: NetworkConfig
@@ -113,6 +235,32 @@ class TrainedModel:
     def mean_initial_context(self) -> np.ndarray:
         return self.initial_context.mean(axis=0)
 
+    @property
+    def history(self) -> tuple[HistoryEntry, ...]:
+        """Which patterns were learned when, by which method, from which model (oldest first).
+
+        A model without a recorded history (just trained, or read from a file of format 1) has
+        one entry: its first training.
+        """
+        recorded = self.meta.get("history")
+        if recorded is None:
+            return (first_training_entry(self.meta, self.patterns),)
+        return tuple(HistoryEntry.from_json("model", entry) for entry in recorded)
+
+    @property
+    def fingerprint(self) -> str:
+        """SHA-256 of what the model computes with: network sizes, weights, PBs, initial
+        contexts, normalization and pattern names (not its meta.json, so the same model saved
+        twice has the same fingerprint)."""
+        digest = hashlib.sha256(json.dumps(asdict(self.network), sort_keys=True).encode())
+        for name, value in sorted(params_to_numpy(self.params).items()):
+            digest.update(name.encode())
+            digest.update(np.ascontiguousarray(value, dtype=np.float32).tobytes())
+        for array in (self.lower, self.upper, self.sequence_pb, self.initial_context):
+            digest.update(np.ascontiguousarray(array, dtype=np.float64).tobytes())
+        digest.update("\n".join(self.sequence_patterns).encode())
+        return digest.hexdigest()
+
     def normalize(self, x: np.ndarray) -> np.ndarray:
         """Raw sensory-motor values (..., I) → normalized (..., I)."""
         return (np.asarray(x) - self.lower) / (self.upper - self.lower)
@@ -138,6 +286,7 @@ class TrainedModel:
             "network": asdict(self.network),
             "sequence_patterns": list(self.sequence_patterns),
             **{k: v for k, v in self.meta.items() if k not in ("format", "format_version")},
+            "history": [entry.to_json() for entry in self.history],
         }
         arrays = {f"params/{k}": v for k, v in params_to_numpy(self.params).items()}
         arrays.update(lower=np.asarray(self.lower), upper=np.asarray(self.upper),
@@ -159,8 +308,9 @@ class TrainedModel:
             loader that pairs a model with a robot passes them.
         """
         path = Path(path)
-        meta, arrays = load_archive(path, MODEL_FORMAT, MODEL_FORMAT_VERSION)
+        meta, arrays = load_archive(path, MODEL_FORMAT, READABLE_MODEL_FORMAT_VERSIONS)
         network, patterns, expected = _model_layout(path, meta)
+        history = _checked_history(path, meta)
         for name in expected:
             check_numeric(path, name, arrays[name])
         if np.any(arrays["upper"] <= arrays["lower"]):
@@ -172,7 +322,10 @@ class TrainedModel:
         params = params_from_numpy({k[len("params/"):]: v for k, v in arrays.items()
                                     if k.startswith("params/")})
         extra = {k: v for k, v in meta.items()
-                 if k not in ("format", "format_version", "network", "sequence_patterns")}
+                 if k not in ("format", "format_version", "network", "sequence_patterns",
+                              "history")}
+        if history is not None:
+            extra["history"] = [entry.to_json() for entry in history]
         model = cls(network=network, params=params, lower=arrays["lower"].astype(np.float64),
                     upper=arrays["upper"].astype(np.float64),
                     sequence_pb=arrays["sequence_pb"].astype(np.float64),
@@ -208,6 +361,21 @@ def _model_layout(path: Path, meta: dict[str, Any]
                   sequence_pb=(n_seq, network.pb_size),
                   initial_context=(n_seq, network.context_size))
     return network, tuple(patterns), shapes
+
+
+def _checked_history(path: Path, meta: dict[str, Any]) -> tuple[HistoryEntry, ...] | None:
+    """The recorded history, each entry checked (None: none recorded, format 1)."""
+    recorded = meta.get("history")
+    if recorded is None and meta.get("format_version") == 1:
+        return None
+    if not isinstance(recorded, list) or not recorded or len(recorded) > MAX_HISTORY:
+        raise ModelFileError(f"{path}: meta.json's history is not a list of 1 to "
+                             f"{MAX_HISTORY} entries")
+    entries = tuple(HistoryEntry.from_json(path, entry) for entry in recorded)
+    if entries[-1].patterns != tuple(dict.fromkeys(meta["sequence_patterns"])):
+        raise ModelFileError(f"{path}: the history's last entry names other patterns than "
+                             "the model holds")
+    return entries
 
 
 def _checkpoint_members(path: Path, meta: dict[str, Any]) -> dict[str, tuple[int, ...] | None]:
@@ -274,7 +442,7 @@ def save_archive(path: str | os.PathLike[str], meta: dict[str, Any],
         handle.write(buffer.getvalue())
 
 
-def load_archive(path: str | os.PathLike[str], fmt: str, version: int,
+def load_archive(path: str | os.PathLike[str], fmt: str, version: int | tuple[int, ...],
                  members: Callable[[Path, dict[str, Any]], dict[str, tuple[int, ...] | None]]
                  | None = None) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     """Read an archive written by :func:`save_archive` and check its format and version.
@@ -282,7 +450,8 @@ def load_archive(path: str | os.PathLike[str], fmt: str, version: int,
     The zip's central directory is checked before anything is decompressed: every member must
     be a ``.npy`` array, there are at most :data:`MAX_MEMBERS`, their uncompressed sizes add
     up to at most :data:`MAX_ARCHIVE_BYTES` and ``meta.json`` to at most
-    :data:`MAX_META_BYTES`. Then ``members(path, meta)`` (by default the one registered for
+    :data:`MAX_META_BYTES`. ``version`` is the format version, or the versions, it accepts.
+    Then ``members(path, meta)`` (by default the one registered for
     ``fmt``, for models and training checkpoints) names the arrays the archive must hold, with
     their shapes where known: another member, a missing one, or one larger than its shape
     allows (:data:`MAX_ITEM_BYTES` per element plus :data:`NPY_HEADER_MARGIN`) is refused.
@@ -315,7 +484,8 @@ def load_archive(path: str | os.PathLike[str], fmt: str, version: int,
                                  f"an .npz archive: {_one_line(error)})") from None
 
 
-def _read_archive(path: Path, archive: zipfile.ZipFile, fmt: str, version: int,
+def _read_archive(path: Path, archive: zipfile.ZipFile, fmt: str,
+                  version: int | tuple[int, ...],
                   members: Callable[[Path, dict[str, Any]], dict[str, tuple[int, ...] | None]]
                   | None) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     kind = fmt.removeprefix("rnnpb-")
@@ -357,10 +527,13 @@ def _read_archive(path: Path, archive: zipfile.ZipFile, fmt: str, version: int,
     if not isinstance(meta, dict) or meta.get("format") != fmt:
         found = meta.get("format") if isinstance(meta, dict) else None
         raise ModelFileError(f"{path}: not an rnnpb {kind} file (format is {_shown(found)})")
-    if meta.get("format_version") != version:
+    versions = (version,) if isinstance(version, int) else tuple(version)
+    found_version = meta.get("format_version")
+    if isinstance(found_version, bool) or found_version not in versions:
+        expected = " or ".join(str(v) for v in versions)
         raise ModelFileError(f"{path}: {kind} format version "
-                             f"{_shown(meta.get('format_version'))} is not supported by rnnpb "
-                             f"{__version__} (expects {version})")
+                             f"{_shown(found_version)} is not supported by rnnpb "
+                             f"{__version__} (expects {expected})")
     shapes: dict[str, tuple[int, ...] | None] = (
         members(path, meta) if members is not None else dict.fromkeys(by_name))
     unknown = [name for name in by_name if name not in shapes]

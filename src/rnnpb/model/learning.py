@@ -28,7 +28,7 @@ import numpy as np
 import optax
 
 from rnnpb.errors import ConfigError, DataFileError
-from rnnpb.model.network import NetworkConfig, Params, init_params, open_loop
+from rnnpb.model.network import NetworkConfig, Params, init_params, logit_numpy, open_loop
 from rnnpb.model.parametric_bias import PBUpdateConfig, pb_update
 from rnnpb.sequences import Sequence
 from rnnpb.vectors import MOTOR_NAMES, SENSORY_NAMES, SENSORY_SIZE
@@ -236,15 +236,51 @@ def per_output_mse(trainable: tuple[Params, jax.Array], rho: jax.Array, inputs: 
     return jnp.sum(error, axis=(0, 1)) / jnp.sum(valid)
 
 
-def init_state(data: TrainingData, network: NetworkConfig, config: TrainConfig) -> TrainState:
+@dataclass(frozen=True)
+class WarmStart:
+    """Where learning starts when it continues from a learned model (incremental learning,
+    :mod:`rnnpb.model.consolidation`) instead of from random weights.
+
+    Attributes
+    ----------
+    params : Params
+        The weights to start from.
+    initial_context : array, shape (S, C)
+        Each training sequence's starting initial context, in (0, 1).
+    pb : array, shape (S, P)
+        Each training sequence's starting PB, in (0, 1): its whole PB profile starts there.
+    fingerprint : str
+        Names the start (the model's fingerprint and the method), so that a checkpoint of one
+        start never resumes another.
+    """
+
+    params: Params
+    initial_context: np.ndarray
+    pb: np.ndarray
+    fingerprint: str
+
+
+def init_state(data: TrainingData, network: NetworkConfig, config: TrainConfig,
+               warm_start: WarmStart | None = None) -> TrainState:
     """The state before the first iteration: random weights from ``config.seed``, initial
-    contexts at 0.5 and every PB profile at 0.5."""
+    contexts at 0.5 and every PB profile at 0.5; or, with ``warm_start``, its weights,
+    initial contexts and PBs (the optimizer's state starts afresh either way)."""
     key = jax.random.PRNGKey(config.seed)
     key, params_key = jax.random.split(key)
     params = init_params(network, params_key)
     n_seq, n_pred = data.valid.shape
     context_logit = jnp.zeros((n_seq, network.context_size), jnp.float32)
-    opt_state = optimizer_for(config).init((params, context_logit))
     rho = jnp.zeros((n_seq, n_pred, network.pb_size), jnp.float32)
+    if warm_start is not None:
+        if np.shape(warm_start.initial_context) != (n_seq, network.context_size) or \
+                np.shape(warm_start.pb) != (n_seq, network.pb_size):
+            raise ConfigError("the warm start's initial contexts or PBs do not match the "
+                              f"{n_seq} training sequences and the network's sizes")
+        params = Params(*(jnp.asarray(v, jnp.float32) for v in warm_start.params))
+        context_logit = jnp.asarray(logit_numpy(np.asarray(warm_start.initial_context)),
+                                    jnp.float32)
+        rho = jnp.broadcast_to(jnp.asarray(logit_numpy(np.asarray(warm_start.pb)),
+                                           jnp.float32)[:, None, :], rho.shape)
+    opt_state = optimizer_for(config).init((params, context_logit))
     return TrainState(params, context_logit, opt_state, rho, jnp.zeros_like(rho), key,
                       jnp.asarray(0, jnp.int32))

@@ -30,6 +30,7 @@ from rnnpb.model.learning import (
     TrainConfig,
     TrainingData,
     TrainState,
+    WarmStart,
     chunk_runner,
     init_state,
     per_output_mse,
@@ -56,7 +57,7 @@ def train(sequences: SequenceABC[Sequence], joint_limits: np.ndarray,
           network: NetworkConfig | None = None, config: TrainConfig | None = None, *,
           progress: bool | Callable[[TrainingProgress], None] = False,
           checkpoint_path: str | os.PathLike[str] | None = None,
-          resume: bool = False) -> TrainedModel:
+          resume: bool = False, warm_start: WarmStart | None = None) -> TrainedModel:
     """Learn the sequences; return the trained model.
 
     Parameters
@@ -70,7 +71,11 @@ def train(sequences: SequenceABC[Sequence], joint_limits: np.ndarray,
     checkpoint_path : path, optional
         Where to write a checkpoint every ``config.checkpoint_every`` iterations (atomically).
     resume : bool
-        Continue from ``checkpoint_path`` if it exists (same data and config required).
+        Continue from ``checkpoint_path`` if it exists (same data, config and warm start
+        required).
+    warm_start : WarmStart, optional
+        Start from these weights, initial contexts and PBs instead of random weights
+        (incremental learning, :mod:`rnnpb.model.consolidation`).
     """
     network = network or NetworkConfig()
     config = config or TrainConfig()
@@ -78,9 +83,10 @@ def train(sequences: SequenceABC[Sequence], joint_limits: np.ndarray,
     if data.inputs.shape[-1] != network.io_size:
         raise ConfigError(f"sequences have {data.inputs.shape[-1]} values per step but the "
                           f"network expects {network.io_size}")
-    state = init_state(data, network, config)
+    state = init_state(data, network, config, warm_start)
+    start_name = warm_start.fingerprint if warm_start is not None else None
     if resume and checkpoint_path is not None and os.path.exists(checkpoint_path):
-        state = load_checkpoint(checkpoint_path, state, data, network, config)
+        state = load_checkpoint(checkpoint_path, state, data, network, config, start_name)
     run_chunk = chunk_runner(config)
     inputs = jnp.asarray(data.inputs, jnp.float32)
     valid = jnp.asarray(data.valid)
@@ -114,7 +120,7 @@ def train(sequences: SequenceABC[Sequence], joint_limits: np.ndarray,
             # this safe point), and the chunk just learned is then kept.
             if checkpoint_path is not None and (done % config.checkpoint_every == 0
                                                 or done == config.iterations):
-                save_checkpoint(checkpoint_path, state, data, network, config)
+                save_checkpoint(checkpoint_path, state, data, network, config, start_name)
             if bar is not None:
                 bar.update(n)
                 bar.set_postfix(mse=f"{mse:.2e}")
@@ -160,23 +166,32 @@ def _finish(state: TrainState, data: TrainingData, network: NetworkConfig, confi
 
 
 def save_checkpoint(path: str | os.PathLike[str], state: TrainState, data: TrainingData,
-                    network: NetworkConfig, config: TrainConfig) -> None:
-    """Write the whole training state atomically, to continue with ``resume=True``."""
+                    network: NetworkConfig, config: TrainConfig,
+                    warm_start: str | None = None) -> None:
+    """Write the whole training state atomically, to continue with ``resume=True``;
+    ``warm_start`` names the start it continued from (:attr:`WarmStart.fingerprint`)."""
     leaves = jax.tree_util.tree_leaves(state)
     arrays = {f"state/{i:04d}": np.asarray(leaf) for i, leaf in enumerate(leaves)}
     meta = {"format": CHECKPOINT_FORMAT, "format_version": CHECKPOINT_FORMAT_VERSION,
             "rnnpb_version": __version__, "network": asdict(network),
             "train_config": config.to_dict(), "data_fingerprint": data.fingerprint,
             "iteration": int(state.iteration), "n_leaves": len(leaves)}
+    if warm_start is not None:
+        meta["warm_start"] = warm_start
     save_archive(path, meta, arrays)
 
 
 def load_checkpoint(path: str | os.PathLike[str], template: TrainState, data: TrainingData,
-                    network: NetworkConfig, config: TrainConfig) -> TrainState:
-    """Read a checkpoint into the structure of ``template``; it must match data and config."""
+                    network: NetworkConfig, config: TrainConfig,
+                    warm_start: str | None = None) -> TrainState:
+    """Read a checkpoint into the structure of ``template``; it must match data, config and
+    warm start."""
     meta, arrays = load_archive(path, CHECKPOINT_FORMAT, CHECKPOINT_FORMAT_VERSION)
     if meta.get("data_fingerprint") != data.fingerprint:
         raise ModelFileError(f"{path}: checkpoint was made with other training data")
+    if meta.get("warm_start") != warm_start:
+        raise ModelFileError(f"{path}: checkpoint was made from another starting model or "
+                             "method")
     if meta.get("network") != asdict(network):
         raise ModelFileError(f"{path}: checkpoint was made with another network config")
     saved = meta.get("train_config")

@@ -35,6 +35,15 @@ from rnnpb.perception._colors import (
     load_ball_colors,
     save_ball_colors,
 )
+from rnnpb.perception._depth import (
+    MOUSE_PLANE_X,
+    DepthConfig,
+    depth_from_size,
+    fill_gaps,
+    hands_from_balls,
+    hands_on_plane,
+    running_median,
+)
 from rnnpb.perception._sources import (
     ArraySource,
     FrameSource,
@@ -64,6 +73,7 @@ from rnnpb.perception._user_source import (
 
 __all__ = [
     "BLUE",
+    "MOUSE_PLANE_X",
     "BROAD_BLUE",
     "BROAD_RED",
     "HARD_SCENE_KINDS",
@@ -75,6 +85,7 @@ __all__ = [
     "BallColor",
     "BallColors",
     "BallMeasurement",
+    "DepthConfig",
     "BallTracker",
     "FrameSource",
     "ImageFolderSource",
@@ -95,14 +106,19 @@ __all__ = [
     "call_with_timeout",
     "center_errors",
     "clutter_benchmark",
+    "depth_from_size",
     "draw_tracking",
+    "fill_gaps",
     "fit_color",
+    "hands_from_balls",
+    "hands_on_plane",
     "hard_scene",
     "load_ball_colors",
     "locate_ball",
     "oscillating_hands",
     "open_camera_source",
     "open_frame_source",
+    "running_median",
     "save_ball_colors",
     "score_scene",
     "synthetic_user_hands",

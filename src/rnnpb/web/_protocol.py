@@ -23,6 +23,9 @@ MODES = ("demonstrator", "pointer", "webcam")
 ACTIONS = ("start", "stop", "reset")
 PATTERN_CHOICES = ("1", "2", "3", "4", "pause")
 MAX_CAMERA_INDEX = 16
+GAME_MODES = ("person", "robots")
+GAME_ACTIONS = ("start", "stop")
+MAX_NAME_LENGTH = 200
 
 
 class ProtocolError(RnnpbError):
@@ -84,6 +87,11 @@ def parse_client_message(text: str | bytes | None) -> dict[str, Any]:
     ``{"type": "dt", "dt": S}``                    seconds per step in [0.02, 5]
     ``{"type": "model", "name": NAME}``            one of the models the server offers
     ``{"type": "ping"}``                           answered with ``pong``
+    ``{"type": "game", "action": A, "mode": M,``   the mirror game (``/game``): ``start`` or
+    ``"model": NAME}``                             ``stop``; ``person`` or ``robots``; a model
+                                                   name or ``null`` (the first)
+    ``{"type": "game_hands", "hands": [...]}``     the person's hands in the game, as
+                                                   ``hands``
     =============================================  ===========================================
     """
     if text is None:
@@ -111,6 +119,25 @@ def parse_client_message(text: str | bytes | None) -> dict[str, Any]:
         for name, value in zip(("lhy", "lhz", "rhy", "rhz"), hands, strict=True):
             values.append(math.nan if value is None else _number(value, name, 0.0, 1.0))
         return {"type": "hands", "hands": values}
+    if kind == "game_hands":
+        _keys(message, ("hands",))
+        return {**parse_client_message(json.dumps({"type": "hands",
+                                                   "hands": message["hands"]})),
+                "type": "game_hands"}
+    if kind == "game":
+        _keys(message, ("action", "mode", "model"))
+        if not isinstance(message["action"], str) or message["action"] not in GAME_ACTIONS:
+            raise ProtocolError(f"game action must be one of {', '.join(GAME_ACTIONS)}, got "
+                                f"{_shown(message['action'])}")
+        if not isinstance(message["mode"], str) or message["mode"] not in GAME_MODES:
+            raise ProtocolError(f"game mode must be one of {', '.join(GAME_MODES)}, got "
+                                f"{_shown(message['mode'])}")
+        model = message["model"]
+        if model is not None and (not isinstance(model, str) or len(model) > MAX_NAME_LENGTH):
+            raise ProtocolError(f"game model must be a model name or null, got "
+                                f"{_shown(model)}")
+        return {"type": "game", "action": message["action"], "mode": message["mode"],
+                "model": model}
     if kind == "mode":
         _keys(message, ("mode",))
         if not isinstance(message["mode"], str) or message["mode"] not in MODES:

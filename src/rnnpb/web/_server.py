@@ -1,6 +1,7 @@
 """The dashboard's web server: a Starlette app served by uvicorn.
 
-Routes: ``/`` the page, ``/static/…`` its files (all vendored, nothing is fetched from the
+Routes: ``/`` the page, ``/game`` the mirror game (its WebSocket ``/ws/game``; docs/dashboard.md),
+``/static/…`` its files (all vendored, nothing is fetched from the
 internet), ``/api/state`` the session state as JSON, ``/api/recording.csv`` the current
 session recording, and ``/ws`` the WebSocket every tab opens (docs/dashboard.md). Requests
 whose ``Host`` the :class:`AccessPolicy` does not name get 400, WebSocket handshakes from a
@@ -28,6 +29,7 @@ from starlette.staticfiles import StaticFiles
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from rnnpb.web._access import ANY_ADDRESS, AccessPolicy, SecurityHeadersMiddleware, normalize_host
+from rnnpb.web._game import GameSession
 from rnnpb.web._protocol import ProtocolError, parse_client_message
 from rnnpb.web._session import RecordingLimits, Session
 
@@ -177,8 +179,69 @@ def create_app(session: Session, access: AccessPolicy | None = None,
                 await sending
             log.info("%s disconnected", client)
 
+    game = GameSession(session.models, dt=session.dt)
+
+    async def game_page(request: Request) -> Response:
+        return FileResponse(STATIC_DIR / "game.html", media_type="text/html")
+
+    async def game_socket(ws: WebSocket) -> None:
+        """The mirror game's WebSocket: the same origin rule and message checks as ``/ws``."""
+        if not access.origin_allowed(ws.headers.get("origin"), ws.headers.get("host")):
+            await ws.send_denial_response(PlainTextResponse(
+                "this origin may not use this dashboard\n", status_code=403))
+            return
+        await ws.accept()
+        loop = asyncio.get_running_loop()
+        outbox: asyncio.Queue[str] = asyncio.Queue(maxsize=SEND_QUEUE)
+
+        def put(text: str) -> None:
+            if outbox.full():
+                outbox.get_nowait()
+            outbox.put_nowait(text)
+
+        def from_game(text: str) -> None:
+            with contextlib.suppress(RuntimeError):
+                loop.call_soon_threadsafe(put, text)
+
+        async def sender() -> None:
+            while True:
+                await ws.send_text(await outbox.get())
+
+        put(json.dumps(game.state()))
+        unsubscribe = game.subscribe(from_game)
+        sending = asyncio.create_task(sender())
+        try:
+            while True:
+                event = await ws.receive()
+                if event["type"] == "websocket.disconnect":
+                    break
+                try:
+                    message = parse_client_message(event.get("text", event.get("bytes")))
+                    if message["type"] not in ("game", "game_hands", "ping"):
+                        raise ProtocolError(f"the game page does not take {message['type']!r} "
+                                            "messages")
+                except ProtocolError as error:
+                    put(json.dumps({"type": "error", "message": f"rejected: {error}"}))
+                    continue
+                if message["type"] == "ping":
+                    put('{"type":"pong"}')
+                elif message["type"] == "game":
+                    # Starting loads a model and compiles: not on the event loop.
+                    await asyncio.to_thread(game.submit, message)
+                else:
+                    game.submit(message)
+        except WebSocketDisconnect:
+            pass
+        finally:
+            unsubscribe()
+            sending.cancel()
+            with contextlib.suppress(asyncio.CancelledError, WebSocketDisconnect, RuntimeError):
+                await sending
+
     routes = [
         Route("/", index),
+        Route("/game", game_page),
+        WebSocketRoute("/ws/game", game_socket),
         Route("/api/state", state),
         Route("/api/recording.csv", recording),
         WebSocketRoute("/ws", websocket),
@@ -191,7 +254,9 @@ def create_app(session: Session, access: AccessPolicy | None = None,
         Middleware(TrustedHostMiddleware, allowed_hosts=list(access.allowed_hosts),
                    www_redirect=False),
     ]
-    return Starlette(routes=routes, middleware=middleware)
+    app = Starlette(routes=routes, middleware=middleware)
+    app.state.game = game
+    return app
 
 
 class DashboardServer:
@@ -251,6 +316,7 @@ class DashboardServer:
         deadline = time.monotonic() + 10
         while not self.server.started:
             if not self._thread.is_alive() or time.monotonic() > deadline:
+                self.app.state.game.stop()
                 self.session.close()
                 raise RnnpbError(f"cannot serve on {self.host}:{self.server.config.port} "
                                  "(is the port in use?)")
@@ -261,6 +327,7 @@ class DashboardServer:
         self.server.should_exit = True
         if self._thread is not None:
             self._thread.join(timeout=10)
+        self.app.state.game.stop()
         self.session.close()
 
     def wait(self) -> None:

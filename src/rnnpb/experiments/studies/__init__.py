@@ -16,14 +16,19 @@ from __future__ import annotations
 import importlib
 from dataclasses import dataclass, field
 from types import ModuleType
+from typing import TYPE_CHECKING
 
 from rnnpb.errors import ConfigError
-from rnnpb.experiments.summary import Target
+
+if TYPE_CHECKING:  # the command line lists the studies without loading JAX
+    from rnnpb.experiments.summary import Target
 
 # name -> module; the order is the order of `rnnpb study --help`.
 STUDY_MODULES: dict[str, str] = {
-    "safety": "rnnpb.experiments.studies.safety",
     "novelty": "rnnpb.experiments.studies.novelty",
+    "incremental": "rnnpb.experiments.studies.incremental",
+    "safety": "rnnpb.experiments.studies.safety",
+    "dyad": "rnnpb.experiments.studies.dyad",
 }
 
 

@@ -1,0 +1,116 @@
+"""rnnpb consolidate: add new patterns to a learned model without forgetting the old ones."""
+
+from __future__ import annotations
+
+import argparse
+
+NAME = "consolidate"
+SAFE_POINTS = True  # Ctrl-C stops between training chunks (rnnpb._interrupt)
+HELP = "add new patterns to a learned model (rehearsal and consolidation)"
+DESCRIPTION = """\
+Add new movement patterns to a learned model (Ito & Tani 2004, section 4.1, after Tani 1998).
+
+Methods:
+  rehearsal  (default) the model regenerates each learned pattern in closed loop from its PB,
+             without the original data, and learns the new pattern together with them
+  finetune   learns the new pattern alone (the old ones are overwritten: for comparison)
+  replay     learns the new pattern with the original data (--replay-data)
+  scratch    learns the original data and the new pattern anew from random weights
+             (--replay-data; the model's own full learning: the upper bound)
+
+The new files are sequence CSVs as for `rnnpb train`; their patterns must have names the
+model does not hold. Learning continues from the model's weights (scratch: from random ones)
+with the model's own algorithm (paper or fast preset); --iterations overrides the default
+(paper: 5,000; fast: 500; scratch: the model's first training's). The new model records its
+history (see `rnnpb info`). The model given is never changed; the new one is written only when
+learning is done, atomically. A checkpoint is written next to it (OUT.checkpoint.npz) every
+--checkpoint-every iterations; after an interruption --resume continues from it.
+
+Example:
+  rnnpb consolidate --model set1.npz --add data/patterns/4_*.csv --out set1+4.npz
+"""
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--model", required=True, metavar="MODEL", help="the learned model")
+    parser.add_argument("--add", nargs="+", required=True, metavar="FILE_OR_DIR",
+                        help="sequence CSV files (or directories) of the new pattern(s)")
+    parser.add_argument("--out", required=True, metavar="MODEL",
+                        help="where to write the new model (.npz)")
+    parser.add_argument("--method", choices=("rehearsal", "finetune", "replay", "scratch"),
+                        default="rehearsal", help="how to add them (default: rehearsal)")
+    parser.add_argument("--replay-data", nargs="+", metavar="FILE_OR_DIR",
+                        help="the original training data (replay and scratch)")
+    parser.add_argument("--iterations", type=int, help="learning iterations")
+    parser.add_argument("--seed", type=int, help="random seed (default: the model's)")
+    parser.add_argument("--checkpoint-every", type=int, default=1000, metavar="N",
+                        help="write a checkpoint every N iterations (default 1000)")
+    parser.add_argument("--resume", action="store_true",
+                        help="continue from OUT.checkpoint.npz if it exists")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def run(args: argparse.Namespace) -> int:
+    from rnnpb._atomic import check_writable
+
+    check_writable(args.out, "model")
+
+    from dataclasses import replace
+
+    from rnnpb import _interrupt
+    from rnnpb.commands.train import checkpoint_path_for
+    from rnnpb.errors import ConfigError
+    from rnnpb.model import TrainedModel
+    from rnnpb.model.consolidation import ConsolidationConfig, consolidate
+    from rnnpb.sequences import read_sequence_files
+
+    if args.iterations is not None and args.iterations < 1:
+        raise ConfigError(f"--iterations must be >= 1, got {args.iterations}")
+    if args.checkpoint_every < 1:
+        raise ConfigError(f"--checkpoint-every must be >= 1, got {args.checkpoint_every}")
+    model = TrainedModel.load(args.model)
+    new = read_sequence_files(args.add)
+    replay = read_sequence_files(args.replay_data) if args.replay_data else None
+    if replay is not None and args.method not in ("replay", "scratch"):
+        raise ConfigError(f"--replay-data is for the methods replay and scratch, not "
+                          f"{args.method} (rehearsal needs no original data)")
+    config = ConsolidationConfig(method=args.method)
+    learning = config.learning_for(model)
+    changes = {"iterations": args.iterations, "seed": args.seed}
+    learning = replace(learning, checkpoint_every=args.checkpoint_every,
+                       **{k: v for k, v in changes.items() if v is not None})
+    config = replace(config, train=learning)
+    added = sorted({s.pattern for s in new})
+    print(f"adding {len(new)} sequence(s) of pattern(s) {', '.join(added)} to {args.model} "
+          f"({', '.join(model.patterns)}) by {args.method}: {learning.iterations} iterations "
+          f"({learning.optimizer})")
+    bar = None
+    if not args.no_progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=learning.iterations, unit="it", desc=args.method, dynamic_ncols=True)
+
+    def after_chunk(progress) -> None:
+        if bar is not None:
+            bar.update(progress.iteration - bar.n)
+            bar.set_postfix(mse=f"{progress.mse:.2e}")
+        # A safe point: the chunk's error has been read back, so no XLA work is in flight.
+        _interrupt.check()
+
+    try:
+        grown = consolidate(model, new, config, replay_data=replay, parent=args.model,
+                            progress=after_chunk, checkpoint_path=checkpoint_path_for(args.out),
+                            resume=args.resume)
+    finally:
+        if bar is not None:
+            bar.close()
+    _interrupt.check()  # interrupted during the last chunk: no model file
+    grown.save(args.out)
+    entry = grown.history[-1]
+    print(f"wrote {args.out}: patterns {', '.join(grown.patterns)} after {entry.iterations} "
+          f"iterations in {entry.seconds:.1f} s; training error (MSE) max "
+          f"{grown.meta['training']['mse_max']:.2e}")
+    if entry.details.get("replay_data_matches_record") is False:
+        print("note: the original data differ from the data the model recorded (CSV files "
+              "round values); the new model records that")
+    return 0

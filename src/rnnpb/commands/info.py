@@ -1,0 +1,95 @@
+"""rnnpb info: what a model file holds."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+NAME = "info"
+HELP = "show what a model holds: patterns and PBs, sizes, learning, error, history"
+DESCRIPTION = """\
+Show what a model file holds: its learned patterns and their PBs, the network's sizes, the
+training config and its preset (paper or fast) with the on-line regression that suits it,
+the training error, and the model's history (which patterns were learned when, by which
+method, from which model).
+
+Example:
+  rnnpb info results/demo/models/set1.npz
+"""
+
+# Settings that do not change what is learned, left out when a config is matched to a preset.
+_RUN_SETTINGS = ("iterations", "seed", "chunk_iterations", "checkpoint_every")
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("model", metavar="MODEL", help="a model file (.npz)")
+
+
+def preset_of(train_config: dict[str, Any] | None) -> str:
+    """``paper``, ``fast`` or ``custom``: the preset the recorded training config is (its
+    iterations and seed aside), ``unknown`` when none is recorded."""
+    from rnnpb.model import TrainConfig
+
+    if not isinstance(train_config, dict):
+        return "unknown"
+    try:
+        recorded = TrainConfig.from_dict(train_config).to_dict()
+    except (TypeError, ValueError, KeyError):
+        return "unknown"
+    for name, preset in (("paper", TrainConfig.paper()), ("fast", TrainConfig.fast())):
+        wanted = preset.to_dict()
+        if all(recorded[k] == wanted[k] for k in wanted if k not in _RUN_SETTINGS):
+            return name
+    return "custom"
+
+
+def suited_regression(preset: str) -> str:
+    """The on-line regression to run a model of ``preset`` with (docs/model.md, "Which
+    learning, and why the gate is on")."""
+    if preset == "fast":
+        return "fast preset: use --online ungated"
+    if preset == "paper":
+        return "paper preset: use the default on-line regression (--online default)"
+    return "not a preset: try the default, and --online ungated if it follows poorly"
+
+
+def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from rnnpb.model import TrainedModel
+
+    model = TrainedModel.load(args.model)
+    net = model.network
+    print(f"{args.model}: {len(model.patterns)} pattern(s), {len(model.sequence_patterns)} "
+          f"training sequence(s); model fingerprint {model.fingerprint[:16]}")
+    print(f"network: {net.sensory_size} sensory + {net.motor_size} motor values, "
+          f"{net.pb_size} PB, {net.hidden_size} hidden, {net.context_size} context units")
+    print("patterns (PB: the mean of its sequences' learned PBs):")
+    counts = {p: model.sequence_patterns.count(p) for p in model.patterns}
+    for name, pb in model.pattern_pb.items():
+        print(f"  {name}: PB {np.array2string(pb, precision=3)} ({counts[name]} sequence(s))")
+    config = model.meta.get("train_config")
+    preset = preset_of(config)
+    if isinstance(config, dict):
+        print(f"learning: {preset} preset, {config.get('optimizer')}, "
+              f"{config.get('iterations')} iterations, learning rate "
+              f"{config.get('learning_rate')}, input noise {config.get('input_noise')}, "
+              f"seed {config.get('seed')}")
+    else:
+        print("learning: not recorded")
+    print(f"on-line regression: {suited_regression(preset)}")
+    training = model.meta.get("training")
+    if isinstance(training, dict) and "mse_max" in training:
+        print(f"training error (MSE over outputs): max {training['mse_max']:.2e}, mean "
+              f"{training.get('mse_mean', float('nan')):.2e}; {training.get('seconds', 0):.1f} s")
+    print("history:")
+    for k, entry in enumerate(model.history):
+        when = entry.created or "time not recorded"
+        source = (f" from {entry.parent} ({(entry.parent_fingerprint or '')[:16]})"
+                  if entry.parent or entry.parent_fingerprint else "")
+        print(f"  {k}. {entry.method}: learned {', '.join(entry.added)}{source}; "
+              f"{entry.iterations} iterations, {entry.seconds:.1f} s; {when}")
+        if entry.details:
+            shown = ", ".join(f"{key} {value}" for key, value in entry.details.items())
+            print(f"     {shown}")
+    return 0

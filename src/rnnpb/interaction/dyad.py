@@ -1,0 +1,641 @@
+"""Two agents coupled through their senses (the paper's section 4.2): robot–robot and
+robot–subject, in one process, as fast as possible or paced.
+
+Each agent moves a body and sees its partner's. What an agent shows its partner is its hands
+*in the person's space*: where a person's hands would be, in the seeing robot's frame, for the
+robot's camera to see them as it saw its teachers (``lhy lhz rhy rhz``,
+:meth:`rnnpb.robot.camera.RobotCamera.sensory_from_hands`).
+
+The scale mapping between a robot's body and a person's. The robot imitates a person through
+the mirror mapping (:class:`rnnpb.demonstrator.MirrorMapping`): each person's hand, relative to
+the person's shoulder, reflected through the plane between them and scaled by
+``s = (L1 + L2) / arm_reach`` (robot arm reach over a person's, 0.21 m / 0.62 m = 0.34),
+placed at the robot's opposite-side shoulder. A robot facing a robot is seen through the
+inverse of that mapping: its hands by forward kinematics
+(:func:`rnnpb.robot.forward_kinematics`), relative to its shoulders, scaled by ``1 / s``,
+reflected back and placed at a person's shoulders (:class:`rnnpb.demonstrator.UserBody`) — the
+person the robot would be imitating (``view="mirrored"``, the default). So a robot moving a
+learned pattern is seen moving that pattern. Physically, a robot facing another sees it turned
+half a turn (``view="physical"``): left and right swap sides and the circles of patterns 3 and
+4 turn the other way, which the robots never learned; "mirrored" is that view flipped left to
+right, as in a mirror.
+
+Timing: the agents see each other one step late (the other's body as it was after the last
+step), so both can act at once; a subject and a robot alike.
+
+What an agent may vary (:class:`AgentConfig`): its *adaptation* — how fast its PB follows what
+it sees (a scale on the regression's learning rates; 0: the PB never follows, the robot plays
+its own pattern), its *persistence* — after how many steps of stable interaction it takes the
+initiative and starts another of its patterns (``None``: never), and *noise* on what it sees.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from typing import Protocol
+
+import numpy as np
+
+from rnnpb.demonstrator import PATTERNS, PatternConfig, UserBody, pattern_offsets
+from rnnpb.errors import ConfigError
+from rnnpb.model.generation import generate
+from rnnpb.model.io import TrainedModel
+from rnnpb.model.mirror import MirrorSystem, StepResult
+from rnnpb.model.online_config import OnlineConfig
+from rnnpb.robot import FOREARM_LENGTH, SHOULDERS, UPPER_ARM_LENGTH, forward_kinematics
+from rnnpb.robot.camera import RobotCamera
+
+VIEWS = ("mirrored", "physical")
+WARMUP = 48  # closed-loop steps generated before an initiative is played (4 cycles)
+LEAD_HORIZON = 600  # steps an initiative can last past lead_steps while the partner follows
+LEADER_HORIZON = 4000  # steps a robot that never follows plans ahead (then plans again)
+RELEASE = 3  # unstable steps after which a leader whose partner no longer follows lets go
+_REFLECT_X = np.array([-1.0, 1.0, 1.0])
+_TURN = np.array([-1.0, -1.0, 1.0])  # half a turn about the vertical axis
+
+
+def robot_to_person_scale(body: UserBody | None = None) -> float:
+    """Metres of a person's hand movement per metre of the robot's: ``arm_reach / (L1 + L2)``."""
+    body = body or UserBody()
+    return body.arm_reach / (UPPER_ARM_LENGTH + FOREARM_LENGTH)
+
+
+def person_hands(joints: np.ndarray, body: UserBody | None = None, view: str = "mirrored"
+                 ) -> np.ndarray:
+    """A robot's joint angles (..., 8) → its hands in the person's space (..., 2, 3): where a
+    person's hands would be (robot frame of the robot that sees it), [left, right]."""
+    if view not in VIEWS:
+        raise ConfigError(f"view must be one of {', '.join(VIEWS)}, got {view!r}")
+    body = body or UserBody()
+    hands, _ = forward_kinematics(joints)
+    relative = (hands - SHOULDERS) * robot_to_person_scale(body)
+    if view == "mirrored":
+        # The inverse of MirrorMapping: the robot's right arm shows the person's left hand.
+        return body.shoulders + relative[..., ::-1, :] * _REFLECT_X
+    # Turned half a turn: the robot's left arm is on the seer's right, where a person's left
+    # hand is.
+    return body.shoulders + relative * _TURN
+
+
+@dataclass(frozen=True)
+class AgentConfig:
+    """What an agent may vary.
+
+    Attributes
+    ----------
+    adaptation : float
+        Scale on the PB's (and the window onset's) learning rates of the on-line regression;
+        1 is the configured rate; 0: the robot does not follow at all, it plays its own
+        pattern (closed-loop generation from its PB) whatever it sees.
+    persistence : int or None
+        Steps of stable interaction (the agent's own prediction error below ``stable_error``)
+        after which the agent takes the initiative: it starts another of its patterns and
+        plays it without looking for ``lead_steps`` steps — its own closed-loop generation of
+        that pattern, from the pattern's learned initial context. None: never.
+    noise : float
+        Standard deviation of the noise on what the agent sees (normalized view units).
+    patience : int or None
+        Steps of not predicting its partner (prediction error above ``stable_error``) after
+        which the agent initiates another pattern, hoping the partner will follow (the
+        paper's subjects did); each time a little longer, up to twice as long, drawn from its
+        own random stream so that two agents do not keep initiating together. None: never.
+    alone_steps : int or None
+        Steps of seeing no movement (every view coordinate's standard deviation over them
+        below ``still_level``) after which the agent, left alone, takes the initiative. None:
+        never.
+    still_level : float
+        The movement (view units) under which the partner counts as still.
+    lead_steps : int
+        How long an initiative is held before the agent looks again.
+    stable_error : float
+        RMS prediction error (view units) under which a step counts as stable.
+    """
+
+    adaptation: float = 1.0
+    persistence: int | None = None
+    noise: float = 0.0
+    patience: int | None = None
+    alone_steps: int | None = 12
+    still_level: float = 0.01
+    lead_steps: int = 24
+    stable_error: float = 0.03
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.adaptation) and 0.0 <= self.adaptation <= 10.0):
+            raise ConfigError(f"adaptation must be in [0, 10], got {self.adaptation}")
+        if self.persistence is not None and self.persistence < 1:
+            raise ConfigError(f"persistence must be >= 1 step or None, got {self.persistence}")
+        if not (math.isfinite(self.noise) and self.noise >= 0.0):
+            raise ConfigError(f"noise must be >= 0, got {self.noise}")
+        if self.patience is not None and self.patience < 1:
+            raise ConfigError(f"patience must be >= 1 step or None, got {self.patience}")
+        if self.alone_steps is not None and self.alone_steps < 2:
+            raise ConfigError(f"alone_steps must be >= 2 steps or None, got {self.alone_steps}")
+        if not self.still_level >= 0:
+            raise ConfigError(f"still_level must be >= 0, got {self.still_level}")
+        if self.lead_steps < 0:
+            raise ConfigError(f"lead_steps must be >= 0, got {self.lead_steps}")
+        if not self.stable_error > 0:
+            raise ConfigError(f"stable_error must be > 0, got {self.stable_error}")
+
+    def online_config(self, base: OnlineConfig | None = None) -> OnlineConfig:
+        """The on-line regression of an agent with this adaptation."""
+        base = base or OnlineConfig()
+        if self.adaptation == 1.0:
+            return base
+        if self.adaptation == 0.0:
+            # No regression, and no restarts (they jump the PB to what fits): the PB stays.
+            return replace(base, iterations=0, restart_span=0, phase_restarts=0)
+        return replace(base, pb=replace(base.pb, learning_rate=base.pb.learning_rate
+                                        * self.adaptation),
+                       onset_learning_rate=base.onset_learning_rate * self.adaptation)
+
+
+@dataclass(frozen=True)
+class AgentStep:
+    """What an agent did in a step.
+
+    Attributes
+    ----------
+    hands : array, shape (2, 3)
+        Its hands in the person's space (what its partner sees next step).
+    view : array, shape (4,)
+        What it saw this step (its partner's hands through its camera, with its noise).
+    pb : array, shape (P,) or None
+        Its PB (a robot), or None (a subject).
+    motor : array, shape (8,) or None
+        Its joint angles (a robot).
+    intent : str
+        The pattern it means to play (a subject's current pattern; a robot's initiative while
+        it lasts), else ``""``.
+    initiative : bool
+        It took the initiative at this step.
+    result : StepResult or None
+        The mirror system's step (a robot).
+    """
+
+    hands: np.ndarray
+    view: np.ndarray
+    pb: np.ndarray | None = None
+    motor: np.ndarray | None = None
+    intent: str = ""
+    initiative: bool = False
+    result: StepResult | None = None
+
+
+class Agent(Protocol):
+    """One side of a dyad: it sees (4,) and moves; ``hands`` is what it shows now."""
+
+    name: str
+
+    @property
+    def hands(self) -> np.ndarray: ...
+
+    def act(self, view: np.ndarray) -> AgentStep: ...
+
+
+class RobotAgent:
+    """A mirror system moving a simulated body (kinematic: the joints go where commanded)."""
+
+    def __init__(self, model: TrainedModel, config: AgentConfig | None = None, *,
+                 online: OnlineConfig | None = None, seed: int = 0, name: str = "robot",
+                 body: UserBody | None = None, view: str = "mirrored",
+                 initial_pb: np.ndarray | None = None,
+                 initial_joints: np.ndarray | None = None) -> None:
+        self.model = model
+        self.config = config or AgentConfig()
+        self.name = name
+        self.body = body or UserBody()
+        self.view_kind = view
+        self.rng = np.random.default_rng(seed)
+        self.mirror = MirrorSystem(model, self.config.online_config(online))
+        self.patterns = tuple(model.patterns)
+        if initial_pb is not None:
+            self.mirror.reset(np.asarray(initial_pb, dtype=np.float64))
+        lower = np.asarray(model.lower)[model.network.sensory_size:]
+        upper = np.asarray(model.upper)[model.network.sensory_size:]
+        self.joints = (np.asarray(initial_joints, dtype=np.float64) if initial_joints is not None
+                       else 0.5 * (lower + upper))
+        self._hands = person_hands(self.joints, self.body, view)
+        self._stable = 0
+        self._unstable = 0
+        self._led = 0
+        self._patience = self._draw_patience()
+        self._intent = ""
+        self._recent: list[np.ndarray] = []
+        self._plan: list[np.ndarray] = []  # joint angles to play while leading
+        if self.config.adaptation == 0.0:
+            self._play(self.mirror.pb, LEADER_HORIZON)
+
+    @property
+    def hands(self) -> np.ndarray:
+        return self._hands
+
+    def _draw_patience(self) -> int | None:
+        p = self.config.patience
+        return None if p is None else p + int(self.rng.integers(0, p + 1))
+
+    def _left_alone(self) -> bool:
+        """The partner has not moved (or not been seen) for ``alone_steps`` steps."""
+        n = self.config.alone_steps
+        if n is None or len(self._recent) < n:
+            return False
+        recent = np.asarray(self._recent[-n:])
+        if not np.isfinite(recent).all():
+            return True
+        return bool(np.all(recent.std(axis=0) < self.config.still_level))
+
+    def set_config(self, config: AgentConfig) -> None:
+        """Change persistence, noise and lead from the next step on (the adaptation is fixed
+        at construction: it is part of the compiled step)."""
+        self.config = replace(config, adaptation=self.config.adaptation)
+
+    def take_initiative(self, pattern: str | None = None) -> str:
+        """Start another learned pattern now (``pattern``, or one drawn from the others) and
+        play it without looking for ``lead_steps`` steps; returns its name."""
+        if pattern is None:
+            current = self.model.nearest_pattern(self.mirror.pb)[0]
+            others = [p for p in self.patterns if p != current] or list(self.patterns)
+            pattern = str(self.rng.choice(others))
+        if pattern not in self.patterns:
+            raise ConfigError(f"pattern {pattern!r} is not one this robot learned "
+                              f"({', '.join(self.patterns)})")
+        self.mirror.reset(self.model.pattern_pb[pattern])
+        self._play(self.model.pattern_pb[pattern], self.config.lead_steps + LEAD_HORIZON,
+                   self.model.pattern_initial_context(pattern))
+        self._stable, self._unstable, self._led, self._intent = 0, 0, 0, pattern
+        self._patience = self._draw_patience()
+        self._recent.clear()
+        return pattern
+
+    def _play(self, pb: np.ndarray, n_steps: int, context: np.ndarray | None = None) -> None:
+        if n_steps > 0:
+            # The closed loop of a model learned from short demonstrations takes a few cycles
+            # to settle on its pattern (docs/dyad.md): the robot plays it from then on.
+            generated = generate(self.model, np.clip(pb, 0.0, 1.0), WARMUP + n_steps,
+                                 initial_context=context)
+            self._plan = list(generated.motor[WARMUP:])
+
+    def act(self, view: np.ndarray) -> AgentStep:
+        seen = np.asarray(view, dtype=np.float64)
+        if self.config.noise > 0:
+            seen = seen + self.config.noise * self.rng.standard_normal(seen.shape)
+        initiative = False
+        if self.config.adaptation == 0.0:
+            # It never follows: it plays its own pattern, planned ahead.
+            if not self._plan:
+                self._play(self.mirror.pb, LEADER_HORIZON)
+            self.joints = self._plan.pop(0)
+            self._hands = person_hands(self.joints, self.body, self.view_kind)
+            return AgentStep(hands=self._hands, view=seen, pb=self.mirror.pb,
+                             motor=self.joints)
+        if self._plan and self._led >= self.config.lead_steps and self._unstable >= RELEASE:
+            # The partner no longer follows: look and follow again (and wait a while of its own
+            # before initiating again, so that two agents do not keep initiating together).
+            self._plan = []
+            self._unstable, self._patience = 0, self._draw_patience()
+        leading = bool(self._plan)
+        persistence = self.config.persistence
+        if (persistence is not None and self._stable >= persistence) or \
+                (not leading and ((self._patience is not None
+                                   and self._unstable >= self._patience)
+                                  or self._left_alone())):
+            self.take_initiative()
+            initiative = leading = True
+        result = self.mirror.step(seen)
+        stable = math.isfinite(result.prediction_error) and \
+            math.sqrt(result.prediction_error) < self.config.stable_error
+        if leading:
+            # Led: stable while the partner follows the led pattern (the mirror system, which
+            # watches it, recognises that pattern in it).
+            stable = stable and self.model.nearest_pattern(result.pb)[0] == self._intent
+        self._stable = self._stable + 1 if stable else 0
+        self._unstable = 0 if stable else self._unstable + 1
+        if leading:
+            # While it leads, the robot plays its generated pattern and does not act on what
+            # it sees; its mirror system, started at that pattern's PB, watches the partner:
+            # the lead lasts ``lead_steps`` and then as long as the partner follows (the
+            # mirror predicts it), and the robot carries on from where the partner is.
+            self.joints = self._plan.pop(0)
+            self._led += 1
+            if not self._plan:
+                self._intent = ""
+        else:
+            self._intent = ""
+            self._recent.append(seen)
+            del self._recent[:-max(self.config.alone_steps or 1, 1)]
+            self.joints = result.motor
+        self._hands = person_hands(self.joints, self.body, self.view_kind)
+        return AgentStep(hands=self._hands, view=seen, pb=result.pb, motor=self.joints,
+                         intent=self._intent, initiative=initiative, result=result)
+
+
+@dataclass(frozen=True)
+class SubjectConfig:
+    """The scripted subject of the paper's section 4.2.
+
+    It does not know the robot's repertoire. It plays a pattern of its own; when the robot's
+    movement comes close to one of its patterns it keeps following it (it takes that pattern,
+    at the robot's phase); when they cannot match for ``patience`` steps it initiates another
+    (one it has not found yet, if any); once matched for ``memorize_steps`` it counts the
+    pattern found and, after holding it that long again, moves on to explore another.
+
+    Attributes
+    ----------
+    repertoire : tuple of str
+        Its patterns (the demonstrator's movements).
+    patience : int
+        Steps without a match before it initiates another pattern.
+    memorize_steps : int
+        Steps of match after which a pattern counts as found (for the subject); it holds the
+        synchrony as long again before exploring.
+    follow_steps : int
+        Steps the robot must move one of its other patterns before it follows it.
+    phase_coupling : float
+        Fraction of the phase difference to the robot it closes each step while matched.
+    period_steps : float
+        Its own cycle (the demonstrator's: 12 steps).
+    match_tolerance : float
+        The movement-class tolerance (relative RMS misfit) under which it deems a movement
+        one of its patterns.
+    """
+
+    repertoire: tuple[str, ...] = PATTERNS
+    patience: int = 30
+    memorize_steps: int = 24
+    follow_steps: int = 4
+    phase_coupling: float = 0.3
+    period_steps: float = 12.0
+    match_tolerance: float = 0.5
+
+    def __post_init__(self) -> None:
+        if not self.repertoire or any(p not in PATTERNS for p in self.repertoire):
+            raise ConfigError(f"subject repertoire must be patterns of {', '.join(PATTERNS)}")
+        for name in ("patience", "memorize_steps", "follow_steps"):
+            if getattr(self, name) < 1:
+                raise ConfigError(f"subject {name} must be >= 1, got {getattr(self, name)}")
+        if not 0.0 <= self.phase_coupling <= 1.0:
+            raise ConfigError("subject phase_coupling must be in [0, 1]")
+        if not 3.0 <= self.period_steps <= 200.0:
+            raise ConfigError("subject period_steps must be in [3, 200]")
+        if not self.match_tolerance > 0:
+            raise ConfigError("subject match_tolerance must be > 0")
+
+
+class ScriptedSubject:
+    """A person who explores the robot's repertoire (:class:`SubjectConfig`)."""
+
+    def __init__(self, config: SubjectConfig | None = None, *, seed: int = 0,
+                 agent: AgentConfig | None = None, name: str = "subject",
+                 pattern_config: PatternConfig | None = None,
+                 camera: RobotCamera | None = None) -> None:
+        self.config = config or SubjectConfig()
+        self.agent = agent or AgentConfig()
+        self.name = name
+        self.rng = np.random.default_rng(seed)
+        self.pattern_config = pattern_config or PatternConfig()
+        self.camera = camera or RobotCamera()
+        period = int(round(self.config.period_steps))
+        theta = 2 * np.pi * np.arange(period) / period
+        self._templates = {}
+        for name in self.config.repertoire:
+            cycle = self.camera.sensory_from_hands(self.pattern_config.body.hand_centres
+                                                   + pattern_offsets(name, theta,
+                                                                     self.pattern_config))
+            self._templates[name] = cycle - cycle.mean(axis=0)
+        self._period = period
+        self.pattern = str(self.rng.choice(self.config.repertoire))
+        self.theta = float(self.rng.uniform(0, 2 * np.pi))
+        self.believed_found: list[str] = []
+        self._views: list[np.ndarray] = []
+        self._matched = 0
+        self._unmatched = 0
+        self._dwell = 0
+        self._other = ("", 0)
+        self._hands = self._pose()
+
+    @property
+    def hands(self) -> np.ndarray:
+        return self._hands
+
+    def _pose(self) -> np.ndarray:
+        return self.pattern_config.body.hand_centres + pattern_offsets(
+            self.pattern, np.array(self.theta), self.pattern_config)
+
+    def _initiate(self) -> None:
+        unfound = [p for p in self.config.repertoire
+                   if p not in self.believed_found and p != self.pattern]
+        choices = unfound or [p for p in self.config.repertoire if p != self.pattern] \
+            or list(self.config.repertoire)
+        self.pattern = str(self.rng.choice(choices))
+        self._matched = self._unmatched = self._dwell = 0
+        self._other = ("", 0)
+
+    def _robot_movement(self) -> tuple[str, int]:
+        """What it takes the robot to be doing: the one of its own patterns (and its phase)
+        that the robot's last cycle looks like, as :func:`rnnpb.analysis.dyad.classify_movement`
+        judges it (it knows its own movements, not the robot's)."""
+        w = self._period
+        if len(self._views) < w:
+            return "", -1
+        segment = np.asarray(self._views[-w:])
+        if not np.isfinite(segment).all():
+            return "", -1
+        segment = segment - segment.mean(axis=0)
+        index = (np.arange(w)[:, None] + np.arange(-w + 1, 1)[None, :]) % w
+        best = (np.inf, "", -1)
+        for name, cycle in self._templates.items():
+            fits = np.sqrt(np.mean((cycle[index] - segment[None]) ** 2, axis=(1, 2))) \
+                / np.sqrt(np.mean(cycle ** 2))
+            j = int(np.argmin(fits))
+            if fits[j] < best[0]:
+                best = (float(fits[j]), name, j)
+        return (best[1], best[2]) if best[0] < self.config.match_tolerance else ("", -1)
+
+    def act(self, view: np.ndarray) -> AgentStep:
+        seen = np.asarray(view, dtype=np.float64)
+        if self.agent.noise > 0:
+            seen = seen + self.agent.noise * self.rng.standard_normal(seen.shape)
+        self._views.append(seen)
+        del self._views[:-self._period]
+        robot, phase = self._robot_movement()
+        config = self.config
+        initiative = False
+        self._dwell += 1
+        if robot and robot == self.pattern:
+            self._matched += 1  # over the time on this pattern: a flicker does not reset it
+            self._unmatched = 0
+            # Keep following passively: close part of the phase gap to the robot.
+            robot_theta = 2 * np.pi * phase / self._period
+            gap = (robot_theta - self.theta + np.pi) % (2 * np.pi) - np.pi
+            self.theta += config.phase_coupling * gap
+            if self._matched == config.memorize_steps and self.pattern not in \
+                    self.believed_found:
+                self.believed_found.append(self.pattern)
+            if self._matched >= 2 * config.memorize_steps and \
+                    len(self.believed_found) < len(config.repertoire):
+                self._initiate()  # memorised: explore another
+                initiative = True
+        else:
+            self._unmatched += 1
+            if robot and robot != self.pattern:
+                name, count = self._other
+                self._other = (robot, count + 1 if name == robot else 1)
+                if self._other[1] >= config.follow_steps:
+                    # The robot's movement is close to one of its own: follow it.
+                    self.pattern = robot
+                    self.theta = 2 * np.pi * phase / self._period
+                    self._matched = self._unmatched = self._dwell = 0
+                    self._other = ("", 0)
+            else:
+                self._other = ("", 0)
+            if self._unmatched >= config.patience or \
+                    self._dwell >= config.patience + 2 * config.memorize_steps:
+                # They cannot match (or not for long enough to remember it): try another.
+                self._initiate()
+                initiative = True
+        self.theta += 2 * np.pi / config.period_steps
+        self._hands = self._pose()
+        return AgentStep(hands=self._hands, view=seen, intent=self.pattern,
+                         initiative=initiative)
+
+
+@dataclass(frozen=True)
+class DyadStep:
+    """One step of both agents: ``step`` index, each agent's :class:`AgentStep`, the seconds
+    the step took, and each agent's hands as the other's camera sees them after the step
+    (``shown_a``, ``shown_b``, (4,) each: what the partner sees next)."""
+
+    step: int
+    a: AgentStep
+    b: AgentStep
+    seconds: float
+    shown_a: np.ndarray
+    shown_b: np.ndarray
+
+
+class Dyad:
+    """Two agents facing each other; each sees the other's hands through its own camera."""
+
+    def __init__(self, a: Agent, b: Agent, camera: RobotCamera | None = None) -> None:
+        self.a, self.b = a, b
+        self.camera = camera or RobotCamera()
+        self.steps = 0
+
+    def view(self, of: Agent) -> np.ndarray:
+        """What a robot's camera sees of an agent now, (4,)."""
+        return self.camera.sensory_from_hands(of.hands)
+
+    def step(self) -> DyadStep:
+        """Both agents see each other as they are and act (each sees the other one step
+        late)."""
+        start = time.perf_counter()
+        view_of_b, view_of_a = self.view(self.b), self.view(self.a)
+        a = self.a.act(view_of_b)
+        b = self.b.act(view_of_a)
+        seconds = time.perf_counter() - start
+        record = DyadStep(self.steps, a, b, seconds, self.view(self.a), self.view(self.b))
+        self.steps += 1
+        return record
+
+    def run(self, n_steps: int, *, dt: float = 0.4, paced: bool = False,
+            on_step: Callable[[DyadStep], None] | None = None,
+            between_steps: Callable[[float], None] | None = None,
+            should_stop: Callable[[], bool] | None = None) -> DyadRun:
+        """``n_steps`` steps, as fast as possible or one every ``dt`` seconds (the pacing of
+        :class:`rnnpb.interaction.InteractionLoop`: a late step starts the next at once;
+        ``between_steps(wait_s)`` is called while waiting)."""
+        records = []
+        deadline = time.perf_counter()
+        for _ in range(n_steps):
+            while paced:
+                wait_s = max(0.0, deadline - time.perf_counter())
+                if between_steps is not None:
+                    between_steps(wait_s)
+                elif wait_s > 0:
+                    time.sleep(wait_s)
+                if (should_stop is not None and should_stop()) or \
+                        time.perf_counter() >= deadline:
+                    break
+            if should_stop is not None and should_stop():
+                break
+            record = self.step()
+            records.append(record)
+            if on_step is not None:
+                on_step(record)
+            if paced:
+                deadline = max(deadline + dt, time.perf_counter())
+        return DyadRun.from_steps(records)
+
+
+@dataclass(frozen=True)
+class DyadRun:
+    """A two-agent run as arrays, (n, …) each: for each agent ``x`` in ``a``, ``b``: ``x_view``
+    (what it saw, (n, 4)), ``x_shown`` (its hands as the other's camera saw them next, (n,
+    4)), ``x_pb`` ((n, P), NaN for a subject), ``x_motor`` ((n, 8), NaN for a subject),
+    ``x_intent`` and ``x_initiative``; ``seconds`` per step."""
+
+    arrays: dict[str, np.ndarray] = field(default_factory=dict)
+
+    @classmethod
+    def from_steps(cls, steps: list[DyadStep]) -> DyadRun:
+        out: dict[str, np.ndarray] = {"step": np.array([s.step for s in steps])}
+        for side in ("a", "b"):
+            parts = [getattr(s, side) for s in steps]
+            out[f"{side}_view"] = np.array([p.view for p in parts]).reshape(-1, 4)
+            out[f"{side}_shown"] = np.array([getattr(s, f"shown_{side}") for s in steps]
+                                            ).reshape(-1, 4)
+            pb_size = next((len(p.pb) for p in parts if p.pb is not None), 4)
+            out[f"{side}_pb"] = np.array([p.pb if p.pb is not None else np.full(pb_size, np.nan)
+                                          for p in parts]).reshape(-1, pb_size)
+            out[f"{side}_motor"] = np.array([p.motor if p.motor is not None
+                                             else np.full(8, np.nan) for p in parts]
+                                            ).reshape(-1, 8)
+            out[f"{side}_intent"] = np.array([p.intent for p in parts], dtype=object)
+            out[f"{side}_initiative"] = np.array([p.initiative for p in parts], dtype=bool)
+        out["seconds"] = np.array([s.seconds for s in steps])
+        return cls(out)
+
+    def __getitem__(self, key: str) -> np.ndarray:
+        return self.arrays[key]
+
+    def __len__(self) -> int:
+        return len(self.arrays.get("step", ()))
+
+
+def random_start(model: TrainedModel, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """A random start for a robot: a PB drawn uniformly in [0.1, 0.9] per unit and joint
+    angles drawn uniformly within the model's motor range; ((P,), (8,))."""
+    s = model.network.sensory_size
+    lower = np.asarray(model.lower)[s:]
+    upper = np.asarray(model.upper)[s:]
+    pb = rng.uniform(0.1, 0.9, model.network.pb_size)
+    return pb, rng.uniform(lower, upper)
+
+
+def robot_pair(model_a: TrainedModel, model_b: TrainedModel, a: AgentConfig | None = None,
+               b: AgentConfig | None = None, *, seed: int = 0,
+               online: OnlineConfig | None = None, view: str = "mirrored") -> Dyad:
+    """Two robots from random starts (drawn from ``seed``)."""
+    rng = np.random.default_rng([int(seed), 18])
+    pb_a, joints_a = random_start(model_a, rng)
+    pb_b, joints_b = random_start(model_b, rng)
+    robot_a = RobotAgent(model_a, a, online=online, seed=int(rng.integers(2**31)), name="a",
+                         view=view, initial_pb=pb_a, initial_joints=joints_a)
+    robot_b = RobotAgent(model_b, b, online=online, seed=int(rng.integers(2**31)), name="b",
+                         view=view, initial_pb=pb_b, initial_joints=joints_b)
+    return Dyad(robot_a, robot_b)
+
+
+def robot_and_subject(model: TrainedModel, robot: AgentConfig | None = None,
+                      subject: SubjectConfig | None = None, *, seed: int = 0,
+                      online: OnlineConfig | None = None) -> Dyad:
+    """A robot (agent A, from a random start) and a scripted subject (agent B)."""
+    rng = np.random.default_rng([int(seed), 42])
+    pb, joints = random_start(model, rng)
+    robot_agent = RobotAgent(model, robot, online=online, seed=int(rng.integers(2**31)),
+                             name="robot", initial_pb=pb, initial_joints=joints)
+    return Dyad(robot_agent, ScriptedSubject(subject, seed=int(rng.integers(2**31))))

@@ -1,0 +1,229 @@
+"""The paper's learning phase (section 2.1, Fig. 2a) from any user source: the person moves,
+the robot records the hands and its own joint angles for them, cut into whole cycles.
+
+Per step: the hands' 3-D positions — from the colour balls' image centres and apparent sizes
+for a camera source (:func:`rnnpb.perception.hands_from_balls`), on a fixed plane in front of
+the robot for a source without depth (:func:`rnnpb.perception.hands_on_plane`) — then the
+robot's hand targets by the mirror mapping and its joint angles by inverse kinematics
+(:class:`rnnpb.demonstrator.MirrorMapping`). The sensory values are the ones the source
+measured (the network is taught what the camera sees, as in the paper).
+
+Cutting (:func:`cycle_bounds`): the first principal component of the sensory values, lightly
+smoothed, crosses its mean upwards once per cycle of any of the paper's patterns; cycles are
+the stretches between successive upward crossings at least half the dominant period apart (the
+period from the autocorrelation's first peak). A sequence is then ``cycles_per_sequence`` whole
+cycles (``mode="cycles"``) or consecutive windows of ``length`` steps (``mode="length"``);
+steps where a hand could not be recovered (lost longer than the gap filling covers) split the
+recording, and a sequence never spans them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from rnnpb.demonstrator import MirrorMapping
+from rnnpb.errors import ConfigError, RnnpbError
+from rnnpb.perception import (
+    MOUSE_PLANE_X,
+    DepthConfig,
+    TrackedUserSource,
+    hands_from_balls,
+    hands_on_plane,
+)
+from rnnpb.robot.camera import RobotCamera
+from rnnpb.sequences import Sequence
+from rnnpb.sources import FrameStepSource, UserSource
+
+CUT_MODES = ("cycles", "length")
+MIN_PERIOD = 4
+MAX_PERIOD = 60
+
+
+@dataclass(frozen=True)
+class Demonstration:
+    """A recorded demonstration, step by step.
+
+    Attributes
+    ----------
+    sensory : array, shape (n_steps, 4)
+        What the source measured, ``lhy lhz rhy rhz``; NaN where a hand was not seen.
+    hands : array, shape (n_steps, 2, 3)
+        The user's hands in the robot frame, metres; NaN where not recovered.
+    motor : array, shape (n_steps, 8)
+        The robot's joint angles for them, radians; NaN where the hands are NaN.
+    ik_residual : array, shape (n_steps, 2)
+        Distance from each robot hand target to where the arm reaches, metres.
+    depth : str
+        ``"size"`` (from the balls' apparent size) or ``"plane"`` (the fixed plane).
+    source : str
+        The source's description.
+    """
+
+    sensory: np.ndarray
+    hands: np.ndarray
+    motor: np.ndarray
+    ik_residual: np.ndarray
+    depth: str
+    source: str = ""
+    truth: dict = field(default_factory=dict, compare=False)
+
+    @property
+    def n_steps(self) -> int:
+        return int(len(self.sensory))
+
+    @property
+    def valid(self) -> np.ndarray:
+        """Steps whose sensory and motor values are all finite, shape (n_steps,)."""
+        return (np.isfinite(self.sensory).all(axis=1) & np.isfinite(self.motor).all(axis=1))
+
+
+def record_demonstration(source: UserSource, *, steps: int | None = None,
+                         mapping: MirrorMapping | None = None, camera: RobotCamera | None = None,
+                         depth: DepthConfig | None = None,
+                         plane_x: float = MOUSE_PLANE_X) -> Demonstration:
+    """Read a connected source to its end (or ``steps``) and turn it into a demonstration.
+
+    A :class:`rnnpb.perception.TrackedUserSource` gives depth from the balls' sizes; every other
+    source puts the hands on the plane ``x = plane_x``.
+    """
+    if steps is not None and steps < 2:
+        raise ConfigError(f"a demonstration needs at least 2 steps, got {steps}")
+    mapping = mapping or MirrorMapping()
+    camera = camera or RobotCamera()
+    # A video sampled every N-th frame: read the tracker's frames here, so that each kept
+    # observation is paired with its own ball sizes (not those of the last dropped frame).
+    frame_step = 1
+    reader = source
+    if isinstance(source, FrameStepSource) and isinstance(source.inner, TrackedUserSource):
+        reader, frame_step = source.inner, source.frame_step
+    tracked = isinstance(reader, TrackedUserSource)
+    sensory, centers, radii, frame_size = [], [], [], None
+    index = -1
+    while steps is None or len(sensory) < steps:
+        observation = reader.read()
+        if observation is None:
+            break
+        index += 1
+        if index % frame_step:
+            continue
+        sensory.append(observation.sensory)
+        if isinstance(reader, TrackedUserSource):
+            result = reader.last_result
+            assert result is not None
+            centers.append([ball.center_px for ball in result.balls])
+            radii.append([ball.radius_px for ball in result.balls])
+            if observation.frame is not None:
+                frame_size = (observation.frame.shape[1], observation.frame.shape[0])
+    if len(sensory) < 2:
+        raise RnnpbError(f"{_described(source)}: gave {len(sensory)} steps; a demonstration "
+                         "needs at least 2")
+    sensory_array = np.array(sensory)
+    if tracked:
+        hands = hands_from_balls(np.array(centers), np.array(radii), camera, depth,
+                                 image_size=frame_size)
+    else:
+        hands = hands_on_plane(sensory_array, camera, plane_x)
+    found = np.isfinite(hands).all(axis=(1, 2))
+    motor = np.full((len(hands), 8), np.nan)
+    residual = np.full((len(hands), 2), np.nan)
+    if found.any():
+        ik = mapping.inverse_kinematics(hands[found])
+        motor[found], residual[found] = ik.joints, ik.residual
+    return Demonstration(sensory_array, hands, motor, residual, "size" if tracked else "plane",
+                         _described(source))
+
+
+def _described(source: UserSource) -> str:
+    return str(getattr(source, "description", "") or type(source).__name__)
+
+
+def dominant_period(signal: np.ndarray, min_period: int = MIN_PERIOD,
+                    max_period: int = MAX_PERIOD) -> int | None:
+    """The lag of the autocorrelation's first strong peak in [min_period, max_period], or None
+    when the signal does not repeat. ``signal`` shape (n_steps,).
+
+    A peak is a local maximum inside the range, above 0.3 and at least 0.6 above the lowest
+    correlation at a shorter lag: a cycle's autocorrelation falls towards -1 at half its period
+    and comes back, while a drifting, shapeless movement's only decays (with small bumps).
+    """
+    x = np.asarray(signal, dtype=np.float64)
+    x = x - x.mean()
+    energy = float(x @ x)
+    max_period = min(max_period, len(x) // 2)
+    if energy <= 1e-12 or max_period < min_period + 2:
+        return None
+    lags = np.arange(1, max_period + 2)
+    correlation = np.array([x[:-k] @ x[k:] / energy * len(x) / (len(x) - k) for k in lags])
+    peaks = [i for i in range(min_period - 1, len(lags) - 1)
+             if correlation[i] >= correlation[i - 1] and correlation[i] >= correlation[i + 1]
+             and correlation[i] > 0.3 and correlation[i] - correlation[:i].min() >= 0.6]
+    if not peaks:
+        return None
+    # the first strong peak: later peaks are its multiples
+    best = max(correlation[i] for i in peaks)
+    first = next(i for i in peaks if correlation[i] >= 0.8 * best)
+    return int(lags[first])
+
+
+def cycle_bounds(sensory: np.ndarray) -> list[tuple[int, int]]:
+    """Whole cycles of a movement, as ``[(start, stop), …]`` step ranges (stop exclusive).
+
+    ``sensory`` shape (n_steps, 4), all finite. Empty when the movement does not repeat.
+    """
+    x = np.asarray(sensory, dtype=np.float64)
+    if x.ndim != 2 or len(x) < 2 * MIN_PERIOD or not np.isfinite(x).all():
+        return []
+    centred = x - x.mean(axis=0)
+    _, _, vt = np.linalg.svd(centred, full_matrices=False)
+    component = centred @ vt[0]
+    component = np.convolve(np.pad(component, 1, mode="edge"), np.ones(3) / 3, mode="valid")
+    period = dominant_period(component)
+    if period is None:
+        return []
+    ups = np.where((component[:-1] < 0) & (component[1:] >= 0))[0] + 1
+    starts: list[int] = []
+    for t in ups:
+        if not starts or t - starts[-1] >= period / 2:
+            starts.append(int(t))
+    return list(zip(starts[:-1], starts[1:], strict=True))
+
+
+def _valid_runs(valid: np.ndarray) -> list[tuple[int, int]]:
+    edges = np.diff(np.concatenate([[0], valid.astype(int), [0]]))
+    return list(zip(np.where(edges == 1)[0], np.where(edges == -1)[0], strict=True))
+
+
+def cut_sequences(demonstration: Demonstration, pattern: str, *, mode: str = "cycles",
+                  cycles_per_sequence: int = 4, length: int = 50) -> list[Sequence]:
+    """Cut a demonstration into training sequences of ``pattern`` (see the module doc).
+
+    Raises :class:`RnnpbError` when nothing whole is left to cut (no repeating movement, or
+    every stretch shorter than asked).
+    """
+    if mode not in CUT_MODES:
+        raise ConfigError(f"cut mode must be one of {', '.join(CUT_MODES)}, got {mode!r}")
+    if cycles_per_sequence < 1:
+        raise ConfigError(f"cycles_per_sequence must be >= 1, got {cycles_per_sequence}")
+    if length < 2:
+        raise ConfigError(f"sequence length must be >= 2, got {length}")
+    sequences: list[Sequence] = []
+    for start, stop in _valid_runs(demonstration.valid):
+        if mode == "length":
+            pieces = [(s, s + length) for s in range(start, stop - length + 1, length)]
+        else:
+            cycles = cycle_bounds(demonstration.sensory[start:stop])
+            pieces = [(start + cycles[i][0], start + cycles[i + cycles_per_sequence - 1][1])
+                      for i in range(0, len(cycles) - cycles_per_sequence + 1,
+                                     cycles_per_sequence)]
+        for a, b in pieces:
+            sequences.append(Sequence(demonstration.sensory[a:b], demonstration.motor[a:b],
+                                      pattern, f"{demonstration.source} steps {a}-{b - 1}",
+                                      meta={"hands": demonstration.hands[a:b], "first_step": a}))
+    if not sequences:
+        what = (f"{cycles_per_sequence} whole cycles" if mode == "cycles"
+                else f"{length} steps")
+        raise RnnpbError(f"{demonstration.source}: no stretch of {what} with both hands seen "
+                         f"in {demonstration.n_steps} steps (is the movement repeating?)")
+    return sequences

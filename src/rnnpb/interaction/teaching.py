@@ -1,0 +1,519 @@
+"""Teaching by showing, on-line: cut a new movement out of the interaction's stream.
+
+The novelty detector (each on-line step's ``novelty``: ``familiar``, ``novel``,
+``unstructured``, ``still`` or ``""``) says when the person performs a structured movement no
+learned pattern fits. :class:`EpisodeCutter` watches those words step by step and keeps the
+movement once it has been ``novel`` long enough to be sure and to hold whole cycles:
+
+1. A *run* is the stretch of consecutive steps called ``novel`` (up to ``tolerance_steps``
+   steps without evidence, ``""``, are forgiven — the detector says nothing while a hand is
+   lost for a moment — but the hand positions must be seen). Any other word ends the run and
+   throws it away: ``unstructured`` movement is never kept, nor a run broken by ``familiar``
+   or ``still``.
+2. The whole cycles of the run are counted with :func:`rnnpb.interaction.learning_phase.
+   cycle_bounds`. From ``confirm_cycles`` whole cycles on the cutter is *recording* ("cycle
+   k of ``episode_cycles``"); when the run holds ``episode_cycles`` whole cycles, the last
+   ``episode_cycles`` of them are the episode: their sensory values as seen and the robot's
+   joint angles for them (3-D hands from the source when it gives them, else on the fixed
+   plane; mirror mapping and inverse kinematics, as in the learning phase).
+3. The cutter then stays *kept* until the run ends, so one performance gives one episode.
+
+It is pure bookkeeping (NumPy only, no clock or I/O): a principal component and an
+autocorrelation of at most ``max_run_steps`` steps, 0.2 ms a step (median) with a full run.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from rnnpb.demonstrator import MirrorMapping
+from rnnpb.errors import ConfigError
+from rnnpb.interaction.learning_phase import cycle_bounds
+from rnnpb.perception import MOUSE_PLANE_X, hands_on_plane
+from rnnpb.robot.camera import RobotCamera
+
+WATCHING, RECORDING, KEPT = "watching", "recording", "kept"
+CUTTER_STATES = (WATCHING, RECORDING, KEPT)
+
+
+@dataclass(frozen=True)
+class TeachingConfig:
+    """When a novel movement is kept.
+
+    Attributes
+    ----------
+    confirm_cycles : int
+        Whole cycles called ``novel`` before the cutter says it is recording.
+    episode_cycles : int
+        Whole cycles an episode holds.
+    tolerance_steps : int
+        Consecutive steps without evidence (``""``) a run survives.
+    max_run_steps : int
+        The run's oldest steps are dropped beyond this many (bounds the cost per step).
+    plane_x : float
+        ``x`` (m) of the hands' plane for sources that give no 3-D hands.
+    """
+
+    confirm_cycles: int = 1
+    episode_cycles: int = 4
+    tolerance_steps: int = 2
+    max_run_steps: int = 200
+    plane_x: float = MOUSE_PLANE_X
+
+    def __post_init__(self) -> None:
+        if self.episode_cycles < 1:
+            raise ConfigError(f"episode_cycles must be >= 1, got {self.episode_cycles}")
+        if not 1 <= self.confirm_cycles <= self.episode_cycles:
+            raise ConfigError(f"confirm_cycles must be in [1, episode_cycles], got "
+                              f"{self.confirm_cycles}")
+        if self.tolerance_steps < 0:
+            raise ConfigError(f"tolerance_steps must be >= 0, got {self.tolerance_steps}")
+        if self.max_run_steps < 16:
+            raise ConfigError(f"max_run_steps must be >= 16, got {self.max_run_steps}")
+
+
+@dataclass(frozen=True)
+class KeptMovement:
+    """Whole cycles of a new movement, cut out of the stream.
+
+    Attributes
+    ----------
+    sensory : array, shape (n_steps, 4)
+    motor : array, shape (n_steps, 8)
+        The robot's joint angles for the person's hands, radians.
+    n_cycles : int
+    first_step, last_step : int
+        The loop steps it spans (inclusive).
+    """
+
+    sensory: np.ndarray
+    motor: np.ndarray
+    n_cycles: int
+    first_step: int
+    last_step: int
+
+
+@dataclass(frozen=True)
+class CutterStatus:
+    """What the cutter is doing, for the dashboard and the log."""
+
+    state: str
+    cycles: int
+    episode_cycles: int
+
+    def describe(self) -> str:
+        if self.state == RECORDING:
+            return (f"recording a new movement (cycle {min(self.cycles + 1, self.episode_cycles)}"
+                    f" of {self.episode_cycles})")
+        if self.state == KEPT:
+            return "new movement kept"
+        return ""
+
+
+class EpisodeCutter:
+    """Watches each step's novelty and keeps whole cycles of a novel movement (module doc).
+
+    Parameters
+    ----------
+    config : TeachingConfig, optional
+    mapping : MirrorMapping, optional
+    camera : RobotCamera, optional
+    """
+
+    def __init__(self, config: TeachingConfig | None = None,
+                 mapping: MirrorMapping | None = None,
+                 camera: RobotCamera | None = None) -> None:
+        self.config = config or TeachingConfig()
+        self.mapping = mapping or MirrorMapping()
+        self.camera = camera or RobotCamera()
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the current run."""
+        self._steps: list[int] = []
+        self._sensory: list[np.ndarray] = []
+        self._hands: list[np.ndarray] = []
+        self._quiet = 0
+        self._cycles = 0
+        self._kept = False
+
+    @property
+    def status(self) -> CutterStatus:
+        config = self.config
+        if self._kept:
+            state = KEPT
+        elif self._cycles >= config.confirm_cycles:
+            state = RECORDING
+        else:
+            state = WATCHING
+        return CutterStatus(state, self._cycles, config.episode_cycles)
+
+    def observe(self, step: int, observed: np.ndarray, novelty: str,
+                hands: np.ndarray | None = None) -> KeptMovement | None:
+        """One step: the hands seen (4,), the step's novelty word, optionally the 3-D hands
+        (2, 3); returns the episode on the step it is complete, else None."""
+        observed = np.asarray(observed, dtype=np.float64).reshape(4)
+        seen = bool(np.isfinite(observed).all())
+        if novelty == "" and self._steps and self._quiet < self.config.tolerance_steps and seen:
+            self._quiet += 1  # no evidence for a moment: the run goes on
+        elif novelty != "novel" or not seen:
+            self.reset()
+            return None
+        else:
+            self._quiet = 0
+        if self._kept:
+            return None
+        self._steps.append(int(step))
+        self._sensory.append(observed)
+        self._hands.append(np.full((2, 3), np.nan) if hands is None
+                           else np.asarray(hands, dtype=np.float64).reshape(2, 3))
+        if len(self._steps) > self.config.max_run_steps:
+            del self._steps[0], self._sensory[0], self._hands[0]
+        cycles = cycle_bounds(np.array(self._sensory))
+        self._cycles = len(cycles)
+        if self._cycles < self.config.episode_cycles:
+            return None
+        start, stop = cycles[-self.config.episode_cycles][0], cycles[-1][1]
+        sensory = np.array(self._sensory[start:stop])
+        hands = np.array(self._hands[start:stop])
+        missing = ~np.isfinite(hands).all(axis=(1, 2))
+        if missing.any():
+            hands[missing] = hands_on_plane(sensory[missing], self.camera, self.config.plane_x)
+        motor = self.mapping.motor_from_hands(hands)
+        self._kept = True
+        return KeptMovement(sensory, motor, self.config.episode_cycles, self._steps[start],
+                            self._steps[stop - 1])
+
+
+@dataclass(frozen=True)
+class TeachingEvent:
+    """Something the teacher did, for the dashboard and the log.
+
+    ``kind`` is ``recording`` (a novel movement is being recorded; ``text`` says which cycle),
+    ``kept`` (an episode was stored; ``episode_id``, ``pattern``) or ``refused`` (the memory
+    would not take it; ``text`` says why).
+    """
+
+    step: int
+    kind: str
+    text: str
+    episode_id: int | None = None
+    pattern: str = ""
+
+
+class EpisodeKeeper:
+    """A loop subscriber: cuts novel movements with an :class:`EpisodeCutter` and stores each
+    as an episode in the short-term memory, under the next free name ``new-1``, ``new-2`` ….
+
+    Parameters
+    ----------
+    memory : rnnpb.memory.MemoryStore
+        Open store (the keeper does not close it).
+    model : str
+        The running model's file (which model saw the movement).
+    source : str
+        The source's description (where the movement came from).
+    config : TeachingConfig, optional
+    hands_of : callable, optional
+        ``hands_of(record) -> array (2, 3) or None``: the 3-D hands of a step when the source
+        gives them (a camera's depth from size); else they lie on the fixed plane.
+
+    ``events`` lists what happened, newest last; ``kept`` the stored episodes' ids.
+    """
+
+    def __init__(self, memory, model: str, source: str, config: TeachingConfig | None = None,
+                 hands_of=None, mapping: MirrorMapping | None = None) -> None:
+        self.memory = memory
+        self.model = str(model)
+        self.source = str(source)
+        self.cutter = EpisodeCutter(config, mapping)
+        self.hands_of = hands_of
+        self.events: list[TeachingEvent] = []
+        self.kept: list[int] = []
+        self._last_text = ""
+
+    def next_pattern_name(self) -> str:
+        """``new-N`` for the smallest N no episode of the memory is named yet."""
+        taken = {e.pattern for e in self.memory.episodes()}
+        n = 1
+        while f"new-{n}" in taken:
+            n += 1
+        return f"new-{n}"
+
+    def __call__(self, record) -> None:
+        hands = self.hands_of(record) if self.hands_of is not None else None
+        episode = self.cutter.observe(record.step, record.observed,
+                                      getattr(record, "novelty", ""), hands)
+        text = self.cutter.status.describe()
+        if episode is None:
+            if text != self._last_text and self.cutter.status.state == RECORDING:
+                self.events.append(TeachingEvent(record.step, "recording", text))
+            self._last_text = text
+            return
+        self._last_text = text
+        pattern = self.next_pattern_name()
+        from rnnpb.errors import RnnpbError
+
+        try:
+            episode_id = self.memory.add_episode(
+                episode.sensory, episode.motor, source=self.source, model=self.model,
+                pattern=pattern, n_cycles=episode.n_cycles,
+                note=f"steps {episode.first_step}-{episode.last_step}")
+        except RnnpbError as error:
+            self.events.append(TeachingEvent(record.step, "refused", str(error)))
+            return
+        self.kept.append(episode_id)
+        self.events.append(TeachingEvent(
+            record.step, "kept", f"kept a new movement as {pattern} ({episode.n_cycles} cycles, "
+            f"{len(episode.sensory)} steps)", episode_id, pattern))
+
+
+def tracked_hands(source):
+    """For :class:`EpisodeKeeper`'s ``hands_of``: the 3-D hands a camera source's tracker found
+    for the step just read (depth from the balls' size, unfiltered: on-line there is no later
+    frame to filter with), or None when ``source`` has no tracker."""
+    inner = getattr(source, "inner", source)  # a FrameStepSource keeps the camera inside
+
+    def hands_of(record) -> np.ndarray | None:
+        result = getattr(inner, "last_result", None)
+        return None if result is None else result.hands_3d
+
+    return hands_of
+
+
+def version_path(model_path: str | os.PathLike[str], version: int) -> Path:
+    """The file of a model's version ``version``: ``model.npz`` → ``model.v2.npz`` (the
+    original is version 1; a version's own file name gives the same family)."""
+    path = Path(model_path)
+    stem = re.sub(r"\.v\d+$", "", path.name.removesuffix(".npz"))
+    return path.with_name(f"{stem}.v{int(version)}.npz")
+
+
+def _consolidation_worker(model_path: str, memory_path: str, episode_ids: list[int],
+                          out_path: str, queue, iterations: int | None = None) -> None:
+    """In a spawned process: consolidate the episodes into the model, write the new version,
+    record the consolidation in the memory; report progress and the outcome on ``queue``."""
+    start = time.perf_counter()
+    try:
+        from dataclasses import replace
+
+        from rnnpb.memory import MemoryStore
+        from rnnpb.model import ConsolidationConfig, TrainedModel, consolidate, rehearse
+
+        model = TrainedModel.load(model_path)
+        with MemoryStore(memory_path, create=False) as memory:
+            sequences = [memory.episode(i).sequence() for i in episode_ids]
+
+        def progress(p) -> None:
+            queue.put(("progress", int(p.iteration), int(p.total), float(p.mse)))
+
+        config = ConsolidationConfig()
+        if iterations is not None:
+            config = ConsolidationConfig(train=replace(config.learning_for(model),
+                                                       iterations=int(iterations)))
+        learned = consolidate(model, sequences, config, parent=model_path, progress=progress)
+        learned.save(out_path)
+        rehearsed = rehearse(model)
+        seconds = time.perf_counter() - start
+        with MemoryStore(memory_path, create=False) as memory:
+            memory.add_consolidation(model_before=model_path, model_after=out_path,
+                                     episode_ids=episode_ids,
+                                     rehearsed=[*rehearsed, *sequences], seconds=seconds)
+        queue.put(("done", out_path, seconds))
+    except BaseException as error:  # the parent keeps its model and says why
+        message = f"{type(error).__name__}: {error}" if not str(error).startswith("rnnpb") \
+            else str(error)
+        try:
+            from rnnpb.memory import MemoryStore
+
+            with MemoryStore(memory_path, create=False) as memory:
+                memory.add_consolidation(model_before=model_path, model_after="",
+                                         episode_ids=episode_ids, rehearsed=[],
+                                         status="failed", message=message[:500],
+                                         seconds=time.perf_counter() - start)
+        except BaseException:  # noqa: BLE001 - the message to the parent matters more
+            pass
+        queue.put(("failed", message))
+
+
+@dataclass(frozen=True)
+class ConsolidationState:
+    """Where a background consolidation is: ``running`` (``iteration`` of ``total``),
+    ``done`` (``model_path`` of the new version, ``seconds``) or ``failed`` (``message``)."""
+
+    state: str
+    iteration: int = 0
+    total: int = 0
+    model_path: str = ""
+    seconds: float = 0.0
+    message: str = ""
+
+    def describe(self) -> str:
+        if self.state == "running":
+            share = f" {100 * self.iteration / self.total:.0f} %" if self.total else ""
+            return f"consolidating{share}"
+        if self.state == "done":
+            return f"consolidated in {self.seconds:.0f} s"
+        return f"consolidation failed: {self.message}"
+
+
+class BackgroundConsolidation:
+    """A consolidation in a spawned process, so that the loop keeps its pace.
+
+    The process loads the model, reads the episodes from the memory, runs
+    :func:`rnnpb.model.consolidate` (rehearsal), writes the new version beside the model and
+    records the consolidation in the memory; :meth:`poll` never blocks, :meth:`wait` does.
+    """
+
+    def __init__(self, model_path: str | os.PathLike[str],
+                 memory_path: str | os.PathLike[str], episode_ids: list[int],
+                 out_path: str | os.PathLike[str], iterations: int | None = None) -> None:
+        import multiprocessing
+
+        context = multiprocessing.get_context("spawn")
+        self._queue = context.Queue()
+        self.out_path = str(out_path)
+        self._process = context.Process(
+            target=_consolidation_worker, daemon=True,
+            args=(str(model_path), str(memory_path), list(episode_ids), self.out_path,
+                  self._queue, iterations))
+        self.state = ConsolidationState("running")
+        self._process.start()
+
+    def poll(self) -> ConsolidationState:
+        """The latest state, reading what the process reported so far (never blocks)."""
+        import queue as queues
+
+        while self.state.state == "running":
+            try:
+                message = self._queue.get_nowait()
+            except queues.Empty:
+                if not self._process.is_alive() and self._queue.empty():
+                    code = self._process.exitcode
+                    self.state = ConsolidationState(
+                        "failed", message=f"the consolidation process ended (exit code {code})")
+                break
+            self._take(message)
+        return self.state
+
+    def wait(self, timeout_s: float | None = None) -> ConsolidationState:
+        """Block until the consolidation has finished (or ``timeout_s``)."""
+        deadline = None if timeout_s is None else time.perf_counter() + timeout_s
+        while self.poll().state == "running":
+            if deadline is not None and time.perf_counter() > deadline:
+                break
+            self._process.join(0.05)
+        return self.state
+
+    def _take(self, message: tuple) -> None:
+        kind = message[0]
+        if kind == "progress":
+            self.state = ConsolidationState("running", message[1], message[2])
+        elif kind == "done":
+            self.state = ConsolidationState("done", model_path=message[1], seconds=message[2])
+            self._process.join(5.0)
+        else:
+            self.state = ConsolidationState("failed", message=message[1])
+            self._process.join(5.0)
+
+    def cancel(self) -> None:
+        if self._process.is_alive():
+            self._process.terminate()
+            self._process.join(5.0)
+
+
+class Teacher:
+    """On-line teaching in the interaction loop (docs/teaching.md).
+
+    Subscribe it to the loop (it keeps novel movements as episodes) and pass
+    :meth:`between_steps` to ``loop.run``: there it starts a consolidation in the background
+    once an episode is kept (``auto``, else on :meth:`confirm`), swaps the new model version in
+    between two steps when it is done, and keeps every version for :meth:`undo`. With
+    ``wait`` (a run as fast as possible) it blocks until each consolidation finishes, so a
+    scripted run repeats; paced it never waits.
+    """
+
+    def __init__(self, loop, model_path: str | os.PathLike[str], memory, *,
+                 make_mirror, source: str = "", config: TeachingConfig | None = None,
+                 auto: bool = True, wait: bool | None = None, hands_of=None,
+                 iterations: int | None = None) -> None:
+        self.iterations = iterations
+        self.loop = loop
+        self.memory = memory
+        self.make_mirror = make_mirror
+        self.versions: list[str] = [str(model_path)]
+        self.keeper = EpisodeKeeper(memory, str(model_path), source, config, hands_of)
+        self.auto = auto
+        self.wait = (not loop.config.paced) if wait is None else wait
+        self.job: BackgroundConsolidation | None = None
+        self.pending: list[int] = []
+        self.events = self.keeper.events
+        self.swapped_at: list[int] = []
+        loop.subscribe(self._on_step)
+
+    @property
+    def model_path(self) -> str:
+        return self.versions[-1]
+
+    def _on_step(self, record) -> None:
+        before = len(self.keeper.kept)
+        self.keeper.model = self.model_path
+        self.keeper(record)
+        self.pending.extend(self.keeper.kept[before:])
+        if self.auto and self.pending and self.job is None:
+            self.confirm()
+
+    def confirm(self) -> None:
+        """Start consolidating the pending episodes (the person said yes)."""
+        if self.job is not None or not self.pending:
+            return
+        out = version_path(self.model_path, len(self.versions) + 1)
+        ids, self.pending = self.pending, []
+        self.job = BackgroundConsolidation(self.model_path, self.memory.path, ids, out,
+                                           self.iterations)
+        self.events.append(TeachingEvent(self.loop.steps, "consolidating",
+                                         f"consolidating {len(ids)} episode(s) into {out.name}"))
+
+    def between_steps(self, wait_s: float) -> None:
+        start = time.perf_counter()
+        if self.job is not None:
+            state = self.job.wait() if self.wait else self.job.poll()
+            if state.state == "done":
+                self._swap(state)
+            elif state.state == "failed":
+                self.events.append(TeachingEvent(self.loop.steps, "failed", state.describe()))
+                self.job = None
+        rest = wait_s - (time.perf_counter() - start)
+        if rest > 0:
+            time.sleep(min(rest, 0.02))
+
+    def _swap(self, state: ConsolidationState) -> None:
+        from rnnpb.model import TrainedModel
+
+        assert self.job is not None
+        self.job = None
+        model = TrainedModel.load(state.model_path)
+        self.loop.mirror = self.make_mirror(model)
+        self.versions.append(state.model_path)
+        self.swapped_at.append(self.loop.steps)
+        learned = ", ".join(p for p in model.patterns if p.startswith("new-")) or "?"
+        self.events.append(TeachingEvent(self.loop.steps, "learned",
+                                         f"learned as pattern {learned} "
+                                         f"({state.seconds:.0f} s, {Path(state.model_path).name})"))
+
+    def undo(self) -> None:
+        """Go back to the previous model version (the newer file stays on disk)."""
+        from rnnpb.model import TrainedModel
+
+        if len(self.versions) < 2:
+            return
+        self.versions.pop()
+        self.loop.mirror = self.make_mirror(TrainedModel.load(self.model_path))
+        self.events.append(TeachingEvent(self.loop.steps, "undone",
+                                         f"back to {Path(self.model_path).name}"))

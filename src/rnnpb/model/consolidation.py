@@ -1,0 +1,296 @@
+"""Incremental learning: rehearsal and consolidation (Ito & Tani 2004, section 4.1, after
+Tani 1998).
+
+Every memory of an RNNPB shares the same weights, so learning a new pattern alone overwrites
+the old ones (the memory interference problem). The paper's remedy: the network, as long-term
+memory, *rehearses* what it knows — it regenerates each learned pattern in closed loop from
+that pattern's PB, with no access to the original data — and is then trained on the new
+pattern together with the rehearsed ones (*consolidation*).
+
+:func:`consolidate` runs it, and the alternatives it is measured against, through the same
+learning (:mod:`rnnpb.model.learning`, driven by :func:`rnnpb.model.training.train`, with its
+progress, checkpoints and resume):
+
+``rehearsal``
+    the new sequences and one rehearsed sequence per learned sequence (:func:`rehearse`);
+``finetune``
+    the new sequences alone: what interference looks like;
+``replay``
+    the new sequences and the stored original data (the caller passes it: the model file keeps
+    only its fingerprint);
+``scratch``
+    the original data and the new sequences learned anew from random weights, with the
+    model's own full learning: the upper bound.
+
+All but ``scratch`` start from the model's weights ("warm start"); an old sequence starts from
+its learned PB and initial context, a new sequence from PB 0.5 and context 0.5, as in a first
+training. The old patterns keep their names, the new pattern gets PBs of its own, and the
+result records the step in its history (:class:`rnnpb.model.io.HistoryEntry`).
+
+Unlike the rest of the model this module reads a clock: the time the history records.
+"""
+
+from __future__ import annotations
+
+import datetime
+import os
+from collections.abc import Callable
+from collections.abc import Sequence as SequenceABC
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from rnnpb.errors import ConfigError, DataFileError
+from rnnpb.model.generation import generate
+from rnnpb.model.io import HistoryEntry, TrainedModel
+from rnnpb.model.learning import TrainConfig, WarmStart, prepare_data
+from rnnpb.model.training import TrainingProgress, train
+from rnnpb.sequences import Sequence
+
+CONSOLIDATION_METHODS = ("rehearsal", "finetune", "replay", "scratch")
+"""The ways :func:`consolidate` adds patterns (see the module)."""
+REHEARSAL_STEPS = 50
+"""Steps of each rehearsed sequence: the length of the paper's demonstrations (2.2)."""
+REHEARSAL_TRANSIENT = 100
+"""Closed-loop steps run before a rehearsed sequence starts: the network falls onto the
+pattern's limit cycle after a transient (paper 3.3), and what it rehearses is that cycle."""
+# Iterations of a consolidation by each optimizer, when the caller names none. From warm
+# weights, on learning set 1's model (the paper's algorithm) with its left-out pattern added by
+# rehearsal, the mean training error fell from 3.1e-4 after 100 iterations to 4.4e-5 after
+# 5,000 and only to 3.6e-5 after 20,000: a tenth of a first training's 50,000 iterations
+# reaches it, and keeps a consolidation well within a minute on one core (docs/model.md,
+# "Consolidation"). Adam (the fast preset) needs a tenth of its 3,000 too, rounded up.
+CONSOLIDATION_ITERATIONS = {"momentum": 5_000, "adam": 500}
+
+Method = Literal["rehearsal", "finetune", "replay", "scratch"]
+
+
+@dataclass(frozen=True)
+class ConsolidationConfig:
+    """How to add patterns to a learned model.
+
+    Attributes
+    ----------
+    method : str
+        One of :data:`CONSOLIDATION_METHODS`.
+    train : TrainConfig or None
+        The learning. None: the model's own recorded learning (its optimizer, rates and seed)
+        with :data:`CONSOLIDATION_ITERATIONS` iterations — for ``scratch`` with the model's own
+        full iterations.
+    rehearsal_steps, rehearsal_transient : int
+        Length of each rehearsed sequence, and the closed-loop steps run before it.
+    """
+
+    method: Method = "rehearsal"
+    train: TrainConfig | None = None
+    rehearsal_steps: int = REHEARSAL_STEPS
+    rehearsal_transient: int = REHEARSAL_TRANSIENT
+
+    def __post_init__(self) -> None:
+        if self.method not in CONSOLIDATION_METHODS:
+            raise ConfigError(f"consolidation method must be one of "
+                              f"{', '.join(CONSOLIDATION_METHODS)}, got {self.method!r}")
+        if self.rehearsal_steps < 2:
+            raise ConfigError(f"rehearsal_steps must be >= 2, got {self.rehearsal_steps}")
+        if self.rehearsal_transient < 1:
+            raise ConfigError(f"rehearsal_transient must be >= 1, got "
+                              f"{self.rehearsal_transient}")
+
+    def learning_for(self, model: TrainedModel) -> TrainConfig:
+        """The :class:`TrainConfig` this consolidation of ``model`` learns with."""
+        if self.train is not None:
+            return self.train
+        recorded = model.meta.get("train_config")
+        try:
+            own = TrainConfig.from_dict(recorded) if isinstance(recorded, dict) \
+                else TrainConfig.paper()
+        except (TypeError, ValueError, KeyError) as error:
+            raise ConfigError(f"the model's recorded training config is not usable ({error}); "
+                              "give the consolidation's learning explicitly") from None
+        if self.method == "scratch":
+            # The first training's length: a consolidated model records its consolidation's.
+            first = model.history[0].train_config.get("iterations")
+            return replace(own, iterations=first) if isinstance(first, int) else own
+        return replace(own, iterations=CONSOLIDATION_ITERATIONS[own.optimizer])
+
+
+def model_joint_limits(model: TrainedModel) -> np.ndarray:
+    """The motor normalization of ``model`` as joint limits (M, 2): a consolidation keeps the
+    model's normalization, so its weights mean what they meant."""
+    s = model.network.sensory_size
+    return np.column_stack([model.lower[s:], model.upper[s:]])
+
+
+def rehearse(model: TrainedModel, n_steps: int = REHEARSAL_STEPS,
+             transient: int = REHEARSAL_TRANSIENT) -> list[Sequence]:
+    """Each learned sequence regenerated in closed loop from its learned PB and initial
+    context, without the original data.
+
+    The network runs ``transient + n_steps - 1`` steps from the sequence's PB and initial
+    context (first input 0.5); the rehearsed sequence is its last ``n_steps`` outputs, paired
+    sensory and motor. ``meta["initial_context"]`` (C,) is the context the network had at the
+    rehearsed sequence's first step and ``meta["pb"]`` (P,) the PB it ran with: learning from
+    them, the network already predicts the rehearsed sequence exactly.
+
+    Returns
+    -------
+    list of Sequence
+        One per learned sequence, in the model's order, each named by its pattern (raw units:
+        sensory in [0, 1], motor in radians).
+    """
+    if n_steps < 2 or transient < 1:
+        raise ConfigError(f"rehearsal needs n_steps >= 2 and transient >= 1, got {n_steps} "
+                          f"and {transient}")
+    out = []
+    for i, pattern in enumerate(model.sequence_patterns):
+        pb = model.sequence_pb[i]
+        generated = generate(model, pb, transient - 1 + n_steps,
+                             initial_context=model.initial_context[i])
+        # Row k of the run is x̂_{k+1} with the context c_{k+1} made in the same step, which
+        # the next step takes with it: the sequence starts at x̂_transient, context c_transient.
+        start = transient - 1
+        out.append(Sequence(
+            sensory=generated.sensory[start:], motor=generated.motor[start:], pattern=pattern,
+            source=f"rehearsed pattern {pattern} (sequence {i + 1})",
+            meta={"initial_context": generated.context[start], "pb": np.asarray(pb)}))
+    return out
+
+
+def _check_new(model: TrainedModel, new_sequences: SequenceABC[Sequence]) -> None:
+    if not new_sequences:
+        raise DataFileError("no new sequences to add")
+    net = model.network
+    for seq in new_sequences:
+        if seq.sensory.shape[1] != net.sensory_size or seq.motor.shape[1] != net.motor_size:
+            raise ConfigError(
+                f"{seq.source or 'a new sequence'}: has {seq.sensory.shape[1]} sensory and "
+                f"{seq.motor.shape[1]} motor values per step but the model's network has "
+                f"{net.sensory_size} and {net.motor_size}: a model of another network size")
+    clashes = sorted({s.pattern for s in new_sequences} & set(model.patterns))
+    if clashes:
+        raise ConfigError(
+            f"new pattern name(s) {', '.join(repr(c) for c in clashes)} already learned by the "
+            f"model (it holds {', '.join(model.patterns)}); a consolidation adds new patterns "
+            "only: give the new one another name (its file name or `pattern` column)")
+
+
+def _original(model: TrainedModel, replay_data: SequenceABC[Sequence] | None,
+              method: str) -> list[Sequence]:
+    """The stored original data, in the model's pattern order; it must hold exactly the
+    model's patterns."""
+    if not replay_data:
+        raise ConfigError(f"method {method!r} needs the original training data of the model's "
+                          f"patterns ({', '.join(model.patterns)}); pass it (--replay-data)")
+    given = {s.pattern for s in replay_data}
+    missing = [p for p in model.patterns if p not in given]
+    extra = sorted(given - set(model.patterns))
+    if missing or extra:
+        raise ConfigError(
+            "the original data must hold the model's patterns exactly: "
+            + "; ".join(part for part in (
+                f"missing {', '.join(missing)}" if missing else "",
+                f"not learned by the model: {', '.join(extra)}" if extra else "") if part))
+    order = {p: i for i, p in enumerate(model.patterns)}
+    return sorted(replay_data, key=lambda s: order[s.pattern])  # stable: keeps the file order
+
+
+def _replay_matches(model: TrainedModel, original: SequenceABC[Sequence],
+                    limits: np.ndarray) -> bool:
+    """Whether the original data are, bit for bit, those the model's history recorded
+    (rounding when data are written to CSV can make them differ)."""
+    for entry in model.history:
+        if entry.added_data_fingerprint is not None:
+            part = [s for s in original if s.pattern in entry.added]
+            if not part or prepare_data(part, limits).fingerprint != entry.added_data_fingerprint:
+                return False
+    return True
+
+
+def consolidate(model: TrainedModel, new_sequences: SequenceABC[Sequence],
+                config: ConsolidationConfig | None = None, *,
+                replay_data: SequenceABC[Sequence] | None = None, parent: str | None = None,
+                progress: bool | Callable[[TrainingProgress], None] = False,
+                checkpoint_path: str | os.PathLike[str] | None = None,
+                resume: bool = False) -> TrainedModel:
+    """Add the patterns of ``new_sequences`` to ``model``; return the new model.
+
+    Parameters
+    ----------
+    model : TrainedModel
+        The learned model (not changed).
+    new_sequences : list of Sequence
+        Demonstrations of the new pattern(s): names the model does not hold, the model's
+        sensory and motor sizes, values within its normalization.
+    config : ConsolidationConfig
+        The method and the learning (default: rehearsal with the model's own learning).
+    replay_data : list of Sequence
+        The original data of the model's patterns, for ``replay`` and ``scratch``.
+    parent : str
+        The model's file name, for the history.
+    progress, checkpoint_path, resume
+        As for :func:`rnnpb.model.training.train`: a checkpoint of a consolidation resumes only
+        the same consolidation (same model, method, data and learning).
+
+    Returns
+    -------
+    TrainedModel
+        The old sequences (rehearsed, replayed or, for finetune, as they were), then the new;
+        ``meta["history"]`` is the model's history with this step appended.
+    """
+    config = config or ConsolidationConfig()
+    _check_new(model, new_sequences)
+    learning = config.learning_for(model)
+    limits = model_joint_limits(model)
+    new = list(new_sequences)
+    new_data = prepare_data(new, limits)  # checks the values lie within the normalization
+    net = model.network
+    fresh_pb = np.full((len(new), net.pb_size), 0.5)
+    fresh_context = np.full((len(new), net.context_size), 0.5)
+    details: dict[str, Any] = {}
+    warm: WarmStart | None = None
+    tag = f"{model.fingerprint}:{config.method}"
+    if config.method == "rehearsal":
+        old = rehearse(model, config.rehearsal_steps, config.rehearsal_transient)
+        warm = WarmStart(model.params,
+                         np.vstack([[s.meta["initial_context"] for s in old], fresh_context]),
+                         np.vstack([[s.meta["pb"] for s in old], fresh_pb]), tag)
+        details.update(rehearsal_steps=config.rehearsal_steps,
+                       rehearsal_transient=config.rehearsal_transient)
+        sequences = [*old, *new]
+    elif config.method == "finetune":
+        warm = WarmStart(model.params, fresh_context, fresh_pb, tag)
+        sequences = new
+    else:
+        old = _original(model, replay_data, config.method)
+        details["replay_data_matches_record"] = _replay_matches(model, old, limits)
+        if config.method == "replay":
+            pbs, contexts = model.pattern_pb, {p: model.pattern_initial_context(p)
+                                               for p in model.patterns}
+            warm = WarmStart(model.params,
+                             np.vstack([[contexts[s.pattern] for s in old], fresh_context]),
+                             np.vstack([[pbs[s.pattern] for s in old], fresh_pb]), tag)
+        sequences = [*old, *new]
+    learned = train(sequences, limits, net, learning, progress=progress,
+                    checkpoint_path=checkpoint_path, resume=resume, warm_start=warm)
+    if config.method == "finetune":
+        # The old patterns were not trained: they keep their PBs and initial contexts.
+        learned = replace(
+            learned,
+            sequence_pb=np.vstack([model.sequence_pb, learned.sequence_pb]),
+            sequence_patterns=(*model.sequence_patterns, *learned.sequence_patterns),
+            initial_context=np.vstack([model.initial_context, learned.initial_context]))
+    training = learned.meta["training"]
+    entry = HistoryEntry(
+        method=config.method, added=tuple(dict.fromkeys(s.pattern for s in new)),
+        patterns=learned.patterns, parent=Path(parent).name if parent else None,
+        parent_fingerprint=model.fingerprint, train_config=learning.to_dict(),
+        data_fingerprint=training["data_fingerprint"],
+        added_data_fingerprint=new_data.fingerprint, iterations=int(training["iterations"]),
+        seconds=float(training["seconds"]),
+        created=datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        details=details)
+    meta = {**learned.meta,
+            "history": [e.to_json() for e in (*model.history, entry)]}
+    return replace(learned, meta=meta)

@@ -1,0 +1,97 @@
+"""Two agents coupled through their senses: the body mapping, symmetry, a leader and a
+follower, the scripted subject and the two-agent recording."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rnnpb.analysis import dyad as measures
+from rnnpb.analysis.metrics import LOCK_LIMIT
+from rnnpb.demonstrator import MirrorMapping, learning_set
+from rnnpb.errors import ConfigError
+from rnnpb.interaction.dyad import (
+    AgentConfig,
+    Dyad,
+    RobotAgent,
+    ScriptedSubject,
+    SubjectConfig,
+    person_hands,
+    robot_and_subject,
+    robot_to_person_scale,
+)
+from rnnpb.interaction.recorder import DyadRecorder, dyad_columns, read_dyad_session
+from rnnpb.model import OnlineConfig, TrainConfig, train
+from rnnpb.robot import JOINT_LIMITS
+from rnnpb.robot.camera import RobotCamera
+
+
+@pytest.fixture(scope="module")
+def model():
+    return train(learning_set("1"), JOINT_LIMITS, config=TrainConfig.fast(iterations=1500))
+
+
+def test_a_robot_is_seen_as_the_person_it_imitates():
+    demo = learning_set("1")[4]  # pattern 3: circles, where left and right matter
+    seen = RobotCamera().sensory_from_hands(person_hands(demo.motor))
+    assert np.abs(seen - demo.sensory).max() < 1e-9
+    # Physically turned half a turn, the circles turn the other way: not what was learned.
+    turned = RobotCamera().sensory_from_hands(person_hands(demo.motor, view="physical"))
+    assert np.abs(turned - demo.sensory).max() > 0.05
+    assert robot_to_person_scale() == pytest.approx(1 / MirrorMapping().effective_scale)
+
+
+def test_identical_agents_from_identical_starts_stay_identical(model):
+    start = model.pattern_pb["2"]
+    a, b = (RobotAgent(model, AgentConfig(patience=5), seed=3, initial_pb=start, name=n)
+            for n in "ab")
+    run = Dyad(a, b).run(30)
+    assert np.array_equal(run["a_motor"], run["b_motor"])
+    assert np.array_equal(run["a_pb"], run["b_pb"])
+    assert np.array_equal(run["a_initiative"], run["b_initiative"])
+
+
+def test_an_adaptive_follower_locks_on_to_a_leader_that_does_not_adapt(model):
+    online = OnlineConfig.ungated()  # the fast preset's models (docs/model.md)
+    leader = RobotAgent(model, AgentConfig(adaptation=0.0), initial_pb=model.pattern_pb["3"],
+                        online=online, name="a")
+    follower = RobotAgent(model, AgentConfig(alone_steps=None), online=online,
+                          initial_pb=np.full(4, 0.5), name="b")
+    run = Dyad(leader, follower).run(60)
+    found = measures.measure_dyad(run["a_shown"], run["b_shown"], model.patterns,
+                                  run["a_pb"], run["b_pb"])
+    leader_on = int(np.flatnonzero(found.class_a == "3")[0])
+    assert found.first_coherent is not None
+    # Locked within the paper's limit once the leader's first cycle is there to be seen.
+    assert found.first_coherent - leader_on <= LOCK_LIMIT
+    assert found.coherent[found.first_coherent:].mean() > 0.8
+
+
+def test_the_subject_explores_and_the_session_is_recorded_per_agent(model, tmp_path):
+    dyad = robot_and_subject(model, AgentConfig(), SubjectConfig(patience=10), seed=1)
+    path = tmp_path / "dyad.csv"
+    with DyadRecorder(path) as recorder:
+        run = dyad.run(60, on_step=recorder.write)
+    assert isinstance(dyad.b, ScriptedSubject)
+    assert run["b_initiative"].any()  # it tried something new when they could not match
+    assert set(run["b_intent"]) <= set(SubjectConfig().repertoire)
+    session = read_dyad_session(path)
+    assert list(session) == dyad_columns(4)
+    assert {"a_lhy", "b_lhy", "a_pb0", "b_intent", "a_initiative"} <= set(session)
+    assert np.allclose(session["a_pb0"], run["a_pb"][:, 0], atol=1e-5)
+    assert np.isnan(session["b_lshp"]).all()  # a subject has no motors
+    assert np.allclose(session["b_shown_lhy"], run["b_shown"][:, 0], atol=1e-5)
+
+
+@pytest.mark.parametrize("changes, message", [
+    ({"adaptation": -1}, "adaptation"), ({"persistence": 0}, "persistence"),
+    ({"noise": float("nan")}, "noise"), ({"patience": 0}, "patience")])
+def test_bad_agent_settings(changes, message):
+    with pytest.raises(ConfigError, match=message):
+        AgentConfig(**changes)
+
+
+def test_a_robot_takes_only_its_own_patterns(model):
+    robot = RobotAgent(model)
+    with pytest.raises(ConfigError, match="not one this robot learned"):
+        robot.take_initiative("4")

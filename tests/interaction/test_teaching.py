@@ -1,0 +1,127 @@
+"""Cutting a new movement out of the stream by the novelty words of each step."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rnnpb.demonstrator import Imperfection, MirrorMapping, PatternConfig, perform
+from rnnpb.errors import ConfigError
+from rnnpb.interaction.teaching import (
+    KEPT,
+    RECORDING,
+    WATCHING,
+    EpisodeCutter,
+    TeachingConfig,
+)
+from rnnpb.robot.camera import RobotCamera
+
+
+def _stream(pattern, steps, seed=0, perfect=False):
+    config = PatternConfig(imperfection=Imperfection.none()) if perfect else PatternConfig()
+    motion = perform([(pattern, steps)], config, np.random.default_rng(seed))
+    return motion, RobotCamera().sensory_from_hands(motion.measured)
+
+
+def test_four_whole_cycles_of_a_novel_movement_are_kept_once():
+    motion, sensory = _stream("3", 100, perfect=True)
+    words = [""] * 10 + ["novel"] * 90
+    cutter = EpisodeCutter(TeachingConfig(episode_cycles=4))
+    kept, states = [], []
+    for t in range(100):
+        episode = cutter.observe(t, sensory[t], words[t])
+        states.append(cutter.status.state)
+        if episode is not None:
+            kept.append(episode)
+    assert len(kept) == 1
+    (episode,) = kept
+    assert episode.n_cycles == 4
+    # whole cycles: the perfect user's period is 12 steps
+    assert len(episode.sensory) == 48
+    assert np.array_equal(episode.sensory, sensory[episode.first_step:episode.last_step + 1])
+    truth = MirrorMapping().motor_from_hands(motion.measured)
+    assert np.abs(episode.motor - truth[episode.first_step:episode.last_step + 1]).max() < 1e-4
+    assert episode.first_step >= 10  # nothing from before the detector said novel
+    assert states[:10] == [WATCHING] * 10 and RECORDING in states and states[-1] == KEPT
+    assert "recording a new movement (cycle" in next(
+        s for s in _statuses(sensory, words) if s.state == RECORDING).describe()
+
+
+def _statuses(sensory, words):
+    cutter = EpisodeCutter()
+    for t, word in enumerate(words):
+        cutter.observe(t, sensory[t], word)
+        yield cutter.status
+
+
+def test_unstructured_movement_is_never_kept():
+    rng = np.random.default_rng(3)
+    walk = np.clip(0.5 + np.cumsum(0.02 * rng.standard_normal((150, 4)), axis=0), 0, 1)
+    _, cyclic = _stream("4", 155, seed=1)
+    cutter = EpisodeCutter()
+    # the detector's word: unstructured
+    assert all(cutter.observe(t, walk[t], "unstructured") is None for t in range(150))
+    # a detector mistaking it for novel still gives no whole cycles to keep
+    assert all(cutter.observe(t, walk[t], "novel") is None for t in range(150))
+    # a novel run broken by unstructured steps starts again from nothing each time
+    words = (["novel"] * 30 + ["unstructured"]) * 5
+    assert all(cutter.observe(t, cyclic[t], w) is None for t, w in enumerate(words))
+
+
+def test_a_moment_without_evidence_does_not_break_the_run_but_a_lost_hand_does():
+    _, sensory = _stream("1", 90, seed=2)
+    words = ["novel"] * 90
+    for t in (20, 21, 40):
+        words[t] = ""
+    cutter = EpisodeCutter()
+    assert any(cutter.observe(t, sensory[t], w) is not None for t, w in enumerate(words))
+    lost = sensory.copy()
+    lost[25::25, 0] = np.nan  # a hand lost every 25 steps: never four cycles in a row
+    cutter = EpisodeCutter()
+    assert all(cutter.observe(t, lost[t], "novel") is None for t in range(90))
+
+
+def test_teaching_config_is_validated():
+    with pytest.raises(ConfigError, match="confirm_cycles"):
+        TeachingConfig(confirm_cycles=5, episode_cycles=4)
+
+
+def test_the_keeper_stores_each_novel_movement_once_in_the_memory(tmp_path):
+    from types import SimpleNamespace
+
+    from rnnpb.interaction.teaching import EpisodeKeeper
+    from rnnpb.memory import MemoryStore
+
+    _, shape = _stream("3", 80, seed=4)
+    rng = np.random.default_rng(5)
+    walk = np.clip(0.5 + np.cumsum(0.02 * rng.standard_normal((60, 4)), axis=0), 0, 1)
+    stream = [(row, "novel") for row in shape] + [(row, "unstructured") for row in walk] \
+        + [(row, "novel") for row in shape]
+    with MemoryStore(tmp_path / "m.npz") as memory:
+        keeper = EpisodeKeeper(memory, model="m.npz", source="scenario:held:3")
+        for t, (row, word) in enumerate(stream):
+            keeper(SimpleNamespace(step=t, observed=row, novelty=word))
+        episodes = memory.episodes()
+        assert [e.pattern for e in episodes] == ["new-1", "new-2"]
+        assert all(e.status == "kept" and e.n_cycles == 4 for e in episodes)
+        assert all(e.source == "scenario:held:3" and e.model == "m.npz" for e in episodes)
+        # nothing from the unstructured stretch (steps 80-139)
+        for e in episodes:
+            first, last = (int(v) for v in e.note.removeprefix("steps ").split("-"))
+            assert last < 80 or first >= 140
+    kinds = [event.kind for event in keeper.events]
+    assert kinds.count("kept") == 2 and "recording" in kinds
+
+
+def test_a_camera_sources_hands_reach_the_keeper():
+    from rnnpb.interaction import open_source
+    from rnnpb.interaction.teaching import tracked_hands
+
+    with open_source("synthetic:1", steps=3, seed=0) as source:
+        hands_of = tracked_hands(source)
+        assert hands_of(None) is None  # nothing read yet
+        source.read()
+        hands = hands_of(None)
+        truth = source.frames.hands[0]
+    assert hands.shape == (2, 3) and np.abs(hands - truth).max() < 0.03
+    assert tracked_hands(object())(None) is None

@@ -1,0 +1,220 @@
+"""Incremental learning: rehearsal and consolidation, the alternatives, history and bad input."""
+
+import numpy as np
+import pytest
+
+from rnnpb.analysis import metrics
+from rnnpb.errors import ConfigError, ModelFileError
+from rnnpb.experiments.paper import learned_attractors, synchronization
+from rnnpb.model import OnlineConfig, TrainConfig, TrainedModel, train
+from rnnpb.model.consolidation import (
+    ConsolidationConfig,
+    consolidate,
+    model_joint_limits,
+    rehearse,
+)
+from rnnpb.model.learning import prepare_data
+
+from .synthetic import LIMITS, make_sequences
+
+CONSOLIDATION = TrainConfig.fast(iterations=500)
+
+
+@pytest.fixture(scope="module")
+def two_patterns():
+    """Demonstrator patterns 1 and 2 learned with the fast preset, and pattern 3's data."""
+    from rnnpb.demonstrator import pattern_dataset
+    from rnnpb.robot import JOINT_LIMITS
+
+    model = train(pattern_dataset(0, ("1", "2")), JOINT_LIMITS,
+                  config=TrainConfig.fast(iterations=1200))
+    return model, pattern_dataset(0, ("3",))
+
+
+def _keeps_and_follows(before: TrainedModel, after: TrainedModel) -> bool:
+    """Every pattern followed (locked on and recognised) and the old patterns' closed-loop
+    cycles where they were."""
+    limits = model_joint_limits(after)
+    for pattern in after.patterns:
+        sync = synchronization(after, pattern, OnlineConfig.ungated(), limits, seed=100,
+                               before=30, after=10)
+        if sync.steps_to_lock is None or sync.steps_to_lock > metrics.LOCK_LIMIT \
+                or sync.recognized_pattern != pattern:
+            return False
+    old, new = learned_attractors(before, 200, 100), learned_attractors(after, 200, 100)
+    return all(new[p].period is not None and metrics.cycle_distance(new[p].cycle, old[p].cycle)
+               <= 0.05 for p in before.patterns)
+
+
+@pytest.mark.slow
+def test_rehearsal_adds_a_pattern_and_finetuning_forgets(two_patterns):
+    model, new = two_patterns
+    rehearsed = consolidate(model, new, ConsolidationConfig(train=CONSOLIDATION))
+    assert rehearsed.patterns == ("1", "2", "3")
+    assert _keeps_and_follows(model, rehearsed)
+    finetuned = consolidate(model, new, ConsolidationConfig("finetune", train=CONSOLIDATION))
+    assert finetuned.patterns == ("1", "2", "3")
+    assert not _keeps_and_follows(model, finetuned)  # the check can fail: interference
+
+
+def test_rehearsed_sequences_are_what_the_network_predicts(two_patterns):
+    model, _ = two_patterns
+    rehearsed = rehearse(model, n_steps=20, transient=30)
+    assert [s.pattern for s in rehearsed] == list(model.sequence_patterns)
+    # From the recorded context and PB, the network predicts its rehearsal exactly: learning
+    # starts with no error on the old patterns.
+    from rnnpb.model.learning import per_output_mse
+    from rnnpb.model.network import logit_numpy
+
+    data = prepare_data(rehearsed, model_joint_limits(model))
+    pb = np.stack([s.meta["pb"] for s in rehearsed])
+    rho = np.broadcast_to(logit_numpy(pb)[:, None], (len(pb), 19, pb.shape[1]))
+    context = logit_numpy(np.stack([s.meta["initial_context"] for s in rehearsed]))
+    error = per_output_mse((model.params, context.astype(np.float32)),
+                           rho.astype(np.float32), data.inputs.astype(np.float32), data.valid)
+    assert float(np.max(error)) < 1e-9
+
+
+def test_history_records_each_step_and_survives_a_file(two_patterns, tmp_path):
+    model, new = two_patterns
+    model.save(tmp_path / "start.npz")
+    start = TrainedModel.load(tmp_path / "start.npz")
+    grown = consolidate(start, new, ConsolidationConfig(train=TrainConfig.fast(iterations=50)),
+                        parent=str(tmp_path / "start.npz"))
+    grown.save(tmp_path / "grown.npz")
+    loaded = TrainedModel.load(tmp_path / "grown.npz")
+    assert [e.method for e in loaded.history] == ["train", "rehearsal"]
+    last = loaded.history[-1]
+    assert last.added == ("3",) and last.patterns == ("1", "2", "3")
+    assert last.parent == "start.npz" and last.parent_fingerprint == start.fingerprint
+    assert last.train_config["iterations"] == 50 and last.created
+    assert loaded.fingerprint == grown.fingerprint != start.fingerprint
+
+
+def test_seeded_consolidations_repeat_bit_for_bit(two_patterns):
+    model, new = two_patterns
+    config = ConsolidationConfig(train=TrainConfig.fast(iterations=100, seed=3))
+    a, b = consolidate(model, new, config), consolidate(model, new, config)
+    for x, y in zip(a.params, b.params, strict=True):
+        assert np.array_equal(np.asarray(x), np.asarray(y))
+    assert np.array_equal(a.sequence_pb, b.sequence_pb)
+    assert np.array_equal(a.initial_context, b.initial_context)
+    assert a.fingerprint == b.fingerprint
+
+
+def test_interrupted_consolidation_resumes_to_the_same_model(two_patterns, tmp_path):
+    model, new = two_patterns
+    config = ConsolidationConfig(train=TrainConfig.fast(iterations=300, checkpoint_every=100))
+    checkpoint = tmp_path / "c.npz"
+
+    def stop(progress):
+        if progress.iteration >= 200:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        consolidate(model, new, config, progress=stop, checkpoint_path=checkpoint)
+    resumed = consolidate(model, new, config, checkpoint_path=checkpoint, resume=True)
+    # It went on from the checkpoint at 200: one chunk of 100 iterations.
+    assert [i for i, _ in resumed.meta["training"]["history"]] == [300]
+    whole = consolidate(model, new, config)
+    assert resumed.fingerprint == whole.fingerprint
+    # A checkpoint resumes only the consolidation of the same model: fine-tuning learns the
+    # same data from any model, so the start is checked apart from the data.
+    from dataclasses import replace
+
+    finetune = ConsolidationConfig("finetune", train=config.train)
+    with pytest.raises(KeyboardInterrupt):
+        consolidate(model, new, finetune, progress=stop, checkpoint_path=tmp_path / "f.npz")
+    other = replace(model, params=type(model.params)(*(np.asarray(w) * 1.01
+                                                       for w in model.params)))
+    with pytest.raises(ModelFileError, match="another starting model or method"):
+        consolidate(other, new, finetune, checkpoint_path=tmp_path / "f.npz", resume=True)
+
+
+def test_the_alternatives_run_the_same_way(two_patterns):
+    from rnnpb.demonstrator import pattern_dataset
+
+    model, new = two_patterns
+    original = pattern_dataset(0, ("1", "2"))
+    short = TrainConfig.fast(iterations=30)
+    for method in ("finetune", "replay", "scratch"):
+        grown = consolidate(model, new, ConsolidationConfig(method, train=short),
+                            replay_data=original)
+        assert grown.patterns == ("1", "2", "3") and grown.history[-1].method == method
+        assert len(grown.sequence_patterns) == 6
+    # The replayed data are those the model learned, bit for bit.
+    replayed = consolidate(model, new, ConsolidationConfig("replay", train=short),
+                           replay_data=original)
+    assert replayed.history[-1].details["replay_data_matches_record"] is True
+    # The scratch method without a config: the first training's whole length.
+    assert ConsolidationConfig("scratch").learning_for(model).iterations == 1200
+    assert ConsolidationConfig().learning_for(model).iterations == 500
+
+
+def test_bad_input_is_refused_clearly(two_patterns):
+    from rnnpb.demonstrator import pattern_dataset
+
+    model, new = two_patterns
+    with pytest.raises(ConfigError, match="'1' already learned"):
+        consolidate(model, pattern_dataset(0, ("1",)), ConsolidationConfig())
+    with pytest.raises(ConfigError, match="needs the original training data"):
+        consolidate(model, new, ConsolidationConfig("replay"))
+    with pytest.raises(ConfigError, match="missing 2"):
+        consolidate(model, new, ConsolidationConfig("replay"),
+                    replay_data=pattern_dataset(0, ("1",)))
+    with pytest.raises(ConfigError, match="method must be one of"):
+        ConsolidationConfig("forget")  # type: ignore[arg-type]
+    # A model of another network size: its sensory-motor vector is not the data's.
+    from dataclasses import replace
+
+    import jax
+
+    from rnnpb.model import NetworkConfig, init_params
+
+    small = NetworkConfig(sensory_size=2, motor_size=8)
+    other = replace(model, network=small, params=init_params(small, jax.random.PRNGKey(0)),
+                    lower=model.lower[2:], upper=model.upper[2:])
+    with pytest.raises(ConfigError, match="another network size"):
+        consolidate(other, new, ConsolidationConfig())
+
+
+def test_a_model_file_of_format_1_still_loads(tmp_path):
+    from pathlib import Path
+
+    # Written by rnnpb before models recorded their history (format 1).
+    old = TrainedModel.load(Path(__file__).parent / "data" / "model_format1.npz")
+    assert old.patterns == ("0", "1")
+    (entry,) = old.history
+    assert entry.method == "train" and entry.added == ("0", "1") and entry.created is None
+    assert entry.data_fingerprint == old.meta["training"]["data_fingerprint"]
+    old.save(tmp_path / "m.npz")  # saved again, it is of the current format
+    again = TrainedModel.load(tmp_path / "m.npz")
+    assert again.history == old.history and again.fingerprint == old.fingerprint
+    grown = consolidate(old, make_sequences(n_steps=20, kinds=(2,)),
+                        ConsolidationConfig(train=TrainConfig.fast(iterations=20)))
+    assert grown.patterns == ("0", "1", "2") and grown.network == old.network
+    # Its normalization is kept: the limits of the synthetic set.
+    assert np.allclose(model_joint_limits(grown), LIMITS)
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    (lambda h: h[0].update(method="forget"), "history method 'forget'"),
+    (lambda h: h[0].update(added=["../x"]), "history pattern name"),
+    (lambda h: h[0].update(iterations=-1), "'iterations'"),
+    (lambda h: h[0].update(surprise=1), "unknown field"),
+    (lambda h: h.clear(), "history is not a list of 1"),
+    (lambda h: h[0].update(patterns=["9"]), "last entry names other patterns"),
+])
+def test_a_bad_history_is_refused(tmp_path, change, message):
+    import json
+
+    from rnnpb.model.io import load_archive, save_archive
+
+    model = TrainedModel.load(__file__.rsplit("/", 1)[0] + "/data/model_format1.npz")
+    model.save(tmp_path / "m.npz")
+    meta, arrays = load_archive(tmp_path / "m.npz", "rnnpb-model", 2)
+    history = json.loads(json.dumps(meta["history"]))
+    change(history)
+    save_archive(tmp_path / "bad.npz", {**meta, "history": history}, arrays)
+    with pytest.raises(ModelFileError, match=message):
+        TrainedModel.load(tmp_path / "bad.npz")
