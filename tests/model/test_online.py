@@ -212,3 +212,33 @@ def test_presets_round_trip_and_only_the_default_is_gated():
     assert OnlineConfig.ungated().surprise_gate == 0 == OnlineConfig.paper().surprise_gate
     for config in (OnlineConfig(), OnlineConfig.ungated(), OnlineConfig.paper()):
         assert OnlineConfig.from_dict(config.to_dict()) == config
+
+
+def _risk_network(pb_size, seed=0):
+    """A risk network that calls much of PB space unsafe (for the guard's parity)."""
+    from rnnpb.model.meta import MetaParams
+
+    rng = np.random.default_rng(seed)
+    hidden = 8
+    return MetaParams(w1=rng.normal(0, 2.0, (pb_size, hidden)), b1=rng.normal(0, 0.5, hidden),
+                      w2=rng.normal(0, 1 / np.sqrt(hidden), (hidden, hidden)),
+                      b2=np.zeros(hidden), w3=rng.normal(0, 1.0, hidden), b3=np.asarray(1.0))
+
+
+@pytest.mark.parametrize("guard, span", [("barrier", 3), ("barrier", 0), ("projection", 3)])
+def test_the_safety_guard_matches_the_numpy_reference(trained, guard, span):
+    meta = _risk_network(trained.network.pb_size)
+    config = OnlineConfig(window=8, iterations=5, safety_guard=guard, barrier_span=span,
+                          barrier_weight=0.5, phase_restarts=0)
+    sensory = make_sequences(n_samples=1, n_steps=12, seed=4, kinds=(1,))[0].sensory
+    mirror = MIRROR_SYSTEMS["compiled"](trained, config, meta=meta)
+    ref = MIRROR_SYSTEMS["reference"](trained, config, meta=meta)
+    unguarded = MIRROR_SYSTEMS["reference"](trained, config)
+    moved = 0.0
+    for u in sensory:
+        result, expected, plain = mirror.step(u), ref.step(u), unguarded.step(u)
+        np.testing.assert_allclose(result.pb, expected.pb, atol=2e-4)
+        np.testing.assert_allclose(result.motor / SPAN, expected.motor / SPAN, atol=2e-4)
+        np.testing.assert_allclose(result.predicted_hands, expected.predicted_hands, atol=2e-4)
+        moved = max(moved, float(np.abs(expected.pb - plain.pb).max()))
+    assert moved > 1e-2  # the guard acted: the comparison is not of two unguarded steps

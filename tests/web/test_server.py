@@ -340,3 +340,22 @@ def test_a_new_client_starts_with_the_runs_recent_steps(server):
         _next(fresh, "state")
         assert _next(fresh, "history")["steps"] == []  # a new run: no old steps replayed
     assert state["run"] != history["run"]
+
+
+def test_state_and_steps_say_what_guards_the_robot(server, model_dir):
+    from rnnpb.web import offered_models
+
+    # A safety map beside a model is neither offered as a model nor refused as one.
+    (model_dir / "set1.safety.npz").write_bytes(b"")
+    try:
+        assert offered_models(model_dir) == ({"set1.npz": model_dir / "set1.npz"}, {})
+    finally:
+        (model_dir / "set1.safety.npz").unlink()
+    status, body, _ = _get(server, "/api/state")
+    safety = json.loads(body)["safety"]
+    assert safety["filter"] and not safety["map"] and safety["risk"] == {}
+    with _ws(server) as ws:
+        _control(ws, type="control", action="start")
+        step = _next(ws, "step")
+        _control(ws, type="control", action="stop")
+    assert step["prevented"] >= 0 and "filtered" in step and "unsafe" in step

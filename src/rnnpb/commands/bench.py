@@ -15,8 +15,10 @@ single-threaded, after warm-up:
   - one on-line step (PB regression over a window of L = 30 steps, 100 iterations,
     then the motor command): median and 99th percentile, and the median of the same step
     without phase restarts, timed alternately with it (what they cost), and the step with
-    the safety guard on (the meta-level's barrier in the regression, then the command filter's
-    check before sending: docs/safety.md);
+    the safety guard on (the default guard, the meta-level's barrier on the newest PB step
+    in the regression, then the command filter's check before sending: docs/safety.md), and
+    each guard's step alone (the barrier on the newest step, on 3 steps, on the whole
+    window, the projection);
   - the same on-line step in a straightforward NumPy implementation (the reference the
     tests hold the compiled one to), and the ratio;
   - colour-ball tracking of 640x480 frames;
@@ -25,6 +27,11 @@ single-threaded, after warm-up:
 --json FILE writes the same figures (keys train_iteration_ms_median,
 online_step_ms_median, online_step_ms_p99, ...) with the machine and versions.
 """
+
+
+SAFETY_GUARD_TIMED = "barrier"
+"""The guard of the "safety on" figure: the one a map switches on by default
+(``OnlineConfig.safety_guard``)."""
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -130,32 +137,47 @@ def run(args: argparse.Namespace) -> int:
     compiled = MIRROR_SYSTEMS["compiled"]
     mirror = compiled(model, online)
     plain = compiled(model, replace(online, phase_restarts=0))
-    # The safety-on step: a risk network of the stored size (its weights do not change the
-    # cost) as a barrier in the regression, and the command filter before sending.
+    # The safety-on steps: a risk network of the stored size (its weights do not change the
+    # cost) guarding the regression — the barrier on the newest steps (the default span), the
+    # barrier on the whole window, the projection — and the command filter before sending.
     from rnnpb.safety import CommandFilter, MetaConfig, init_meta
 
     meta = init_meta(network.pb_size, MetaConfig().hidden, 0)
-    guarded = compiled(model, replace(online, safety_guard="barrier"), meta=meta)
+    guards = {"barrier": replace(online, safety_guard="barrier"),
+              "barrier_3_steps": replace(online, safety_guard="barrier", barrier_span=3),
+              "barrier_window": replace(online, safety_guard="barrier", barrier_span=0),
+              "projection": replace(online, safety_guard="projection")}
+    guarded = {name: compiled(model, cfg, meta=meta) for name, cfg in guards.items()}
     command_filter = CommandFilter()
     stream = np.concatenate([s.sensory for s in sequences])
     for t in range(40):
         mirror.step(stream[t])
         plain.step(stream[t])
-        command_filter(guarded.step(stream[t]).motor)
-    step_times, plain_times, guarded_times, filter_times = [], [], [], []
+        for system in guarded.values():
+            command_filter(system.step(stream[t]).motor)
+    step_times, plain_times = [], []
+    # Also the processor time of each step: on a shared machine the wall-clock time includes
+    # waiting for a core, the processor time does not (the ratios are measured in one run).
+    cpu_times: dict[str, list[float]] = {name: [] for name in ("off", *guarded)}
+    guarded_times: dict[str, list[float]] = {name: [] for name in guarded}
+    filter_times: dict[str, list[float]] = {name: [] for name in guarded}
     for t in range(args.steps):
         u = stream[(40 + t) % len(stream)]
         for system, times in ((mirror, step_times), (plain, plain_times)):
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             system.step(u)
             times.append((time.perf_counter() - t0) * 1e3)
-        t0 = time.perf_counter()
-        command = guarded.step(u).motor
-        t1 = time.perf_counter()
-        command_filter(command)
-        t2 = time.perf_counter()
-        guarded_times.append((t2 - t0) * 1e3)
-        filter_times.append((t2 - t1) * 1e3)
+            if system is mirror:
+                cpu_times["off"].append((time.process_time() - c0) * 1e3)
+        for name, system in guarded.items():
+            t0, c0 = time.perf_counter(), time.process_time()
+            command = system.step(u).motor
+            cpu_times[name].append((time.process_time() - c0) * 1e3)
+            t1 = time.perf_counter()
+            command_filter(command)
+            t2 = time.perf_counter()
+            guarded_times[name].append((t1 - t0) * 1e3)
+            filter_times[name].append((t2 - t1) * 1e3)
     step_times = np.asarray(step_times)
     next_part()
 
@@ -199,8 +221,15 @@ def run(args: argparse.Namespace) -> int:
         "online_step_ms_median": float(np.median(step_times)),
         "online_step_ms_p99": float(np.percentile(step_times, 99)),
         "online_step_without_phase_restarts_ms_median": float(np.median(plain_times)),
-        "online_step_safety_on_ms_median": float(np.median(guarded_times)),
-        "command_filter_ms_median": float(np.median(filter_times)),
+        # The step with the guard the default uses when a map exists (the barrier on the
+        # newest steps), plus the filter; then each guard's step alone.
+        "online_step_safety_on_ms_median": float(np.median(
+            np.add(guarded_times[SAFETY_GUARD_TIMED], filter_times[SAFETY_GUARD_TIMED]))),
+        **{f"online_step_{name}_ms_median": float(np.median(times))
+           for name, times in guarded_times.items()},
+        "command_filter_ms_median": float(np.median(filter_times[SAFETY_GUARD_TIMED])),
+        **{f"online_step_{name}_cpu_ms_median": float(np.median(times))
+           for name, times in cpu_times.items()},
         "online_step_reference_numpy_ms_median": reference_ms,
         "online_speedup_vs_numpy": reference_ms / float(np.median(step_times)),
         "dyad_step_ms_median": dyad_ms,
@@ -229,9 +258,17 @@ def run(args: argparse.Namespace) -> int:
     print(f"  on-line step without phase restarts:     "
           f"{figures['online_step_without_phase_restarts_ms_median']:8.3f} ms median "
           f"(phase restarts cost {cost:+.0%})")
-    print(f"  on-line step, safety on (barrier+filter):"
+    print(f"  on-line step, safety on ({SAFETY_GUARD_TIMED}+filter):"
           f"{figures['online_step_safety_on_ms_median']:8.3f} ms median (the filter "
           f"{figures['command_filter_ms_median']:.3f} ms of it)")
+    print(f"    processor time per step (no waiting for a core): guard off "
+          f"{figures['online_step_off_cpu_ms_median']:.3f} ms median")
+    for name in guarded:
+        label = {"barrier": "barrier (newest step)", "barrier_3_steps": "barrier on 3 steps",
+                 "barrier_window": "barrier on the window"}.get(name, name)
+        print(f"    the step with the {label} alone: "
+              f"{figures[f'online_step_{name}_ms_median']:8.3f} ms median, processor time "
+              f"{figures[f'online_step_{name}_cpu_ms_median']:.3f} ms")
     print(f"  on-line step, NumPy reference:           {reference_ms:8.1f} ms median "
           f"(over {args.reference_steps} steps) — compiled is "
           f"{figures['online_speedup_vs_numpy']:.0f}x faster")

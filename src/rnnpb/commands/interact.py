@@ -51,6 +51,13 @@ end; summary.json lists the episodes and the versions written.
 
 A progress bar on stderr shows the steps (only on a terminal; --no-progress turns it off).
 
+Safety (docs/safety.md): every command passes the command filter before it is sent (it
+slows a command faster than the servos and holds or shortens one that would collide; the
+recording's unsafe and filtered columns say so); with a safety map beside the model
+(MODEL.safety.npz, from `rnnpb safety learn`) the regression also keeps the PB out of the
+learned unsafe region. Without a map the filter alone guards (said once). --no-safety turns
+both off.
+
 Example:
   rnnpb interact --model results/demo/models/set1.npz --source scenario:switch:1,2,3 --out run/
   rnnpb interact --model m.npz --source scenario:steps:1*40,figure-eight*100 --learn --out run/
@@ -86,6 +93,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--consolidation-iterations", type=int, metavar="N",
                         help="with --learn: learning iterations of each consolidation "
                         "(default: the consolidation's own, docs/model.md)")
+    parser.add_argument("--no-safety", action="store_true",
+                        help="no command filter and no PB guard (docs/safety.md)")
     parser.add_argument("--no-progress", action="store_true",
                         help="no progress bar (there is none when stderr is not a terminal)")
 
@@ -141,16 +150,23 @@ def run(args: argparse.Namespace) -> int:
         robot = MujocoRobot(dt=args.dt)
     else:
         robot = KinematicRobot(dt=args.dt)
-    mirror = MirrorSystem(model, online)
+    from rnnpb.safety import online_safety
+
+    safety = online_safety(model_path, model, online, enabled=not args.no_safety)
+    online = safety.config
+    mirror = MirrorSystem(model, online, meta=safety.meta)
     with contextlib.ExitStack() as stack:
         # SIGTERM (`kill`, a service manager) ends the run as Ctrl-C does: at the next step,
         # with the recording, the summary and a playable video.
         stack.enter_context(_terminate_as_interrupt())
         stack.enter_context(source)
         stack.enter_context(robot)
+        if safety.command_filter is not None:
+            safety.command_filter.reset(robot.read())  # the pose the first command leaves
         recorder = stack.enter_context(SessionRecorder(out / "session.csv",
                                                        model.network.pb_size))
-        loop = InteractionLoop(mirror, source, robot, recorder, loop_config)
+        loop = InteractionLoop(mirror, source, robot, recorder, loop_config,
+                               command_filter=safety.command_filter)
         if args.render:
             from rnnpb.interaction.render import SessionVideo
 
@@ -163,6 +179,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"interacting: {args.source} -> {model_path} ({online_name} on-line regression"
               f"{why}; {args.robot} robot{', paced' if args.paced else ''}); Ctrl-C stops",
               flush=True)
+        print(safety.note, flush=True)
         bar = stack.enter_context(progress_bar(
             total=args.steps or _source_length(source), unit="step", desc="interacting",
             disable=args.no_progress))
@@ -239,12 +256,17 @@ def run(args: argparse.Namespace) -> int:
                 "online": online_name, "online_config": online.to_dict(), "loop": summary.to_dict(),
                 "dt": args.dt, "paced": args.paced, "robot": args.robot,
                 "recognition_config": mirror.recognition.to_dict(),
-                "recognition_timeline": timeline}
+                "recognition_timeline": timeline,
+                "safety": {**safety.to_dict(), "unsafe_commands": loop.unsafe_commands,
+                           "prevented_commands": loop.prevented_commands}}
     if teaching is not None:
         document["teaching"] = teaching
     with atomic_write(out / "summary.json", "w", encoding="utf-8") as handle:
         json.dump(document, handle, indent=2)
     print(summary.describe())
+    if safety.command_filter is not None:
+        print(f"safety: {loop.unsafe_commands} unsafe commands generated, "
+              f"{loop.prevented_commands} held, shortened or slowed by the filter")
     if teaching is not None:
         versions = [Path(v).name for v in teaching["versions_written"]]
         print(f"learned: {len(teaching['episodes'])} episode(s) kept, model versions written: "

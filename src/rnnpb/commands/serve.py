@@ -55,6 +55,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="also accept the WebSocket of pages from this origin, "
                              "scheme://host[:port] (repeatable; the server's own page "
                              "always is)")
+    parser.add_argument("--no-safety", action="store_true",
+                        help="no command filter and no PB guard (docs/safety.md; by default "
+                        "the filter checks every command, and a model's safety map beside it "
+                        "guards its PB)")
     parser.add_argument("--log-level", default="warning",
                         choices=("debug", "info", "warning", "error"),
                         help="server log detail (default warning)")
@@ -83,12 +87,14 @@ def run(args: argparse.Namespace) -> int:
     server = DashboardServer(models, host=args.host, port=args.port, dt=args.dt,
                              log_level=args.log_level, allow_hosts=access.hosts,
                              allow_origins=access.origins)
+    server.session.safety_enabled = not args.no_safety  # read when a model loads
     server.start()
     print(f"rnnpb dashboard: {server.url}  (models: {', '.join(models)}; Ctrl-C to stop)",
           flush=True)
     print(f"answering for: {', '.join(access.allowed_hosts)}"
           + (f"; pages from: {', '.join(access.origins)}" if access.origins else ""),
           flush=True)
+    _print_safety(models, args.no_safety)
     try:
         server.wait()
     finally:
@@ -122,3 +128,16 @@ def _check_port_free(host: str, port: int) -> None:
                           "--port, or --port 0 for any free one")
             raise ConfigError(f"cannot serve on {host}:{port}: {reason}") from None
 
+
+def _print_safety(models: dict, off: bool) -> None:
+    """Say once what guards the robot (docs/safety.md)."""
+    from rnnpb.safety import safety_map_path
+
+    if off:
+        print("safety: off (--no-safety): no command filter, no PB guard", flush=True)
+        return
+    mapped = [name for name, path in models.items() if safety_map_path(path).exists()]
+    print("safety: the command filter checks every command; "
+          + (f"safety maps guard the PB of {', '.join(mapped)}" if mapped else
+             "no model has a safety map (`rnnpb safety learn`), so the filter alone guards"),
+          flush=True)

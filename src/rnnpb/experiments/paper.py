@@ -19,6 +19,7 @@ import numpy as np
 from rnnpb.analysis import metrics
 from rnnpb.errors import ConfigError
 from rnnpb.model import MirrorSystem, OnlineConfig, TrainConfig, TrainedModel, generate, train
+from rnnpb.model.meta import MetaParams
 from rnnpb.vectors import (
     MOTOR_NAMES,
     PREDICTED_PREFIX,
@@ -122,13 +123,15 @@ class Run:
 
 
 def run_scenario(model: TrainedModel, scenario, online: OnlineConfig,
-                 joint_limits: np.ndarray) -> Run:
-    """Drive the mirror system with a demonstrator scenario through the interaction loop."""
+                 joint_limits: np.ndarray, meta: MetaParams | None = None) -> Run:
+    """Drive the mirror system with a demonstrator scenario through the interaction loop.
+    ``meta``: a safety map's risk network, for the guard ``online.safety_guard`` names
+    (docs/safety.md); None runs unguarded."""
     from rnnpb.demonstrator import ScenarioSource
     from rnnpb.interaction import InteractionLoop, LoopConfig
 
     records = []
-    mirror = MirrorSystem(model, online)
+    mirror = MirrorSystem(model, online, meta=meta)
     with ScenarioSource(scenario) as source:
         InteractionLoop(mirror, source, config=LoopConfig(dt=scenario.dt)).run(
             on_step=records.append)
@@ -177,12 +180,14 @@ class Synchronization:
 
 def synchronization(model: TrainedModel, pattern: str, online: OnlineConfig,
                     joint_limits: np.ndarray, seed: int = 0, before: int = 75,
-                    pause: int = PAUSE_STEPS, after: int = 45) -> Synchronization:
-    """The user performs ``pattern``, pauses, and goes on (paper Figure 5)."""
+                    pause: int = PAUSE_STEPS, after: int = 45,
+                    meta: MetaParams | None = None) -> Synchronization:
+    """The user performs ``pattern``, pauses, and goes on (paper Figure 5). ``meta``: see
+    :func:`run_scenario`."""
     from rnnpb.demonstrator import pause_scenario
 
     scenario = pause_scenario(pattern, before=before, pause=pause, after=after, seed=seed)
-    run = run_scenario(model, scenario, online, joint_limits)
+    run = run_scenario(model, scenario, online, joint_limits, meta)
     lock = metrics.steps_to_lock(run.motor_error, run.sensory_error, 0, before)
     settle = metrics.pb_settle_step(run.pb[:before])
     lag = math.nan
@@ -215,15 +220,16 @@ class Switching:
 
 
 def switching(model: TrainedModel, online: OnlineConfig, joint_limits: np.ndarray,
-              seed: int = 0, steps_each: int = SWITCH_STEPS_EACH) -> Switching:
+              seed: int = 0, steps_each: int = SWITCH_STEPS_EACH,
+              meta: MetaParams | None = None) -> Switching:
     """Every ordered pair of learned patterns: steps from the switch until the robot follows
-    the new pattern (locked on it)."""
+    the new pattern (locked on it). ``meta``: see :func:`run_scenario`."""
     from rnnpb.demonstrator import switch_scenario
 
     pairs = {}
     for a, b in permutations(model.patterns, 2):
         run = run_scenario(model, switch_scenario((a, b), steps_each=steps_each, seed=seed),
-                           online, joint_limits)
+                           online, joint_limits, meta)
         pairs[f"{a}->{b}"] = metrics.steps_to_lock(run.motor_error, run.sensory_error,
                                                    steps_each)
     return Switching(pairs)

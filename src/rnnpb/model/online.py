@@ -194,6 +194,21 @@ def _phase_restart(params: Params, state: OnlineState, phase_candidates: jax.Arr
     return jax.tree_util.tree_map(lambda a, b: jnp.where(accept, a, b), restarted, state)
 
 
+def _barrier_gradient(meta: MetaParams, config: OnlineConfig, n: jax.Array,
+                      rho: jax.Array) -> jax.Array:
+    """The gradient of the barrier (:func:`rnnpb.model.meta.barrier_energy`) with respect to
+    the profile ``rho`` (L, P), over its newest ``config.barrier_span`` steps (all for 0);
+    zero elsewhere. Only those rows go through the risk network: its cost scales with them."""
+    length = rho.shape[0]
+    span = config.barrier_span or length
+    if span >= length:
+        return jax.grad(lambda r: barrier_energy(meta, r, config.risk_level))(rho)
+    start = jnp.clip(n - span, 0, length - span)
+    newest = jax.lax.dynamic_slice_in_dim(rho, start, span, axis=0)
+    grad = jax.grad(lambda r: barrier_energy(meta, r, config.risk_level))(newest)
+    return jax.lax.dynamic_update_slice_in_dim(jnp.zeros_like(rho), grad, start, axis=0)
+
+
 def pattern_errors(params: Params, state: OnlineState, pattern_rho: jax.Array,
                    onset_context: jax.Array, onset_motor: jax.Array, config: OnlineConfig,
                    steps: int) -> jax.Array:
@@ -272,7 +287,7 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
     guard = config.safety_guard if meta is not None else "off"
     barrier = None
     if guard == "barrier" and config.barrier_weight > 0:
-        barrier = jax.grad(lambda r: barrier_energy(meta, r, config.risk_level))
+        barrier = partial(_barrier_gradient, meta, config, state.n)
 
     def iteration(_, carry):
         rho, velocity, context, motor = carry

@@ -15,6 +15,7 @@ import math
 import numpy as np
 
 from rnnpb.model.io import TrainedModel
+from rnnpb.model.meta import MetaParams
 from rnnpb.model.mirror import (
     MirrorSystem,
     StepResult,
@@ -201,6 +202,48 @@ def pb_update(rho: np.ndarray, velocity: np.ndarray, grad: np.ndarray, config: P
     return new_rho, new_velocity
 
 
+def risk_logit_and_gradient(meta: MetaParams, rho: np.ndarray
+                            ) -> tuple[np.ndarray, np.ndarray]:
+    """The risk network (:func:`rnnpb.model.meta.risk_logit`) at the PBs ``sigmoid(rho)``,
+    rows (n, P): the logits (n,) and their gradients with respect to ``rho`` (n, P), by hand."""
+    pb = sigmoid(rho)
+    h1 = np.tanh(pb @ meta.w1 + meta.b1)
+    h2 = np.tanh(h1 @ meta.w2 + meta.b2)
+    logits = h2 @ meta.w3 + meta.b3
+    d_a2 = meta.w3 * (1.0 - h2 ** 2)
+    d_a1 = (d_a2 @ meta.w2.T) * (1.0 - h1 ** 2)
+    return logits, (d_a1 @ meta.w1.T) * pb * (1.0 - pb)
+
+
+def barrier_gradient(meta: MetaParams, rho: np.ndarray, n: int, config: OnlineConfig
+                     ) -> np.ndarray:
+    """The gradient of the barrier ``softplus(risk_logit - logit(risk_level))`` summed over
+    the newest ``config.barrier_span`` rows of ``rho`` (L, P) (all for 0), zero elsewhere
+    (as :func:`rnnpb.model.online._barrier_gradient`)."""
+    length = len(rho)
+    span = config.barrier_span or length
+    start = 0 if span >= length else int(np.clip(n - span, 0, length - span))
+    rows = slice(start, start + min(span, length))
+    logits, grad = risk_logit_and_gradient(meta, rho[rows])
+    threshold = math.log(config.risk_level / (1.0 - config.risk_level))
+    out = np.zeros_like(rho)
+    out[rows] = sigmoid(logits - threshold)[:, None] * grad  # softplus' = sigmoid
+    return out
+
+
+def project_out(meta: MetaParams, rho: np.ndarray, config: OnlineConfig) -> np.ndarray:
+    """Each row of ``rho`` (n, P) moved down the risk gradient until its risk is below
+    ``risk_level`` (as :func:`rnnpb.model.meta.project_out`)."""
+    threshold = math.log(config.risk_level / (1.0 - config.risk_level))
+    rho = rho.copy()
+    for _ in range(config.projection_steps):
+        logits, grad = risk_logit_and_gradient(meta, rho)
+        norm = np.sqrt(np.sum(grad ** 2, axis=1, keepdims=True)) + 1e-6
+        rho = np.where((logits > threshold)[:, None],
+                       rho - config.projection_rate * grad / norm, rho)
+    return rho
+
+
 class ReferenceMirrorSystem:
     """:class:`rnnpb.model.mirror.MirrorSystem` in plain NumPy, float64: its drop-in twin.
 
@@ -211,6 +254,7 @@ class ReferenceMirrorSystem:
     """
 
     def __init__(self, model: TrainedModel, config: OnlineConfig | None = None,
+                 meta: MetaParams | None = None,
                  recognition: RecognitionConfig | None = None) -> None:
         self.model = model
         self.config = config or OnlineConfig()
@@ -219,6 +263,9 @@ class ReferenceMirrorSystem:
         self.learned_pb = np.array([model.pattern_pb[name] for name in self.patterns])
         self.pattern_rho = restart_candidates(model)
         self.params = model.params
+        # The safety guard's risk network, as the compiled step takes it (docs/safety.md).
+        self.meta = None if meta is None else MetaParams(
+            *(np.asarray(a, dtype=np.float64) for a in meta))
         # The same learned states as the compiled step's (they are its inputs, not its work).
         self.phase_candidates = (phase_candidates(model) if self.config.phase_restarts > 0
                                  else None)
@@ -402,15 +449,23 @@ class ReferenceMirrorSystem:
                                                  self.n - 1)))
             gate = float(np.clip((rms / cfg.surprise_gate) ** cfg.gate_power, cfg.gate_floor,
                                  1.0))
+        guard = cfg.safety_guard if self.meta is not None else "off"
+        barrier = guard == "barrier" and cfg.barrier_weight > 0
         for _ in range(cfg.iterations):
             _, g_rho, g_c, g_m, _, _ = window_error_and_gradients(
                 self.params, self.sensory, self.seen, self.n, self.rho, self.onset_context,
                 self.onset_motor, motor_inputs)
-            self.rho, self.velocity = pb_update(self.rho, self.velocity, gate * g_rho, cfg.pb,
+            g_rho = gate * g_rho
+            if barrier:
+                g_rho = g_rho + cfg.barrier_weight * barrier_gradient(self.meta, self.rho,
+                                                                      self.n, cfg)
+            self.rho, self.velocity = pb_update(self.rho, self.velocity, g_rho, cfg.pb,
                                                 self.n)
             if cfg.optimize_onset:
                 self.onset_context = self.onset_context - cfg.onset_learning_rate * g_c
                 self.onset_motor = self.onset_motor - cfg.onset_learning_rate * g_m
+        if guard == "projection":
+            self.rho[:self.n] = project_out(self.meta, self.rho[:self.n], cfg)
         _, _, _, _, predictions, contexts = window_error_and_gradients(
             self.params, self.sensory, self.seen, self.n, self.rho, self.onset_context,
             self.onset_motor, motor_inputs)

@@ -35,6 +35,7 @@ from rnnpb.safety._map import (
     safety_map_path,
 )
 from rnnpb.safety._meta import MetaConfig, familiarity, fit_meta, init_meta, risk
+from rnnpb.safety._online import OnlineSafety, online_safety, risk_plane, risk_views
 
 __all__ = [
     "PHYSICAL",
@@ -45,6 +46,7 @@ __all__ = [
     "ExplorationConfig",
     "FilterDecision",
     "MetaConfig",
+    "OnlineSafety",
     "SafetyChecker",
     "SafetyLimits",
     "SafetyMap",
@@ -58,7 +60,10 @@ __all__ = [
     "learn_safety_map",
     "load_safety_map",
     "model_fingerprint",
+    "online_safety",
     "risk",
+    "risk_plane",
+    "risk_views",
     "safety_map_path",
     "sample_pbs",
     "unsettled_steps",

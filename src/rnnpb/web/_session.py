@@ -79,7 +79,8 @@ def offered_models(model_or_dir: str | Path) -> tuple[dict[str, Path], dict[str,
     refused: dict[str, str] = {}
     for found in sorted(path.rglob("*.npz")):
         name = str(found.relative_to(path))
-        if found.name.endswith(".checkpoint.npz") or any(
+        # A checkpoint, or a model's safety map (M.safety.npz, docs/safety.md): not models.
+        if found.name.endswith((".checkpoint.npz", ".safety.npz")) or any(
                 part.startswith(".") for part in found.relative_to(path).parts):
             continue
         try:
@@ -269,6 +270,11 @@ class Session:
         # Names this server's runs, so a page that reconnects to a restarted server knows
         # its plots belong to another run even when the run numbers coincide.
         self._token = secrets.token_hex(4)
+        # Safety (docs/safety.md): the command filter always and the model's map when one
+        # lies beside it; ``rnnpb serve --no-safety`` sets this False before start().
+        self.safety_enabled = True
+        self.safety = None  # rnnpb.safety.OnlineSafety of the loaded model
+        self._risk_views: dict[str, Any] = {}
 
     # --- life cycle -----------------------------------------------------------------------
     def start(self, model_name: str | None = None) -> None:
@@ -384,6 +390,7 @@ class Session:
             "robot": {"shoulders": SHOULDERS.tolist(), "upper_arm": UPPER_ARM_LENGTH,
                       "forearm": FOREARM_LENGTH, "joint_limits": JOINT_LIMITS.tolist(),
                       "joint_names": list(MOTOR_NAMES)},
+            "safety": self._safety_state(),
         }
 
     # --- the session thread ---------------------------------------------------------------
@@ -527,7 +534,8 @@ class Session:
             # The regression that suits the model's learning (docs/model.md, "Which on-line
             # regression"), as `rnnpb interact` picks it.
             choice = OnlineConfig.for_model(model)
-            mirror = MirrorSystem(model, choice.config)
+            safety, risk = self._load_safety(self.models[name], model, choice.config)
+            mirror = MirrorSystem(model, safety.config, meta=safety.meta)
             started = time.perf_counter()
             mirror.step(np.full(model.network.sensory_size, 0.5))  # compiles the step
             mirror.reset()
@@ -542,6 +550,7 @@ class Session:
             self.loading = False
             self.loading_model = None
         self.model, self.mirror, self.model_name = model, mirror, name
+        self.safety, self._risk_views = safety, risk
         self.model_error = None
         self._new_run()
         self.running = was_running
@@ -570,11 +579,33 @@ class Session:
         except OSError as error:
             self.recorder = None
             self._error(f"cannot record this run: {error}; the robot runs without recording")
+        command_filter = self.safety.command_filter if self.safety is not None else None
+        if command_filter is not None:
+            command_filter.reset()
         self.loop = InteractionLoop(self.mirror, self._source, recorder=self.recorder,
-                                    config=LoopConfig(dt=self.dt, paced=True))
+                                    config=LoopConfig(dt=self.dt, paced=True),
+                                    command_filter=command_filter)
         # The loop calls subscribers once a step's timings are complete, so the step message
         # carries this step's sections.
         self.loop.subscribe(self._publish_step)
+
+    def _load_safety(self, path: Path, model, online) -> tuple[Any, dict[str, Any]]:
+        """The model's safety (filter; map if beside it) and the risk on the PB plot's
+        views, computed once per model (sent with the state message)."""
+        from rnnpb.safety import online_safety, risk_views
+
+        safety = online_safety(path, model, online, enabled=self.safety_enabled)
+        log.info("%s", safety.note)
+        views = ({} if safety.safety_map is None
+                 else risk_views(safety.safety_map, model.pattern_pb))
+        return safety, views
+
+    def _safety_state(self) -> dict[str, Any]:
+        """The ``safety`` part of the state message: what guards the robot, and the risk
+        grids of the PB plot (empty without a map)."""
+        if self.safety is None:
+            return {"map": False, "guard": "off", "filter": False, "note": "", "risk": {}}
+        return {**self.safety.to_dict(), "risk": self._risk_views}
 
     def _close_run(self) -> None:
         if self.recorder is not None:
@@ -639,10 +670,17 @@ class Session:
             "arms": {"elbows": np.round(elbows, 5).tolist(), "hands": np.round(hands, 5).tolist()},
             "timings_ms": {k: round(v * 1e3, 3) for k, v in record.timings.items()},
             "missed_deadlines": self.loop.missed_deadlines if self.loop is not None else 0,
+            **self._step_safety(record),
         }
         self._publish(message)
         if record.frame is not None and self._webcam is not None:
             self._publish_frame(record.frame)
+
+    def _step_safety(self, record) -> dict[str, Any]:
+        """The step message's safety fields: why the generated command was unsafe (empty
+        when safe), what the filter did, and how many commands it has changed this run."""
+        return {"unsafe": record.unsafe, "filtered": record.filtered,
+                "prevented": self.loop.prevented_commands if self.loop is not None else 0}
 
     def _publish_frame(self, frame: np.ndarray) -> None:
         import cv2

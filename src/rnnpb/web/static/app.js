@@ -127,6 +127,7 @@ function onState(state) {
   showProblems();
   updateStatus();
   drawPlots();
+  showSafety(dash.lastStep);
 }
 
 // The model list, and the one chosen: while a model loads, the one being loaded.
@@ -280,6 +281,7 @@ function onStep(step) {
   updateStatus();
   drawPlots();
   drawPointerPanel();
+  showSafety(step);
 }
 
 // The readouts under the robot: the last step's, marked as such while stopped.
@@ -839,6 +841,7 @@ function drawPB() {
   g.save(); g.translate(11, 12 + ph); g.rotate(-Math.PI / 2);
   g.fillText(`${P.labels[1]} →`, 0, 0); g.restore();
   if (P.fixed) { g.fillText("0", m - 10, 12 + ph + 10); g.fillText("1", m + pw - 4, 12 + ph + 12); }
+  drawRisk(g, P, project, X, Y, [m, 12, pw, ph]);
   // The trail first, the learned markers over it: the markers are what the trail is read by.
   g.strokeStyle = "rgba(224, 123, 0, 0.75)";
   g.lineWidth = 1.5;
@@ -879,6 +882,60 @@ function drawPB() {
     g.fillStyle = "#e07b00";
     g.beginPath(); g.arc(X(p[0]), Y(p[1]), 2, 0, 2 * Math.PI); g.fill();
   }
+}
+
+// The learned unsafe region (the safety map's risk, docs/safety.md), shaded under the trail:
+// the server sends the risk on a grid of each view's plane once, with the state message. The
+// grid becomes a small image (one pixel a cell, opacity = risk) drawn through the affine map
+// that the plot's own projection makes of the grid's plane, so any view is covered exactly.
+let riskImage = null;
+function drawRisk(g, P, project, X, Y, box) {
+  const safety = dash.state && dash.state.safety;
+  const view = safety && safety.risk && safety.risk[projection.mode];
+  if (!view) return;
+  const [ea0, ea1, eb0, eb1] = view.extent, n = view.grid;
+  if (!riskImage || riskImage.view !== view) {
+    const canvas = document.createElement("canvas");
+    canvas.width = n; canvas.height = n;
+    const c = canvas.getContext("2d"), image = c.createImageData(n, n);
+    view.risk.forEach((row, i) => row.forEach((risk, j) => {
+      const k = 4 * (i * n + j);
+      image.data.set([214, 58, 58, Math.round(255 * 0.55 * risk)], k);
+    }));
+    c.putImageData(image, 0, 0);
+    riskImage = { view, canvas };
+  }
+  // Grid corner (a, b) of the plane → pixel: origin + a·axes[0] + b·axes[1], projected.
+  const pixel = (a, b) => {
+    const p = project(view.origin.map((o, k) => o + a * view.axes[0][k] + b * view.axes[1][k]));
+    return [X(p[0]), Y(p[1])];
+  };
+  const o = pixel(ea0, eb0), u = pixel(ea1, eb0), v = pixel(ea0, eb1);
+  g.save();
+  g.beginPath(); g.rect(...box); g.clip();
+  g.transform((u[0] - o[0]) / n, (u[1] - o[1]) / n, (v[0] - o[0]) / n, (v[1] - o[1]) / n,
+    o[0], o[1]);
+  g.imageSmoothingEnabled = true;
+  g.drawImage(riskImage.canvas, 0, 0);
+  g.restore();
+}
+
+// What guards the robot, and how many commands the filter changed (a line under the PB plot,
+// made here so that the page's markup stays as it is).
+function showSafety(step) {
+  let line = $("safety-status");
+  if (!line) {
+    line = el("p", { id: "safety-status", className: "legend" });
+    $("plot-pb").after(line);
+  }
+  const safety = (dash.state && dash.state.safety) || {};
+  const parts = [safety.filter ? "command filter on" : "command filter off",
+    safety.map ? `PB guard: ${safety.guard} (shaded: learned risk)` : "no safety map"];
+  if (step) {
+    parts.push(`prevented commands: ${step.prevented}`);
+    if (step.filtered) parts.push(`last step ${step.filtered}: ${step.unsafe}`);
+  }
+  line.textContent = `Safety — ${parts.join(" · ")}`;
 }
 
 function drawTimings() {
