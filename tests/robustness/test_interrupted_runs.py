@@ -146,6 +146,12 @@ def test_ctrl_c_during_the_first_compile_stops_interact_cleanly(model_file, tmp_
     runs = _interrupt_during_startup(command, None, [0.5], tmp_path)
     runs += _interrupt_during_startup(command, "interacting:", [0.0], tmp_path)
     for status, stdout, stderr, out in runs:
+        if status == 130 and "interacting:" not in stdout:
+            # The signal came before the command began its work (a busy machine still
+            # starting Python): the plain Ctrl-C exit, and nothing left half-written.
+            assert stderr.strip().splitlines()[-1] == "rnnpb: interrupted", stderr
+            assert not list(out.glob(".*"))
+            continue
         assert status == 0, stderr
         assert "interrupted: the recording keeps every step so far" in stdout
         recorded = read_session(out / "session.csv")
