@@ -15,5 +15,8 @@ test:
 bench: setup
 	.venv/bin/rnnpb bench
 
+# The type checker reads pyproject.toml's [tool.basedpyright]; --pythonpath points it at the
+# project's environment, where the dependencies' types are.
 lint: setup
 	.venv/bin/ruff check src tests benchmarks
+	.venv/bin/basedpyright --pythonpath .venv/bin/python

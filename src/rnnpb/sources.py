@@ -15,7 +15,7 @@ are parsed in one place, :func:`rnnpb.interaction.open_source`.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -48,7 +48,8 @@ class Observation:
     @property
     def seen(self) -> np.ndarray:
         """Per hand (left, right): whether its position was observed this step."""
-        return ~np.isnan(self.sensory.reshape(2, 2)).any(axis=1)
+        # NumPy's stub allows a scalar from any(axis=1); on a (2, 2) array it is (2,).
+        return cast(np.ndarray, ~np.isnan(self.sensory.reshape(2, 2)).any(axis=1))
 
 
 class UserSource:

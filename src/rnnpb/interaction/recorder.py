@@ -79,6 +79,7 @@ class SessionRecorder:
         """Append one :class:`rnnpb.interaction.loop.StepRecord`."""
         if self._writer is None:
             self.open()
+        assert self._writer is not None and self._handle is not None  # open() set both
         seen = np.isfinite(record.observed)
         row = [record.step, f"{record.time_s:.4f}", *(_fmt(v) for v in record.observed),
                *(_fmt(v) for v in record.predicted), *(f"{v:.6f}" for v in record.motor),
@@ -222,6 +223,7 @@ class DyadRecorder(SessionRecorder):
     def write(self, record) -> None:
         if self._writer is None:
             self.open()
+        assert self._writer is not None and self._handle is not None  # open() set both
         row: list[object] = [record.step, f"{record.step * self.dt:.4f}"]
         for agent, shown in ((record.a, record.shown_a), (record.b, record.shown_b)):
             result = agent.result

@@ -30,7 +30,7 @@ import zlib
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -171,8 +171,10 @@ class HistoryEntry:
 def first_training_entry(meta: dict[str, Any], patterns: tuple[str, ...]) -> HistoryEntry:
     """The history a model has without a recorded one: its first training, as its training
     record says (a model just trained, or a file of format 1)."""
-    training = meta.get("training") if isinstance(meta.get("training"), dict) else {}
-    config = meta.get("train_config") if isinstance(meta.get("train_config"), dict) else {}
+    training = meta.get("training")
+    training = training if isinstance(training, dict) else {}
+    config = meta.get("train_config")
+    config = config if isinstance(config, dict) else {}
     iterations = training.get("iterations", 0)
     seconds = training.get("seconds", 0.0)
     fingerprint = training.get("data_fingerprint")
@@ -437,7 +439,8 @@ def save_archive(path: str | os.PathLike[str], meta: dict[str, Any],
     payload = dict(arrays)
     payload["meta.json"] = np.frombuffer(json.dumps(meta, indent=1).encode("utf-8"), np.uint8)
     buffer = io.BytesIO()
-    np.savez(buffer, **payload)
+    # NumPy's stub types the arrays' keywords with ``allow_pickle: bool`` among them.
+    np.savez(buffer, **cast("dict[str, Any]", payload))
     with atomic_write(path, "wb") as handle:
         handle.write(buffer.getvalue())
 
@@ -559,7 +562,8 @@ def _read_npy(path: Path, archive: zipfile.ZipFile, info: zipfile.ZipInfo,
               shape: tuple[int, ...] | None) -> np.ndarray:
     """One ``.npy`` member, its header checked against ``shape`` and the member's size first."""
     name = info.filename[:-len(".npy")]
-    with archive.open(info) as member:
+    # ZipFile.open's stub says IO[bytes]; reading a member gives a ZipExtFile (readinto).
+    with cast(zipfile.ZipExtFile, archive.open(info)) as member:
         if member.read(len(_NPY_MAGIC)) != _NPY_MAGIC:
             raise ModelFileError(f"{path}: member {name!r} is not a .npy array")
         member.seek(0)

@@ -20,7 +20,7 @@ import hashlib
 from collections.abc import Callable
 from collections.abc import Sequence as SequenceABC
 from dataclasses import asdict, dataclass, field, replace
-from typing import Any, Literal, NamedTuple
+from typing import Any, Literal, NamedTuple, cast
 
 import jax
 import jax.numpy as jnp
@@ -209,7 +209,9 @@ def _compiled_chunk(config: TrainConfig
         if not config.learn_initial_context:
             grad_trainable = (grad_trainable[0], jnp.zeros_like(grad_trainable[1]))
         updates, opt_state = optimizer.update(grad_trainable, state.opt_state, trainable)
-        params, context_logit = optax.apply_updates(trainable, updates)
+        # optax types its result as any tree; it has the structure of ``trainable``.
+        params, context_logit = cast("tuple[Params, jax.Array]",
+                                     optax.apply_updates(trainable, updates))
         rho, rho_velocity = jax.vmap(lambda r, v, g, m: pb_update(r, v, g, config.pb, m))(
             state.rho, state.rho_velocity, grad_rho, valid)
         return TrainState(params, context_logit, opt_state, rho, rho_velocity, key,

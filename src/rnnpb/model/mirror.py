@@ -13,11 +13,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import partial
-from typing import NamedTuple
+from typing import NamedTuple, cast
 
 import jax
 import jax.numpy as jnp
 import numpy as np
+from numpy.typing import ArrayLike
 
 from rnnpb import _xla
 from rnnpb.errors import ConfigError
@@ -116,12 +117,12 @@ class PackedLayout(NamedTuple):
             start += sizes[name]
         return cls(**parts)
 
-    def unpack(self, packed: np.ndarray) -> StepOutputs:
+    def unpack(self, packed: np.ndarray) -> StepOutputs[np.ndarray]:
         """The packed vector (host side) back into named outputs."""
         return StepOutputs(*(packed[part] for part in self))
 
 
-def pack(outputs: StepOutputs) -> jax.Array:
+def pack(outputs: StepOutputs[jax.Array]) -> jax.Array:
     """The outputs of a step as one float32 vector, in :class:`PackedLayout`'s order."""
     return jnp.concatenate([jnp.reshape(value, (-1,)).astype(jnp.float32) for value in outputs])
 
@@ -149,8 +150,9 @@ def normalized_hands(values: object, sensory_size: int) -> tuple[np.ndarray, np.
         raise ConfigError(f"observed hands must be {sensory_size} numbers (lhy lhz rhy rhz), "
                           f"got {values!r:.80}") from None
     if u.shape != (sensory_size,):
+        # np.asarray took ``values`` above: it is array-like.
         raise ConfigError(f"observed hands must have {sensory_size} values "
-                          f"(lhy lhz rhy rhz), got {np.shape(values)}")
+                          f"(lhy lhz rhy rhz), got {np.shape(cast(ArrayLike, values))}")
     seen = np.isfinite(u)
     return np.where(seen, np.clip(u, 0.0, 1.0), 0.0), seen
 

@@ -42,7 +42,7 @@ the context need not be dragged to the user's phase through the old observations
 from __future__ import annotations
 
 from functools import partial
-from typing import NamedTuple
+from typing import Generic, NamedTuple, TypeVar
 
 import jax
 import jax.numpy as jnp
@@ -75,21 +75,25 @@ class OnlineState(NamedTuple):
     predicted_sensory: jax.Array  # (S,) last prediction of the next observation
 
 
-class StepOutputs(NamedTuple):
+# The arrays of StepOutputs: jax.Array on the device, np.ndarray once back on the host.
+_Values = TypeVar("_Values", jax.Array, np.ndarray)
+
+
+class StepOutputs(NamedTuple, Generic[_Values]):
     """What :func:`online_step` returns, in normalized units (the host side,
     :class:`rnnpb.model.mirror.MirrorSystem`, makes a :class:`~rnnpb.model.mirror.StepResult`
     of it). The field order is the order of the packed vector that comes back to the host."""
 
-    motor: jax.Array  # (M,) normalized motor command for this step
-    predicted_sensory: jax.Array  # (S,) prediction of the next observation
-    pb: jax.Array  # (P,) current PB
-    window_error: jax.Array  # () mean squared sensory error over the window after regression
-    held: jax.Array  # () bool: the regression failed numerically, the last state was kept
-    context: jax.Array  # (C,) the context after the current step (for phase-space plots)
+    motor: _Values  # (M,) normalized motor command for this step
+    predicted_sensory: _Values  # (S,) prediction of the next observation
+    pb: _Values  # (P,) current PB
+    window_error: _Values  # () mean squared sensory error over the window after regression
+    held: _Values  # () bool: the regression failed numerically, the last state was kept
+    context: _Values  # (C,) the context after the current step (for phase-space plots)
     # (K,) for each learned pattern, the window's mean squared sensory error over its last
     # ``recognition_steps`` predictions with that pattern's PB in place of the regressed
     # profile (the evidence of rnnpb.model.recognition); (0,) without learned PBs given.
-    pattern_errors: jax.Array
+    pattern_errors: _Values
 
 
 def initial_state(model: TrainedModel, config: OnlineConfig,
@@ -239,7 +243,7 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
                 config: OnlineConfig, candidates: jax.Array | None = None,
                 phase_candidates: jax.Array | None = None, meta: MetaParams | None = None,
                 pattern_rho: jax.Array | None = None, recognition_steps: int = 12
-                ) -> tuple[OnlineState, StepOutputs]:
+                ) -> tuple[OnlineState, StepOutputs[jax.Array]]:
     """One step of the mirror system, compiled as one call.
 
     Parameters
@@ -287,6 +291,7 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
     guard = config.safety_guard if meta is not None else "off"
     barrier = None
     if guard == "barrier" and config.barrier_weight > 0:
+        assert meta is not None  # the guard is "off" without it
         barrier = partial(_barrier_gradient, meta, config, state.n)
 
     def iteration(_, carry):
@@ -307,6 +312,7 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
         0, config.iterations, iteration,
         (state.rho, state.rho_velocity, state.onset_context, state.onset_motor))
     if guard == "projection":
+        assert meta is not None  # the guard is "off" without it
         rho = jnp.where(valid[:, None], project_out(meta, rho, config.risk_level,
                                                     config.projection_steps,
                                                     config.projection_rate), rho)

@@ -344,6 +344,7 @@ class ReferenceMirrorSystem:
         sensory, seen = self.sensory[piece], self.seen[piece]
         inputs = None if motor_inputs is None else motor_inputs[piece]
         best_error, best = None, None
+        assert self.phase_candidates is not None  # the caller checks
         for candidate in self.phase_candidates:
             predictions = window_error_and_gradients(
                 self.params, sensory, seen, span, np.tile(candidate[:n_pb], (span, 1)),
@@ -351,6 +352,7 @@ class ReferenceMirrorSystem:
             error = self._recent_mse(predictions, sensory, seen, 0, span - 1)
             if best_error is None or error < best_error:
                 best_error, best = error, candidate
+        assert best_error is not None and best is not None  # one candidate per learned pattern
         predictions = window_error_and_gradients(
             self.params, self.sensory, self.seen, self.n, self.rho, self.onset_context,
             self.onset_motor, motor_inputs)[4]
@@ -432,6 +434,7 @@ class ReferenceMirrorSystem:
                     self.onset_motor, motor_inputs)[0]
                 if best_error is None or error < best_error:
                     best_error, best = error, (k, profile)
+            assert best is not None  # the current profile is always a candidate
             if best[0] > 0:
                 self.rho = best[1]
                 self.velocity = np.zeros_like(self.velocity)
