@@ -76,7 +76,8 @@ class Demonstration:
     @property
     def valid(self) -> np.ndarray:
         """Steps whose sensory and motor values are all finite, shape (n_steps,)."""
-        return (np.isfinite(self.sensory).all(axis=1) & np.isfinite(self.motor).all(axis=1))
+        return np.asarray(np.isfinite(self.sensory).all(axis=1)
+                          & np.isfinite(self.motor).all(axis=1))
 
 
 def record_demonstration(source: UserSource, *, steps: int | None = None,

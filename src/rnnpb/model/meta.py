@@ -21,17 +21,19 @@ from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 
 class MetaParams(NamedTuple):
-    """Weights of the risk network. Shapes: P PB, H hidden."""
+    """Weights of the risk network. Shapes: P PB, H hidden. JAX arrays for the compiled
+    step, NumPy arrays for the NumPy twin."""
 
-    w1: jax.Array  # (P, H)
-    b1: jax.Array  # (H,)
-    w2: jax.Array  # (H, H)
-    b2: jax.Array  # (H,)
-    w3: jax.Array  # (H,)
-    b3: jax.Array  # ()
+    w1: jax.Array | np.ndarray  # (P, H)
+    b1: jax.Array | np.ndarray  # (H,)
+    w2: jax.Array | np.ndarray  # (H, H)
+    b2: jax.Array | np.ndarray  # (H,)
+    w3: jax.Array | np.ndarray  # (H,)
+    b3: jax.Array | np.ndarray  # ()
 
 
 def risk_logit(params: MetaParams, pb: jax.Array) -> jax.Array:

@@ -212,7 +212,7 @@ def risk_logit_and_gradient(meta: MetaParams, rho: np.ndarray
     logits = h2 @ meta.w3 + meta.b3
     d_a2 = meta.w3 * (1.0 - h2 ** 2)
     d_a1 = (d_a2 @ meta.w2.T) * (1.0 - h1 ** 2)
-    return logits, (d_a1 @ meta.w1.T) * pb * (1.0 - pb)
+    return np.asarray(logits), np.asarray((d_a1 @ meta.w1.T) * pb * (1.0 - pb))
 
 
 def barrier_gradient(meta: MetaParams, rho: np.ndarray, n: int, config: OnlineConfig
@@ -460,6 +460,7 @@ class ReferenceMirrorSystem:
                 self.onset_motor, motor_inputs)
             g_rho = gate * g_rho
             if barrier:
+                assert self.meta is not None  # the guard is "off" without it
                 g_rho = g_rho + cfg.barrier_weight * barrier_gradient(self.meta, self.rho,
                                                                       self.n, cfg)
             self.rho, self.velocity = pb_update(self.rho, self.velocity, g_rho, cfg.pb,
@@ -468,6 +469,7 @@ class ReferenceMirrorSystem:
                 self.onset_context = self.onset_context - cfg.onset_learning_rate * g_c
                 self.onset_motor = self.onset_motor - cfg.onset_learning_rate * g_m
         if guard == "projection":
+            assert self.meta is not None
             self.rho[:self.n] = project_out(self.meta, self.rho[:self.n], cfg)
         _, _, _, _, predictions, contexts = window_error_and_gradients(
             self.params, self.sensory, self.seen, self.n, self.rho, self.onset_context,
