@@ -183,7 +183,7 @@ def test_archive_paths(tmp_path):
     save_archive(tmp_path / "a.npz", {"format": "x", "format_version": 1}, {"v": np.ones(2)})
     meta, arrays = load_archive(tmp_path / "a.npz", "x", 1)
     assert meta["format"] == "x" and arrays["v"].tolist() == [1.0, 1.0]
-    with pytest.raises(ModelFileError, match="not an rnnpb model file \(format is .x.\)"):
+    with pytest.raises(ModelFileError, match=r"not an rnnpb model file \(format is .x.\)"):
         load_archive(tmp_path / "a.npz", MODEL_FORMAT, MODEL_FORMAT_VERSION)
 
 
