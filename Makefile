@@ -19,4 +19,5 @@ bench: setup
 # project's environment, where the dependencies' types are.
 lint: setup
 	.venv/bin/ruff check src tests benchmarks
+	.venv/bin/ruff format --check src tests benchmarks
 	.venv/bin/basedpyright --pythonpath .venv/bin/python

@@ -40,11 +40,15 @@ def main() -> None:
     rng = np.random.default_rng(0)
     lower = np.concatenate([np.zeros(network.sensory_size), JOINT_LIMITS[:, 0]])
     upper = np.concatenate([np.ones(network.sensory_size), JOINT_LIMITS[:, 1]])
-    model = TrainedModel(network=network, params=init_params(network, jax.random.PRNGKey(0)),
-                         lower=lower, upper=upper,
-                         sequence_pb=rng.uniform(0.2, 0.8, (len(sequences), network.pb_size)),
-                         sequence_patterns=tuple(s.pattern for s in sequences),
-                         initial_context=np.full((len(sequences), network.context_size), 0.5))
+    model = TrainedModel(
+        network=network,
+        params=init_params(network, jax.random.PRNGKey(0)),
+        lower=lower,
+        upper=upper,
+        sequence_pb=rng.uniform(0.2, 0.8, (len(sequences), network.pb_size)),
+        sequence_patterns=tuple(s.pattern for s in sequences),
+        initial_context=np.full((len(sequences), network.context_size), 0.5),
+    )
     mirror = MirrorSystem(model)
     params = jax.tree_util.tree_map(lambda a: jnp.asarray(a, jnp.float32), model.params)
     state = initial_state(model, mirror.config)
@@ -54,8 +58,9 @@ def main() -> None:
     def bare(u: np.ndarray) -> None:
         nonlocal state
         hands, seen = normalized_hands(u, network.sensory_size)
-        state, packed = _online_step_packed(params, state, hands.astype(np.float32), seen,
-                                            mirror.config, candidates, phases)
+        state, packed = _online_step_packed(
+            params, state, hands.astype(np.float32), seen, mirror.config, candidates, phases
+        )
         np.asarray(packed)
 
     stream = np.concatenate([s.sensory for s in sequences])

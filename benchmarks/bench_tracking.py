@@ -16,14 +16,18 @@ def main() -> None:
     parser.add_argument("--frames", type=int, default=500, help="timed frames (default 500)")
     args = parser.parse_args()
     f = tracking_benchmark(n_frames=args.frames)
-    print(f"colour-ball tracking, {f['width']}x{f['height']}, one core "
-          f"({platform.processor() or platform.machine()})")
+    print(
+        f"colour-ball tracking, {f['width']}x{f['height']}, one core "
+        f"({platform.processor() or platform.machine()})"
+    )
     print(f"  frames timed        {f['frames']}")
     print(f"  median per frame    {f['median_ms']:.2f} ms  ({f['fps']:.0f} frames/s)")
     print(f"  90th percentile     {f['p90_ms']:.2f} ms")
     print(f"  centre error, clean frames               {f['clean_error_px']:.2f} px mean")
-    print(f"  centre error, noise + blur + clutter     {f['noisy_error_px']:.2f} px mean, "
-          f"{f['noisy_p95_px']:.2f} px 95th percentile")
+    print(
+        f"  centre error, noise + blur + clutter     {f['noisy_error_px']:.2f} px mean, "
+        f"{f['noisy_p95_px']:.2f} px 95th percentile"
+    )
     print(f"  balls reported for the wrong hand        {f['swapped']}")
 
 

@@ -28,14 +28,18 @@ def main() -> None:
     for kind in args.kinds.split(","):
         scores = clutter_benchmark(seeds, [kind], args.frames)
         for s in scores:
-            print(f"{kind:10s} {s.seed:4d} {s.mean_error_px:9.2f} "
-                  f"{100 * s.tracked_fraction:9.1f} {s.wrong:6d}")
+            print(
+                f"{kind:10s} {s.seed:4d} {s.mean_error_px:9.2f} "
+                f"{100 * s.tracked_fraction:9.1f} {s.wrong:6d}"
+            )
         errors = sum(s.mean_error_px * s.tracked for s in scores) / sum(s.tracked for s in scores)
         tracked = sum(s.tracked for s in scores) / sum(s.visible for s in scores)
         met = errors <= 3.0 and tracked >= 0.95
-        print(f"{kind:10s}  all {errors:9.2f} {100 * tracked:9.1f} "
-              f"{sum(s.wrong for s in scores):6d}  target (<= 3 px, >= 95 %) "
-              f"{'met' if met else 'NOT met'}")
+        print(
+            f"{kind:10s}  all {errors:9.2f} {100 * tracked:9.1f} "
+            f"{sum(s.wrong for s in scores):6d}  target (<= 3 px, >= 95 %) "
+            f"{'met' if met else 'NOT met'}"
+        )
     print(f"(numpy {np.__version__})")
 
 

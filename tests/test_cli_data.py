@@ -17,8 +17,14 @@ def test_data_command_writes_files_that_read_back(tmp_path, capsys):
     assert index["generator"]["seed"] == 3 and index["generator"]["period_steps"] == 10
     assert index["learning_sets"]["1"]["patterns"] == ["1", "2", "3"]
     files = index["learning_sets"]["2"]["files"]
-    assert files == ["patterns/2_1.csv", "patterns/2_2.csv", "patterns/3_1.csv",
-                     "patterns/3_2.csv", "patterns/4_1.csv", "patterns/4_2.csv"]
+    assert files == [
+        "patterns/2_1.csv",
+        "patterns/2_2.csv",
+        "patterns/3_1.csv",
+        "patterns/3_2.csv",
+        "patterns/4_1.csv",
+        "patterns/4_2.csv",
+    ]
     read = read_sequence_files([out / f for f in files])
     from rnnpb.demonstrator import PatternConfig
 

@@ -9,16 +9,33 @@ import textwrap
 import rnnpb
 from rnnpb import _xla
 
-PACKAGES = ("rnnpb", "rnnpb.cli", "rnnpb.model", "rnnpb.robot", "rnnpb.interaction",
-            "rnnpb.perception", "rnnpb.demonstrator", "rnnpb.sequences", "rnnpb.experiments")
+PACKAGES = (
+    "rnnpb",
+    "rnnpb.cli",
+    "rnnpb.model",
+    "rnnpb.robot",
+    "rnnpb.interaction",
+    "rnnpb.perception",
+    "rnnpb.demonstrator",
+    "rnnpb.sequences",
+    "rnnpb.experiments",
+)
 
 
 def _python(code, **env_changes):
-    env = {k: v for k, v in os.environ.items()
-           if k not in ("XLA_FLAGS", "RNNPB_XLA_DEFAULTS", "MUJOCO_GL")}
+    env = {
+        k: v
+        for k, v in os.environ.items()
+        if k not in ("XLA_FLAGS", "RNNPB_XLA_DEFAULTS", "MUJOCO_GL")
+    }
     env.update(env_changes)
-    result = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], env=env,
-                            capture_output=True, text=True, timeout=120)
+    result = subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(code)],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert result.returncode == 0, result.stderr
     return result
 

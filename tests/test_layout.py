@@ -34,16 +34,66 @@ ALLOWED: dict[str, set[str]] = {
     "safety": {"model", "robot", "sequences"},
     "perception": {"demonstrator", "robot", "sources", "sequences"},
     "analysis": {"demonstrator", "robot", "sequences"},
-    "interaction": {"model", "memory", "safety", "perception", "demonstrator", "robot", "sources",
-                    "sequences"},
-    "experiments": {"analysis", "interaction", "model", "memory", "safety", "demonstrator",
-                    "perception", "robot", "sources", "sequences"},
-    "web": {"interaction", "model", "memory", "safety", "perception", "demonstrator", "robot",
-            "sources", "sequences", "analysis"},
-    "sweeps": {"experiments", "analysis", "interaction", "model", "demonstrator", "robot",
-               "sources", "sequences"},
-    "commands": {"models", "experiments", "sweeps", "web", "interaction", "analysis", "model",
-                 "memory", "safety", "perception", "demonstrator", "robot", "sources", "sequences"},
+    "interaction": {
+        "model",
+        "memory",
+        "safety",
+        "perception",
+        "demonstrator",
+        "robot",
+        "sources",
+        "sequences",
+    },
+    "experiments": {
+        "analysis",
+        "interaction",
+        "model",
+        "memory",
+        "safety",
+        "demonstrator",
+        "perception",
+        "robot",
+        "sources",
+        "sequences",
+    },
+    "web": {
+        "interaction",
+        "model",
+        "memory",
+        "safety",
+        "perception",
+        "demonstrator",
+        "robot",
+        "sources",
+        "sequences",
+        "analysis",
+    },
+    "sweeps": {
+        "experiments",
+        "analysis",
+        "interaction",
+        "model",
+        "demonstrator",
+        "robot",
+        "sources",
+        "sequences",
+    },
+    "commands": {
+        "models",
+        "experiments",
+        "sweeps",
+        "web",
+        "interaction",
+        "analysis",
+        "model",
+        "memory",
+        "safety",
+        "perception",
+        "demonstrator",
+        "robot",
+        "sources",
+        "sequences",
+    },
     "cli": set(),
 }
 
@@ -80,7 +130,8 @@ def _imports() -> dict[str, set[tuple[str, str]]]:
 def test_every_part_has_a_place():
     assert set(_imports()) <= set(ALLOWED), (
         "parts without a place in the layout: "
-        f"{sorted(set(_imports()) - set(ALLOWED))} (add them to docs/design.md and ALLOWED)")
+        f"{sorted(set(_imports()) - set(ALLOWED))} (add them to docs/design.md and ALLOWED)"
+    )
 
 
 def test_imports_point_down():
@@ -91,8 +142,11 @@ def test_imports_point_down():
             allowed = {part, "errors"}
         if part == "rnnpb":
             allowed = FOUNDATION
-        wrong += [f"{file} imports rnnpb.{target}" for target, file in sorted(edges)
-                  if target not in allowed and not target.startswith("__")]
+        wrong += [
+            f"{file} imports rnnpb.{target}"
+            for target, file in sorted(edges)
+            if target not in allowed and not target.startswith("__")
+        ]
     assert not wrong, "imports that run against the layout:\n" + "\n".join(wrong)
 
 

@@ -60,8 +60,9 @@ def atomic_write(path: str | os.PathLike[str], mode: str = "w", **kwargs) -> Ite
         if tmp is not None:
             with contextlib.suppress(FileNotFoundError):
                 os.unlink(tmp)
-        if isinstance(error, OSError) and (error.filename is None
-                                           or _is_temporary(error.filename, path)):
+        if isinstance(error, OSError) and (
+            error.filename is None or _is_temporary(error.filename, path)
+        ):
             raise type(error)(error.errno, error.strerror or str(error), str(path)) from error
         raise
 
@@ -91,7 +92,8 @@ def check_writable(path: str | os.PathLike[str], what: str = "output file") -> N
     try:
         fd, probe = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
     except OSError as error:
-        raise ConfigError(f"{path}: cannot write the {what} here: "
-                          f"{error.strerror or error}") from None
+        raise ConfigError(
+            f"{path}: cannot write the {what} here: {error.strerror or error}"
+        ) from None
     os.close(fd)
     os.unlink(probe)

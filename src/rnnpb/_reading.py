@@ -27,8 +27,9 @@ def _size(n_bytes: int) -> str:
     return f"{n_bytes / 2**20:.0f} MiB" if n_bytes >= 2**20 else f"{n_bytes:,} bytes"
 
 
-def open_regular_file(path: Path, error: type[RnnpbError], expected: str, max_bytes: int,
-                      mode: str = "r", **kwargs) -> IO:
+def open_regular_file(
+    path: Path, error: type[RnnpbError], expected: str, max_bytes: int, mode: str = "r", **kwargs
+) -> IO:
     """Open ``path`` for reading if it is a regular file of at most ``max_bytes``.
 
     Raises ``error`` naming the path for a missing path, a directory, anything that is not a
@@ -56,21 +57,29 @@ def open_regular_file(path: Path, error: type[RnnpbError], expected: str, max_by
         raise
 
 
-def _check_kind(path: Path, info: os.stat_result, error: type[RnnpbError], expected: str,
-                max_bytes: int) -> None:
+def _check_kind(
+    path: Path, info: os.stat_result, error: type[RnnpbError], expected: str, max_bytes: int
+) -> None:
     if stat.S_ISDIR(info.st_mode):
         raise error(f"{path}: is a directory, expected {expected}")
     if not stat.S_ISREG(info.st_mode):
-        raise error(f"{path}: is not a regular file (a FIFO, device or socket), expected "
-                    f"{expected}")
+        raise error(
+            f"{path}: is not a regular file (a FIFO, device or socket), expected {expected}"
+        )
     if info.st_size > max_bytes:
-        raise error(f"{path}: is {_size(info.st_size)}, larger than the {_size(max_bytes)} "
-                    f"rnnpb reads as {expected}")
+        raise error(
+            f"{path}: is {_size(info.st_size)}, larger than the {_size(max_bytes)} "
+            f"rnnpb reads as {expected}"
+        )
 
 
-def bounded_lines(handle: IO[str], path: Path, error: type[RnnpbError],
-                  max_chars: int = MAX_LINE_CHARS,
-                  max_total: int = MAX_TEXT_FILE_BYTES) -> Iterator[str]:
+def bounded_lines(
+    handle: IO[str],
+    path: Path,
+    error: type[RnnpbError],
+    max_chars: int = MAX_LINE_CHARS,
+    max_total: int = MAX_TEXT_FILE_BYTES,
+) -> Iterator[str]:
     """The lines of a text file opened with ``newline=""``, each at most ``max_chars`` long.
 
     A longer line, or more than ``max_total`` characters in all (a file that grows while it is
@@ -81,8 +90,10 @@ def bounded_lines(handle: IO[str], path: Path, error: type[RnnpbError],
         number += 1
         total += len(line)
         if len(line) > max_chars:
-            raise error(f"{path}: line {number} is longer than {max_chars:,} characters (a CSV "
-                        "file of rnnpb has short lines)")
+            raise error(
+                f"{path}: line {number} is longer than {max_chars:,} characters (a CSV "
+                "file of rnnpb has short lines)"
+            )
         if total > max_total:
             raise error(f"{path}: grew past {_size(max_total)} while being read")
         yield line

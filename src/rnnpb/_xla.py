@@ -74,8 +74,10 @@ def configure(environ: MutableMapping[str, str] | None = None) -> bool:
         warnings.warn(
             "JAX started before rnnpb.configure_xla() was called, so the setting does not "
             "apply in this process and the on-line step runs about twice as slow; call it "
-            f"before the first JAX computation, or set XLA_FLAGS={FLAG}", RuntimeWarning,
-            stacklevel=2)
+            f"before the first JAX computation, or set XLA_FLAGS={FLAG}",
+            RuntimeWarning,
+            stacklevel=2,
+        )
     return True
 
 
@@ -92,7 +94,10 @@ def warn_if_not_configured() -> None:
         "the on-line step runs about twice as slow as it can: XLA compiles its regression "
         "loop as separate tasks. Call rnnpb.configure_xla() before the first JAX computation "
         f"(or set XLA_FLAGS={FLAG}); RNNPB_XLA_DEFAULTS=0 keeps XLA's defaults and silences "
-        "this", RuntimeWarning, stacklevel=3)
+        "this",
+        RuntimeWarning,
+        stacklevel=3,
+    )
 
 
 def single_threaded(environ: MutableMapping[str, str] | None = None) -> None:

@@ -64,15 +64,23 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="Run `rnnpb COMMAND --help` for a command's options.",
     )
     parser.add_argument("--version", action="version", version=f"rnnpb {__version__}")
-    parser.add_argument("--debug", action="store_true",
-                        help="show the full traceback of an error instead of one line")
+    parser.add_argument(
+        "--debug",
+        action="store_true",
+        help="show the full traceback of an error instead of one line",
+    )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for module in _available_commands():
-        command = sub.add_parser(module.NAME, help=module.HELP, description=module.DESCRIPTION,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+        command = sub.add_parser(
+            module.NAME,
+            help=module.HELP,
+            description=module.DESCRIPTION,
+            formatter_class=argparse.RawDescriptionHelpFormatter,
+        )
         module.add_arguments(command)
-        command.set_defaults(_run=module.run,
-                             _safe_points=bool(getattr(module, "SAFE_POINTS", False)))
+        command.set_defaults(
+            _run=module.run, _safe_points=bool(getattr(module, "SAFE_POINTS", False))
+        )
     return parser
 
 
@@ -95,8 +103,10 @@ def main(argv: Sequence[str] | None = None) -> int:
                 if interrupts.requested:
                     # Ctrl-C after the command's last safe point: its output is complete.
                     interrupts.requested = False
-                    print("rnnpb: interrupted after the work was done; the output is complete",
-                          file=sys.stderr)
+                    print(
+                        "rnnpb: interrupted after the work was done; the output is complete",
+                        file=sys.stderr,
+                    )
                 return status
         # A command without safe points: Python's own Ctrl-C, caught below.
         return int(args._run(args) or 0)

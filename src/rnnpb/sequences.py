@@ -54,8 +54,9 @@ def pattern_name_problem(name: object) -> str | None:
         return "starts or ends with a space"
     bad = [c for c in name if not (c.isalnum() or c in _PATTERN_NAME_PUNCTUATION)]
     if bad:
-        return (f"holds {bad[0]!r}; a pattern name has only letters, digits, '-', '_', '.' and "
-                "spaces")
+        return (
+            f"holds {bad[0]!r}; a pattern name has only letters, digits, '-', '_', '.' and spaces"
+        )
     return None
 
 
@@ -91,17 +92,21 @@ class Sequence:
         motor = np.asarray(self.motor, dtype=np.float64)
         where = self.source or "sequence"
         if sensory.ndim != 2 or sensory.shape[1] != SENSORY_SIZE:
-            raise DataFileError(f"{where}: sensory must have shape (n_steps, {SENSORY_SIZE}), "
-                                f"got {sensory.shape}")
+            raise DataFileError(
+                f"{where}: sensory must have shape (n_steps, {SENSORY_SIZE}), got {sensory.shape}"
+            )
         if motor.ndim != 2 or motor.shape[1] != MOTOR_SIZE:
-            raise DataFileError(f"{where}: motor must have shape (n_steps, {MOTOR_SIZE}), "
-                                f"got {motor.shape}")
+            raise DataFileError(
+                f"{where}: motor must have shape (n_steps, {MOTOR_SIZE}), got {motor.shape}"
+            )
         if sensory.shape[0] != motor.shape[0]:
-            raise DataFileError(f"{where}: sensory has {sensory.shape[0]} steps but motor has "
-                                f"{motor.shape[0]}")
+            raise DataFileError(
+                f"{where}: sensory has {sensory.shape[0]} steps but motor has {motor.shape[0]}"
+            )
         if sensory.shape[0] < 2:
-            raise DataFileError(f"{where}: a sequence needs at least 2 steps, got "
-                                f"{sensory.shape[0]}")
+            raise DataFileError(
+                f"{where}: a sequence needs at least 2 steps, got {sensory.shape[0]}"
+            )
         if not (np.all(np.isfinite(sensory)) and np.all(np.isfinite(motor))):
             raise DataFileError(f"{where}: contains NaN or infinite values")
         if not self.pattern:
@@ -128,18 +133,21 @@ class _Table:
     label_runs: list[tuple[int, str]]  # (first row, label) of each run of equal labels
 
 
-def _cell_value(text: str, path: Path, line: int, column: str, blank_is_nan: bool,
-                finite: bool) -> float:
+def _cell_value(
+    text: str, path: Path, line: int, column: str, blank_is_nan: bool, finite: bool
+) -> float:
     if blank_is_nan and not text.strip():
         return math.nan
     try:
         value = float(text)
     except ValueError:
-        raise DataFileError(f"{path}: line {line}, column {column!r}: {text[:40]!r} is not a "
-                            "number") from None
+        raise DataFileError(
+            f"{path}: line {line}, column {column!r}: {text[:40]!r} is not a number"
+        ) from None
     if finite and not math.isfinite(value):
-        raise DataFileError(f"{path}: line {line}, column {column!r}: {text[:40]!r} is not a "
-                            "finite number")
+        raise DataFileError(
+            f"{path}: line {line}, column {column!r}: {text[:40]!r} is not a finite number"
+        )
     return value
 
 
@@ -155,23 +163,31 @@ def _check_header(path: Path, header: list[str], required: SequenceABC[str]) -> 
         # An empty header cell (a spreadsheet's trailing comma) names no column; any other name
         # appearing twice would make one of its columns silently win.
         if name and name in seen:
-            raise DataFileError(f"{path}: column {_shown(name)[:40]} appears more than once in "
-                                "the header")
+            raise DataFileError(
+                f"{path}: column {_shown(name)[:40]} appears more than once in the header"
+            )
         seen.add(name)
     missing = [name for name in required if name not in seen]
     if missing:
         shown = ", ".join(_shown(name) for name in header)
-        raise DataFileError(f"{path}: missing column(s) {', '.join(missing)} "
-                            f"(header has {shown[:200]})")
+        raise DataFileError(
+            f"{path}: missing column(s) {', '.join(missing)} (header has {shown[:200]})"
+        )
 
 
-def _read_table(path: Path, required: SequenceABC[str], numeric: SequenceABC[str],
-                blank_is_nan: bool = False, label_column: str | None = None) -> _Table:
+def _read_table(
+    path: Path,
+    required: SequenceABC[str],
+    numeric: SequenceABC[str],
+    blank_is_nan: bool = False,
+    label_column: str | None = None,
+) -> _Table:
     """Read a CSV file into the float columns ``numeric`` (the step column must be finite,
     others too unless ``blank_is_nan``); ``label_column``, if the file has it, as runs."""
     # utf-8-sig: a byte-order mark (spreadsheet programs write one) is not part of the header.
-    handle = open_regular_file(path, DataFileError, "a CSV file", MAX_TEXT_FILE_BYTES,
-                               newline="", encoding="utf-8-sig")
+    handle = open_regular_file(
+        path, DataFileError, "a CSV file", MAX_TEXT_FILE_BYTES, newline="", encoding="utf-8-sig"
+    )
     values = array.array("d")
     lines = array.array("q")
     label_runs: list[tuple[int, str]] = []
@@ -180,8 +196,9 @@ def _read_table(path: Path, required: SequenceABC[str], numeric: SequenceABC[str
             reader = csv.reader(bounded_lines(handle, path, DataFileError))
             header = next((row for row in reader if row), None)
             if not header:
-                raise DataFileError(f"{path}: empty file, expected a CSV header with columns "
-                                    f"{', '.join(required)}")
+                raise DataFileError(
+                    f"{path}: empty file, expected a CSV header with columns {', '.join(required)}"
+                )
             header = [name.strip() for name in header]
             _check_header(path, header, required)
             where = [header.index(name) for name in numeric]
@@ -194,9 +211,12 @@ def _read_table(path: Path, required: SequenceABC[str], numeric: SequenceABC[str
                 line = reader.line_num
                 if len(row) != len(header):
                     raise DataFileError(f"{path}: line {line}: expected {len(header)} fields")
-                values.extend([_cell_value(row[j], path, line, name, blank_is_nan and not fin,
-                                           fin)
-                               for j, name, fin in zip(where, numeric, finite, strict=True)])
+                values.extend(
+                    [
+                        _cell_value(row[j], path, line, name, blank_is_nan and not fin, fin)
+                        for j, name, fin in zip(where, numeric, finite, strict=True)
+                    ]
+                )
                 lines.append(line)
                 if label_at is not None:
                     label = row[label_at].strip()
@@ -239,8 +259,8 @@ def read_sequences(path: str | os.PathLike[str]) -> list[Sequence]:
     if n_rows < 2:
         raise DataFileError(f"{path}: needs at least 2 rows of data, has {n_rows}")
     _check_steps(path, table)
-    sensory = table.values[:, 1:1 + SENSORY_SIZE]
-    motor = table.values[:, 1 + SENSORY_SIZE:]
+    sensory = table.values[:, 1 : 1 + SENSORY_SIZE]
+    motor = table.values[:, 1 + SENSORY_SIZE :]
     if PATTERN_COLUMN not in table.header:
         return [Sequence(sensory, motor, pattern_from_filename(path), str(path))]
     sequences = []
@@ -271,8 +291,9 @@ def read_sequence_files(paths: SequenceABC[str | os.PathLike[str]]) -> list[Sequ
     return sequences
 
 
-def write_sequence(path: str | os.PathLike[str], sequence: Sequence,
-                   with_pattern_column: bool = True) -> None:
+def write_sequence(
+    path: str | os.PathLike[str], sequence: Sequence, with_pattern_column: bool = True
+) -> None:
     """Write one sequence as CSV (atomically)."""
     header = [STEP_COLUMN, *SENSORY_NAMES, *MOTOR_NAMES]
     if with_pattern_column:
@@ -281,8 +302,11 @@ def write_sequence(path: str | os.PathLike[str], sequence: Sequence,
         writer = csv.writer(handle)
         writer.writerow(header)
         for t in range(sequence.n_steps):
-            row = [t, *(f"{v:.6f}" for v in sequence.sensory[t]),
-                   *(f"{v:.6f}" for v in sequence.motor[t])]
+            row = [
+                t,
+                *(f"{v:.6f}" for v in sequence.sensory[t]),
+                *(f"{v:.6f}" for v in sequence.motor[t]),
+            ]
             if with_pattern_column:
                 row.append(sequence.pattern)
             writer.writerow(row)
@@ -312,8 +336,9 @@ def write_sensory_stream(path: str | os.PathLike[str], sensory: np.ndarray) -> N
     """Write a sensory stream CSV (atomically); NaN is written as an empty cell."""
     sensory = np.asarray(sensory, dtype=np.float64)
     if sensory.ndim != 2 or sensory.shape[1] != SENSORY_SIZE:
-        raise DataFileError(f"{path}: sensory stream must have shape (n_steps, {SENSORY_SIZE}), "
-                            f"got {sensory.shape}")
+        raise DataFileError(
+            f"{path}: sensory stream must have shape (n_steps, {SENSORY_SIZE}), got {sensory.shape}"
+        )
     with atomic_write(path, "w", newline="", encoding="utf-8") as handle:
         writer = csv.writer(handle)
         writer.writerow([STEP_COLUMN, *SENSORY_NAMES])

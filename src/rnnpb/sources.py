@@ -86,12 +86,15 @@ class ArraySensorySource(UserSource):
         What the stream is (for messages).
     """
 
-    def __init__(self, sensory: np.ndarray, truth: list[dict[str, Any]] | None = None,
-                 name: str = "stream") -> None:
+    def __init__(
+        self, sensory: np.ndarray, truth: list[dict[str, Any]] | None = None, name: str = "stream"
+    ) -> None:
         sensory = np.asarray(sensory, dtype=np.float64)
         if sensory.ndim != 2 or sensory.shape[1] != SENSORY_SIZE:
-            raise ConfigError(f"{name}: sensory stream must have shape (n_steps, "
-                              f"{SENSORY_SIZE}), got {sensory.shape}")
+            raise ConfigError(
+                f"{name}: sensory stream must have shape (n_steps, "
+                f"{SENSORY_SIZE}), got {sensory.shape}"
+            )
         self.sensory = sensory
         self.truth = truth
         self.name = name

@@ -7,8 +7,14 @@ normalized to [0, 1]; the motor vector ``r`` holds the robot's eight arm joint a
 
 SENSORY_NAMES: tuple[str, ...] = ("lhy", "lhz", "rhy", "rhz")
 MOTOR_NAMES: tuple[str, ...] = (
-    "lshp", "lshr", "lshy", "lelp",
-    "rshp", "rshr", "rshy", "relp",
+    "lshp",
+    "lshr",
+    "lshy",
+    "lelp",
+    "rshp",
+    "rshr",
+    "rshy",
+    "relp",
 )
 SENSORY_SIZE = len(SENSORY_NAMES)
 MOTOR_SIZE = len(MOTOR_NAMES)

@@ -19,8 +19,7 @@ def performed(labels: list[tuple[str, int]], phase0: float = 0.0) -> np.ndarray:
     out, theta = [], phase0
     for label, n in labels:
         for _ in range(n):
-            offsets = (pattern_offsets(label, np.array(theta), config) if label
-                       else np.zeros((2, 3)))
+            offsets = pattern_offsets(label, np.array(theta), config) if label else np.zeros((2, 3))
             out.append(camera.sensory_from_hands(config.body.hand_centres + offsets))
             theta += 2 * np.pi / 12
     return np.array(out)
@@ -75,8 +74,12 @@ def test_transfer_entropy_finds_the_driver():
 
 
 def test_patterns_found_counts_first_episodes_of_learned_patterns():
-    episodes = [dyad.Episode(10, 30, "2"), dyad.Episode(40, 60, "2"), dyad.Episode(70, 90, "4"),
-                dyad.Episode(100, 130, "1")]
+    episodes = [
+        dyad.Episode(10, 30, "2"),
+        dyad.Episode(40, 60, "2"),
+        dyad.Episode(70, 90, "4"),
+        dyad.Episode(100, 130, "1"),
+    ]
     found = dyad.patterns_found(episodes, 140, LEARNED, min_steps=12)
     assert found[20] == 0 and found[21] == 1 and found[110] == 1 and found[111] == 2
     assert found[-1] == 2  # pattern 4 is not learned
@@ -85,7 +88,7 @@ def test_patterns_found_counts_first_episodes_of_learned_patterns():
 @pytest.mark.parametrize("gap, expected", [(2, 1), (5, 2)])
 def test_short_gaps_do_not_end_an_episode(gap, expected):
     coherent = np.ones(60, dtype=bool)
-    coherent[30:30 + gap] = False
+    coherent[30 : 30 + gap] = False
     joint = np.full(60, "1", dtype=object)
     assert len(dyad.episodes(coherent, joint, min_steps=12, bridge=3)) == expected
 
@@ -94,15 +97,20 @@ def test_the_dyad_figures_are_drawn(tmp_path):
     from rnnpb.analysis import figures
 
     a = performed([("1", 40), ("2", 40)])
-    run = {"a_shown": a, "b_shown": a, "a_pb": np.full((80, 4), 0.3),
-           "b_pb": np.full((80, 4), np.nan)}
+    run = {
+        "a_shown": a,
+        "b_shown": a,
+        "a_pb": np.full((80, 4), 0.3),
+        "b_pb": np.full((80, 4), np.nan),
+    }
     coherent = dyad.measure_dyad(a, a, LEARNED).coherent
     figures.plot_dyad(run, coherent, tmp_path / "run.png", shifts=[(52, "a")])
     grid = np.array([[0.9, 0.5], [0.2, np.nan]])
-    figures.plot_phase_diagram((0.1, 1.0), {"x": {"coherent share": grid,
-                                                  "shifts per 200 steps": grid,
-                                                  "leader index": grid}},
-                               tmp_path / "phase.png")
+    figures.plot_phase_diagram(
+        (0.1, 1.0),
+        {"x": {"coherent share": grid, "shifts per 200 steps": grid, "leader index": grid}},
+        tmp_path / "phase.png",
+    )
     figures.plot_patterns_found({"s": np.arange(80) // 30}, 0.4, 3, tmp_path / "found.png")
     for name in ("run.png", "phase.png", "found.png"):
         assert (tmp_path / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
@@ -119,5 +127,6 @@ def test_a_robots_own_recognition_can_stand_for_its_movement_class():
     both = dyad.measure_dyad(a, a, LEARNED, recognised_a=named, recognised_b=named)
     assert both.coherent[20:].all()
     still = np.repeat(a[:1], 60, axis=0)  # named, but not moving: not a movement
-    assert not dyad.measure_dyad(still, still, LEARNED, recognised_a=named,
-                                 recognised_b=named).coherent.any()
+    assert not dyad.measure_dyad(
+        still, still, LEARNED, recognised_a=named, recognised_b=named
+    ).coherent.any()

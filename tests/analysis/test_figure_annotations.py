@@ -43,8 +43,12 @@ def test_session_figure_says_what_it_shows(tmp_path, monkeypatch):
     session, _ = _session()
     captions = []
     monkeypatch.setattr(figures, "_caption", lambda fig, text: captions.append(text))
-    figures.plot_session(session, tmp_path / "s.png", marks=[(30, "switch")],
-                         pattern_pb={"a": [0.2, 0.2, 0.8, 0.8], "b": [0.8, 0.8, 0.2, 0.2]})
+    figures.plot_session(
+        session,
+        tmp_path / "s.png",
+        marks=[(30, "switch")],
+        pattern_pb={"a": [0.2, 0.2, 0.8, 0.8], "b": [0.8, 0.8, 0.2, 0.2]},
+    )
     assert (tmp_path / "s.png").read_bytes()[:4] == b"\x89PNG"
     (text,) = captions
     assert "▼ marks 3 jump(s) of the PB" in text and "steps 30, 45, 48" in text
@@ -60,9 +64,12 @@ def test_figure_9_axes_do_not_show_the_same_swing_twice(tmp_path):
     # Two context units that swing together (a thin ellipse on the diagonal of their plane).
     mixing[0, :2] = [0.3, 0.29]
     mixing[1, :2] = [0.01, -0.01]
-    attractors = {name: SimpleNamespace(context=0.5 + np.column_stack(
-        [np.cos(t + shift), np.sin(2 * t + shift)]) @ mixing) for name, shift in
-        (("1", 0.0), ("2", 1.0))}
+    attractors = {
+        name: SimpleNamespace(
+            context=0.5 + np.column_stack([np.cos(t + shift), np.sin(2 * t + shift)]) @ mixing
+        )
+        for name, shift in (("1", 0.0), ("2", 1.0))
+    }
     i, j = figures.context_units(attractors)
     stacked = np.concatenate([a.context for a in attractors.values()])
     assert abs(np.corrcoef(stacked[:, i], stacked[:, j])[0, 1]) > 0.9
@@ -71,7 +78,8 @@ def test_figure_9_axes_do_not_show_the_same_swing_twice(tmp_path):
     assert abs(np.corrcoef(xy[:, 0], xy[:, 1])[0, 1]) < 0.05
     np.testing.assert_allclose(plane @ plane.T, np.eye(2), atol=1e-9)
     assert explained[0] >= explained[1] > 0.01 and explained.sum() <= 1 + 1e-9
-    run = SimpleNamespace(context=attractors["1"].context, novel_pattern="4", learning_set="1",
-                          case=2)
+    run = SimpleNamespace(
+        context=attractors["1"].context, novel_pattern="4", learning_set="1", case=2
+    )
     figures.plot_attractors([(run, attractors)], tmp_path / "f9.png", transient=10)
     assert (tmp_path / "f9.png").read_bytes()[:4] == b"\x89PNG"

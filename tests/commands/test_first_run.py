@@ -39,18 +39,34 @@ def test_models_are_found_in_the_demo_folder_else_the_shipped_one(tmp_path):
 
 @pytest.mark.slow
 def test_interact_without_a_model_runs_the_shipped_one_with_its_regression(
-        tmp_path, monkeypatch, capsys):
+    tmp_path, monkeypatch, capsys
+):
     monkeypatch.chdir(tmp_path)
-    assert main(["interact", "--source", "scenario:held:1", "--steps", "4",
-                 "--out", "run"]) == 0
+    assert main(["interact", "--source", "scenario:held:1", "--steps", "4", "--out", "run"]) == 0
     out = capsys.readouterr().out
-    assert ("(ungated on-line regression, chosen as the model was learned with Adam, the fast "
-            "preset; --online overrides;") in out
+    assert (
+        "(ungated on-line regression, chosen as the model was learned with Adam, the fast "
+        "preset; --online overrides;"
+    ) in out
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())
     assert summary["model"] == str(SHIPPED_MODEL) and summary["online"] == "ungated"
     assert summary["online_config"]["surprise_gate"] == 0.0
-    assert main(["interact", "--source", "scenario:held:1", "--steps", "2", "--online",
-                 "default", "--out", "run2"]) == 0
+    assert (
+        main(
+            [
+                "interact",
+                "--source",
+                "scenario:held:1",
+                "--steps",
+                "2",
+                "--online",
+                "default",
+                "--out",
+                "run2",
+            ]
+        )
+        == 0
+    )
     assert "(default on-line regression; kinematic robot)" in capsys.readouterr().out
     summary = json.loads((tmp_path / "run2" / "summary.json").read_text())
     assert summary["online"] == "default" and summary["online_config"]["surprise_gate"] > 0
@@ -85,12 +101,18 @@ class _FakeCapture:
 
 
 def test_cameras_lists_the_cameras_that_deliver_a_frame(monkeypatch, capsys):
-    captures = {0: _FakeCapture((480, 640, 3), 30.0), 1: _FakeCapture(None, 0.0),
-                2: _FakeCapture((720, 1280, 3), 0.0), 3: _FakeCapture(None, 0.0, opens=False)}
+    captures = {
+        0: _FakeCapture((480, 640, 3), 30.0),
+        1: _FakeCapture(None, 0.0),
+        2: _FakeCapture((720, 1280, 3), 0.0),
+        3: _FakeCapture(None, 0.0, opens=False),
+    }
     devices = [(i, f"/dev/video{i}") for i in captures]
     found = cameras.probe_cameras(devices, captures.__getitem__)
     assert [(c.index, c.width, c.height, c.fps) for c in found] == [
-        (0, 640, 480, 30.0), (2, 1280, 720, 0.0)]
+        (0, 640, 480, 30.0),
+        (2, 1280, 720, 0.0),
+    ]
     assert all(c.released for c in captures.values())
     monkeypatch.setattr(cameras, "candidate_devices", lambda: devices)
     monkeypatch.setattr("cv2.VideoCapture", captures.__getitem__)

@@ -25,8 +25,14 @@ def _write_session(path: Path, n: int = 12) -> None:
         writer.writerow(columns)
         for step in range(n):
             row = {name: f"{rng.uniform(0.2, 0.8):.4f}" for name in columns}
-            row.update(step=step, time_s=f"{0.4 * step:.2f}", held=0, lost_left=0,
-                       lost_right=int(step == 3), truth_pattern="1" if step < 6 else "2")
+            row.update(
+                step=step,
+                time_s=f"{0.4 * step:.2f}",
+                held=0,
+                lost_left=0,
+                lost_right=int(step == 3),
+                truth_pattern="1" if step < 6 else "2",
+            )
             row["rhy"] = row["rhz"] = "" if step == 3 else row["rhy"]
             writer.writerow([row[name] for name in columns])
 
@@ -42,13 +48,25 @@ def test_view_saves_a_recording_with_every_part_on_one_timeline(tmp_path, capsys
     rrd = tmp_path / "replay.rrd"
     assert main(["view", str(session), "--save", str(rrd)]) == 0
     assert "12 steps" in capsys.readouterr().out
-    verified = subprocess.run([str(rerun_cli), "rrd", "verify", str(rrd)], capture_output=True,
-                              text=True, timeout=120)
+    verified = subprocess.run(
+        [str(rerun_cli), "rrd", "verify", str(rrd)], capture_output=True, text=True, timeout=120
+    )
     assert verified.returncode == 0, verified.stderr
-    printed = subprocess.run([str(rerun_cli), "rrd", "print", "-vv", str(rrd)],
-                             capture_output=True, text=True, timeout=120).stdout
-    for entity in ("/hands/observed", "/hands/predicted", "/robot/arms", "/joints/lshp",
-                   "/pb/pb3", "/errors/prediction_error", "/status/truth_pattern"):
+    printed = subprocess.run(
+        [str(rerun_cli), "rrd", "print", "-vv", str(rrd)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    ).stdout
+    for entity in (
+        "/hands/observed",
+        "/hands/predicted",
+        "/robot/arms",
+        "/joints/lshp",
+        "/pb/pb3",
+        "/errors/prediction_error",
+        "/status/truth_pattern",
+    ):
         assert entity in printed, entity
     assert "index_name: step" in printed and "index_name: time" in printed
 
@@ -87,13 +105,35 @@ def test_a_new_video_removes_the_partial_a_killed_run_left(tmp_path):
 @pytest.mark.slow
 def test_sigterm_during_a_rendered_run_leaves_a_playable_video(tmp_path):
     out = tmp_path / "run"
-    env = {**os.environ, "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl"),
-           "PYTHONPATH": os.pathsep.join(sys.path)}
+    env = {
+        **os.environ,
+        "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl"),
+        "PYTHONPATH": os.pathsep.join(sys.path),
+    }
     process = subprocess.Popen(
-        [sys.executable, "-m", "rnnpb.cli", "interact", "--model", str(SHIPPED_MODEL),
-         "--source", "scenario:held:1", "--out", str(out), "--render", "--paced", "--dt",
-         "0.05", "--steps", "2000", "--no-progress"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+        [
+            sys.executable,
+            "-m",
+            "rnnpb.cli",
+            "interact",
+            "--model",
+            str(SHIPPED_MODEL),
+            "--source",
+            "scenario:held:1",
+            "--out",
+            str(out),
+            "--render",
+            "--paced",
+            "--dt",
+            "0.05",
+            "--steps",
+            "2000",
+            "--no-progress",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        env=env,
+    )
     session = out / "session.csv"
     deadline = time.monotonic() + 240
     while time.monotonic() < deadline and process.poll() is None:

@@ -24,7 +24,7 @@ def test_paper_protocol_shapes_and_ranges(full):
         assert seq.sensory.shape == (50, 4) and seq.motor.shape == (50, 8)
         assert np.all((seq.sensory > 0.05) & (seq.sensory < 0.95))
         assert np.all(seq.motor >= JOINT_LIMITS[:, 0]) and np.all(seq.motor <= JOINT_LIMITS[:, 1])
-        assert seq.meta["ik_residual"].max() < 1e-3     # every target reached to 1 mm
+        assert seq.meta["ik_residual"].max() < 1e-3  # every target reached to 1 mm
         assert seq.meta["dt"] == 0.4
 
 
@@ -45,8 +45,13 @@ def test_seeds_reproduce_bit_for_bit(full):
 
 
 def test_learning_sets_hold_the_right_patterns_and_the_same_samples(full):
-    assert LEARNING_SETS == {"1": ("1", "2", "3"), "2": ("2", "3", "4"), "3": ("1", "3", "4"),
-                             "4": ("1", "2", "4"), "full": ("1", "2", "3", "4")}
+    assert LEARNING_SETS == {
+        "1": ("1", "2", "3"),
+        "2": ("2", "3", "4"),
+        "3": ("1", "3", "4"),
+        "4": ("1", "2", "4"),
+        "full": ("1", "2", "3", "4"),
+    }
     by_pattern = {}
     for seq in full:
         by_pattern.setdefault(seq.pattern, []).append(seq)

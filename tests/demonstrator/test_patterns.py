@@ -52,13 +52,13 @@ def test_pattern_properties(dataset, side):
         ly, lz, ry, rz = paths(seq.sensory if side == "sensory" else seq.motor)
         h_extent = np.ptp(ly) + np.ptp(ry)
         v_extent = np.ptp(lz) + np.ptp(rz)
-        if pattern == "1":   # horizontal, opposite phase
+        if pattern == "1":  # horizontal, opposite phase
             assert h_extent > 3 * v_extent
             assert corr(ly, ry) < -0.9
         elif pattern == "2":  # vertical, in phase
             assert v_extent > 3 * h_extent
             assert corr(lz, rz) > 0.9
-        else:                 # rotation: both extents, counter-clockwise as the robot sees it
+        else:  # rotation: both extents, counter-clockwise as the robot sees it
             assert 0.5 < h_extent / v_extent < 2.0
             cycle = slice(0, 12)
             for y, z in ((ly, lz), (ry, rz)):
@@ -76,7 +76,7 @@ def test_motor_side_joint_symmetry():
     for pattern in ("1", "2"):
         m = pattern_dataset(0, (pattern,), 1, 24, perfect)[0].motor
         for j in range(4):
-            if np.std(m[:, j]) > 0.1:   # joints that carry the movement, not the noise
+            if np.std(m[:, j]) > 0.1:  # joints that carry the movement, not the noise
                 assert corr(m[:, j], m[:, j + 4]) > 0.99, (pattern, j)
 
 
@@ -96,9 +96,9 @@ def test_perfect_user_is_exactly_periodic_and_imperfect_user_is_not():
     np.testing.assert_array_equal(motion.hands, motion.measured)
     noisy = perform([("3", 36)], PatternConfig(), np.random.default_rng(1), phase=0.3)
     cycle_difference = np.abs(noisy.hands[:12] - noisy.hands[12:24]).max()
-    assert 0.003 < cycle_difference < 0.08     # not always completely cyclic, still the pattern
+    assert 0.003 < cycle_difference < 0.08  # not always completely cyclic, still the pattern
     noise = noisy.measured - noisy.hands
-    assert 0.002 < noise.std() < 0.006         # 4 mm sensor noise
+    assert 0.002 < noise.std() < 0.006  # 4 mm sensor noise
 
 
 def test_period_parameter_sets_the_cycle_length():
@@ -129,7 +129,7 @@ def test_mirror_mapping_sides_and_scale():
     delta = mapping.robot_hand_targets(moved) - targets
     np.testing.assert_allclose(delta[1], [0.1 * mapping.effective_scale, 0, 0], atol=1e-12)
     np.testing.assert_allclose(delta[0], 0, atol=1e-12)
-    assert 0.25 < mapping.effective_scale < 0.45   # robot reach 0.21 m / human reach 0.62 m
+    assert 0.25 < mapping.effective_scale < 0.45  # robot reach 0.21 m / human reach 0.62 m
 
 
 def test_resolve_pattern_aliases_and_errors():
@@ -146,8 +146,10 @@ def test_new_shapes_repeat_and_unstructured_movements_do_not():
     from rnnpb.demonstrator import NEW_SHAPES, PATTERNS, UNSTRUCTURED, make_scenario
 
     config = PatternConfig(imperfection=Imperfection.none())
-    sensory = {m: make_scenario([(m, 72)], seed=2, config=config).sensory
-               for m in (*NEW_SHAPES, *UNSTRUCTURED)}
+    sensory = {
+        m: make_scenario([(m, 72)], seed=2, config=config).sensory
+        for m in (*NEW_SHAPES, *UNSTRUCTURED)
+    }
     for shape in NEW_SHAPES:
         assert periodicity(sensory[shape]).best_period == 12, shape
         # Each shape differs from every paper pattern and from the other shapes.

@@ -39,7 +39,7 @@ def test_pause_scenario_freezes_the_hands():
     assert sc.labels[40:45] == (PAUSE,) * 5 and sc.switch_steps == (40, 45)
     still = np.linalg.norm(np.diff(sc.hands[40:45], axis=0), axis=-1).max()
     moving = np.linalg.norm(np.diff(sc.hands[30:40], axis=0), axis=-1).mean()
-    assert still < 0.01 and moving > 0.03   # only the slow drift moves them in the pause
+    assert still < 0.01 and moving > 0.03  # only the slow drift moves them in the pause
     assert sc.truth(42)["pause"] and not sc.truth(39)["pause"]
 
 

@@ -13,8 +13,12 @@ from rnnpb.model import TrainedModel
 @pytest.fixture(scope="module")
 def demo(tmp_path_factory):
     out = tmp_path_factory.mktemp("demo")
-    result = subprocess.run([sys.executable, "-m", "rnnpb.cli", "demo", "--quick", "--out",
-                             str(out)], capture_output=True, text=True, timeout=900)
+    result = subprocess.run(
+        [sys.executable, "-m", "rnnpb.cli", "demo", "--quick", "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
     assert result.returncode == 0, result.stderr[-3000:]
     return out, json.loads((out / "results.json").read_text()), result.stdout
 
@@ -25,9 +29,18 @@ def _values(nested):
 
 def test_report_results_and_files(demo):
     out, results, stdout = demo
-    for key in ("train_mse", "sync_steps_to_lock", "pause_steps_to_relock", "switch_steps",
-                "novel_case", "larger_set_success", "runtime_s", "config", "versions",
-                "rnnpb_version"):
+    for key in (
+        "train_mse",
+        "sync_steps_to_lock",
+        "pause_steps_to_relock",
+        "switch_steps",
+        "novel_case",
+        "larger_set_success",
+        "runtime_s",
+        "config",
+        "versions",
+        "rnnpb_version",
+    ):
         assert key in results
     assert set(results["train_mse"]) == {"1", "2", "3", "4"}
     report = (out / "report.md").read_text()
@@ -35,8 +48,7 @@ def test_report_results_and_files(demo):
     for figure in results["files"]["figures"]:
         assert (out / "figures" / figure).stat().st_size > 10_000
         assert f"figures/{figure}" in report
-    for name in ("figure5_synchronization.png", "figure6_switching.png",
-                 "figure9_attractors.png"):
+    for name in ("figure5_synchronization.png", "figure6_switching.png", "figure9_attractors.png"):
         assert f"figures/{name}" in report
     # The kept models and data are what results.json says they are.
     for key, path in results["files"]["models"].items():

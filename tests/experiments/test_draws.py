@@ -19,24 +19,39 @@ from rnnpb.experiments import (
 
 def _sync(pattern, lock, settle, relock):
     return Synchronization(
-        pattern=pattern, steps_to_lock=lock, pb_settle_steps=settle, phase_lag_steps=math.nan,
-        recognized_pattern=pattern, pb_distance_to_learned=0.0, pause_relative_motion=1.0,
-        pause_steps_to_relock=relock, pause_start=75, pause_end=80, run=None)
+        pattern=pattern,
+        steps_to_lock=lock,
+        pb_settle_steps=settle,
+        phase_lag_steps=math.nan,
+        recognized_pattern=pattern,
+        pb_distance_to_learned=0.0,
+        pause_relative_motion=1.0,
+        pause_steps_to_relock=relock,
+        pause_start=75,
+        pause_end=80,
+        run=None,
+    )
 
 
 def _job(first, other):
     """One learning set's draws: patterns 1 and 2; ``first`` and ``other`` are
     (lock, settle, relock, switch 1->2, switch 2->1) for the report's draw and draw 200."""
+
     def draw(values):
         lock, settle, relock, s12, s21 = values
-        return Draw([_sync("1", lock, settle, relock), _sync("2", 3, 10, 2)],
-                    Switching({"1->2": s12, "2->1": s21}))
+        return Draw(
+            [_sync("1", lock, settle, relock), _sync("2", 3, 10, 2)],
+            Switching({"1->2": s12, "2->1": s21}),
+        )
+
     return {100: draw(first), 200: draw(other)}
 
 
 def _follows(*draws):
-    return {seed: FollowsEveryPattern({"1": steps}, ok)
-            for seed, (steps, ok) in zip((100, 200), draws, strict=True)}
+    return {
+        seed: FollowsEveryPattern({"1": steps}, ok)
+        for seed, (steps, ok) in zip((100, 200), draws, strict=True)
+    }
 
 
 def test_counts_per_draw_and_pooled():
@@ -62,8 +77,14 @@ def test_counts_per_draw_and_pooled():
     assert pooled["larger_set_9_of_10"] == Target(False, "3/4")
     # results.json keeps exactly these values, in this order.
     assert list(out.to_json()["by_seed"]["200"]) == [
-        "sync_steps_to_lock", "pb_settle_steps", "pause_steps_to_relock", "switch_steps",
-        "larger_set_success", "larger_set_steps_to_follow", "targets"]
+        "sync_steps_to_lock",
+        "pb_settle_steps",
+        "pause_steps_to_relock",
+        "switch_steps",
+        "larger_set_success",
+        "larger_set_steps_to_follow",
+        "targets",
+    ]
     assert out.to_json()["targets"]["larger_set_9_of_10"] == {"met": False, "detail": "3/4"}
 
 

@@ -15,13 +15,20 @@ def test_quick_study_writes_its_measures_and_shows_forgetting(tmp_path):
     assert set(results["after"]["1"]) == {"rehearsal", "finetune", "replay", "scratch"}
     assert (tmp_path / "figures" / "forgetting.png").stat().st_size > 0
     assert "## The chain" in (tmp_path / "report.md").read_text()
-    assert set(outcome.targets) == {"rehearsal_all_followed", "rehearsal_old_generation",
-                                    "rehearsal_within_60s", "chain_all_followed"}
+    assert set(outcome.targets) == {
+        "rehearsal_all_followed",
+        "rehearsal_old_generation",
+        "rehearsal_within_60s",
+        "chain_all_followed",
+    }
     after = results["after"]["1"]
 
     def worst_old(method):
-        return max(p["generation_vs_before"] for p in after[method]["pattern"].values()
-                   if p["generation_vs_before"] is not None)
+        return max(
+            p["generation_vs_before"]
+            for p in after[method]["pattern"].values()
+            if p["generation_vs_before"] is not None
+        )
 
     # Fine-tuning on the new pattern alone moves the old patterns more than rehearsal does.
     assert worst_old("finetune") > worst_old("rehearsal")

@@ -22,8 +22,16 @@ def test_every_demonstration_is_learned_and_kept(tmp_path):
     config = ExperimentConfig(samples_per_pattern=3, extra_scenario_seeds=())
     data = tmp_path / "data"
     data.mkdir()
-    result = learning_set_job("1", TrainConfig.fast(iterations=20), OnlineConfig(), config,
-                              str(tmp_path / "set1.npz"), str(data), "default", full=False)
+    result = learning_set_job(
+        "1",
+        TrainConfig.fast(iterations=20),
+        OnlineConfig(),
+        config,
+        str(tmp_path / "set1.npz"),
+        str(data),
+        "default",
+        full=False,
+    )
     names = sorted(p.name for p in data.glob("*.csv"))
     assert names == [f"{p}_{k}.csv" for p in "123" for k in (1, 2, 3)]
     assert [s.pattern for s in read_sequences(data / "2_3.csv")] == ["2"]
@@ -46,9 +54,17 @@ def test_demo_refuses_a_bad_number_of_demonstrations(tmp_path, capsys):
 
 def test_the_comparison_runs_the_papers_regression_on_the_same_model(tmp_path):
     config = ExperimentConfig(extra_scenario_seeds=())
-    result = learning_set_job("1", TrainConfig.fast(iterations=20), OnlineConfig(), config,
-                              str(tmp_path / "set1.npz"), None, "default", full=False,
-                              compare=OnlineConfig.paper())
+    result = learning_set_job(
+        "1",
+        TrainConfig.fast(iterations=20),
+        OnlineConfig(),
+        config,
+        str(tmp_path / "set1.npz"),
+        None,
+        "default",
+        full=False,
+        compare=OnlineConfig.paper(),
+    )
     compared = result.compared("paper")
     assert compared.label == "paper" and compared.model == result.model
     assert [s.pattern for s in compared.synchronization] == ["1", "2", "3"]
@@ -72,10 +88,20 @@ def test_the_report_says_which_learning_and_regression_it_ran():
 
 
 def _novel(case, period, return_error):
-    return NovelResponse(learning_set="1", novel_pattern="4", amplitude=1.0, case=case,
-                         description="", period=period, nearest_pattern=None,
-                         distance=math.nan, return_error=return_error, motor=np.zeros((1, 8)),
-                         pb=np.zeros((1, 4)), context=np.zeros((1, 30)))
+    return NovelResponse(
+        learning_set="1",
+        novel_pattern="4",
+        amplitude=1.0,
+        case=case,
+        description="",
+        period=period,
+        nearest_pattern=None,
+        distance=math.nan,
+        return_error=return_error,
+        motor=np.zeros((1, 8)),
+        pb=np.zeros((1, 4)),
+        context=np.zeros((1, 30)),
+    )
 
 
 def test_the_missing_case_explanation_counts_the_closed_loop_cycles():

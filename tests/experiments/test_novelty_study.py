@@ -8,17 +8,34 @@ from rnnpb.experiments.studies.novelty import SETTLE_STEPS, StreamRun, judge, me
 
 def _run(kind, movement, novelty, recognised, start=0, score=0.05):
     n = len(novelty)
-    return StreamRun("1", kind, movement, 0, start, tuple(novelty), tuple(recognised),
-                     tuple(["1"] * n), np.full(n, score), np.zeros((n, 4)), np.zeros((n, 3)),
-                     np.zeros((n, 4)))
+    return StreamRun(
+        "1",
+        kind,
+        movement,
+        0,
+        start,
+        tuple(novelty),
+        tuple(recognised),
+        tuple(["1"] * n),
+        np.full(n, score),
+        np.zeros((n, 4)),
+        np.zeros((n, 3)),
+        np.zeros((n, 4)),
+    )
 
 
 def test_the_measures_count_what_each_step_said():
     n = SETTLE_STEPS + 20
     learned = _run("learned", "1", ["familiar"] * n, ["1"] * (n - 5) + ["2"] * 5, score=0.02)
     # Called novel 30 steps after it starts, then on every step.
-    novel = _run("novel", "figure-eight", ["familiar"] * 66 + ["novel"] * 30,
-                 ["1"] * 66 + [None] * 30, start=36, score=0.08)
+    novel = _run(
+        "novel",
+        "figure-eight",
+        ["familiar"] * 66 + ["novel"] * 30,
+        ["1"] * 66 + [None] * 30,
+        start=36,
+        score=0.08,
+    )
     late = _run("novel", "one-arm", ["familiar"] * 96, ["1"] * 96, start=36, score=0.02)
     walk = _run("unstructured", "random-walk", ["unstructured"] * n, [None] * n)
     still = _run("still", "pause", ["still"] * n, [None] * n)

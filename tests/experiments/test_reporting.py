@@ -23,17 +23,29 @@ def test_values_read_as_the_report_prints_them():
 
 def test_a_table_and_a_figure_in_markdown():
     assert reporting.table(("set", "steps"), [("1", 4), ("2", "never")]) == [
-        "| set | steps |", "|---|---|", "| 1 | 4 |", "| 2 | never |"]
+        "| set | steps |",
+        "|---|---|",
+        "| 1 | 4 |",
+        "| 2 | never |",
+    ]
     assert reporting.embed("lock-on", "lock.png") == "![lock-on](figures/lock.png)"
 
 
 def test_both_files_are_written_and_json_holds_plain_values(tmp_path):
-    results = {"lag": math.nan, "steps": np.int64(3), "curve": np.arange(3.0),
-               "per_seed": {100: (1, 2)}}
+    results = {
+        "lag": math.nan,
+        "steps": np.int64(3),
+        "curve": np.arange(3.0),
+        "per_seed": {100: (1, 2)},
+    }
     reporting.write_outputs(tmp_path, ["# study", "", "text"], results)
     assert (tmp_path / "report.md").read_text() == "# study\n\ntext"
     assert json.loads((tmp_path / "results.json").read_text()) == {
-        "lag": None, "steps": 3, "curve": [0.0, 1.0, 2.0], "per_seed": {"100": [1, 2]}}
+        "lag": None,
+        "steps": 3,
+        "curve": [0.0, 1.0, 2.0],
+        "per_seed": {"100": [1, 2]},
+    }
 
 
 def test_a_failed_write_leaves_the_old_results(tmp_path):

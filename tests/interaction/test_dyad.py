@@ -43,8 +43,9 @@ def test_a_robot_is_seen_as_the_person_it_imitates():
 
 def test_identical_agents_from_identical_starts_stay_identical(model):
     start = model.pattern_pb["2"]
-    a, b = (RobotAgent(model, AgentConfig(patience=5), seed=3, initial_pb=start, name=n)
-            for n in "ab")
+    a, b = (
+        RobotAgent(model, AgentConfig(patience=5), seed=3, initial_pb=start, name=n) for n in "ab"
+    )
     run = Dyad(a, b).run(30)
     assert np.array_equal(run["a_motor"], run["b_motor"])
     assert np.array_equal(run["a_pb"], run["b_pb"])
@@ -53,18 +54,25 @@ def test_identical_agents_from_identical_starts_stay_identical(model):
 
 def test_an_adaptive_follower_locks_on_to_a_leader_that_does_not_adapt(model):
     online = OnlineConfig.ungated()  # the fast preset's models (docs/model.md)
-    leader = RobotAgent(model, AgentConfig(adaptation=0.0), initial_pb=model.pattern_pb["3"],
-                        online=online, name="a")
-    follower = RobotAgent(model, AgentConfig(alone_steps=None), online=online,
-                          initial_pb=np.full(4, 0.5), name="b")
+    leader = RobotAgent(
+        model,
+        AgentConfig(adaptation=0.0),
+        initial_pb=model.pattern_pb["3"],
+        online=online,
+        name="a",
+    )
+    follower = RobotAgent(
+        model, AgentConfig(alone_steps=None), online=online, initial_pb=np.full(4, 0.5), name="b"
+    )
     run = Dyad(leader, follower).run(60)
-    found = measures.measure_dyad(run["a_shown"], run["b_shown"], model.patterns,
-                                  run["a_pb"], run["b_pb"])
+    found = measures.measure_dyad(
+        run["a_shown"], run["b_shown"], model.patterns, run["a_pb"], run["b_pb"]
+    )
     leader_on = int(np.flatnonzero(found.class_a == "3")[0])
     assert found.first_coherent is not None
     # Locked within the paper's limit once the leader's first cycle is there to be seen.
     assert found.first_coherent - leader_on <= LOCK_LIMIT
-    assert found.coherent[found.first_coherent:].mean() > 0.8
+    assert found.coherent[found.first_coherent :].mean() > 0.8
 
 
 def test_the_subject_explores_and_the_session_is_recorded_per_agent(model, tmp_path):
@@ -83,9 +91,15 @@ def test_the_subject_explores_and_the_session_is_recorded_per_agent(model, tmp_p
     assert np.allclose(session["b_shown_lhy"], run["b_shown"][:, 0], atol=1e-5)
 
 
-@pytest.mark.parametrize("changes, message", [
-    ({"adaptation": -1}, "adaptation"), ({"persistence": 0}, "persistence"),
-    ({"noise": float("nan")}, "noise"), ({"patience": 0}, "patience")])
+@pytest.mark.parametrize(
+    "changes, message",
+    [
+        ({"adaptation": -1}, "adaptation"),
+        ({"persistence": 0}, "persistence"),
+        ({"noise": float("nan")}, "noise"),
+        ({"patience": 0}, "patience"),
+    ],
+)
 def test_bad_agent_settings(changes, message):
     with pytest.raises(ConfigError, match=message):
         AgentConfig(**changes)

@@ -35,8 +35,22 @@ def model_path(tmp_path_factory):
 
 def test_interact_writes_recording_plot_and_summary(model_path, tmp_path, capsys):
     out = tmp_path / "run"
-    assert main(["interact", "--model", str(model_path), "--source", "scenario:switch:1,2",
-                 "--out", str(out), "--steps", "60"]) == 0
+    assert (
+        main(
+            [
+                "interact",
+                "--model",
+                str(model_path),
+                "--source",
+                "scenario:switch:1,2",
+                "--out",
+                str(out),
+                "--steps",
+                "60",
+            ]
+        )
+        == 0
+    )
     session = read_session(out / "session.csv")
     assert len(session["step"]) == 60
     for column in (*SENSORY_NAMES, *MOTOR_NAMES, "pred_lhy", "pb0", "pb3", "prediction_error"):
@@ -51,7 +65,8 @@ def test_interact_writes_recording_plot_and_summary(model_path, tmp_path, capsys
     motor = np.stack([session[name] for name in MOTOR_NAMES], axis=1)
     assert np.all(motor >= JOINT_LIMITS[:, 0]) and np.all(motor <= JOINT_LIMITS[:, 1])
     assert np.nanmean(session["prediction_error"][30:50]) < np.nanmean(
-        session["prediction_error"][1:6])
+        session["prediction_error"][1:6]
+    )
     summary = json.loads((out / "summary.json").read_text())
     assert summary["loop"]["steps"] == 60
     assert set(summary["loop"]["section_ms"]) == {"perceive", "mirror", "act", "record"}
@@ -67,8 +82,24 @@ def test_interact_writes_recording_plot_and_summary(model_path, tmp_path, capsys
 
 def test_ungated_regression_is_recorded_in_the_summary(model_path, tmp_path):
     out = tmp_path / "ungated"
-    assert main(["interact", "--model", str(model_path), "--source", "scenario:held:1",
-                 "--out", str(out), "--steps", "12", "--online", "ungated"]) == 0
+    assert (
+        main(
+            [
+                "interact",
+                "--model",
+                str(model_path),
+                "--source",
+                "scenario:held:1",
+                "--out",
+                str(out),
+                "--steps",
+                "12",
+                "--online",
+                "ungated",
+            ]
+        )
+        == 0
+    )
     summary = json.loads((out / "summary.json").read_text())
     assert summary["online_config"]["surprise_gate"] == 0 < OnlineConfig().surprise_gate
 
@@ -79,8 +110,12 @@ def test_lost_hands_from_a_csv_stream_are_marked_and_bridged(model_path, tmp_pat
     stream = tmp_path / "stream.csv"
     write_sensory_stream(stream, sensory)
     out = tmp_path / "run"
-    assert main(["interact", "--model", str(model_path), "--source", f"csv:{stream}",
-                 "--out", str(out)]) == 0
+    assert (
+        main(
+            ["interact", "--model", str(model_path), "--source", f"csv:{stream}", "--out", str(out)]
+        )
+        == 0
+    )
     session = read_session(out / "session.csv")
     np.testing.assert_array_equal(session["lost_left"], np.isnan(sensory[:, 0]).astype(float))
     assert np.all(session["lost_right"] == 0)
@@ -93,10 +128,14 @@ def test_loop_sections_subscribers_and_pacing(model_path, tmp_path):
     model = TrainedModel.load(model_path)
     sensory = learning_set("1")[2].sensory[:8]
     seen = []
-    with ArraySensorySource(sensory) as source, KinematicRobot() as robot, \
-            SessionRecorder(tmp_path / "s.csv") as recorder:
-        loop = InteractionLoop(MirrorSystem(model), source, robot, recorder,
-                               LoopConfig(dt=0.05, paced=True))
+    with (
+        ArraySensorySource(sensory) as source,
+        KinematicRobot() as robot,
+        SessionRecorder(tmp_path / "s.csv") as recorder,
+    ):
+        loop = InteractionLoop(
+            MirrorSystem(model), source, robot, recorder, LoopConfig(dt=0.05, paced=True)
+        )
         loop.subscribe(seen.append)
         summary = loop.run()
     assert summary.steps == 8 and len(seen) == 8
@@ -116,28 +155,34 @@ def test_frame_step_keeps_every_nth_observation():
     np.testing.assert_allclose(values, np.array([0, 12, 24, 36]) / 40)
 
 
-@pytest.mark.parametrize("spec, message", [
-    ("nothing", "expected KIND:ARGUMENT"),
-    ("scenario:dance:1", "unknown scenario"),
-    ("scenario:held:9", "unknown movement pattern .9."),
-    ("ftp:x", "unknown kind"),
-    ("scenario:held", "needs an argument"),
-    ("scenario:steps:1*ten", "steps must be an integer"),
-    ("scenario:steps:figure-eight", "expected MOVEMENT.STEPS"),
-    ("scenario:steps:wave*10", "unknown movement pattern"),
-])
+@pytest.mark.parametrize(
+    "spec, message",
+    [
+        ("nothing", "expected KIND:ARGUMENT"),
+        ("scenario:dance:1", "unknown scenario"),
+        ("scenario:held:9", "unknown movement pattern .9."),
+        ("ftp:x", "unknown kind"),
+        ("scenario:held", "needs an argument"),
+        ("scenario:steps:1*ten", "steps must be an integer"),
+        ("scenario:steps:figure-eight", "expected MOVEMENT.STEPS"),
+        ("scenario:steps:wave*10", "unknown movement pattern"),
+    ],
+)
 def test_bad_source_specifications(spec, message):
     with pytest.raises(ConfigError, match=message):
         open_source(spec)
 
 
-@pytest.mark.parametrize("spec, parsed", [
-    ("scenario:switch:1,2", SourceSpec("scenario", "switch:1,2")),
-    ("csv:run/a:b.csv", SourceSpec("csv", "run/a:b.csv")),
-    ("webcam:2", SourceSpec("webcam", 2)),
-    (" Video:clip.mp4", SourceSpec("video", "clip.mp4")),
-    ("synthetic:rotation-in-phase", SourceSpec("synthetic", "rotation-in-phase")),
-])
+@pytest.mark.parametrize(
+    "spec, parsed",
+    [
+        ("scenario:switch:1,2", SourceSpec("scenario", "switch:1,2")),
+        ("csv:run/a:b.csv", SourceSpec("csv", "run/a:b.csv")),
+        ("webcam:2", SourceSpec("webcam", 2)),
+        (" Video:clip.mp4", SourceSpec("video", "clip.mp4")),
+        ("synthetic:rotation-in-phase", SourceSpec("synthetic", "rotation-in-phase")),
+    ],
+)
 def test_the_one_grammar_of_source_specifications(spec, parsed):
     assert parse_source_spec(spec) == parsed
 
@@ -151,13 +196,16 @@ def test_a_scenario_of_any_movements_one_after_another():
     assert labels == ["1"] * 10 + ["figure-eight"] * 5 + ["random-walk"] * 4 + ["pause"] * 3
 
 
-@pytest.mark.parametrize("spec, message", [
-    ("camera:0", "unknown kind 'camera'; expected one of webcam:INDEX"),
-    ("video:", "expected KIND:ARGUMENT, one of webcam:INDEX, video:PATH, images:DIR"),
-    ("webcam:front", "the webcam index must be an integer"),
-    ("csv:stream.csv", "a csv source cannot be used here"),
-    ("scenario:held:1", "a scenario source cannot be used here"),
-])
+@pytest.mark.parametrize(
+    "spec, message",
+    [
+        ("camera:0", "unknown kind 'camera'; expected one of webcam:INDEX"),
+        ("video:", "expected KIND:ARGUMENT, one of webcam:INDEX, video:PATH, images:DIR"),
+        ("webcam:front", "the webcam index must be an integer"),
+        ("csv:stream.csv", "a csv source cannot be used here"),
+        ("scenario:held:1", "a scenario source cannot be used here"),
+    ],
+)
 def test_camera_only_specifications(spec, message):
     with pytest.raises(ConfigError, match=message):
         parse_source_spec(spec, kinds=CAMERA_KINDS)
@@ -169,8 +217,11 @@ def test_the_loop_paces_itself_and_hands_its_waits_to_a_controller(model_path):
     from rnnpb.model import TrainedModel
 
     sensory = learning_set("1")[2].sensory
-    loop = InteractionLoop(MirrorSystem(TrainedModel.load(model_path)),
-                           ArraySensorySource(sensory[:30]), config=LoopConfig(0.1, paced=True))
+    loop = InteractionLoop(
+        MirrorSystem(TrainedModel.load(model_path)),
+        ArraySensorySource(sensory[:30]),
+        config=LoopConfig(0.1, paced=True),
+    )
     seen = []
     loop.subscribe(seen.append)
     waits = []
@@ -208,8 +259,25 @@ def test_the_loop_paces_itself_and_hands_its_waits_to_a_controller(model_path):
 
 def test_side_by_side_video(model_path, tmp_path):
     out = tmp_path / "run"
-    assert main(["interact", "--model", str(model_path), "--source", "scenario:held:2",
-                 "--out", str(out), "--steps", "6", "--render", "--robot", "mujoco"]) == 0
+    assert (
+        main(
+            [
+                "interact",
+                "--model",
+                str(model_path),
+                "--source",
+                "scenario:held:2",
+                "--out",
+                str(out),
+                "--steps",
+                "6",
+                "--render",
+                "--robot",
+                "mujoco",
+            ]
+        )
+        == 0
+    )
     import cv2
 
     capture = cv2.VideoCapture(str(out / "session.mp4"))

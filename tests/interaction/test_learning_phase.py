@@ -57,8 +57,23 @@ def test_a_still_or_shapeless_recording_has_no_cycles():
 
 def test_record_writes_sequences_that_train_reads(tmp_path, capsys):
     out = tmp_path / "three"
-    assert main(["record", "synthetic:3", "--steps", "40", "--cycles", "2",
-                 "--pattern", "three", "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "record",
+                "synthetic:3",
+                "--steps",
+                "40",
+                "--cycles",
+                "2",
+                "--pattern",
+                "three",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     sequences = read_sequence_files([out])
     assert sequences and all(s.pattern == "three" for s in sequences)
     assert all(s.n_steps >= 20 for s in sequences)  # two whole cycles of about 12 steps
@@ -72,8 +87,23 @@ def test_record_from_a_stream_without_depth_uses_the_plane(tmp_path, capsys):
     stream = tmp_path / "stream.csv"
     write_sensory_stream(stream, RobotCamera().sensory_from_hands(motion.measured))
     out = tmp_path / "two"
-    assert main(["record", f"csv:{stream}", "--cut", "length", "--length", "25",
-                 "--pattern", "two", "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "record",
+                f"csv:{stream}",
+                "--cut",
+                "length",
+                "--length",
+                "25",
+                "--pattern",
+                "two",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     sequences = read_sequence_files([out])
     assert [s.n_steps for s in sequences] == [25, 25]
     # on the plane the synthetic user moves in, the angles are the demonstrator's own

@@ -9,8 +9,7 @@ from rnnpb.errors import ConfigError
 from rnnpb.interaction import LoopConfig
 
 
-@pytest.mark.parametrize("dt", [math.inf, -math.inf, math.nan, 10**309, 0, -0.1, True, "0.4",
-                                None])
+@pytest.mark.parametrize("dt", [math.inf, -math.inf, math.nan, 10**309, 0, -0.1, True, "0.4", None])
 def test_bad_dt_is_refused(dt):
     with pytest.raises(ConfigError, match="dt must be"):
         LoopConfig(dt=dt)

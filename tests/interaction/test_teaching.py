@@ -38,13 +38,15 @@ def test_four_whole_cycles_of_a_novel_movement_are_kept_once():
     assert episode.n_cycles == 4
     # whole cycles: the perfect user's period is 12 steps
     assert len(episode.sensory) == 48
-    assert np.array_equal(episode.sensory, sensory[episode.first_step:episode.last_step + 1])
+    assert np.array_equal(episode.sensory, sensory[episode.first_step : episode.last_step + 1])
     truth = MirrorMapping().motor_from_hands(motion.measured)
-    assert np.abs(episode.motor - truth[episode.first_step:episode.last_step + 1]).max() < 1e-4
+    assert np.abs(episode.motor - truth[episode.first_step : episode.last_step + 1]).max() < 1e-4
     assert episode.first_step >= 10  # nothing from before the detector said novel
     assert states[:10] == [WATCHING] * 10 and RECORDING in states and states[-1] == KEPT
-    assert "recording a new movement (cycle" in next(
-        s for s in _statuses(sensory, words) if s.state == RECORDING).describe()
+    assert (
+        "recording a new movement (cycle"
+        in next(s for s in _statuses(sensory, words) if s.state == RECORDING).describe()
+    )
 
 
 def _statuses(sensory, words):
@@ -95,8 +97,11 @@ def test_the_keeper_stores_each_novel_movement_once_in_the_memory(tmp_path):
     _, shape = _stream("3", 80, seed=4)
     rng = np.random.default_rng(5)
     walk = np.clip(0.5 + np.cumsum(0.02 * rng.standard_normal((60, 4)), axis=0), 0, 1)
-    stream = [(row, "novel") for row in shape] + [(row, "unstructured") for row in walk] \
+    stream = (
+        [(row, "novel") for row in shape]
+        + [(row, "unstructured") for row in walk]
         + [(row, "novel") for row in shape]
+    )
     with MemoryStore(tmp_path / "m.npz") as memory:
         keeper = EpisodeKeeper(memory, model="m.npz", source="scenario:held:3")
         for t, (row, word) in enumerate(stream):

@@ -32,7 +32,7 @@ def test_a_new_shape_is_kept_and_random_movement_is_not(model, tmp_path):
     first, last = (int(v) for v in episodes[0].note.removeprefix("steps ").split("-"))
     # whole cycles of the new shape only: nothing of the learned pattern before it, nothing
     # of the random walk after it
-    assert set(truth[first:last + 1]) == {"figure-eight"}
+    assert set(truth[first : last + 1]) == {"figure-eight"}
     assert episodes[0].n_cycles == 4 and episodes[0].pattern == "new-1"
 
 
@@ -46,8 +46,7 @@ def test_teaching_consolidates_in_the_background_and_swaps_the_new_version_in(mo
     with open_source(spec, seed=2) as source, MemoryStore(path) as memory:
         loop = InteractionLoop(MirrorSystem(model), source, config=LoopConfig(max_steps=120))
         # run as fast as possible: the loop waits for the consolidation, so the run repeats
-        teacher = Teacher(loop, path, memory, make_mirror=MirrorSystem, source=spec,
-                          iterations=20)
+        teacher = Teacher(loop, path, memory, make_mirror=MirrorSystem, source=spec, iterations=20)
         loop.run(between_steps=teacher.between_steps)
         kinds = [e.kind for e in teacher.events]
         assert "kept" in kinds and "learned" in kinds, teacher.events
@@ -64,7 +63,8 @@ def test_teaching_consolidates_in_the_background_and_swaps_the_new_version_in(mo
 
 
 def test_interact_learn_keeps_a_new_shape_writes_a_version_and_nothing_from_random(
-        model, tmp_path, capsys):
+    model, tmp_path, capsys
+):
     import json
 
     from rnnpb.cli import main
@@ -74,23 +74,57 @@ def test_interact_learn_keeps_a_new_shape_writes_a_version_and_nothing_from_rand
     path = tmp_path / "m.npz"
     model.save(path)
     out = tmp_path / "run"
-    assert main(["interact", "--model", str(path), "--source",
-                 "scenario:steps:1*30,figure-eight*90", "--seed", "2", "--learn",
-                 "--consolidation-iterations", "20", "--no-progress", "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "interact",
+                "--model",
+                str(path),
+                "--source",
+                "scenario:steps:1*30,figure-eight*90",
+                "--seed",
+                "2",
+                "--learn",
+                "--consolidation-iterations",
+                "20",
+                "--no-progress",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     printed = capsys.readouterr().out
     teaching = json.loads((out / "summary.json").read_text())["teaching"]
     (episode,) = teaching["episodes"]
     assert episode["pattern"] == "new-1" and episode["status"] == "learned"
     assert teaching["versions_written"] == [str(version_path(path, 2))]
     assert version_path(path, 2).exists() and teaching["memory"] == str(memory_path_for(path))
-    for words in ("kept a new movement as new-1", "into m.v2.npz (pattern new-1)",
-                  "learned as pattern new-1"):
+    for words in (
+        "kept a new movement as new-1",
+        "into m.v2.npz (pattern new-1)",
+        "learned as pattern new-1",
+    ):
         assert words in printed, printed
 
     # unstructured movement: nothing kept, no version written, the memory untouched
     out = tmp_path / "walk"
-    assert main(["interact", "--model", str(path), "--source", "scenario:steps:random-walk*150",
-                 "--learn", "--no-progress", "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "interact",
+                "--model",
+                str(path),
+                "--source",
+                "scenario:steps:random-walk*150",
+                "--learn",
+                "--no-progress",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     teaching = json.loads((out / "summary.json").read_text())["teaching"]
     assert teaching["episodes"] == [] and teaching["versions_written"] == []
     assert not version_path(path, 3).exists()
@@ -99,15 +133,17 @@ def test_interact_learn_keeps_a_new_shape_writes_a_version_and_nothing_from_rand
 def test_consolidation_iterations_need_learn_and_a_positive_count(tmp_path, capsys):
     from rnnpb.cli import main
 
-    for extra in (["--consolidation-iterations", "20"],
-                  ["--learn", "--consolidation-iterations", "0"]):
-        assert main(["interact", "--source", "scenario:held:1", "--out", str(tmp_path),
-                     *extra]) == 2
+    for extra in (
+        ["--consolidation-iterations", "20"],
+        ["--learn", "--consolidation-iterations", "0"],
+    ):
+        assert (
+            main(["interact", "--source", "scenario:held:1", "--out", str(tmp_path), *extra]) == 2
+        )
         assert "--consolidation-iterations" in capsys.readouterr().err
 
 
-def test_learning_from_the_shipped_model_works_on_a_copy_in_the_run_folder(tmp_path,
-                                                                          monkeypatch):
+def test_learning_from_the_shipped_model_works_on_a_copy_in_the_run_folder(tmp_path, monkeypatch):
     from pathlib import Path
 
     import rnnpb.models
@@ -117,8 +153,20 @@ def test_learning_from_the_shipped_model_works_on_a_copy_in_the_run_folder(tmp_p
     shipped = Path(rnnpb.models.__file__).parent
     before = sorted(p.name for p in shipped.iterdir())
     out = tmp_path / "run"
-    assert main(["interact", "--source", "scenario:steps:random-walk*12", "--learn",
-                 "--out", str(out), "--no-progress"]) == 0
+    assert (
+        main(
+            [
+                "interact",
+                "--source",
+                "scenario:steps:random-walk*12",
+                "--learn",
+                "--out",
+                str(out),
+                "--no-progress",
+            ]
+        )
+        == 0
+    )
     assert sorted(p.name for p in shipped.iterdir()) == before
     assert any(p.suffix == ".npz" for p in out.iterdir())
     assert any(p.name.endswith(".memory.sqlite") for p in out.iterdir())

@@ -13,9 +13,17 @@ def test_list_show_forget_export(tmp_path, capsys):
     model = tmp_path / "m.npz"
     rng = np.random.default_rng(0)
     with MemoryStore(model) as memory:
-        ids = [memory.add_episode(rng.uniform(0, 1, (24, 4)), rng.uniform(-1, 1, (24, 8)),
-                                  source="synthetic:4", model=str(model), pattern=f"new-{k}",
-                                  n_cycles=2) for k in (1, 2)]
+        ids = [
+            memory.add_episode(
+                rng.uniform(0, 1, (24, 4)),
+                rng.uniform(-1, 1, (24, 8)),
+                source="synthetic:4",
+                model=str(model),
+                pattern=f"new-{k}",
+                n_cycles=2,
+            )
+            for k in (1, 2)
+        ]
     assert main(["memory", "list", str(model)]) == 0
     printed = capsys.readouterr().out
     assert "2 episodes" in printed and "new-1" in printed and "synthetic:4" in printed

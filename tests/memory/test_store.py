@@ -31,10 +31,12 @@ def test_the_memory_file_sits_beside_the_model(tmp_path):
 def test_an_episode_comes_back_as_it_went_in(tmp_path):
     sensory, motor = _movement()
     with MemoryStore(tmp_path / "m.npz") as memory:
-        first = memory.add_episode(sensory, motor, source="synthetic:3", model="m.npz",
-                                   pattern="new-1", n_cycles=2)
-        second = memory.add_episode(*_movement(30, 1), source="webcam:0", model="m.npz",
-                                    pattern="new-2", n_cycles=2)
+        first = memory.add_episode(
+            sensory, motor, source="synthetic:3", model="m.npz", pattern="new-1", n_cycles=2
+        )
+        second = memory.add_episode(
+            *_movement(30, 1), source="webcam:0", model="m.npz", pattern="new-2", n_cycles=2
+        )
     with MemoryStore(tmp_path / "m.memory.sqlite", create=False) as memory:
         episode = memory.episode(first)
         assert np.array_equal(episode.sensory, sensory) and np.array_equal(episode.motor, motor)
@@ -51,12 +53,17 @@ def test_an_episode_comes_back_as_it_went_in(tmp_path):
 
 def test_a_consolidation_keeps_its_rehearsals_and_marks_its_episodes_learned(tmp_path):
     with MemoryStore(tmp_path / "m.npz") as memory:
-        episode = memory.add_episode(*_movement(), source="s", model="v1.npz",
-                                     pattern="new-1", n_cycles=2)
+        episode = memory.add_episode(
+            *_movement(), source="s", model="v1.npz", pattern="new-1", n_cycles=2
+        )
         rehearsed = [Sequence(*_movement(20, k), pattern=str(k)) for k in (1, 2, 3)]
-        consolidation = memory.add_consolidation(model_before="v1.npz", model_after="v2.npz",
-                                                 episode_ids=[episode], rehearsed=rehearsed,
-                                                 seconds=12.5)
+        consolidation = memory.add_consolidation(
+            model_before="v1.npz",
+            model_after="v2.npz",
+            episode_ids=[episode],
+            rehearsed=rehearsed,
+            seconds=12.5,
+        )
         assert memory.episode(episode).summary.status == "learned"
         (summary,) = memory.consolidations()
         assert summary.episode_ids == (episode,) and summary.n_rehearsed == 3
@@ -65,8 +72,9 @@ def test_a_consolidation_keeps_its_rehearsals_and_marks_its_episodes_learned(tmp
         assert np.array_equal(back[1].motor, rehearsed[1].motor)
         # a consolidation naming an episode that is not there is refused as a whole
         with pytest.raises(MemoryFileError, match="no episode 99"):
-            memory.add_consolidation(model_before="v2.npz", model_after="v3.npz",
-                                     episode_ids=[99], rehearsed=rehearsed)
+            memory.add_consolidation(
+                model_before="v2.npz", model_after="v3.npz", episode_ids=[99], rehearsed=rehearsed
+            )
         assert len(memory.consolidations()) == 1
 
 
@@ -78,11 +86,11 @@ def test_bad_movements_and_names_are_refused_before_anything_is_written(tmp_path
         with pytest.raises(DataFileError, match="NaN"):
             memory.add_episode(bad, motor, source="s", model="m", pattern="p", n_cycles=1)
         with pytest.raises(DataFileError, match="pattern name"):
-            memory.add_episode(sensory, motor, source="s", model="m", pattern="<b>",
-                               n_cycles=1)
+            memory.add_episode(sensory, motor, source="s", model="m", pattern="<b>", n_cycles=1)
         with pytest.raises(DataFileError, match="status"):
-            memory.add_episode(sensory, motor, source="s", model="m", pattern="p",
-                               n_cycles=1, status="maybe")
+            memory.add_episode(
+                sensory, motor, source="s", model="m", pattern="p", n_cycles=1, status="maybe"
+            )
         assert memory.episodes() == []
 
 
@@ -105,10 +113,9 @@ def test_foreign_damaged_and_newer_files_are_refused_clearly(tmp_path):
     damaged = tmp_path / "damaged.memory.sqlite"
     with MemoryStore(damaged) as memory:
         for k in range(20):
-            memory.add_episode(*_movement(200, k), source="s", model="m", pattern="p",
-                               n_cycles=4)
+            memory.add_episode(*_movement(200, k), source="s", model="m", pattern="p", n_cycles=4)
     data = bytearray(damaged.read_bytes())
-    data[len(data) // 2:len(data) // 2 + 4096] = os.urandom(4096)
+    data[len(data) // 2 : len(data) // 2 + 4096] = os.urandom(4096)
     damaged.write_bytes(bytes(data))
     with pytest.raises(MemoryFileError, match="damaged"):
         with MemoryStore(damaged) as memory:
@@ -141,8 +148,12 @@ def test_kill_9_mid_write_loses_no_committed_episode_and_never_half_of_one(tmp_p
     rng = np.random.default_rng(0)
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
     for run in range(10):
-        writer = subprocess.Popen([sys.executable, "-c", _WRITER, str(path), str(run)],
-                                  stdout=subprocess.PIPE, text=True, env=env)
+        writer = subprocess.Popen(
+            [sys.executable, "-c", _WRITER, str(path), str(run)],
+            stdout=subprocess.PIPE,
+            text=True,
+            env=env,
+        )
         assert writer.stdout is not None
         assert writer.stdout.readline().strip() == "ready"
         time.sleep(float(rng.uniform(0.01, 0.15)))

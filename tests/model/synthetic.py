@@ -22,8 +22,13 @@ def pattern_values(kind: int, phase: np.ndarray) -> tuple[np.ndarray, np.ndarray
     return u, motor
 
 
-def make_sequences(n_samples: int = 2, n_steps: int = 50, noise: float = 0.01,
-                   seed: int = 0, kinds: tuple[int, ...] = (0, 1, 2)) -> list[Sequence]:
+def make_sequences(
+    n_samples: int = 2,
+    n_steps: int = 50,
+    noise: float = 0.01,
+    seed: int = 0,
+    kinds: tuple[int, ...] = (0, 1, 2),
+) -> list[Sequence]:
     rng = np.random.default_rng(seed)
     sequences = []
     for kind in kinds:

@@ -19,16 +19,32 @@ def data_dir(tmp_path):
     directory = tmp_path / "data"
     for i, seq in enumerate(make_sequences(n_steps=30)):
         # No pattern column: the file name names the pattern.
-        write_sequence(directory / f"pat{seq.pattern}_{i % 2 + 1}.csv", seq,
-                       with_pattern_column=False)
+        write_sequence(
+            directory / f"pat{seq.pattern}_{i % 2 + 1}.csv", seq, with_pattern_column=False
+        )
     return directory
 
 
 def test_train_then_generate(data_dir, tmp_path, capsys, monkeypatch):
     monkeypatch.setattr("rnnpb.robot.JOINT_LIMITS", np.array([[-2.0, 2.0]] * 8))
     model_path = tmp_path / "model.npz"
-    assert main(["train", "--data", str(data_dir), "--out", str(model_path), "--preset",
-                 "fast", "--iterations", "300", "--no-progress"]) == 0
+    assert (
+        main(
+            [
+                "train",
+                "--data",
+                str(data_dir),
+                "--out",
+                str(model_path),
+                "--preset",
+                "fast",
+                "--iterations",
+                "300",
+                "--no-progress",
+            ]
+        )
+        == 0
+    )
     out = capsys.readouterr().out
     assert "pattern pat0" in out and "mean squared error" in out
     model = TrainedModel.load(model_path)
@@ -36,22 +52,78 @@ def test_train_then_generate(data_dir, tmp_path, capsys, monkeypatch):
     # The finished model holds what the checkpoint did: it is removed unless asked for.
     assert not (tmp_path / "model.checkpoint.npz").exists()
     kept = tmp_path / "kept.npz"
-    assert main(["train", "--data", str(data_dir), "--out", str(kept), "--preset", "fast",
-                 "--iterations", "100", "--no-progress", "--keep-checkpoint"]) == 0
+    assert (
+        main(
+            [
+                "train",
+                "--data",
+                str(data_dir),
+                "--out",
+                str(kept),
+                "--preset",
+                "fast",
+                "--iterations",
+                "100",
+                "--no-progress",
+                "--keep-checkpoint",
+            ]
+        )
+        == 0
+    )
     assert (tmp_path / "kept.checkpoint.npz").exists()
 
     gen_path = tmp_path / "gen.csv"
-    assert main(["generate", "--model", str(model_path), "--pattern", "pat1", "--steps", "40",
-                 "--out", str(gen_path)]) == 0
+    assert (
+        main(
+            [
+                "generate",
+                "--model",
+                str(model_path),
+                "--pattern",
+                "pat1",
+                "--steps",
+                "40",
+                "--out",
+                str(gen_path),
+            ]
+        )
+        == 0
+    )
     generated = read_sequences(gen_path)[0]
     assert generated.n_steps == 40 and generated.pattern == "pat1"
-    assert main(["generate", "--model", str(model_path), "--pb", "0.1,0.2,0.3,0.4",
-                 "--steps", "10", "--out", str(tmp_path / "pb.csv")]) == 0
+    assert (
+        main(
+            [
+                "generate",
+                "--model",
+                str(model_path),
+                "--pb",
+                "0.1,0.2,0.3,0.4",
+                "--steps",
+                "10",
+                "--out",
+                str(tmp_path / "pb.csv"),
+            ]
+        )
+        == 0
+    )
 
 
 def test_errors_are_one_line_and_nonzero(tmp_path, capsys):
-    assert main(["generate", "--model", str(tmp_path / "none.npz"), "--pattern", "x",
-                 "--out", str(tmp_path / "o.csv")]) == 2
+    assert (
+        main(
+            [
+                "generate",
+                "--model",
+                str(tmp_path / "none.npz"),
+                "--pattern",
+                "x",
+                "--out",
+                str(tmp_path / "o.csv"),
+            ]
+        )
+        == 2
+    )
     err = capsys.readouterr().err
     assert err.startswith("rnnpb: error:") and "no such file" in err
     assert "Traceback" not in err
@@ -71,14 +143,33 @@ def test_help_names_every_command(capsys):
 
 def test_bench_prints_and_writes_its_figures(tmp_path):
     path = tmp_path / "bench.json"
-    result = subprocess.run([sys.executable, "-m", "rnnpb.cli", "bench", "--steps", "20",
-                             "--reference-steps", "1", "--no-tracking", "--json", str(path)],
-                            capture_output=True, text=True, timeout=300)
+    result = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "rnnpb.cli",
+            "bench",
+            "--steps",
+            "20",
+            "--reference-steps",
+            "1",
+            "--no-tracking",
+            "--json",
+            str(path),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert result.returncode == 0, result.stderr
     figures = json.loads(path.read_text())
-    for key in ("train_iteration_ms_median", "online_step_ms_median", "online_step_ms_p99",
-                "online_step_without_phase_restarts_ms_median",
-                "online_step_reference_numpy_ms_median"):
+    for key in (
+        "train_iteration_ms_median",
+        "online_step_ms_median",
+        "online_step_ms_p99",
+        "online_step_without_phase_restarts_ms_median",
+        "online_step_reference_numpy_ms_median",
+    ):
         assert figures[key] > 0
     # The compiled step is faster than the plain NumPy one.
     assert figures["online_step_ms_median"] < figures["online_step_reference_numpy_ms_median"]

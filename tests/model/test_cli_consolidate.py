@@ -26,12 +26,40 @@ def files(tmp_path, monkeypatch):
 
 def test_consolidate_then_info(files, capsys):
     out = files / "m2.npz"
-    assert main(["consolidate", "--model", str(files / "m.npz"), "--add", str(files / "new"),
-                 "--out", str(out), "--iterations", "60", "--no-progress"]) == 0
+    assert (
+        main(
+            [
+                "consolidate",
+                "--model",
+                str(files / "m.npz"),
+                "--add",
+                str(files / "new"),
+                "--out",
+                str(out),
+                "--iterations",
+                "60",
+                "--no-progress",
+            ]
+        )
+        == 0
+    )
     assert "patterns 0, 1, 2" in capsys.readouterr().out
     assert TrainedModel.load(out).patterns == ("0", "1", "2")
-    assert main(["consolidate", "--model", str(out), "--add", str(files / "new"), "--out",
-                 str(files / "m3.npz"), "--no-progress"]) == 2  # pattern 2 is learned now
+    assert (
+        main(
+            [
+                "consolidate",
+                "--model",
+                str(out),
+                "--add",
+                str(files / "new"),
+                "--out",
+                str(files / "m3.npz"),
+                "--no-progress",
+            ]
+        )
+        == 2
+    )  # pattern 2 is learned now
     assert "'2' already learned" in capsys.readouterr().err
     assert main(["info", str(out)]) == 0
     text = capsys.readouterr().out
@@ -41,9 +69,20 @@ def test_consolidate_then_info(files, capsys):
 
 
 def test_replay_takes_the_original_data(files, capsys):
-    args = ["consolidate", "--model", str(files / "m.npz"), "--add", str(files / "new"),
-            "--out", str(files / "r.npz"), "--method", "replay", "--iterations", "20",
-            "--no-progress"]
+    args = [
+        "consolidate",
+        "--model",
+        str(files / "m.npz"),
+        "--add",
+        str(files / "new"),
+        "--out",
+        str(files / "r.npz"),
+        "--method",
+        "replay",
+        "--iterations",
+        "20",
+        "--no-progress",
+    ]
     assert main(args) == 2
     assert "needs the original training data" in capsys.readouterr().err
     assert main([*args, "--replay-data", str(files / "old")]) == 0
@@ -56,22 +95,56 @@ def test_replay_takes_the_original_data(files, capsys):
 def test_bad_files_are_refused_in_one_line(files, capsys):
     bad = files / "bad.csv"
     bad.write_text("step,lhy,lhz\n0,0.5,0.5\n1,0.5,0.5\n")
-    assert main(["consolidate", "--model", str(files / "m.npz"), "--add", str(bad),
-                 "--out", str(files / "x.npz")]) == 2
+    assert (
+        main(
+            [
+                "consolidate",
+                "--model",
+                str(files / "m.npz"),
+                "--add",
+                str(bad),
+                "--out",
+                str(files / "x.npz"),
+            ]
+        )
+        == 2
+    )
     assert "missing column(s)" in capsys.readouterr().err
-    assert main(["consolidate", "--model", str(files / "old" / "p0_1.csv"), "--add",
-                 str(files / "new"), "--out", str(files / "x.npz")]) == 2
+    assert (
+        main(
+            [
+                "consolidate",
+                "--model",
+                str(files / "old" / "p0_1.csv"),
+                "--add",
+                str(files / "new"),
+                "--out",
+                str(files / "x.npz"),
+            ]
+        )
+        == 2
+    )
     assert capsys.readouterr().err.startswith("rnnpb: error:")
     assert main(["info", str(bad)]) == 2
     assert not (files / "x.npz").exists()
 
 
-def test_an_interrupted_consolidation_leaves_the_model_and_resumes(files, capsys,
-                                                                   monkeypatch):
+def test_an_interrupted_consolidation_leaves_the_model_and_resumes(files, capsys, monkeypatch):
     before = (files / "m.npz").read_bytes()
-    args = ["consolidate", "--model", str(files / "m.npz"), "--add", str(files / "new"),
-            "--out", str(files / "m.npz"), "--iterations", "300", "--checkpoint-every", "100",
-            "--no-progress"]
+    args = [
+        "consolidate",
+        "--model",
+        str(files / "m.npz"),
+        "--add",
+        str(files / "new"),
+        "--out",
+        str(files / "m.npz"),
+        "--iterations",
+        "300",
+        "--checkpoint-every",
+        "100",
+        "--no-progress",
+    ]
     calls = []
     real_check = _interrupt.check
 

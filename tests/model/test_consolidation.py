@@ -26,8 +26,9 @@ def two_patterns():
     from rnnpb.demonstrator import pattern_dataset
     from rnnpb.robot import JOINT_LIMITS
 
-    model = train(pattern_dataset(0, ("1", "2")), JOINT_LIMITS,
-                  config=TrainConfig.fast(iterations=1200))
+    model = train(
+        pattern_dataset(0, ("1", "2")), JOINT_LIMITS, config=TrainConfig.fast(iterations=1200)
+    )
     return model, pattern_dataset(0, ("3",))
 
 
@@ -36,14 +37,20 @@ def _keeps_and_follows(before: TrainedModel, after: TrainedModel) -> bool:
     cycles where they were."""
     limits = model_joint_limits(after)
     for pattern in after.patterns:
-        sync = synchronization(after, pattern, OnlineConfig.ungated(), limits, seed=100,
-                               before=30, after=10)
-        if sync.steps_to_lock is None or sync.steps_to_lock > metrics.LOCK_LIMIT \
-                or sync.recognized_pattern != pattern:
+        sync = synchronization(
+            after, pattern, OnlineConfig.ungated(), limits, seed=100, before=30, after=10
+        )
+        if (
+            sync.steps_to_lock is None
+            or sync.steps_to_lock > metrics.LOCK_LIMIT
+            or sync.recognized_pattern != pattern
+        ):
             return False
     old, new = learned_attractors(before, 200, 100), learned_attractors(after, 200, 100)
-    return all(new[p].period is not None and metrics.cycle_distance(new[p].cycle, old[p].cycle)
-               <= 0.05 for p in before.patterns)
+    return all(
+        new[p].period is not None and metrics.cycle_distance(new[p].cycle, old[p].cycle) <= 0.05
+        for p in before.patterns
+    )
 
 
 @pytest.mark.slow
@@ -70,8 +77,12 @@ def test_rehearsed_sequences_are_what_the_network_predicts(two_patterns):
     pb = np.stack([s.meta["pb"] for s in rehearsed])
     rho = np.broadcast_to(logit_numpy(pb)[:, None], (len(pb), 19, pb.shape[1]))
     context = logit_numpy(np.stack([s.meta["initial_context"] for s in rehearsed]))
-    error = per_output_mse((model.params, context.astype(np.float32)),
-                           rho.astype(np.float32), data.inputs.astype(np.float32), data.valid)
+    error = per_output_mse(
+        (model.params, context.astype(np.float32)),
+        rho.astype(np.float32),
+        data.inputs.astype(np.float32),
+        data.valid,
+    )
     assert float(np.max(error)) < 1e-9
 
 
@@ -79,8 +90,12 @@ def test_history_records_each_step_and_survives_a_file(two_patterns, tmp_path):
     model, new = two_patterns
     model.save(tmp_path / "start.npz")
     start = TrainedModel.load(tmp_path / "start.npz")
-    grown = consolidate(start, new, ConsolidationConfig(train=TrainConfig.fast(iterations=50)),
-                        parent=str(tmp_path / "start.npz"))
+    grown = consolidate(
+        start,
+        new,
+        ConsolidationConfig(train=TrainConfig.fast(iterations=50)),
+        parent=str(tmp_path / "start.npz"),
+    )
     grown.save(tmp_path / "grown.npz")
     loaded = TrainedModel.load(tmp_path / "grown.npz")
     assert [e.method for e in loaded.history] == ["train", "rehearsal"]
@@ -125,8 +140,7 @@ def test_interrupted_consolidation_resumes_to_the_same_model(two_patterns, tmp_p
     finetune = ConsolidationConfig("finetune", train=config.train)
     with pytest.raises(KeyboardInterrupt):
         consolidate(model, new, finetune, progress=stop, checkpoint_path=tmp_path / "f.npz")
-    other = replace(model, params=type(model.params)(*(np.asarray(w) * 1.01
-                                                       for w in model.params)))
+    other = replace(model, params=type(model.params)(*(np.asarray(w) * 1.01 for w in model.params)))
     with pytest.raises(ModelFileError, match="another starting model or method"):
         consolidate(other, new, finetune, checkpoint_path=tmp_path / "f.npz", resume=True)
 
@@ -138,13 +152,15 @@ def test_the_alternatives_run_the_same_way(two_patterns):
     original = pattern_dataset(0, ("1", "2"))
     short = TrainConfig.fast(iterations=30)
     for method in ("finetune", "replay", "scratch"):
-        grown = consolidate(model, new, ConsolidationConfig(method, train=short),
-                            replay_data=original)
+        grown = consolidate(
+            model, new, ConsolidationConfig(method, train=short), replay_data=original
+        )
         assert grown.patterns == ("1", "2", "3") and grown.history[-1].method == method
         assert len(grown.sequence_patterns) == 6
     # The replayed data are those the model learned, bit for bit.
-    replayed = consolidate(model, new, ConsolidationConfig("replay", train=short),
-                           replay_data=original)
+    replayed = consolidate(
+        model, new, ConsolidationConfig("replay", train=short), replay_data=original
+    )
     assert replayed.history[-1].details["replay_data_matches_record"] is True
     # The scratch method without a config: the first training's whole length.
     assert ConsolidationConfig("scratch").learning_for(model).iterations == 1200
@@ -160,8 +176,9 @@ def test_bad_input_is_refused_clearly(two_patterns):
     with pytest.raises(ConfigError, match="needs the original training data"):
         consolidate(model, new, ConsolidationConfig("replay"))
     with pytest.raises(ConfigError, match="missing 2"):
-        consolidate(model, new, ConsolidationConfig("replay"),
-                    replay_data=pattern_dataset(0, ("1",)))
+        consolidate(
+            model, new, ConsolidationConfig("replay"), replay_data=pattern_dataset(0, ("1",))
+        )
     with pytest.raises(ConfigError, match="method must be one of"):
         ConsolidationConfig("forget")  # type: ignore[arg-type]
     # A model of another network size: its sensory-motor vector is not the data's.
@@ -172,8 +189,13 @@ def test_bad_input_is_refused_clearly(two_patterns):
     from rnnpb.model import NetworkConfig, init_params
 
     small = NetworkConfig(sensory_size=2, motor_size=8)
-    other = replace(model, network=small, params=init_params(small, jax.random.PRNGKey(0)),
-                    lower=model.lower[2:], upper=model.upper[2:])
+    other = replace(
+        model,
+        network=small,
+        params=init_params(small, jax.random.PRNGKey(0)),
+        lower=model.lower[2:],
+        upper=model.upper[2:],
+    )
     with pytest.raises(ConfigError, match="another network size"):
         consolidate(other, new, ConsolidationConfig())
 
@@ -190,21 +212,27 @@ def test_a_model_file_of_format_1_still_loads(tmp_path):
     old.save(tmp_path / "m.npz")  # saved again, it is of the current format
     again = TrainedModel.load(tmp_path / "m.npz")
     assert again.history == old.history and again.fingerprint == old.fingerprint
-    grown = consolidate(old, make_sequences(n_steps=20, kinds=(2,)),
-                        ConsolidationConfig(train=TrainConfig.fast(iterations=20)))
+    grown = consolidate(
+        old,
+        make_sequences(n_steps=20, kinds=(2,)),
+        ConsolidationConfig(train=TrainConfig.fast(iterations=20)),
+    )
     assert grown.patterns == ("0", "1", "2") and grown.network == old.network
     # Its normalization is kept: the limits of the synthetic set.
     assert np.allclose(model_joint_limits(grown), LIMITS)
 
 
-@pytest.mark.parametrize(("change", "message"), [
-    (lambda h: h[0].update(method="forget"), "history method 'forget'"),
-    (lambda h: h[0].update(added=["../x"]), "history pattern name"),
-    (lambda h: h[0].update(iterations=-1), "'iterations'"),
-    (lambda h: h[0].update(surprise=1), "unknown field"),
-    (lambda h: h.clear(), "history is not a list of 1"),
-    (lambda h: h[0].update(patterns=["9"]), "last entry names other patterns"),
-])
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (lambda h: h[0].update(method="forget"), "history method 'forget'"),
+        (lambda h: h[0].update(added=["../x"]), "history pattern name"),
+        (lambda h: h[0].update(iterations=-1), "'iterations'"),
+        (lambda h: h[0].update(surprise=1), "unknown field"),
+        (lambda h: h.clear(), "history is not a list of 1"),
+        (lambda h: h[0].update(patterns=["9"]), "last entry names other patterns"),
+    ],
+)
 def test_a_bad_history_is_refused(tmp_path, change, message):
     import json
 

@@ -18,8 +18,12 @@ def _period(signal: np.ndarray) -> int:
 
 @pytest.mark.parametrize("pattern", ["0", "1", "2"])
 def test_generation_from_a_learned_pb_is_that_patterns_limit_cycle(trained, pattern):
-    generated = generate(trained, trained.pattern_pb[pattern], 400,
-                         initial_context=trained.pattern_initial_context(pattern))
+    generated = generate(
+        trained,
+        trained.pattern_pb[pattern],
+        400,
+        initial_context=trained.pattern_initial_context(pattern),
+    )
     steady = generated.sensory[200:]
     # Same period as learned (12 steps) ...
     assert abs(_period(steady) - PERIOD) <= 1
@@ -33,7 +37,7 @@ def test_generation_from_a_learned_pb_is_that_patterns_limit_cycle(trained, patt
         errors.append(np.sqrt(np.mean((cycle - truth) ** 2)))
     assert min(errors) < 0.05
     # The limit cycle repeats itself: two consecutive cycles agree closely.
-    assert np.sqrt(np.mean((steady[:PERIOD] - steady[PERIOD:2 * PERIOD]) ** 2)) < 0.02
+    assert np.sqrt(np.mean((steady[:PERIOD] - steady[PERIOD : 2 * PERIOD]) ** 2)) < 0.02
 
 
 def test_generation_rejects_bad_pb(trained):

@@ -20,10 +20,12 @@ def _params64(seed: int) -> Params:
     params = init_params(NET, jax.random.PRNGKey(seed))
     rng = np.random.default_rng(seed)
     # Non-zero biases so their gradients are exercised too.
-    return Params(w_in=jnp.asarray(np.asarray(params.w_in) * 3, jnp.float64),
-                  b_h=jnp.asarray(rng.normal(0, 0.3, params.b_h.shape), jnp.float64),
-                  w_out=jnp.asarray(np.asarray(params.w_out) * 3, jnp.float64),
-                  b_out=jnp.asarray(rng.normal(0, 0.3, params.b_out.shape), jnp.float64))
+    return Params(
+        w_in=jnp.asarray(np.asarray(params.w_in) * 3, jnp.float64),
+        b_h=jnp.asarray(rng.normal(0, 0.3, params.b_h.shape), jnp.float64),
+        w_out=jnp.asarray(np.asarray(params.w_out) * 3, jnp.float64),
+        b_out=jnp.asarray(rng.normal(0, 0.3, params.b_out.shape), jnp.float64),
+    )
 
 
 def _close(a, b, rtol, atol=1e-12):
@@ -43,15 +45,20 @@ def test_learning_gradients_match_numpy_reference_and_finite_differences():
         noise = jnp.zeros((n_seq, n_steps - 1, NET.io_size))
 
         error_fn = jax.jit(learning.squared_error)
-        (g_params, g_context), g_rho = jax.grad(learning.squared_error,
-                                                argnums=(0, 1))(
-            (params, jnp.asarray(context_logit)), jnp.asarray(rho), jnp.asarray(inputs),
-            jnp.asarray(valid), noise)
+        (g_params, g_context), g_rho = jax.grad(learning.squared_error, argnums=(0, 1))(
+            (params, jnp.asarray(context_logit)),
+            jnp.asarray(rho),
+            jnp.asarray(inputs),
+            jnp.asarray(valid),
+            noise,
+        )
         error, r_params, r_rho, r_context = reference.training_error_and_gradients(
-            params, rho, context_logit, inputs, valid)
+            params, rho, context_logit, inputs, valid
+        )
 
-        assert float(error_fn((params, context_logit), rho, inputs, valid, noise)) == \
-            pytest.approx(error, rel=1e-12)
+        assert float(error_fn((params, context_logit), rho, inputs, valid, noise)) == pytest.approx(
+            error, rel=1e-12
+        )
         for name in Params._fields:
             _close(getattr(g_params, name), r_params[name], rtol=1e-8)
         _close(g_rho, r_rho, rtol=1e-8)
@@ -74,8 +81,10 @@ def test_learning_gradients_match_numpy_reference_and_finite_differences():
             plus, minus = w.copy(), w.copy()
             plus[index] += eps
             minus[index] -= eps
-            numeric = (total(p=params._replace(w_in=jnp.asarray(plus)))
-                       - total(p=params._replace(w_in=jnp.asarray(minus)))) / (2 * eps)
+            numeric = (
+                total(p=params._replace(w_in=jnp.asarray(plus)))
+                - total(p=params._replace(w_in=jnp.asarray(minus)))
+            ) / (2 * eps)
             assert numeric == pytest.approx(float(r_params["w_in"][index]), rel=1e-5)
 
 
@@ -88,14 +97,18 @@ def _window_state(rng, length, n, unseen):
     sensory[n:] = 0.0
     seen[n:] = False
     return OnlineState(
-        sensory=jnp.asarray(sensory), seen=jnp.asarray(seen),
+        sensory=jnp.asarray(sensory),
+        seen=jnp.asarray(seen),
         motor_sent=jnp.asarray(rng.uniform(0.2, 0.8, (length, NET.motor_size))),
-        n=jnp.asarray(n), rho=jnp.zeros((length, NET.pb_size)),
+        n=jnp.asarray(n),
+        rho=jnp.zeros((length, NET.pb_size)),
         rho_velocity=jnp.zeros((length, NET.pb_size)),
-        onset_context=jnp.zeros(NET.context_size), onset_motor=jnp.zeros(NET.motor_size),
+        onset_context=jnp.zeros(NET.context_size),
+        onset_motor=jnp.zeros(NET.motor_size),
         next_onset_context=jnp.zeros(NET.context_size),
         next_onset_motor=jnp.zeros(NET.motor_size),
-        predicted_sensory=jnp.zeros(NET.sensory_size))
+        predicted_sensory=jnp.zeros(NET.sensory_size),
+    )
 
 
 @pytest.mark.parametrize("motor_input", ["closed_loop", "recorded"])
@@ -113,33 +126,50 @@ def test_window_gradients_match_numpy_reference_and_finite_differences(motor_inp
 
         error_fn = jax.jit(window.squared_error, static_argnames="config")
         g_rho, g_context, g_motor = jax.grad(window.squared_error, argnums=(2, 3, 4))(
-            params, state, jnp.asarray(rho), jnp.asarray(context), jnp.asarray(motor), config)
+            params, state, jnp.asarray(rho), jnp.asarray(context), jnp.asarray(motor), config
+        )
         recorded = np.asarray(state.motor_sent) if motor_input == "recorded" else None
-        error, r_rho, r_context, r_motor, predictions, contexts = \
+        error, r_rho, r_context, r_motor, predictions, contexts = (
             reference.window_error_and_gradients(
-                params, np.asarray(state.sensory), np.asarray(state.seen), n, rho, context,
-                motor, recorded)
-        assert float(error_fn(params, state, rho, context, motor, config)) == \
-            pytest.approx(error, rel=1e-12)
+                params,
+                np.asarray(state.sensory),
+                np.asarray(state.seen),
+                n,
+                rho,
+                context,
+                motor,
+                recorded,
+            )
+        )
+        assert float(error_fn(params, state, rho, context, motor, config)) == pytest.approx(
+            error, rel=1e-12
+        )
         _close(g_rho, r_rho, rtol=1e-8)
         _close(g_context, r_context, rtol=1e-8)
         _close(g_motor, r_motor, rtol=1e-8)
         assert np.abs(r_rho[:n]).max() > 1e-6  # the comparison is not of zeros
         # The hand-written back-propagation the on-line step uses agrees too.
         m_rho, m_context, m_motor = window.gradients(
-            params, state, jnp.asarray(rho), jnp.asarray(context), jnp.asarray(motor), config)
+            params, state, jnp.asarray(rho), jnp.asarray(context), jnp.asarray(motor), config
+        )
         _close(m_rho, r_rho, rtol=1e-8)
         _close(m_context, r_context, rtol=1e-8)
         _close(m_motor, r_motor, rtol=1e-8)
 
         # The fast window run equals the plain mixed loop of network.py.
         fast_predictions, fast_contexts = window.run(
-            params, state, jnp.asarray(rho), jnp.asarray(context), jnp.asarray(motor), config)
+            params, state, jnp.asarray(rho), jnp.asarray(context), jnp.asarray(motor), config
+        )
         valid = np.arange(length) < n
         plain_predictions, plain_contexts = mixed_loop(
-            params, jax.nn.sigmoid(context), jax.nn.sigmoid(motor), state.sensory,
-            jax.nn.sigmoid(rho), state.seen & valid[:, None],
-            motor_inputs=state.motor_sent if motor_input == "recorded" else None)
+            params,
+            jax.nn.sigmoid(context),
+            jax.nn.sigmoid(motor),
+            state.sensory,
+            jax.nn.sigmoid(rho),
+            state.seen & valid[:, None],
+            motor_inputs=state.motor_sent if motor_input == "recorded" else None,
+        )
         _close(fast_predictions, plain_predictions, rtol=1e-10)
         _close(fast_contexts, plain_contexts, rtol=1e-10)
         _close(fast_predictions, predictions, rtol=1e-10)
@@ -150,6 +180,8 @@ def test_window_gradients_match_numpy_reference_and_finite_differences(motor_inp
             plus, minus = rho.copy(), rho.copy()
             plus[index] += eps
             minus[index] -= eps
-            numeric = (float(error_fn(params, state, plus, context, motor, config))
-                       - float(error_fn(params, state, minus, context, motor, config))) / (2 * eps)
+            numeric = (
+                float(error_fn(params, state, plus, context, motor, config))
+                - float(error_fn(params, state, minus, context, motor, config))
+            ) / (2 * eps)
             assert numeric == pytest.approx(float(r_rho[index]), rel=1e-5, abs=1e-10)

@@ -64,21 +64,27 @@ def test_foreign_files(tmp_path):
 def test_pickled_content_is_never_loaded(tmp_path):
     path = tmp_path / "evil.npz"
     with zipfile.ZipFile(path, "w") as archive:
-        archive.writestr("meta.json.npy", b"\x93NUMPY\x01\x00v\x00{'descr': '|O', "
-                         b"'fortran_order': False, 'shape': (1,), }" + b" " * 60 + b"\n")
+        archive.writestr(
+            "meta.json.npy",
+            b"\x93NUMPY\x01\x00v\x00{'descr': '|O', "
+            b"'fortran_order': False, 'shape': (1,), }" + b" " * 60 + b"\n",
+        )
     with pytest.raises(ModelFileError):
         TrainedModel.load(path)
 
 
-@pytest.mark.parametrize("edit, message", [
-    (lambda m, a: m.update(format="something-else"), "format is 'something-else'"),
-    (lambda m, a: m.update(format_version=99), "format version 99 is not supported"),
-    (lambda m, a: a.pop("params/w_in"), "missing array 'params/w_in'"),
-    (lambda m, a: a.update({"params/w_out": np.zeros((3, 3))}), "has shape"),
-    (lambda m, a: m["network"].update(hidden_size=41), "expected"),
-    (lambda m, a: a.update(lower=np.full(12, np.nan)), "NaN"),
-    (lambda m, a: m.update(sequence_patterns=["a"]), "expected"),
-])
+@pytest.mark.parametrize(
+    "edit, message",
+    [
+        (lambda m, a: m.update(format="something-else"), "format is 'something-else'"),
+        (lambda m, a: m.update(format_version=99), "format version 99 is not supported"),
+        (lambda m, a: a.pop("params/w_in"), "missing array 'params/w_in'"),
+        (lambda m, a: a.update({"params/w_out": np.zeros((3, 3))}), "has shape"),
+        (lambda m, a: m["network"].update(hidden_size=41), "expected"),
+        (lambda m, a: a.update(lower=np.full(12, np.nan)), "NaN"),
+        (lambda m, a: m.update(sequence_patterns=["a"]), "expected"),
+    ],
+)
 def test_mismatched_content(trained, tmp_path, edit, message):
     path = _corrupt(trained, tmp_path, edit)
     with pytest.raises(ModelFileError, match=message) as error:
@@ -113,10 +119,16 @@ def test_trained_model_passes_the_robot_check_and_narrower_bounds_do_too(trained
         TrainedModel.load(path, joint_limits=ROBOT_LIMITS)
     loaded = TrainedModel.load(path, joint_limits=JOINT_LIMITS)
     np.testing.assert_array_equal(loaded.upper, trained.upper)
-    narrow = _corrupt(trained, tmp_path, lambda meta, arrays: arrays.update(
-        upper=arrays["upper"] - 0.1 * (arrays["upper"] - arrays["lower"])))
+    narrow = _corrupt(
+        trained,
+        tmp_path,
+        lambda meta, arrays: arrays.update(
+            upper=arrays["upper"] - 0.1 * (arrays["upper"] - arrays["lower"])
+        ),
+    )
     assert TrainedModel.load(narrow, joint_limits=JOINT_LIMITS) is not None
-    wide = _corrupt(trained, tmp_path, lambda meta, arrays: arrays.update(
-        upper=arrays["upper"] + 1.0))
+    wide = _corrupt(
+        trained, tmp_path, lambda meta, arrays: arrays.update(upper=arrays["upper"] + 1.0)
+    )
     with pytest.raises(ModelFileError, match="outside the robot's joint limits"):
         TrainedModel.load(wide, joint_limits=JOINT_LIMITS)

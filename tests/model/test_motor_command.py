@@ -41,8 +41,10 @@ def test_motor_command_of_non_finite_outputs_is_finite_and_within_bounds(trained
     infinite = _with_motor_bounds(trained, -np.inf, np.inf)
     assert np.all(np.isfinite(motor_command(infinite, np.array([0.0, 1.0, 0.3] + [0.5] * 5))))
     # Ordinary bounds: the same linear map as before.
-    np.testing.assert_allclose(motor_command(trained, np.full(8, 0.25)),
-                               trained.lower[4:] + 0.25 * (trained.upper[4:] - trained.lower[4:]))
+    np.testing.assert_allclose(
+        motor_command(trained, np.full(8, 0.25)),
+        trained.lower[4:] + 0.25 * (trained.upper[4:] - trained.lower[4:]),
+    )
 
 
 @pytest.mark.parametrize("twin", MIRROR_SYSTEMS)
@@ -52,16 +54,26 @@ def test_an_integer_beyond_float_range_is_a_config_error(trained, twin):
         mirror.step([10**309, 0.5, 0.5, 0.5])
 
 
-@pytest.mark.parametrize("name", ["onset_learning_rate", "surprise_gate", "gate_power",
-                                  "gate_floor", "phase_restart_ratio", "phase_restart_level"])
+@pytest.mark.parametrize(
+    "name",
+    [
+        "onset_learning_rate",
+        "surprise_gate",
+        "gate_power",
+        "gate_floor",
+        "phase_restart_ratio",
+        "phase_restart_level",
+    ],
+)
 @pytest.mark.parametrize("value", [math.nan, math.inf, 10**309])
 def test_on_line_settings_refuse_non_finite_numbers(name, value):
     with pytest.raises(ConfigError, match=name):
         OnlineConfig(**{name: value})
 
 
-@pytest.mark.parametrize("change", [{"window": 8.5}, {"iterations": True},
-                                    {"window": "30"}, {"optimize_onset": 1}])
+@pytest.mark.parametrize(
+    "change", [{"window": 8.5}, {"iterations": True}, {"window": "30"}, {"optimize_onset": 1}]
+)
 def test_on_line_settings_refuse_wrong_types(change):
     with pytest.raises(ConfigError, match=next(iter(change))):
         OnlineConfig(**change)
@@ -78,6 +90,9 @@ def test_the_suggested_regression_follows_the_recorded_learning(trained):
     assert OnlineConfig.for_model(unknown).name == "default"
     assert "does not record" in OnlineConfig.for_model(unknown).reason
     assert [OnlineConfig.preset(name) for name in ONLINE_PRESETS] == [
-        OnlineConfig(), OnlineConfig.paper(), OnlineConfig.ungated()]
+        OnlineConfig(),
+        OnlineConfig.paper(),
+        OnlineConfig.ungated(),
+    ]
     with pytest.raises(ConfigError, match="unknown on-line regression"):
         OnlineConfig.preset("gated")

@@ -79,8 +79,12 @@ def test_numerical_failure_holds_the_last_good_state_in_both_twins(trained):
     broken = TrainedModel(
         network=trained.network,
         params=trained.params._replace(w_out=jnp.full_like(trained.params.w_out, jnp.nan)),
-        lower=trained.lower, upper=trained.upper, sequence_pb=trained.sequence_pb,
-        sequence_patterns=trained.sequence_patterns, initial_context=trained.initial_context)
+        lower=trained.lower,
+        upper=trained.upper,
+        sequence_pb=trained.sequence_pb,
+        sequence_patterns=trained.sequence_patterns,
+        initial_context=trained.initial_context,
+    )
     twins = {name: system(broken, SHORT) for name, system in MIRROR_SYSTEMS.items()}
     for _ in range(3):
         results = {name: twin.step([0.5, 0.5, 0.5, 0.5]) for name, twin in twins.items()}
@@ -89,8 +93,9 @@ def test_numerical_failure_holds_the_last_good_state_in_both_twins(trained):
             assert np.all(np.isfinite(result.motor)) and np.all(np.isfinite(result.pb))
         compiled, reference = results["compiled"], results["reference"]
         for name in ("motor", "predicted_hands", "pb", "context", "pattern_errors"):
-            np.testing.assert_allclose(getattr(compiled, name), getattr(reference, name),
-                                       atol=2e-4, err_msg=name)
+            np.testing.assert_allclose(
+                getattr(compiled, name), getattr(reference, name), atol=2e-4, err_msg=name
+            )
         assert compiled.novelty == reference.novelty
         assert compiled.recognised == reference.recognised
 
@@ -98,27 +103,45 @@ def test_numerical_failure_holds_the_last_good_state_in_both_twins(trained):
 def test_packed_outputs_come_back_under_their_names(trained):
     net = trained.network
     rng = np.random.default_rng(0)
-    outputs = StepOutputs(motor=rng.uniform(size=net.motor_size),
-                          predicted_sensory=rng.uniform(size=net.sensory_size),
-                          pb=rng.uniform(size=net.pb_size), window_error=np.asarray(0.25),
-                          held=np.asarray(True), context=rng.uniform(size=net.context_size),
-                          pattern_errors=rng.uniform(size=3))
+    outputs = StepOutputs(
+        motor=rng.uniform(size=net.motor_size),
+        predicted_sensory=rng.uniform(size=net.sensory_size),
+        pb=rng.uniform(size=net.pb_size),
+        window_error=np.asarray(0.25),
+        held=np.asarray(True),
+        context=rng.uniform(size=net.context_size),
+        pattern_errors=rng.uniform(size=3),
+    )
     unpacked = PackedLayout.for_network(net, 3).unpack(np.asarray(pack(outputs), np.float64))
     assert unpacked._fields == outputs._fields
     for name, value, back in zip(outputs._fields, outputs, unpacked, strict=True):
         np.testing.assert_allclose(back, np.reshape(value, -1).astype(np.float32), err_msg=name)
 
 
-@pytest.mark.parametrize("motor_input, optimize_onset, restart_span, surprise_gate, phase", [
-    ("closed_loop", True, 6, 0.0, 0), ("closed_loop", False, 0, 0.0, 0),
-    ("recorded", True, 3, 0.0, 0), ("recorded", False, 6, 0.0, 0),
-    ("closed_loop", True, 6, 0.05, 0), ("closed_loop", True, 6, 0.05, 3),
-    ("recorded", True, 0, 0.0, 2)])
-def test_compiled_step_matches_numpy_reference(trained, motor_input, optimize_onset,
-                                               restart_span, surprise_gate, phase):
-    config = OnlineConfig(window=8, iterations=5, motor_input=motor_input,
-                          optimize_onset=optimize_onset, restart_span=restart_span,
-                          surprise_gate=surprise_gate, phase_restarts=phase)
+@pytest.mark.parametrize(
+    "motor_input, optimize_onset, restart_span, surprise_gate, phase",
+    [
+        ("closed_loop", True, 6, 0.0, 0),
+        ("closed_loop", False, 0, 0.0, 0),
+        ("recorded", True, 3, 0.0, 0),
+        ("recorded", False, 6, 0.0, 0),
+        ("closed_loop", True, 6, 0.05, 0),
+        ("closed_loop", True, 6, 0.05, 3),
+        ("recorded", True, 0, 0.0, 2),
+    ],
+)
+def test_compiled_step_matches_numpy_reference(
+    trained, motor_input, optimize_onset, restart_span, surprise_gate, phase
+):
+    config = OnlineConfig(
+        window=8,
+        iterations=5,
+        motor_input=motor_input,
+        optimize_onset=optimize_onset,
+        restart_span=restart_span,
+        surprise_gate=surprise_gate,
+        phase_restarts=phase,
+    )
     # Pattern 2, then pattern 0: the switch makes the phase restarts start the window over.
     first, second = make_sequences(n_samples=1, n_steps=10, seed=3, kinds=(2, 0))
     sensory = np.concatenate([first.sensory, second.sensory])
@@ -134,8 +157,7 @@ def test_compiled_step_matches_numpy_reference(trained, motor_input, optimize_on
         np.testing.assert_allclose(result.motor / SPAN, expected.motor / SPAN, atol=2e-4)
         np.testing.assert_allclose(result.context, expected.context, atol=2e-4)
         np.testing.assert_allclose(result.window_error, expected.window_error, atol=1e-6)
-        np.testing.assert_allclose(result.prediction_error, expected.prediction_error,
-                                   atol=1e-6)
+        np.testing.assert_allclose(result.prediction_error, expected.prediction_error, atol=1e-6)
         np.testing.assert_array_equal(result.seen, expected.seen)
         # The recognition's evidence: each learned pattern's window error.
         np.testing.assert_allclose(result.pattern_errors, expected.pattern_errors, atol=1e-5)
@@ -170,11 +192,11 @@ def test_phase_candidates_lie_on_each_learned_cycle(trained):
     candidates = phase_candidates(trained, skip=6, steps=24)
     net = trained.network
     assert candidates.shape == (3 * 24, net.pb_size + net.motor_size + net.context_size)
-    pbs = 1.0 / (1.0 + np.exp(-candidates[:, :net.pb_size]))
+    pbs = 1.0 / (1.0 + np.exp(-candidates[:, : net.pb_size]))
     for k, pb in enumerate(trained.pattern_pb.values()):
-        np.testing.assert_allclose(pbs[24 * k:24 * (k + 1)], np.tile(pb, (24, 1)), atol=1e-4)
+        np.testing.assert_allclose(pbs[24 * k : 24 * (k + 1)], np.tile(pb, (24, 1)), atol=1e-4)
     # The motor part follows the learned cycle: one period (12 steps) on, nearly the same.
-    motor = candidates[:, net.pb_size:net.pb_size + net.motor_size]
+    motor = candidates[:, net.pb_size : net.pb_size + net.motor_size]
     assert np.sqrt(np.mean((motor[12:24] - motor[:12]) ** 2)) < 0.5
 
 
@@ -196,12 +218,19 @@ def test_surprise_gate_steadies_the_pb_and_keeps_the_lock(trained):
     assert moves["gated"] < 0.5 * moves["ungated"], moves
 
 
-@pytest.mark.parametrize("change, message", [
-    ({"surprise_gate": -0.1}, "surprise_gate"), ({"gate_power": 0}, "gate_power"),
-    ({"gate_floor": 0}, "gate_floor"), ({"gate_steps": 0}, "gate_steps"),
-    ({"phase_restarts": -1}, "phase_restarts"), ({"phase_restarts": 30}, "phase_restarts"),
-    ({"phase_restart_ratio": 0}, "phase_restart_ratio"),
-    ({"phase_restart_level": -0.1}, "phase_restart_level")])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        ({"surprise_gate": -0.1}, "surprise_gate"),
+        ({"gate_power": 0}, "gate_power"),
+        ({"gate_floor": 0}, "gate_floor"),
+        ({"gate_steps": 0}, "gate_steps"),
+        ({"phase_restarts": -1}, "phase_restarts"),
+        ({"phase_restarts": 30}, "phase_restarts"),
+        ({"phase_restart_ratio": 0}, "phase_restart_ratio"),
+        ({"phase_restart_level": -0.1}, "phase_restart_level"),
+    ],
+)
 def test_bad_surprise_gate_settings_are_refused(change, message):
     with pytest.raises(ConfigError, match=message):
         OnlineConfig(**change)
@@ -220,16 +249,27 @@ def _risk_network(pb_size, seed=0):
 
     rng = np.random.default_rng(seed)
     hidden = 8
-    return MetaParams(w1=rng.normal(0, 2.0, (pb_size, hidden)), b1=rng.normal(0, 0.5, hidden),
-                      w2=rng.normal(0, 1 / np.sqrt(hidden), (hidden, hidden)),
-                      b2=np.zeros(hidden), w3=rng.normal(0, 1.0, hidden), b3=np.asarray(1.0))
+    return MetaParams(
+        w1=rng.normal(0, 2.0, (pb_size, hidden)),
+        b1=rng.normal(0, 0.5, hidden),
+        w2=rng.normal(0, 1 / np.sqrt(hidden), (hidden, hidden)),
+        b2=np.zeros(hidden),
+        w3=rng.normal(0, 1.0, hidden),
+        b3=np.asarray(1.0),
+    )
 
 
 @pytest.mark.parametrize("guard, span", [("barrier", 3), ("barrier", 0), ("projection", 3)])
 def test_the_safety_guard_matches_the_numpy_reference(trained, guard, span):
     meta = _risk_network(trained.network.pb_size)
-    config = OnlineConfig(window=8, iterations=5, safety_guard=guard, barrier_span=span,
-                          barrier_weight=0.5, phase_restarts=0)
+    config = OnlineConfig(
+        window=8,
+        iterations=5,
+        safety_guard=guard,
+        barrier_span=span,
+        barrier_weight=0.5,
+        phase_restarts=0,
+    )
     sensory = make_sequences(n_samples=1, n_steps=12, seed=4, kinds=(1,))[0].sensory
     mirror = MIRROR_SYSTEMS["compiled"](trained, config, meta=meta)
     ref = MIRROR_SYSTEMS["reference"](trained, config, meta=meta)

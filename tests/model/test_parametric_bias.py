@@ -13,21 +13,23 @@ def test_integration_sums_the_window_around_each_step():
     delta = np.arange(1.0, 11.0)[:, None]  # (10, 1)
     out = np.asarray(integrate(jnp.asarray(delta), 4))
     for t in range(10):
-        assert out[t, 0] == delta[max(t - 2, 0):t + 3, 0].sum()
+        assert out[t, 0] == delta[max(t - 2, 0) : t + 3, 0].sum()
 
 
 @pytest.mark.parametrize("n_valid", [1, 4, 12])
 def test_update_matches_reference(n_valid):
     rng = np.random.default_rng(0)
-    config = PBUpdateConfig(learning_rate=0.3, momentum=0.8, k_bp=1.5, k_nb=0.4,
-                            integration_length=6)
+    config = PBUpdateConfig(
+        learning_rate=0.3, momentum=0.8, k_bp=1.5, k_nb=0.4, integration_length=6
+    )
     rho = rng.normal(size=(12, 3))
     velocity = rng.normal(size=(12, 3)) * 0.1
     velocity[n_valid:] = 0
     grad = rng.normal(size=(12, 3))
     valid = np.arange(12) < n_valid
-    new_rho, new_velocity = pb_update(jnp.asarray(rho), jnp.asarray(velocity),
-                                      jnp.asarray(grad), config, jnp.asarray(valid))
+    new_rho, new_velocity = pb_update(
+        jnp.asarray(rho), jnp.asarray(velocity), jnp.asarray(grad), config, jnp.asarray(valid)
+    )
     ref_rho, ref_velocity = reference.pb_update(rho, velocity, grad, config, n_valid)
     np.testing.assert_allclose(np.asarray(new_rho), ref_rho, rtol=1e-5, atol=1e-6)
     np.testing.assert_allclose(np.asarray(new_velocity), ref_velocity, rtol=1e-5, atol=1e-6)
@@ -37,8 +39,9 @@ def test_update_matches_reference(n_valid):
 
 def test_update_descends_the_error():
     # A single PB unit, error 0.5 (p - 0.8)^2 at every step: the PB must move towards 0.8.
-    config = PBUpdateConfig(learning_rate=0.5, momentum=0.5, k_bp=1.0, k_nb=0.1,
-                            integration_length=4)
+    config = PBUpdateConfig(
+        learning_rate=0.5, momentum=0.5, k_bp=1.0, k_nb=0.1, integration_length=4
+    )
     rho = jnp.zeros((8, 1))
     velocity = jnp.zeros((8, 1))
     for _ in range(200):
@@ -48,9 +51,16 @@ def test_update_descends_the_error():
     np.testing.assert_allclose(1 / (1 + np.exp(-np.asarray(rho))), 0.8, atol=1e-3)
 
 
-@pytest.mark.parametrize("kwargs", [dict(learning_rate=0), dict(momentum=1.0),
-                                    dict(k_nb=-1), dict(integration_length=-2),
-                                    dict(learning_rate=2.0, k_nb=0.5)])
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        dict(learning_rate=0),
+        dict(momentum=1.0),
+        dict(k_nb=-1),
+        dict(integration_length=-2),
+        dict(learning_rate=2.0, k_nb=0.5),
+    ],
+)
 def test_bad_coefficients_are_rejected(kwargs):
     with pytest.raises(ConfigError):
         PBUpdateConfig(**kwargs)

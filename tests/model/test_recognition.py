@@ -63,7 +63,7 @@ def test_a_novel_shape_is_called_novel_and_not_recognised(mirror):
     assert all(r.recognised is None for r in results)
     novelty = [r.novelty for r in results]
     assert novelty[30:] == ["novel"] * 30, novelty
-    assert "novel" in novelty[:3 * PERIOD]
+    assert "novel" in novelty[: 3 * PERIOD]
 
 
 def test_a_random_walk_is_never_called_novel(mirror):
@@ -109,8 +109,7 @@ def test_one_step_of_other_evidence_does_not_change_the_answer():
         u = np.array([0.5 + 0.3 * np.sin(2 * np.pi * t / 12)]) + 0.005 * rng.standard_normal(1)
         errors = np.array([1e-4, 0.01]) if t != 40 else np.array([0.01, 1e-4])
         pb = learned[0] if t != 40 else learned[1]
-        state, answer = recognise(state, u, np.ones(1, bool), errors, pb, learned, names,
-                                  config)
+        state, answer = recognise(state, u, np.ones(1, bool), errors, pb, learned, names, config)
         said.append(answer.recognised)
     assert said[20:] == ["a"] * 40
 
@@ -120,7 +119,8 @@ def test_timeline_and_bad_settings():
     assert recognition_timeline(steps) == [
         {"first": 0, "last": 1, "recognised": None, "novelty": ""},
         {"first": 2, "last": 3, "recognised": "1", "novelty": "familiar"},
-        {"first": 4, "last": 4, "recognised": None, "novelty": "novel"}]
+        {"first": 4, "last": 4, "recognised": None, "novelty": "novel"},
+    ]
     with pytest.raises(ConfigError, match="lags"):
         RecognitionConfig(lags=(10, 5))
     with pytest.raises(ConfigError, match="confidence_level"):

@@ -21,8 +21,9 @@ def test_learning_three_patterns_reaches_small_error_and_distinct_pbs(trained):
     pbs = trained.pattern_pb
     assert set(pbs) == {"0", "1", "2"}
     names = list(pbs)
-    between = min(np.linalg.norm(pbs[a] - pbs[b]) for i, a in enumerate(names)
-                  for b in names[i + 1:])
+    between = min(
+        np.linalg.norm(pbs[a] - pbs[b]) for i, a in enumerate(names) for b in names[i + 1 :]
+    )
     assert between > 0.3
     # The two samples of a pattern get nearly the same PB, far closer than other patterns'.
     seq = trained.sequence_pb
@@ -32,8 +33,7 @@ def test_learning_three_patterns_reaches_small_error_and_distinct_pbs(trained):
 
 def test_paper_algorithm_descends():
     sequences = make_sequences(n_steps=30)
-    model = train(sequences, LIMITS, config=TrainConfig.paper(iterations=600,
-                                                              chunk_iterations=200))
+    model = train(sequences, LIMITS, config=TrainConfig.paper(iterations=600, chunk_iterations=200))
     history = [mse for _, mse in model.meta["training"]["history"]]
     assert history[-1] < 0.6 * history[0]
 
@@ -43,10 +43,12 @@ def test_seeded_runs_repeat_exactly_and_seeds_differ():
     config = TrainConfig.fast(iterations=150, chunk_iterations=50)
     a = train(sequences, LIMITS, config=config)
     b = train(sequences, LIMITS, config=config)
-    c = train(sequences, LIMITS, config=TrainConfig.fast(iterations=150, chunk_iterations=50,
-                                                         seed=1))
-    for x, y in zip(jax.tree_util.tree_leaves(a.params), jax.tree_util.tree_leaves(b.params),
-                    strict=True):
+    c = train(
+        sequences, LIMITS, config=TrainConfig.fast(iterations=150, chunk_iterations=50, seed=1)
+    )
+    for x, y in zip(
+        jax.tree_util.tree_leaves(a.params), jax.tree_util.tree_leaves(b.params), strict=True
+    ):
         np.testing.assert_array_equal(np.asarray(x), np.asarray(y))
     np.testing.assert_array_equal(a.sequence_pb, b.sequence_pb)
     assert not np.array_equal(np.asarray(a.params.w_in), np.asarray(c.params.w_in))
@@ -55,21 +57,36 @@ def test_seeded_runs_repeat_exactly_and_seeds_differ():
 def test_checkpoint_resume_continues_where_it_stopped(tmp_path):
     sequences = make_sequences(n_steps=20)
     path = tmp_path / "run.checkpoint.npz"
-    straight = train(sequences, LIMITS,
-                     config=TrainConfig.fast(iterations=200, checkpoint_every=100))
-    train(sequences, LIMITS, config=TrainConfig.fast(iterations=100, checkpoint_every=100),
-          checkpoint_path=path)
+    straight = train(
+        sequences, LIMITS, config=TrainConfig.fast(iterations=200, checkpoint_every=100)
+    )
+    train(
+        sequences,
+        LIMITS,
+        config=TrainConfig.fast(iterations=100, checkpoint_every=100),
+        checkpoint_path=path,
+    )
     assert path.exists()
-    resumed = train(sequences, LIMITS,
-                    config=TrainConfig.fast(iterations=200, checkpoint_every=100),
-                    checkpoint_path=path, resume=True)
+    resumed = train(
+        sequences,
+        LIMITS,
+        config=TrainConfig.fast(iterations=200, checkpoint_every=100),
+        checkpoint_path=path,
+        resume=True,
+    )
     assert resumed.meta["training"]["iterations"] == 200
-    np.testing.assert_array_equal(np.asarray(resumed.params.w_out),
-                                  np.asarray(straight.params.w_out))
+    np.testing.assert_array_equal(
+        np.asarray(resumed.params.w_out), np.asarray(straight.params.w_out)
+    )
     # Other data cannot resume from it.
     with pytest.raises(ModelFileError, match="other training data"):
-        train(make_sequences(n_steps=20, seed=3), LIMITS,
-              config=TrainConfig.fast(iterations=200), checkpoint_path=path, resume=True)
+        train(
+            make_sequences(n_steps=20, seed=3),
+            LIMITS,
+            config=TrainConfig.fast(iterations=200),
+            checkpoint_path=path,
+            resume=True,
+        )
 
 
 def test_motor_values_outside_the_joint_limits_are_rejected():
@@ -77,14 +94,22 @@ def test_motor_values_outside_the_joint_limits_are_rejected():
     motor = bad[0].motor.copy()
     motor[3, 2] = 5.0
     # The column by its name, with its range.
-    with pytest.raises(DataFileError, match=r"bad.csv: step 3, lshy = 5 is outside its range "
-                                            r"\[-2, 2\] \(a joint angle"):
-        train([Sequence(bad[0].sensory, motor, "x", "bad.csv")], LIMITS,
-              config=TrainConfig.fast(iterations=1))
+    with pytest.raises(
+        DataFileError,
+        match=r"bad.csv: step 3, lshy = 5 is outside its range "
+        r"\[-2, 2\] \(a joint angle",
+    ):
+        train(
+            [Sequence(bad[0].sensory, motor, "x", "bad.csv")],
+            LIMITS,
+            config=TrainConfig.fast(iterations=1),
+        )
 
 
-@pytest.mark.parametrize("kwargs", [dict(iterations=-1), dict(optimizer="sgd"),
-                                    dict(learning_rate=0), dict(input_noise=-0.1)])
+@pytest.mark.parametrize(
+    "kwargs",
+    [dict(iterations=-1), dict(optimizer="sgd"), dict(learning_rate=0), dict(input_noise=-0.1)],
+)
 def test_bad_training_config_is_rejected(kwargs):
     with pytest.raises(ConfigError):
         TrainConfig(**kwargs)

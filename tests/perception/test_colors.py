@@ -24,10 +24,12 @@ def _write(tmp_path, data):
     return path
 
 
-GOOD = {"format": "rnnpb-ball-colors", "version": 1,
-        "left": {"name": "red", "hue": [170, 8], "saturation": [120, 255], "value": [60, 255]},
-        "right": {"name": "blue", "hue": [100, 130], "saturation": [120, 255],
-                  "value": [50, 255]}}
+GOOD = {
+    "format": "rnnpb-ball-colors",
+    "version": 1,
+    "left": {"name": "red", "hue": [170, 8], "saturation": [120, 255], "value": [60, 255]},
+    "right": {"name": "blue", "hue": [100, 130], "saturation": [120, 255], "value": [50, 255]},
+}
 
 
 def test_round_trip(tmp_path):
@@ -45,13 +47,16 @@ def test_red_wraps_through_hue_zero():
     assert len(RED.bounds()) == 2 and len(BLUE.bounds()) == 1
 
 
-@pytest.mark.parametrize(("change", "field", "words"), [
-    (("left", "hue", [170, 200]), "left.hue", "200 is outside 0…179"),
-    (("right", "saturation", [200, 100]), "right.saturation", "low 200 is above high 100"),
-    (("right", "value", [10]), "right.value", "expected [low, high]"),
-    (("left", "hue", ["a", 3]), "left.hue", "two integers"),
-    (("left", "value", [-1, 255]), "left.value", "outside 0…255"),
-])
+@pytest.mark.parametrize(
+    ("change", "field", "words"),
+    [
+        (("left", "hue", [170, 200]), "left.hue", "200 is outside 0…179"),
+        (("right", "saturation", [200, 100]), "right.saturation", "low 200 is above high 100"),
+        (("right", "value", [10]), "right.value", "expected [low, high]"),
+        (("left", "hue", ["a", 3]), "left.hue", "two integers"),
+        (("left", "value", [-1, 255]), "left.value", "outside 0…255"),
+    ],
+)
 def test_bad_ranges_name_file_and_field(tmp_path, change, field, words):
     data = json.loads(json.dumps(GOOD))
     side, key, value = change

@@ -23,8 +23,10 @@ from rnnpb.sequences import read_sensory_stream
 
 def test_track_synthetic_writes_a_valid_sensory_stream(tmp_path, capsys):
     out, render = tmp_path / "stream.csv", tmp_path / "marked.avi"
-    assert main(["track", "synthetic:3", "--steps", "25", "--out", str(out),
-                 "--render", str(render)]) == 0
+    assert (
+        main(["track", "synthetic:3", "--steps", "25", "--out", str(out), "--render", str(render)])
+        == 0
+    )
     stream = read_sensory_stream(out)
     assert stream.shape == (25, 4)
     assert np.nanmin(stream) > 0.0 and np.nanmax(stream) < 1.0
@@ -34,8 +36,10 @@ def test_track_synthetic_writes_a_valid_sensory_stream(tmp_path, capsys):
     assert "tracked 25 frames" in printed
     left_lost = int(np.isnan(stream[:, 0]).sum())
     right_lost = int(np.isnan(stream[:, 2]).sum())
-    assert (f"left ball (red) lost in {left_lost} of 25 frames, right ball (blue) lost in "
-            f"{right_lost} of 25 frames") in printed
+    assert (
+        f"left ball (red) lost in {left_lost} of 25 frames, right ball (blue) lost in "
+        f"{right_lost} of 25 frames"
+    ) in printed
     capture = cv2.VideoCapture(str(render))
     n = 0
     while capture.read()[0]:
@@ -61,22 +65,39 @@ def test_track_video_reports_lost_frames_and_writes_empty_cells(tmp_path, capsys
 
 
 def test_track_errors_are_one_line_and_quick(tmp_path, capsys):
-    assert main(["track", f"video:{tmp_path / 'missing.mp4'}", "--out",
-                 str(tmp_path / "x.csv")]) == 2
+    assert (
+        main(["track", f"video:{tmp_path / 'missing.mp4'}", "--out", str(tmp_path / "x.csv")]) == 2
+    )
     assert "no such video file" in capsys.readouterr().err
     bad = tmp_path / "colors.json"
     bad.write_text(json.dumps({"left": {"hue": [0, 300]}, "right": {"hue": [100, 120]}}))
-    assert main(["track", "synthetic:1", "--steps", "3", "--colors", str(bad), "--out",
-                 str(tmp_path / "x.csv")]) == 2
+    assert (
+        main(
+            [
+                "track",
+                "synthetic:1",
+                "--steps",
+                "3",
+                "--colors",
+                str(bad),
+                "--out",
+                str(tmp_path / "x.csv"),
+            ]
+        )
+        == 2
+    )
     err = capsys.readouterr().err
     assert str(bad) in err and "'left.hue'" in err
     assert not (tmp_path / "x.csv").exists()
 
 
 def test_calibrate_from_pixels_and_automatically(tmp_path, capsys):
-    scene = SceneConfig(seed=3, occlusion_probability=0.0,
-                        left_ball_bgr=(20, 140, 230),  # an orange ball on the left hand
-                        right_ball_bgr=(60, 200, 40))  # a green one on the right
+    scene = SceneConfig(
+        seed=3,
+        occlusion_probability=0.0,
+        left_ball_bgr=(20, 140, 230),  # an orange ball on the left hand
+        right_ball_bgr=(60, 200, 40),
+    )  # a green one on the right
     camera = SyntheticCamera(oscillating_hands(3), scene=scene)
     frame, truth = camera.render(2)
     folder = tmp_path / "frames"
@@ -85,8 +106,23 @@ def test_calibrate_from_pixels_and_automatically(tmp_path, capsys):
         cv2.imwrite(str(folder / f"{t}.png"), camera.render(t)[0])
     (lx, ly), (rx, ry) = truth["center_px"].astype(int)
     out = tmp_path / "colors.json"
-    assert main(["calibrate", f"images:{folder}", "--frame", "2", "--left-pixel", f"{lx},{ly}",
-                 "--right-pixel", f"{rx},{ry}", "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "calibrate",
+                f"images:{folder}",
+                "--frame",
+                "2",
+                "--left-pixel",
+                f"{lx},{ly}",
+                "--right-pixel",
+                f"{rx},{ry}",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     colors = load_ball_colors(out)
     assert (colors.left.name, colors.right.name) == ("orange", "green")
     assert (tmp_path / "colors.png").exists()
@@ -101,8 +137,21 @@ def test_calibrate_from_pixels_and_automatically(tmp_path, capsys):
 
     # automatic: the default red and blue balls
     auto = tmp_path / "auto.json"
-    assert main(["calibrate", "synthetic:2", "--frame", "4", "--out", str(auto),
-                 "--preview", str(tmp_path / "auto_preview.png")]) == 0
+    assert (
+        main(
+            [
+                "calibrate",
+                "synthetic:2",
+                "--frame",
+                "4",
+                "--out",
+                str(auto),
+                "--preview",
+                str(tmp_path / "auto_preview.png"),
+            ]
+        )
+        == 0
+    )
     colors = load_ball_colors(auto)
     assert colors.left.wraps and 100 <= colors.right.hue[0] <= colors.right.hue[1] <= 135
     preview = cv2.imread(str(tmp_path / "auto_preview.png"))
@@ -110,8 +159,12 @@ def test_calibrate_from_pixels_and_automatically(tmp_path, capsys):
 
 
 def test_calibrate_refuses_a_grey_pixel(tmp_path, capsys):
-    assert main(["calibrate", "synthetic:1", "--left-pixel", "2,470", "--out",
-                 str(tmp_path / "c.json")]) == 2
+    assert (
+        main(
+            ["calibrate", "synthetic:1", "--left-pixel", "2,470", "--out", str(tmp_path / "c.json")]
+        )
+        == 2
+    )
     assert "grey" in capsys.readouterr().err
     assert not (tmp_path / "c.json").exists()
 

@@ -56,8 +56,11 @@ def test_synthetic_user_every_visible_ball_found_with_its_own_hand(pattern):
             assert d[i] < d[1 - i], "a ball was reported for the wrong hand"
             errors.append(d[i])
             # the sensory values are the centre normalized: Y = col / w, Z = 1 - row / h
-            np.testing.assert_allclose(result.sensory[2 * i:2 * i + 2],
-                                       truth["sensory"][2 * i:2 * i + 2], atol=3.0 / 480)
+            np.testing.assert_allclose(
+                result.sensory[2 * i : 2 * i + 2],
+                truth["sensory"][2 * i : 2 * i + 2],
+                atol=3.0 / 480,
+            )
     assert len(errors) > 60
     assert np.mean(errors) < 3.0
 
@@ -79,9 +82,8 @@ def test_occluded_ball_is_lost_with_nan_then_tracked_again():
         for i in (0, 1):
             hidden = truth["occluded"][i]
             assert result.balls[i].tracked == (not hidden), (t, i)
-            assert np.isnan(result.sensory[2 * i:2 * i + 2]).all() == hidden
-    assert [r.status for r, _ in results[9:11]] == [("tracked", "tracked"),
-                                                   ("lost", "tracked")]
+            assert np.isnan(result.sensory[2 * i : 2 * i + 2]).all() == hidden
+    assert [r.status for r, _ in results[9:11]] == [("tracked", "tracked"), ("lost", "tracked")]
     # recovered at the first frame it shows again, at the right place
     result, truth = results[17]
     assert result.status == ("tracked", "tracked")
@@ -102,10 +104,12 @@ def test_smoothing_reduces_jitter_of_a_still_ball():
     scene = SceneConfig.hard(seed=6, occlusion_probability=0.0)
     raw = [r.balls[0].center_px for r, _ in _track(SyntheticCamera(hands, scene=scene))]
     smooth_tracker = BallTracker(TrackerConfig(smoothing=0.7))
-    smooth = [r.balls[0].center_px
-              for r, _ in _track(SyntheticCamera(hands, scene=scene), smooth_tracker)]
-    assert np.std(np.asarray(smooth)[10:], axis=0).sum() < np.std(np.asarray(raw)[10:],
-                                                                   axis=0).sum()
+    smooth = [
+        r.balls[0].center_px for r, _ in _track(SyntheticCamera(hands, scene=scene), smooth_tracker)
+    ]
+    assert (
+        np.std(np.asarray(smooth)[10:], axis=0).sum() < np.std(np.asarray(raw)[10:], axis=0).sum()
+    )
 
 
 def test_rendering_is_deterministic_for_a_seed_and_differs_across_seeds():

@@ -80,14 +80,13 @@ def test_ik_returns_to_the_target_over_the_reachable_workspace():
 
 
 def test_ik_unreachable_target_gives_the_nearest_reachable_posture_and_says_so():
-    far = SHOULDERS + [[0.5, 0.1, 0.0], [0.0, -0.1, 0.6]]   # beyond the 0.21 m reach
+    far = SHOULDERS + [[0.5, 0.1, 0.0], [0.0, -0.1, 0.6]]  # beyond the 0.21 m reach
     result = inverse_kinematics(far)
     assert not result.reachable.any()
     assert within_limits(result.joints)
     reached, _ = forward_kinematics(result.joints)
     # The residual is what it says, and no random coupled posture gets closer.
-    np.testing.assert_allclose(np.linalg.norm(reached - far, axis=-1), result.residual,
-                               atol=1e-9)
+    np.testing.assert_allclose(np.linalg.norm(reached - far, axis=-1), result.residual, atol=1e-9)
     others, _ = forward_kinematics(coupled_postures(20000, np.random.default_rng(1)))
     best_sampled = np.linalg.norm(others - far, axis=-1).min(axis=0)
     assert np.all(result.residual <= best_sampled + 1e-3)
@@ -99,11 +98,12 @@ def test_ik_random_targets_always_respect_limits():
     result = inverse_kinematics(targets)
     assert within_limits(result.joints)
     reached, _ = forward_kinematics(result.joints)
-    np.testing.assert_allclose(np.linalg.norm(reached - targets, axis=-1), result.residual,
-                               atol=1e-9)
+    np.testing.assert_allclose(
+        np.linalg.norm(reached - targets, axis=-1), result.residual, atol=1e-9
+    )
     # Whatever is reported reachable is reached to 0.1 mm.
     assert np.all(result.residual[result.reachable] < 1e-4)
-    assert 0.005 < result.reachable.mean() < 0.5   # the coupled workspace is a thin shell
+    assert 0.005 < result.reachable.mean() < 0.5  # the coupled workspace is a thin shell
 
 
 def test_ik_rejects_bad_shapes():

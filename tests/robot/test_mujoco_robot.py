@@ -49,7 +49,7 @@ def test_mujoco_robot_tracks_a_demonstrated_joint_trajectory():
         for target in trajectory:
             robot.send(target)
             errors.append(np.abs(robot.read() - target))
-    errors = np.array(errors)[1:]   # the first command starts from the rest pose
+    errors = np.array(errors)[1:]  # the first command starts from the rest pose
     # Stated tracking error at the end of each 0.4 s step: below 0.02 rad (measured ~0.006).
     assert errors.max() < 0.02
     assert np.median(errors) < 0.01

@@ -23,8 +23,11 @@ def front_camera(model) -> tuple[np.ndarray, np.ndarray, float]:
 
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
-    return data.cam_xpos[cam.id].copy(), data.cam_xmat[cam.id].reshape(3, 3).copy(), float(
-        model.cam_fovy[cam.id])
+    return (
+        data.cam_xpos[cam.id].copy(),
+        data.cam_xmat[cam.id].reshape(3, 3).copy(),
+        float(model.cam_fovy[cam.id]),
+    )
 
 
 def project(points, cam_pos, cam_mat, fovy_deg, width, height):
@@ -52,11 +55,11 @@ def test_front_view_shows_the_robot_and_both_hands_where_fk_says(renderer):
             seg = renderer.segmentation(joints, "front")
             image = renderer.render(joints, "front")
             robot_pixels = seg > model.geom("floor").id
-            assert robot_pixels.mean() > 0.02   # the robot fills a visible part of the view
+            assert robot_pixels.mean() > 0.02  # the robot fills a visible part of the view
             hands, _ = forward_kinematics(joints)
             pixels = project(hands, *cam, renderer.width, renderer.height).round().astype(int)
             for (col, row), name in zip(pixels, HAND_GEOMS, strict=True):
-                patch = seg[row - 2:row + 3, col - 2:col + 3]
+                patch = seg[row - 2 : row + 3, col - 2 : col + 3]
                 assert model.geom(name).id in patch, f"{name} not at its FK pixel {col, row}"
             assert ids <= set(np.unique(seg))
             # Rendering is deterministic: the same pose gives the same image.
@@ -72,8 +75,9 @@ def test_robot_eye_sees_the_user_balls_where_robot_camera_projects_them(renderer
             seg = eye.segmentation(seq.motor[t], ROBOT_EYE, user_hands=hands)
             rgb = eye.render(seq.motor[t], ROBOT_EYE, user_hands=hands)
             pixels, _ = camera.project(hands)
-            for (col, row), name in zip(pixels.round().astype(int),
-                                        ("user_left_ball", "user_right_ball"), strict=True):
+            for (col, row), name in zip(
+                pixels.round().astype(int), ("user_left_ball", "user_right_ball"), strict=True
+            ):
                 assert seg[row, col] == eye.model.geom(name).id
             # The user's left ball is red, the right one blue, as rendered.
             (lc, lr), (rc, rr) = pixels.round().astype(int)
@@ -91,8 +95,9 @@ def test_renderer_rejects_unknown_cameras_and_sizes(renderer):
 def test_write_video(tmp_path, renderer):
     import cv2
 
-    frames = [renderer.render(np.array([0.1 * k, 0.3, 0, 1.5] * 2), "three_quarter")
-              for k in range(5)]
+    frames = [
+        renderer.render(np.array([0.1 * k, 0.3, 0, 1.5] * 2), "three_quarter") for k in range(5)
+    ]
     path = write_video(tmp_path / "robot.mp4", frames)
     capture = cv2.VideoCapture(str(path))
     count = 0

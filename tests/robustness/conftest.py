@@ -23,8 +23,9 @@ def data_dir(tmp_path_factory):
 
 @pytest.fixture(scope="session")
 def model(data_dir):
-    config = TrainConfig.fast(iterations=TRAIN_ITERATIONS, checkpoint_every=CHECKPOINT_EVERY,
-                              seed=0)
+    config = TrainConfig.fast(
+        iterations=TRAIN_ITERATIONS, checkpoint_every=CHECKPOINT_EVERY, seed=0
+    )
     return train(read_sequence_files([data_dir]), JOINT_LIMITS, config=config)
 
 

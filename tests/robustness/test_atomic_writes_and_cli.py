@@ -48,15 +48,27 @@ def test_saved_colours_round_trip(tmp_path):
     assert load_ball_colors(tmp_path / "c.json") == BallColors()
 
 
-@pytest.mark.parametrize("content, message", [
-    (b"\x00\x01garbage", "not a readable rnnpb model file"),
-    (b"", "not a readable rnnpb model file"),
-])
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        (b"\x00\x01garbage", "not a readable rnnpb model file"),
+        (b"", "not a readable rnnpb model file"),
+    ],
+)
 def test_cli_bad_model_is_one_line(tmp_path, capsys, content, message):
     model = tmp_path / "m.npz"
     model.write_bytes(content)
-    code = main(["interact", "--model", str(model), "--source", "scenario:held:1", "--out",
-                 str(tmp_path / "out")])
+    code = main(
+        [
+            "interact",
+            "--model",
+            str(model),
+            "--source",
+            "scenario:held:1",
+            "--out",
+            str(tmp_path / "out"),
+        ]
+    )
     err = capsys.readouterr().err
     assert code == 2 and err.startswith(f"rnnpb: error: {model}: ") and message in err
     assert len(err.strip().splitlines()) == 1
@@ -65,19 +77,36 @@ def test_cli_bad_model_is_one_line(tmp_path, capsys, content, message):
 def test_cli_bad_stream_is_one_line(model_file, tmp_path, capsys):
     stream = tmp_path / "s.csv"
     stream.write_text("step,lhy,lhz,rhy,rhz\n0,0.1,oops,0.3,0.4\n")
-    code = main(["interact", "--model", str(model_file), "--source", f"csv:{stream}", "--out",
-                 str(tmp_path / "out")])
+    code = main(
+        [
+            "interact",
+            "--model",
+            str(model_file),
+            "--source",
+            f"csv:{stream}",
+            "--out",
+            str(tmp_path / "out"),
+        ]
+    )
     err = capsys.readouterr().err
     assert code == 2 and len(err.strip().splitlines()) == 1
-    assert err.strip() == (f"rnnpb: error: {stream}: line 2, column 'lhz': 'oops' is not a "
-                           "number")
+    assert err.strip() == (f"rnnpb: error: {stream}: line 2, column 'lhz': 'oops' is not a number")
 
 
 def test_cli_system_errors_are_one_line_unless_debug(model_file, tmp_path, capsys):
     blocked = tmp_path / "file"
     blocked.write_text("not a directory")
-    args = ["interact", "--model", str(model_file), "--source", "scenario:held:1", "--out",
-            str(blocked / "out"), "--steps", "2"]
+    args = [
+        "interact",
+        "--model",
+        str(model_file),
+        "--source",
+        "scenario:held:1",
+        "--out",
+        str(blocked / "out"),
+        "--steps",
+        "2",
+    ]
     assert main(args) == 2
     err = capsys.readouterr().err
     assert err.startswith("rnnpb: error: ") and "Not a directory" in err
@@ -88,8 +117,21 @@ def test_cli_system_errors_are_one_line_unless_debug(model_file, tmp_path, capsy
 
 def test_summary_json_is_written_whole(model_file, tmp_path, capsys):
     out = tmp_path / "run"
-    assert main(["interact", "--model", str(model_file), "--source", "scenario:held:1",
-                 "--out", str(out), "--steps", "3"]) == 0
+    assert (
+        main(
+            [
+                "interact",
+                "--model",
+                str(model_file),
+                "--source",
+                "scenario:held:1",
+                "--out",
+                str(out),
+                "--steps",
+                "3",
+            ]
+        )
+        == 0
+    )
     assert json.loads((out / "summary.json").read_text())["loop"]["steps"] == 3
-    assert sorted(p.name for p in out.iterdir()) == ["session.csv", "session.png",
-                                                     "summary.json"]
+    assert sorted(p.name for p in out.iterdir()) == ["session.csv", "session.png", "summary.json"]

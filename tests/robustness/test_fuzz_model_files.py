@@ -18,8 +18,12 @@ from rnnpb.model.training import load_checkpoint, save_checkpoint
 from rnnpb.robot import JOINT_LIMITS
 from rnnpb.sequences import read_sequence_files
 
-FUZZ = settings(max_examples=60, deadline=None, database=None,
-                suppress_health_check=[HealthCheck.function_scoped_fixture])
+FUZZ = settings(
+    max_examples=60,
+    deadline=None,
+    database=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
+)
 
 
 def _load_or_clear_error(path):
@@ -48,7 +52,7 @@ def test_random_bytes(tmp_path, data):
 @given(fraction=st.floats(min_value=0, max_value=1, exclude_max=True))
 def test_truncated_model(tmp_path, model_bytes, fraction):
     path = tmp_path / "model.npz"
-    path.write_bytes(model_bytes[:int(len(model_bytes) * fraction)])
+    path.write_bytes(model_bytes[: int(len(model_bytes) * fraction)])
     assert _load_or_clear_error(path) is None
 
 
@@ -71,8 +75,11 @@ def test_damaged_compressed_model(tmp_path, model_file, fraction):
 
 
 @FUZZ
-@given(flips=st.lists(st.tuples(st.floats(0, 1, exclude_max=True), st.integers(1, 255)),
-                      min_size=1, max_size=8))
+@given(
+    flips=st.lists(
+        st.tuples(st.floats(0, 1, exclude_max=True), st.integers(1, 255)), min_size=1, max_size=8
+    )
+)
 def test_corrupted_bytes(tmp_path, model_bytes, flips):
     data = bytearray(model_bytes)
     for where, mask in flips:
@@ -89,8 +96,9 @@ def _forge(path, meta, arrays):
     buffer = io.BytesIO()
     payload = dict(arrays)
     if meta is not None:
-        payload["meta.json"] = np.frombuffer(meta if isinstance(meta, bytes)
-                                             else json.dumps(meta).encode(), np.uint8)
+        payload["meta.json"] = np.frombuffer(
+            meta if isinstance(meta, bytes) else json.dumps(meta).encode(), np.uint8
+        )
     np.savez(buffer, **payload)
     path.write_bytes(buffer.getvalue())
 
@@ -110,34 +118,66 @@ def _with(genuine, meta_changes=None, array_changes=None):
     return meta, {k: v for k, v in arrays.items() if v is not None}
 
 
-@pytest.mark.parametrize("name, build, message", [
-    ("no meta", lambda g: (None, g[1]), "no meta.json inside"),
-    ("bad utf-8", lambda g: (b"\xff\xfe{", g[1]), "meta.json is not valid JSON"),
-    ("deep JSON", lambda g: (b"[" * 100_000 + b"]" * 100_000, g[1]),
-     "meta.json is not valid JSON"),
-    ("huge integer", lambda g: (b'{"format": ' + b"9" * 5000 + b"}", g[1]),
-     "meta.json is not valid JSON"),
-    ("JSON list", lambda g: ([1, 2], g[1]), "format is None"),
-    ("foreign format", lambda g: _with(g, {"format": "other"}), "format is 'other'"),
-    ("future version", lambda g: _with(g, {"format_version": 99}), "format version 99"),
-    ("network a string", lambda g: _with(g, {"network": "big"}), "bad network config"),
-    ("network negative", lambda g: _with(g, {"network": {**g[0]["network"], "hidden_size": -4}}),
-     "bad network config"),
-    ("network huge", lambda g: _with(g, {"network": {**g[0]["network"], "hidden_size": 10**30}}),
-     "expected"),
-    ("patterns not a list", lambda g: _with(g, {"sequence_patterns": 7}), "pattern list"),
-    ("array of text", lambda g: _with(g, array_changes={"lower": np.array(["a"] * 12)}),
-     "dtype <U1, expected real numbers"),
-    ("complex array", lambda g: _with(g, array_changes={"upper": np.ones(12) * 1j}),
-     "expected real numbers"),
-    ("NaN weights", lambda g: _with(g, array_changes={
-        "params/w_in": np.full_like(g[1]["params/w_in"], np.nan)}), "NaN or infinite"),
-    ("missing array", lambda g: _with(g, array_changes={"sequence_pb": None}),
-     "missing array 'sequence_pb'"),
-    ("wrong shape", lambda g: _with(g, array_changes={"lower": np.zeros(3)}), "has shape (3,)"),
-    ("upper below lower", lambda g: _with(g, array_changes={"upper": np.zeros(12)}),
-     "upper <= lower"),
-])
+@pytest.mark.parametrize(
+    "name, build, message",
+    [
+        ("no meta", lambda g: (None, g[1]), "no meta.json inside"),
+        ("bad utf-8", lambda g: (b"\xff\xfe{", g[1]), "meta.json is not valid JSON"),
+        (
+            "deep JSON",
+            lambda g: (b"[" * 100_000 + b"]" * 100_000, g[1]),
+            "meta.json is not valid JSON",
+        ),
+        (
+            "huge integer",
+            lambda g: (b'{"format": ' + b"9" * 5000 + b"}", g[1]),
+            "meta.json is not valid JSON",
+        ),
+        ("JSON list", lambda g: ([1, 2], g[1]), "format is None"),
+        ("foreign format", lambda g: _with(g, {"format": "other"}), "format is 'other'"),
+        ("future version", lambda g: _with(g, {"format_version": 99}), "format version 99"),
+        ("network a string", lambda g: _with(g, {"network": "big"}), "bad network config"),
+        (
+            "network negative",
+            lambda g: _with(g, {"network": {**g[0]["network"], "hidden_size": -4}}),
+            "bad network config",
+        ),
+        (
+            "network huge",
+            lambda g: _with(g, {"network": {**g[0]["network"], "hidden_size": 10**30}}),
+            "expected",
+        ),
+        ("patterns not a list", lambda g: _with(g, {"sequence_patterns": 7}), "pattern list"),
+        (
+            "array of text",
+            lambda g: _with(g, array_changes={"lower": np.array(["a"] * 12)}),
+            "dtype <U1, expected real numbers",
+        ),
+        (
+            "complex array",
+            lambda g: _with(g, array_changes={"upper": np.ones(12) * 1j}),
+            "expected real numbers",
+        ),
+        (
+            "NaN weights",
+            lambda g: _with(
+                g, array_changes={"params/w_in": np.full_like(g[1]["params/w_in"], np.nan)}
+            ),
+            "NaN or infinite",
+        ),
+        (
+            "missing array",
+            lambda g: _with(g, array_changes={"sequence_pb": None}),
+            "missing array 'sequence_pb'",
+        ),
+        ("wrong shape", lambda g: _with(g, array_changes={"lower": np.zeros(3)}), "has shape (3,)"),
+        (
+            "upper below lower",
+            lambda g: _with(g, array_changes={"upper": np.zeros(12)}),
+            "upper <= lower",
+        ),
+    ],
+)
 def test_forged_model_files(tmp_path, genuine, name, build, message):
     meta, arrays = build(genuine)
     path = tmp_path / "model.npz"
@@ -147,10 +187,13 @@ def test_forged_model_files(tmp_path, genuine, name, build, message):
     assert str(caught.value).startswith(str(path)) and message in str(caught.value)
 
 
-@pytest.mark.parametrize("shape, message", [
-    ((10**13,), r"array 'lower' has shape \(10000000000000,\), expected \(12,\)"),
-    ((12,), r"array 'lower' claims 96 bytes but its member holds 32"),
-])
+@pytest.mark.parametrize(
+    "shape, message",
+    [
+        ((10**13,), r"array 'lower' has shape \(10000000000000,\), expected \(12,\)"),
+        ((12,), r"array 'lower' claims 96 bytes but its member holds 32"),
+    ],
+)
 def test_array_claiming_huge_size(tmp_path, genuine, shape, message):
     meta, arrays = genuine
     header = np.lib.format.header_data_from_array_1_0(np.zeros(4))
@@ -159,11 +202,11 @@ def test_array_claiming_huge_size(tmp_path, genuine, shape, message):
     np.lib.format.write_array_header_1_0(big, header)
     path = tmp_path / "model.npz"
     with zipfile.ZipFile(path, "w") as archive:
-        archive.writestr("meta.json.npy", _npy(np.frombuffer(json.dumps(meta).encode(),
-                                                             np.uint8)))
+        archive.writestr("meta.json.npy", _npy(np.frombuffer(json.dumps(meta).encode(), np.uint8)))
         for name, array in arrays.items():
-            archive.writestr(f"{name}.npy", big.getvalue() + b"\0" * 32 if name == "lower"
-                             else _npy(array))
+            archive.writestr(
+                f"{name}.npy", big.getvalue() + b"\0" * 32 if name == "lower" else _npy(array)
+            )
     # Refused from the header, before anything of that size is allocated.
     with pytest.raises(ModelFileError, match=message):
         TrainedModel.load(path)
@@ -210,8 +253,16 @@ def test_checkpoint_round_trip_and_forgeries(tmp_path, checkpoint_setup):
     cases = [
         ({**meta, "train_config": "abc"}, arrays, "has no training config"),
         ({**meta, "train_config": [1, 2]}, arrays, "has no training config"),
-        (meta, {**arrays, "state/0000": np.array(["x"] * arrays["state/0000"].size)
-                .reshape(arrays["state/0000"].shape)}, "expected real numbers"),
+        (
+            meta,
+            {
+                **arrays,
+                "state/0000": np.array(["x"] * arrays["state/0000"].size).reshape(
+                    arrays["state/0000"].shape
+                ),
+            },
+            "expected real numbers",
+        ),
         ({**meta, "data_fingerprint": "other"}, arrays, "other training data"),
         ({**meta, "n_leaves": 1}, arrays, "unexpected member(s) 'state/0001'"),
         ({**meta, "n_leaves": 99}, arrays, "missing array 'state/00"),

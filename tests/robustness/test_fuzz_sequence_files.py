@@ -22,14 +22,38 @@ from rnnpb.vectors import MOTOR_NAMES, SENSORY_NAMES
 
 SEQUENCE_COLUMNS = ["step", *SENSORY_NAMES, *MOTOR_NAMES]
 STREAM_COLUMNS = ["step", *SENSORY_NAMES]
-FUZZ = settings(max_examples=60, deadline=None, database=None,
-                suppress_health_check=[HealthCheck.function_scoped_fixture])
+FUZZ = settings(
+    max_examples=60,
+    deadline=None,
+    database=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
+)
 
 cells = st.one_of(
     st.floats(allow_nan=True, allow_infinity=True).map(repr),
     st.integers(min_value=-(10**400), max_value=10**400).map(str),
-    st.sampled_from(["", " ", "nan", "inf", "-inf", "1e999", "-1e999", "0x10", "1_0", "١٢",
-                     "½", "\u00a0", "0.5\u200b", "true", '"', "\x00", "NaN", "Infinity"]),
+    st.sampled_from(
+        [
+            "",
+            " ",
+            "nan",
+            "inf",
+            "-inf",
+            "1e999",
+            "-1e999",
+            "0x10",
+            "1_0",
+            "١٢",
+            "½",
+            "\u00a0",
+            "0.5\u200b",
+            "true",
+            '"',
+            "\x00",
+            "NaN",
+            "Infinity",
+        ]
+    ),
     st.text(max_size=8),
 )
 
@@ -46,13 +70,19 @@ def _expect_clear_error(path, call):
 
 
 def _grid_text(draw, columns_from):
-    header = draw(st.one_of(
-        st.just(list(columns_from)),
-        st.permutations(list(columns_from)),
-        st.lists(st.sampled_from([*columns_from, "pattern", "extra", ""]), max_size=16),
-        st.lists(st.text(max_size=6), max_size=6)))
-    rows = draw(st.lists(st.lists(cells, min_size=max(0, len(header) - 1),
-                                  max_size=len(header) + 1), max_size=6))
+    header = draw(
+        st.one_of(
+            st.just(list(columns_from)),
+            st.permutations(list(columns_from)),
+            st.lists(st.sampled_from([*columns_from, "pattern", "extra", ""]), max_size=16),
+            st.lists(st.text(max_size=6), max_size=6),
+        )
+    )
+    rows = draw(
+        st.lists(
+            st.lists(cells, min_size=max(0, len(header) - 1), max_size=len(header) + 1), max_size=6
+        )
+    )
     newline = draw(st.sampled_from(["\n", "\r\n", "\r"]))
     bom = draw(st.sampled_from(["", "\ufeff"]))
     blank = draw(st.sampled_from(["", newline]))
@@ -161,16 +191,19 @@ def test_values_outside_the_view_plane_are_kept(tmp_path):
     np.testing.assert_array_equal(read_sensory_stream(path), [[-3, 1e30, 2, 0.5]])
 
 
-@pytest.mark.parametrize("text, message", [
-    ("step,lhy,lhz,rhy,rhz\n0,0.1,0.2,0.3\n", "line 2: expected 5 fields"),
-    ("step,lhy,lhz,rhy,rhz\n0,0.1,0.2,0.3,0.4,9\n", "line 2: expected 5 fields"),
-    ("step,lhy,lhz,rhy,rhz\n0,0.1,abc,0.3,0.4\n", "column 'lhz': 'abc' is not a number"),
-    ("step,lhy,lhz\n0,0.1,0.2\n", "missing column(s) rhy, rhz"),
-    ("step,lhy,lhz,rhy,rhz\n", "has a header but no rows"),
-    ("", "empty file"),
-    ("step,lhy,lhz,rhy,rhz\n1e308,0,0,0,0\n-1e308,0,0,0,0\n", "'step' must increase"),
-    ('step,lhy,lhz,rhy,rhz\n0,"0.1\n', "expected 5 fields"),
-])
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("step,lhy,lhz,rhy,rhz\n0,0.1,0.2,0.3\n", "line 2: expected 5 fields"),
+        ("step,lhy,lhz,rhy,rhz\n0,0.1,0.2,0.3,0.4,9\n", "line 2: expected 5 fields"),
+        ("step,lhy,lhz,rhy,rhz\n0,0.1,abc,0.3,0.4\n", "column 'lhz': 'abc' is not a number"),
+        ("step,lhy,lhz\n0,0.1,0.2\n", "missing column(s) rhy, rhz"),
+        ("step,lhy,lhz,rhy,rhz\n", "has a header but no rows"),
+        ("", "empty file"),
+        ("step,lhy,lhz,rhy,rhz\n1e308,0,0,0,0\n-1e308,0,0,0,0\n", "'step' must increase"),
+        ('step,lhy,lhz,rhy,rhz\n0,"0.1\n', "expected 5 fields"),
+    ],
+)
 def test_stream_errors_name_file_and_problem(tmp_path, text, message):
     path = tmp_path / "stream.csv"
     path.write_text(text)

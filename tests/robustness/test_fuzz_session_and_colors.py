@@ -14,8 +14,12 @@ from rnnpb.interaction import SessionRecorder, read_session
 from rnnpb.interaction.loop import StepRecord
 from rnnpb.perception import ball_colors_from_json, load_ball_colors
 
-FUZZ = settings(max_examples=60, deadline=None, database=None,
-                suppress_health_check=[HealthCheck.function_scoped_fixture])
+FUZZ = settings(
+    max_examples=60,
+    deadline=None,
+    database=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
+)
 N_ROWS = 12
 
 
@@ -24,11 +28,19 @@ def _record(step):
     observed = rng.uniform(0, 1, 4)
     if step % 5 == 3:
         observed[:2] = np.nan
-    return StepRecord(step=step, time_s=0.4 * step, observed=observed,
-                      predicted=rng.uniform(0, 1, 4), predicted_next=rng.uniform(0, 1, 4),
-                      motor=rng.uniform(-1, 1, 8), pb=rng.uniform(0, 1, 4),
-                      prediction_error=0.01, window_error=0.02, held=False,
-                      truth={"pattern": "horizontal swing é"})
+    return StepRecord(
+        step=step,
+        time_s=0.4 * step,
+        observed=observed,
+        predicted=rng.uniform(0, 1, 4),
+        predicted_next=rng.uniform(0, 1, 4),
+        motor=rng.uniform(-1, 1, 8),
+        pb=rng.uniform(0, 1, 4),
+        prediction_error=0.01,
+        window_error=0.02,
+        held=False,
+        truth={"pattern": "horizontal swing é"},
+    )
 
 
 @pytest.fixture(scope="module")
@@ -122,12 +134,19 @@ def test_bom_header_and_paths(tmp_path, recording):
 
 
 json_values = st.recursive(
-    st.none() | st.booleans() | st.integers(-10**30, 10**30) | st.floats() | st.text(max_size=6),
-    lambda children: st.lists(children, max_size=4)
-    | st.dictionaries(st.sampled_from(["format", "version", "left", "right", "hue",
-                                       "saturation", "value", "name", "x"]), children,
-                      max_size=5),
-    max_leaves=20)
+    st.none() | st.booleans() | st.integers(-(10**30), 10**30) | st.floats() | st.text(max_size=6),
+    lambda children: (
+        st.lists(children, max_size=4)
+        | st.dictionaries(
+            st.sampled_from(
+                ["format", "version", "left", "right", "hue", "saturation", "value", "name", "x"]
+            ),
+            children,
+            max_size=5,
+        )
+    ),
+    max_leaves=20,
+)
 
 
 @FUZZ
@@ -152,11 +171,14 @@ def test_random_colour_files(tmp_path, data):
     assert str(caught.value).startswith(str(path))
 
 
-@pytest.mark.parametrize("content, message", [
-    (b"[" * 50_000, "not valid JSON"),
-    (b'{"left": {"hue": [' + b"9" * 5000 + b", 1]}}", "not valid JSON"),
-    (b'{"left": {"hue": [0, 300]}, "right": {"hue": [1, 2]}}', "field 'left.hue'"),
-])
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        (b"[" * 50_000, "not valid JSON"),
+        (b'{"left": {"hue": [' + b"9" * 5000 + b", 1]}}", "not valid JSON"),
+        (b'{"left": {"hue": [0, 300]}, "right": {"hue": [1, 2]}}', "field 'left.hue'"),
+    ],
+)
 def test_colour_file_errors(tmp_path, content, message):
     path = tmp_path / "colours.json"
     path.write_bytes(content)

@@ -37,11 +37,18 @@ from rnnpb.sequences import (
 )
 from rnnpb.vectors import MOTOR_NAMES, SENSORY_NAMES
 
-FUZZ = settings(max_examples=40, deadline=None, database=None,
-                suppress_health_check=[HealthCheck.function_scoped_fixture])
+FUZZ = settings(
+    max_examples=40,
+    deadline=None,
+    database=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
+)
 XSS = "<img src=x onerror=alert(1)>"
-CSV_READERS = {"read_sequences": read_sequences, "read_sensory_stream": read_sensory_stream,
-               "read_session": read_session}
+CSV_READERS = {
+    "read_sequences": read_sequences,
+    "read_sensory_stream": read_sensory_stream,
+    "read_session": read_session,
+}
 
 
 def _one_line_error(error, path):
@@ -68,8 +75,7 @@ def _npy(array):
 def _write_model(path, meta, arrays, extra=(), compression=zipfile.ZIP_STORED):
     """A model archive written member by member, as a forger would."""
     with zipfile.ZipFile(path, "w", compression) as archive:
-        archive.writestr("meta.json.npy", _npy(np.frombuffer(json.dumps(meta).encode(),
-                                                             np.uint8)))
+        archive.writestr("meta.json.npy", _npy(np.frombuffer(json.dumps(meta).encode(), np.uint8)))
         for name, array in arrays.items():
             archive.writestr(f"{name}.npy", array if isinstance(array, bytes) else _npy(array))
         for name, data in extra:
@@ -92,8 +98,9 @@ def _load_peak(path, **kwargs):
 def _zeros_member(archive, name, shape, n_bytes):
     """A deflated .npy member of ``n_bytes`` zeros: a few hundred kB on disk."""
     header = io.BytesIO()
-    np.lib.format.write_array_header_1_0(header, {"descr": "<f8", "fortran_order": False,
-                                                   "shape": shape})
+    np.lib.format.write_array_header_1_0(
+        header, {"descr": "<f8", "fortran_order": False, "shape": shape}
+    )
     with archive.open(f"{name}.npy", "w", force_zip64=True) as member:
         member.write(header.getvalue())
         chunk = bytes(2**20)
@@ -103,12 +110,12 @@ def _zeros_member(archive, name, shape, n_bytes):
 
 # --- 1. zip bombs and members that do not belong ---------------------------------------------
 
+
 def test_zip_bomb_is_refused_before_it_is_decompressed(tmp_path, genuine):
     meta, arrays = genuine
     path = tmp_path / "bomb.npz"
     with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as archive:
-        archive.writestr("meta.json.npy", _npy(np.frombuffer(json.dumps(meta).encode(),
-                                                             np.uint8)))
+        archive.writestr("meta.json.npy", _npy(np.frombuffer(json.dumps(meta).encode(), np.uint8)))
         for name, array in arrays.items():
             if name == "lower":
                 _zeros_member(archive, name, (8 * 2**20,), 64 * 2**20)
@@ -127,13 +134,12 @@ def test_checkpoint_total_size_is_capped(tmp_path):
     from rnnpb.model.training import CHECKPOINT_FORMAT, CHECKPOINT_FORMAT_VERSION
 
     path = tmp_path / "c.checkpoint.npz"
-    meta = {"format": CHECKPOINT_FORMAT, "format_version": CHECKPOINT_FORMAT_VERSION,
-            "n_leaves": 1}
+    meta = {"format": CHECKPOINT_FORMAT, "format_version": CHECKPOINT_FORMAT_VERSION, "n_leaves": 1}
     with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as archive:
-        archive.writestr("meta.json.npy", _npy(np.frombuffer(json.dumps(meta).encode(),
-                                                             np.uint8)))
-        _zeros_member(archive, "state/0000", (MAX_ARCHIVE_BYTES // 8 + 2**17,),
-                      MAX_ARCHIVE_BYTES + 2**20)
+        archive.writestr("meta.json.npy", _npy(np.frombuffer(json.dumps(meta).encode(), np.uint8)))
+        _zeros_member(
+            archive, "state/0000", (MAX_ARCHIVE_BYTES // 8 + 2**17,), MAX_ARCHIVE_BYTES + 2**20
+        )
     from rnnpb.model.io import load_archive
 
     tracemalloc.start()
@@ -148,14 +154,17 @@ def test_checkpoint_total_size_is_capped(tmp_path):
 
 
 @FUZZ
-@given(name=st.text(alphabet=string.ascii_letters + "/._-", min_size=1, max_size=12),
-       suffix=st.sampled_from([".npy", ".txt", ""]))
+@given(
+    name=st.text(alphabet=string.ascii_letters + "/._-", min_size=1, max_size=12),
+    suffix=st.sampled_from([".npy", ".txt", ""]),
+)
 def test_unknown_members_are_refused(tmp_path, genuine, name, suffix):
     meta, arrays = genuine
     if f"{name}{suffix}".removesuffix(".npy") in {*arrays, "meta.json"}:
         return  # a genuine member's name, written twice: tested below
-    path = _write_model(tmp_path / "extra.npz", meta, arrays,
-                        extra=[(f"{name}{suffix}", _npy(np.zeros(2)))])
+    path = _write_model(
+        tmp_path / "extra.npz", meta, arrays, extra=[(f"{name}{suffix}", _npy(np.zeros(2)))]
+    )
     with pytest.raises(ModelFileError) as caught:
         TrainedModel.load(path)
     message = _one_line_error(caught.value, path)
@@ -172,6 +181,7 @@ def test_a_member_twice_is_refused(tmp_path, genuine):
 
 
 # --- 3. model contents --------------------------------------------------------------------
+
 
 def test_npy_renamed_npz(tmp_path):
     path = tmp_path / "model.npz"
@@ -195,18 +205,26 @@ def test_plain_member_where_an_array_belongs(tmp_path, genuine, payload):
 def test_model_with_zero_sequences_is_refused(tmp_path, genuine):
     meta, arrays = genuine
     network = meta["network"]
-    path = _write_model(tmp_path / "empty.npz", {**meta, "sequence_patterns": []}, {
-        **arrays, "sequence_pb": np.zeros((0, network["pb_size"])),
-        "initial_context": np.zeros((0, network["context_size"]))})
+    path = _write_model(
+        tmp_path / "empty.npz",
+        {**meta, "sequence_patterns": []},
+        {
+            **arrays,
+            "sequence_pb": np.zeros((0, network["pb_size"])),
+            "initial_context": np.zeros((0, network["context_size"])),
+        },
+    )
     with pytest.raises(ModelFileError) as caught:
         TrainedModel.load(path)
     assert "holds no training sequences" in _one_line_error(caught.value, path)
 
 
 @FUZZ
-@given(value=st.floats(min_value=3.5e38, max_value=1e308) | st.floats(max_value=-3.5e38,
-                                                                        min_value=-1e308),
-       name=st.sampled_from(["params/w_in", "params/b_out", "lower"]))
+@given(
+    value=st.floats(min_value=3.5e38, max_value=1e308)
+    | st.floats(max_value=-3.5e38, min_value=-1e308),
+    name=st.sampled_from(["params/w_in", "params/b_out", "lower"]),
+)
 def test_float64_beyond_float32_is_refused(tmp_path, genuine, value, name):
     meta, arrays = genuine
     changed = arrays[name].astype(np.float64)
@@ -260,8 +278,19 @@ def test_joint_limits_of_another_robot_are_refused(model):
 @pytest.mark.slow
 def test_interact_refuses_a_model_wider_than_the_robot(tmp_path, genuine, capsys):
     path = _write_model(tmp_path / "wide.npz", *_with_motor_bounds(genuine, 10))
-    code = main(["interact", "--model", str(path), "--source", "scenario:held:1", "--out",
-                 str(tmp_path / "out"), "--steps", "2"])
+    code = main(
+        [
+            "interact",
+            "--model",
+            str(path),
+            "--source",
+            "scenario:held:1",
+            "--out",
+            str(tmp_path / "out"),
+            "--steps",
+            "2",
+        ]
+    )
     err = capsys.readouterr().err
     assert code == 2 and err.startswith(f"rnnpb: error: {path}: normalization of joint ")
     assert len(err.strip().splitlines()) == 1
@@ -270,12 +299,16 @@ def test_interact_refuses_a_model_wider_than_the_robot(tmp_path, genuine, capsys
 
 # --- 4. pattern names --------------------------------------------------------------------
 
+
 @settings(max_examples=200, deadline=None, database=None)
 @given(name=st.text(max_size=40))
 def test_pattern_name_rule(name):
     problem = pattern_name_problem(name)
-    allowed = (1 <= len(name) <= 32 and name == name.strip(" ")
-               and all(c.isalnum() or c in "-_. " for c in name))
+    allowed = (
+        1 <= len(name) <= 32
+        and name == name.strip(" ")
+        and all(c.isalnum() or c in "-_. " for c in name)
+    )
     assert (problem is None) == allowed, (name, problem)
     if any(c in name for c in "<>&\"'`=/\\\n\r\t\x00"):
         assert problem is not None
@@ -317,14 +350,25 @@ def test_file_name_pattern_is_checked_and_train_refuses_it(tmp_path, capsys):
     path.write_text(_sequence_text())
     with pytest.raises(DataFileError, match="pattern name '<img src=x onerror=alert"):
         read_sequences(path)
-    code = main(["train", "--data", str(folder), "--out", str(tmp_path / "m.npz"),
-                 "--iterations", "2", "--no-progress"])
+    code = main(
+        [
+            "train",
+            "--data",
+            str(folder),
+            "--out",
+            str(tmp_path / "m.npz"),
+            "--iterations",
+            "2",
+            "--no-progress",
+        ]
+    )
     err = capsys.readouterr().err
     assert code == 2 and err.startswith(f"rnnpb: error: {path}") and "pattern name" in err
     assert not (tmp_path / "m.npz").exists()
 
 
 # --- 2. unbounded lines, huge files, FIFOs and devices ---------------------------------------
+
 
 @pytest.mark.parametrize("reader", list(CSV_READERS))
 def test_fifo_is_refused_without_blocking(tmp_path, reader):
@@ -346,8 +390,9 @@ def test_fifo_is_refused_without_blocking(tmp_path, reader):
             writer.write("")
         pytest.fail(f"{reader} blocked on a FIFO")
     expected = "a session recording (.csv)" if reader == "read_session" else "a CSV file"
-    assert outcome["error"] == (f"{path}: is not a regular file (a FIFO, device or socket), "
-                                f"expected {expected}")
+    assert outcome["error"] == (
+        f"{path}: is not a regular file (a FIFO, device or socket), expected {expected}"
+    )
 
 
 def test_colour_fifo_and_device_are_refused(tmp_path):
@@ -381,9 +426,11 @@ def test_file_over_the_size_cap_is_refused_unread(tmp_path, reader):
 
 
 @FUZZ
-@given(extra=st.integers(min_value=1, max_value=3 * MAX_LINE_CHARS),
-       filler=st.sampled_from(["9", ",", "a", "é", '"']),
-       reader=st.sampled_from(list(CSV_READERS)))
+@given(
+    extra=st.integers(min_value=1, max_value=3 * MAX_LINE_CHARS),
+    filler=st.sampled_from(["9", ",", "a", "é", '"']),
+    reader=st.sampled_from(list(CSV_READERS)),
+)
 def test_line_without_break_is_refused_at_the_limit(tmp_path, extra, filler, reader):
     path = tmp_path / "long.csv"
     header = ",".join(["step", "time_s", *SENSORY_NAMES, *MOTOR_NAMES])
@@ -398,7 +445,8 @@ def test_line_without_break_is_refused_at_the_limit(tmp_path, extra, filler, rea
     message = _one_line_error(caught.value, path)
     # A quote opens a field that runs on; csv's own field limit may stop it first.
     assert "line 2 is longer than 65,536 characters" in message or (
-        filler == '"' and "malformed CSV" in message)
+        filler == '"' and "malformed CSV" in message
+    )
     assert peak < 2 * 2**20
 
 
@@ -415,18 +463,29 @@ def test_readers_hold_about_the_file_size_in_memory(tmp_path, reader):
     n = 20_000
     path = tmp_path / "big_1.csv"
     if reader == "read_sequences":
-        write_sequence(path, Sequence(rng.uniform(0, 1, (n, 4)), rng.uniform(-1, 1, (n, 8)),
-                                      "wave"))
+        write_sequence(
+            path, Sequence(rng.uniform(0, 1, (n, 4)), rng.uniform(-1, 1, (n, 8)), "wave")
+        )
     elif reader == "read_sensory_stream":
         write_sensory_stream(path, rng.uniform(0, 1, (n, 4)))
     else:
         with SessionRecorder(path) as recorder:
             for t in range(n // 4):
-                recorder.write(StepRecord(
-                    step=t, time_s=0.4 * t, observed=rng.uniform(0, 1, 4),
-                    predicted=rng.uniform(0, 1, 4), predicted_next=rng.uniform(0, 1, 4),
-                    motor=rng.uniform(-1, 1, 8), pb=rng.uniform(0, 1, 4), prediction_error=0.01,
-                    window_error=0.02, held=False, truth={"pattern": "wave"}))
+                recorder.write(
+                    StepRecord(
+                        step=t,
+                        time_s=0.4 * t,
+                        observed=rng.uniform(0, 1, 4),
+                        predicted=rng.uniform(0, 1, 4),
+                        predicted_next=rng.uniform(0, 1, 4),
+                        motor=rng.uniform(-1, 1, 8),
+                        pb=rng.uniform(0, 1, 4),
+                        prediction_error=0.01,
+                        window_error=0.02,
+                        held=False,
+                        truth={"pattern": "wave"},
+                    )
+                )
     size = path.stat().st_size
     tracemalloc.start()
     try:
@@ -440,12 +499,19 @@ def test_readers_hold_about_the_file_size_in_memory(tmp_path, reader):
 
 # --- 5. other readers and writers --------------------------------------------------------
 
+
 @pytest.mark.parametrize("reader", ["read_sequences", "read_session"])
 def test_duplicate_column_is_refused(tmp_path, reader):
     path = tmp_path / "dup.csv"
     header = ["step", "time_s", *SENSORY_NAMES, *MOTOR_NAMES, "lhy"]
-    path.write_text(",".join(header) + "\n" + ",".join(["0"] * len(header)) + "\n"
-                    + ",".join(["1"] * len(header)) + "\n")
+    path.write_text(
+        ",".join(header)
+        + "\n"
+        + ",".join(["0"] * len(header))
+        + "\n"
+        + ",".join(["1"] * len(header))
+        + "\n"
+    )
     with pytest.raises(DataFileError) as caught:
         CSV_READERS[reader](path)
     assert "'lhy'" in str(caught.value) or "lhy appears" in str(caught.value)
@@ -463,11 +529,16 @@ def _png_header(width, height):
     import zlib
 
     def chunk(kind, data):
-        return (struct.pack(">I", len(data)) + kind + data
-                + struct.pack(">I", zlib.crc32(kind + data)))
-    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2,
-                                                                   0, 0, 0))
-            + chunk(b"IDAT", zlib.compress(b"\0" * 64)) + chunk(b"IEND", b""))
+        return (
+            struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+        )
+
+    return (
+        b"\x89PNG\r\n\x1a\n"
+        + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0))
+        + chunk(b"IDAT", zlib.compress(b"\0" * 64))
+        + chunk(b"IEND", b"")
+    )
 
 
 def test_image_claiming_too_many_pixels(tmp_path):
@@ -512,8 +583,9 @@ def test_train_out_in_a_read_only_folder(tmp_path, data_dir, capsys):
 
 def test_atomic_write_names_the_destination(tmp_path, monkeypatch, capsys, model):
     target = tmp_path / "model.npz"
-    monkeypatch.setattr(os, "fsync", lambda fd: (_ for _ in ()).throw(
-        OSError(28, "No space left on device")))
+    monkeypatch.setattr(
+        os, "fsync", lambda fd: (_ for _ in ()).throw(OSError(28, "No space left on device"))
+    )
     with pytest.raises(OSError) as caught:
         model.save(target)
     assert caught.value.filename == str(target) and caught.value.errno == 28

@@ -149,19 +149,21 @@ def test_loop_with_a_hostile_stream_records_every_step(model, tmp_path):
     stream[40, 1] = np.inf
     stream[50:60:2] = 1e30
     path = tmp_path / "stream.csv"
-    path.write_text("step,lhy,lhz,rhy,rhz\n" + "".join(
-        f"{t},{','.join(repr(float(v)) for v in row)}\n" for t, row in enumerate(stream)))
+    path.write_text(
+        "step,lhy,lhz,rhy,rhz\n"
+        + "".join(f"{t},{','.join(repr(float(v)) for v in row)}\n" for t, row in enumerate(stream))
+    )
     source = CsvSensorySource(str(path))
     robot = KinematicRobot()
     with source, robot, SessionRecorder(tmp_path / "session.csv") as recorder:
-        summary = InteractionLoop(MirrorSystem(model), source, robot, recorder,
-                                  LoopConfig()).run()
+        summary = InteractionLoop(MirrorSystem(model), source, robot, recorder, LoopConfig()).run()
     # The stream stopping ends the loop cleanly; every step is in the recording.
     assert summary.steps == 80 and summary.lost_steps == 21
     session = read_session(tmp_path / "session.csv")
     assert session["step"].tolist() == list(range(80))
-    motor = np.column_stack([session[n] for n in ("lshp", "lshr", "lshy", "lelp",
-                                                   "rshp", "rshr", "rshy", "relp")])
+    motor = np.column_stack(
+        [session[n] for n in ("lshp", "lshr", "lshy", "lelp", "rshp", "rshr", "rshy", "relp")]
+    )
     assert np.all(np.isfinite(motor))
     assert np.all(motor >= JOINT_LIMITS[:, 0] - 1e-6) and np.all(motor <= JOINT_LIMITS[:, 1] + 1e-6)
     assert session["lost_left"][40] == 1 and np.isnan(session["lhz"][40])

@@ -20,8 +20,13 @@ from .conftest import CHECKPOINT_EVERY, TRAIN_ITERATIONS
 def _rnnpb(*args):
     # Unbuffered: a test waits for a line of output before it interrupts.
     env = {**os.environ, "MUJOCO_GL": "egl", "MPLBACKEND": "Agg", "PYTHONUNBUFFERED": "1"}
-    return subprocess.Popen([sys.executable, "-m", "rnnpb.cli", *map(str, args)], env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    return subprocess.Popen(
+        [sys.executable, "-m", "rnnpb.cli", *map(str, args)],
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
 
 
 def _wait_for(condition, process, timeout=120.0):
@@ -46,9 +51,22 @@ def _session_rows(path):
 def test_train_interrupted_then_resumed_matches_uninterrupted(data_dir, model, tmp_path):
     out = tmp_path / "model.npz"
     checkpoint = tmp_path / "model.checkpoint.npz"
-    command = ["train", "--data", data_dir, "--out", out, "--preset", "fast", "--iterations",
-               TRAIN_ITERATIONS, "--checkpoint-every", CHECKPOINT_EVERY, "--seed", 0,
-               "--no-progress"]
+    command = [
+        "train",
+        "--data",
+        data_dir,
+        "--out",
+        out,
+        "--preset",
+        "fast",
+        "--iterations",
+        TRAIN_ITERATIONS,
+        "--checkpoint-every",
+        CHECKPOINT_EVERY,
+        "--seed",
+        0,
+        "--no-progress",
+    ]
     first = _rnnpb(*command)
     assert _wait_for(checkpoint.exists, first), first.communicate()
     first.send_signal(signal.SIGINT)
@@ -67,8 +85,9 @@ def test_train_interrupted_then_resumed_matches_uninterrupted(data_dir, model, t
     assert resumed.meta["training"]["iterations"] == TRAIN_ITERATIONS
     # Resuming continues the same computation: the result is the uninterrupted run's.
     for name, value in resumed.params._asdict().items():
-        np.testing.assert_allclose(value, getattr(model.params, name), rtol=1e-5, atol=1e-6,
-                                   err_msg=name)
+        np.testing.assert_allclose(
+            value, getattr(model.params, name), rtol=1e-5, atol=1e-6, err_msg=name
+        )
     np.testing.assert_allclose(resumed.sequence_pb, model.sequence_pb, atol=1e-5)
 
 
@@ -77,8 +96,18 @@ def test_train_interrupted_then_resumed_matches_uninterrupted(data_dir, model, t
 def test_interact_interrupted_keeps_every_flushed_step(model_file, tmp_path, how):
     out = tmp_path / "run"
     session = out / "session.csv"
-    process = _rnnpb("interact", "--model", model_file, "--source", "scenario:held:1",
-                     "--out", out, "--paced", "--dt", "0.02")
+    process = _rnnpb(
+        "interact",
+        "--model",
+        model_file,
+        "--source",
+        "scenario:held:1",
+        "--out",
+        out,
+        "--paced",
+        "--dt",
+        "0.02",
+    )
     assert _wait_for(lambda: _session_rows(session) >= 15, process), process.communicate()
     before = _session_rows(session)
     process.send_signal(getattr(signal, how))
@@ -126,8 +155,18 @@ def test_ctrl_c_during_the_first_compile_stops_training_cleanly(data_dir, tmp_pa
     # Before SIGINT was held to safe points, 13 of 32 such runs crashed with a segmentation
     # fault (in jaxlib's import, or at exit with an XLA thread still compiling) and 2 ran on.
     def command(out):
-        return ["train", "--data", data_dir, "--out", out / "model.npz", "--preset", "fast",
-                "--iterations", 100_000, "--no-progress"]
+        return [
+            "train",
+            "--data",
+            data_dir,
+            "--out",
+            out / "model.npz",
+            "--preset",
+            "fast",
+            "--iterations",
+            100_000,
+            "--no-progress",
+        ]
 
     runs = _interrupt_during_startup(command, None, [0.5], tmp_path)
     runs += _interrupt_during_startup(command, "training on", [0.0, 0.3], tmp_path)

@@ -25,8 +25,9 @@ from rnnpb.safety._map import new_map
 
 @pytest.fixture(scope="module")
 def model_path(tmp_path_factory):
-    model = train(learning_set("1", seed=0), JOINT_LIMITS,
-                  config=TrainConfig.fast(iterations=100, seed=0))
+    model = train(
+        learning_set("1", seed=0), JOINT_LIMITS, config=TrainConfig.fast(iterations=100, seed=0)
+    )
     path = tmp_path_factory.mktemp("models") / "m.npz"
     model.save(path)
     return path
@@ -36,10 +37,10 @@ def _map_around(model, centre, radius=0.35):
     rng = np.random.default_rng(1)
     pbs = rng.uniform(size=(1500, model.network.pb_size))
     unsafe = np.linalg.norm(pbs - centre, axis=1) < radius
-    experience = Experience(pbs, unsafe, np.zeros(len(pbs), bool),
-                            np.array(["explored"] * len(pbs)), {})
-    return new_map(model, fit_meta(experience, MetaConfig(iterations=800)), pbs, unsafe,
-                   0.08, {})
+    experience = Experience(
+        pbs, unsafe, np.zeros(len(pbs), bool), np.array(["explored"] * len(pbs)), {}
+    )
+    return new_map(model, fit_meta(experience, MetaConfig(iterations=800)), pbs, unsafe, 0.08, {})
 
 
 def test_without_a_map_the_filter_alone_guards_and_off_means_neither(model_path):
@@ -54,8 +55,7 @@ def test_without_a_map_the_filter_alone_guards_and_off_means_neither(model_path)
     assert off.command_filter is None and off.meta is None and off.config.safety_guard == "off"
 
 
-def test_a_map_beside_the_model_guards_the_pb_and_a_damaged_one_is_an_error(model_path,
-                                                                             tmp_path):
+def test_a_map_beside_the_model_guards_the_pb_and_a_damaged_one_is_an_error(model_path, tmp_path):
     from rnnpb.model import TrainedModel
 
     model = TrainedModel.load(model_path)
@@ -68,8 +68,10 @@ def test_a_map_beside_the_model_guards_the_pb_and_a_damaged_one_is_an_error(mode
     safety = online_safety(path, model, OnlineConfig(safety_guard="projection"))
     assert safety.meta is not None and safety.guard == "projection"
     assert safety.command_filter is not None and "m.safety.npz" in safety.note
-    views = risk_views(safety.safety_map, {"a": np.full(4, 0.2), "b": np.full(4, 0.5),
-                                           "c": np.array([0.8, 0.8, 0.2, 0.5])})
+    views = risk_views(
+        safety.safety_map,
+        {"a": np.full(4, 0.2), "b": np.full(4, 0.5), "c": np.array([0.8, 0.8, 0.2, 0.5])},
+    )
     assert set(views) == {"01", "23", "plane"}
     for view in views.values():
         risk = np.array(view["risk"])
@@ -77,8 +79,9 @@ def test_a_map_beside_the_model_guards_the_pb_and_a_damaged_one_is_an_error(mode
     grid = np.array(views["01"]["risk"])  # rows along PB1, columns along PB0
     assert grid[-5, -5] > 0.5 > grid[2, 2]
     # Cell 19 of 24 along both axes: its centre is PB0 = PB1 = 19.5 / 24.
-    np.testing.assert_allclose(grid[-5, -5], safety.safety_map.risk(
-        np.array([19.5 / 24, 19.5 / 24, 0.3, 0.4])), atol=1e-3)
+    np.testing.assert_allclose(
+        grid[-5, -5], safety.safety_map.risk(np.array([19.5 / 24, 19.5 / 24, 0.3, 0.4])), atol=1e-3
+    )
     safety_map_path(path).write_bytes(b"not a map")
     with pytest.raises(ModelFileError, match="m.safety.npz"):
         online_safety(path, model, OnlineConfig())
@@ -89,16 +92,45 @@ def test_interact_filters_every_command_and_says_what_guards(model_path, tmp_pat
     from rnnpb.interaction import read_session
 
     out = tmp_path / "run"
-    assert main(["interact", "--model", str(model_path), "--source", "scenario:held:1",
-                 "--steps", "12", "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "interact",
+                "--model",
+                str(model_path),
+                "--source",
+                "scenario:held:1",
+                "--steps",
+                "12",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     printed = capsys.readouterr().out
     assert "command filter alone" in printed
     session = read_session(out / "session.csv")
     assert len(session["filtered"]) == 12
     summary = json.loads((out / "summary.json").read_text())
     assert summary["safety"]["filter"] and not summary["safety"]["map"]
-    assert main(["interact", "--model", str(model_path), "--source", "scenario:held:1",
-                 "--steps", "3", "--out", str(out), "--no-safety"]) == 0
+    assert (
+        main(
+            [
+                "interact",
+                "--model",
+                str(model_path),
+                "--source",
+                "scenario:held:1",
+                "--steps",
+                "3",
+                "--out",
+                str(out),
+                "--no-safety",
+            ]
+        )
+        == 0
+    )
     assert "safety: off" in capsys.readouterr().out
     assert json.loads((out / "summary.json").read_text())["safety"]["filter"] is False
 
@@ -112,8 +144,9 @@ def test_a_study_run_counts_what_was_generated_and_what_reached_the_robot(model_
         assert stream.shape == (40, 4) and 0 <= stream.min() <= stream.max() <= 1
     model = TrainedModel.load(model_path)
     meta = _map_around(model, np.array([0.8, 0.8, 0.3, 0.4])).meta
-    row = _adversarial_job(str(model_path), meta, OnlineConfig(), "projection", "full_swing",
-                           8, 0, "1")
+    row = _adversarial_job(
+        str(model_path), meta, OnlineConfig(), "projection", "full_swing", 8, 0, "1"
+    )
     assert row["steps"] == 8 and row["guard"] == "projection"
     assert row["collision_sent"] == row["speed_sent"] == 0  # the filter let none through
     assert row["unsafe_generated"] >= sum(row["collision_parts"].values()) >= 0

@@ -87,8 +87,9 @@ def test_the_loop_records_unsafe_and_filtered(tmp_path, model):
     path = tmp_path / "session.csv"
     sensory = novel_scenario("1", n_steps=6, seed=0).sensory
     with ArraySensorySource(sensory) as source, SessionRecorder(path) as recorder:
-        loop = InteractionLoop(MirrorSystem(model), source, recorder=recorder,
-                               command_filter=Unsafe(initial=REST))
+        loop = InteractionLoop(
+            MirrorSystem(model), source, recorder=recorder, command_filter=Unsafe(initial=REST)
+        )
         loop.run()
     session = read_session(path)
     assert all("collision:" in session["unsafe"][i] for i in (1, 3, 5))
@@ -98,18 +99,21 @@ def test_the_loop_records_unsafe_and_filtered(tmp_path, model):
 
 @pytest.fixture(scope="module")
 def model():
-    return train(learning_set("1", seed=0), JOINT_LIMITS,
-                 config=TrainConfig.fast(iterations=1500, seed=0))
+    return train(
+        learning_set("1", seed=0), JOINT_LIMITS, config=TrainConfig.fast(iterations=1500, seed=0)
+    )
 
 
 def _constructed_map(model, centre, radius=0.2):
     """A map whose unsafe region is the ball of ``radius`` around ``centre``."""
     rng = np.random.default_rng(0)
-    pbs = np.concatenate([rng.uniform(size=(3000, 4)),
-                          np.clip(centre + rng.normal(0, 0.2, (1000, 4)), 0, 1)])
+    pbs = np.concatenate(
+        [rng.uniform(size=(3000, 4)), np.clip(centre + rng.normal(0, 0.2, (1000, 4)), 0, 1)]
+    )
     unsafe = np.linalg.norm(pbs - centre, axis=1) < radius
-    experience = Experience(pbs, unsafe, np.zeros(len(pbs), bool),
-                            np.array(["explored"] * len(pbs)), {})
+    experience = Experience(
+        pbs, unsafe, np.zeros(len(pbs), bool), np.array(["explored"] * len(pbs)), {}
+    )
     meta = fit_meta(experience, MetaConfig(iterations=2000))
     return new_map(model, meta, pbs, unsafe, 0.08, {"constructed": True})
 
@@ -147,12 +151,13 @@ def test_a_missing_or_damaged_map_is_a_clear_error_or_the_documented_fallback(tm
     assert load_safety_map(safety_map_path(model_path), model).fingerprint == maps.fingerprint
     assert "experienced PBs" in describe_safety_map(safety_map_path(model_path))
     data = safety_map_path(model_path).read_bytes()
-    safety_map_path(model_path).write_bytes(data[:len(data) // 2])
+    safety_map_path(model_path).write_bytes(data[: len(data) // 2])
     with pytest.raises(ModelFileError, match="m.safety.npz"):
         find_safety_map(model_path, model)
     assert "unusable" in describe_safety_map(safety_map_path(model_path))
-    other = train(learning_set("2", seed=0), JOINT_LIMITS,
-                  config=TrainConfig.fast(iterations=50, seed=1))
+    other = train(
+        learning_set("2", seed=0), JOINT_LIMITS, config=TrainConfig.fast(iterations=50, seed=1)
+    )
     maps.save(safety_map_path(model_path))
     with pytest.raises(ModelFileError, match="another model"):
         load_safety_map(safety_map_path(model_path), other)

@@ -50,18 +50,25 @@ def test_a_good_spec_is_the_whole_grid(tmp_path):
     assert len(set(keys.values())) == 6
 
 
-@pytest.mark.parametrize(("text", "message"), [
-    (GOOD + "colour = 1\n", "unknown key 'colour'"),
-    (GOOD.replace("seeds = 3", "seeds = []"), "the grid is empty: 'seeds' has no values"),
-    (GOOD.replace('learning_sets = ["1", "full"]', "learning_sets = []"),
-     "the grid is empty: 'learning_sets'"),
-    ('learning_sets = ["1"]\nseeds = 1\n', "the grid is empty: 'training'"),
-    (GOOD.replace("iterations = 500", "iteration = 500"),
-     "[training.fast]: unknown key 'iteration'"),
-    (GOOD.replace('preset = "paper"', 'preset = "fastest"'), "preset 'fastest' is not one of"),
-    (GOOD.replace('"full"]', '"7"]'), "learning set '7' is not one of"),
-    ("seeds = [", "not TOML"),
-])
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        (GOOD + "colour = 1\n", "unknown key 'colour'"),
+        (GOOD.replace("seeds = 3", "seeds = []"), "the grid is empty: 'seeds' has no values"),
+        (
+            GOOD.replace('learning_sets = ["1", "full"]', "learning_sets = []"),
+            "the grid is empty: 'learning_sets'",
+        ),
+        ('learning_sets = ["1"]\nseeds = 1\n', "the grid is empty: 'training'"),
+        (
+            GOOD.replace("iterations = 500", "iteration = 500"),
+            "[training.fast]: unknown key 'iteration'",
+        ),
+        (GOOD.replace('preset = "paper"', 'preset = "fastest"'), "preset 'fastest' is not one of"),
+        (GOOD.replace('"full"]', '"7"]'), "learning set '7' is not one of"),
+        ("seeds = [", "not TOML"),
+    ],
+)
 def test_bad_specs_get_one_line(tmp_path, capsys, text, message):
     path = _spec(tmp_path, text)
     with pytest.raises(ConfigError, match="sweep spec .*spec.toml: ") as caught:
@@ -82,16 +89,39 @@ def test_an_unreachable_address_is_one_line_and_quick(tmp_path, capsys):
     with pytest.raises(ClusterError, match="is not HOST:PORT"):
         check_address("nowhere")
     path = _spec(tmp_path, GOOD)
-    assert cli.main(["sweep", str(path), "--out", str(tmp_path / "out"), "--address",
-                     f"ray://127.0.0.1:{port}"]) == 2
+    assert (
+        cli.main(
+            [
+                "sweep",
+                str(path),
+                "--out",
+                str(tmp_path / "out"),
+                "--address",
+                f"ray://127.0.0.1:{port}",
+            ]
+        )
+        == 2
+    )
     err = capsys.readouterr().err.strip()
     assert err.startswith(f"rnnpb: error: cannot reach a Ray cluster at ray://127.0.0.1:{port}")
     assert "\n" not in err and not (tmp_path / "out").exists()
 
 
 def test_a_run_that_raises_is_recorded_with_its_error(tmp_path):
-    run = RunSpec("s", "9", Setting("t", TrainConfig.fast(iterations=5)), 0,
-                  Setting("o", OnlineConfig()), 100, ("synchronization",), 0, 2, 100, 10, (1.0,))
+    run = RunSpec(
+        "s",
+        "9",
+        Setting("t", TrainConfig.fast(iterations=5)),
+        0,
+        Setting("o", OnlineConfig()),
+        100,
+        ("synchronization",),
+        0,
+        2,
+        100,
+        10,
+        (1.0,),
+    )
     record = execute_run(run, str(tmp_path))
     assert record.status == "failed" and record.measures == []
     assert "9" in record.error and record.error.split(":")[0].endswith("Error")

@@ -43,11 +43,13 @@ def _spec(folder: Path, retries: int = 2):
 
 def _dies_once(marker: str, victim: str):
     """A run function whose worker dies (as if killed) the first time it starts ``victim``."""
+
     def run(run_spec, out):
         if run_spec.run_id == victim and not os.path.exists(marker):
             Path(marker).touch()
             os._exit(1)
         return execute_run(run_spec, out)
+
     return run
 
 
@@ -69,8 +71,14 @@ def test_a_two_run_sweep_writes_its_table_report_and_progress(reference):
     assert outcome.ran == 2 and not outcome.failed
     assert [p.done for p in seen] == [1, 2] and seen[-1].left_s == 0
     assert "2/2 done, 0 running, 0 failed" in seen[-1].describe()
-    assert sorted(p.name for p in out.iterdir()) == ["figures", "models", "report.md",
-                                                   "results.json", "results.parquet", "runs"]
+    assert sorted(p.name for p in out.iterdir()) == [
+        "figures",
+        "models",
+        "report.md",
+        "results.json",
+        "results.parquet",
+        "runs",
+    ]
     assert not list(out.rglob(".*.tmp"))
     report = (out / "report.md").read_text()
     assert "steps until locked on a learned pattern" in report and "95 %" in report
@@ -98,8 +106,9 @@ def test_a_killed_worker_is_retried_and_the_results_are_exact(reference, tmp_pat
     spec, out, _, _ = reference
     folder = tmp_path / "out"
     victim = spec.runs()[0].run_id
-    outcome = run_sweep(spec, folder, log=lambda _: None,
-                        run_function=_dies_once(str(tmp_path / "died"), victim))
+    outcome = run_sweep(
+        spec, folder, log=lambda _: None, run_function=_dies_once(str(tmp_path / "died"), victim)
+    )
     assert (tmp_path / "died").exists() and not outcome.failed
     assert _comparable(folder / "results.parquet") == _comparable(out / "results.parquet")
 
@@ -110,8 +119,9 @@ def test_rerunning_after_a_lost_run_finishes_it_exactly(reference, tmp_path):
     folder = tmp_path / "out"
     shutil.copytree(out / "models", folder / "models")  # the cache serves the rerun
     victim = spec.runs()[0].run_id
-    first = run_sweep(spec, folder, log=lambda _: None,
-                      run_function=_dies_once(str(tmp_path / "died"), victim))
+    first = run_sweep(
+        spec, folder, log=lambda _: None, run_function=_dies_once(str(tmp_path / "died"), victim)
+    )
     assert [r.run_id for r in first.failed] == [victim]
     assert "Error" in first.failed[0].error
     assert "## Failed runs" in (folder / "report.md").read_text()

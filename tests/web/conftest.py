@@ -34,8 +34,13 @@ def server(model_dir, tmp_path_factory):
 
     from rnnpb.web import DashboardServer, find_models
 
-    dashboard = DashboardServer(find_models(model_dir), host="127.0.0.1", port=0, dt=TEST_DT,
-                                workdir=tmp_path_factory.mktemp("sessions"))
+    dashboard = DashboardServer(
+        find_models(model_dir),
+        host="127.0.0.1",
+        port=0,
+        dt=TEST_DT,
+        workdir=tmp_path_factory.mktemp("sessions"),
+    )
     dashboard.start()
     try:
         deadline = time.monotonic() + 90

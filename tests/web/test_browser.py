@@ -16,8 +16,16 @@ import numpy as np
 import pytest
 
 CHROMIUM = Path("/usr/bin/chromium")
-FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-         "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-quic"]
+FLAGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
+    "--disable-quic",
+]
 TRACE_DT = 0.4
 """The step while the mouse traces: one scripted sample (two drags) must fit in one step."""
 TRACE_SAMPLES = 40
@@ -28,8 +36,10 @@ RECOGNISED_WITHIN = 25
 @pytest.fixture(scope="module")
 def browser():
     if not CHROMIUM.exists():
-        pytest.fail(f"{CHROMIUM} is missing: install it (apt-get install chromium, or "
-                    "WITH_BROWSER=1 scripts/setup.sh); the dashboard tests need a browser")
+        pytest.fail(
+            f"{CHROMIUM} is missing: install it (apt-get install chromium, or "
+            "WITH_BROWSER=1 scripts/setup.sh); the dashboard tests need a browser"
+        )
     from playwright.sync_api import sync_playwright
 
     with sync_playwright() as playwright:
@@ -52,9 +62,11 @@ def page(browser, server):
     errors: list[str] = []
     page.on("pageerror", lambda error: errors.append(str(error)))
     page.goto(server.url)
-    page.wait_for_function("window.rnnpbDashboard && rnnpbDashboard.state && "
-                           "rnnpbDashboard.state.model && !rnnpbDashboard.state.loading",
-                           timeout=60000)
+    page.wait_for_function(
+        "window.rnnpbDashboard && rnnpbDashboard.state && "
+        "rnnpbDashboard.state.model && !rnnpbDashboard.state.loading",
+        timeout=60000,
+    )
     yield page
     page.close()
     assert not errors, f"the page raised: {errors}"
@@ -69,8 +81,9 @@ def test_page_loads_and_draws_the_robot_in_3d(page, tmp_path):
     assert "rnnpb" in page.title()
     page.click("#reset")
     page.click("#start")
-    page.wait_for_function("rnnpbDashboard.steps > 5 && rnnpbDashboard.rendered3d > 2",
-                           timeout=20000)
+    page.wait_for_function(
+        "rnnpbDashboard.steps > 5 && rnnpbDashboard.rendered3d > 2", timeout=20000
+    )
     page.click("#stop")
     shot = tmp_path / "view3d.png"
     page.locator("#view3d canvas").screenshot(path=str(shot))
@@ -93,8 +106,10 @@ def test_missing_camera_gives_a_message_on_the_page(page, server):
     page.fill("#camera", "15")
     page.click("#camera-open")
     # The page says "opening the camera…" first; wait for the server's answer, not that.
-    page.wait_for_function("document.querySelector('#camera-message').textContent"
-                           ".includes('still driven by')", timeout=15000)
+    page.wait_for_function(
+        "document.querySelector('#camera-message').textContent.includes('still driven by')",
+        timeout=15000,
+    )
     text = page.text_content("#camera-message")
     assert "no such camera" in text
     assert server.session.mode != "webcam"
@@ -123,7 +138,9 @@ def test_mouse_tracing_a_learned_pattern_is_recognised(page, server, model):
             # Wait for the next step, then move both markers before the step after it.
             handle = page.wait_for_function(
                 f"rnnpbDashboard.lastStep.step > {last} && "
-                "[rnnpbDashboard.lastStep.step, rnnpbDashboard.lastStep.pb]", timeout=10000)
+                "[rnnpbDashboard.lastStep.step, rnnpbDashboard.lastStep.pb]",
+                timeout=10000,
+            )
             last, pb = handle.json_value()
             pbs.append(pb)
             nearest.append(model.nearest_pattern(np.array(pb))[0])
@@ -139,26 +156,37 @@ def test_mouse_tracing_a_learned_pattern_is_recognised(page, server, model):
         # reached the server (its message can arrive a step after the drag ended in the page),
         # the steps see both markers where they were left, and go on seeing them.
         expected = json.dumps([float(v) for v in sensory[-1]])
-        seen_there = (f"rnnpbDashboard.lastStep.observed.every("
-                      f"(v, i) => Math.abs(v - {expected}[i]) < 0.01)")
+        seen_there = (
+            f"rnnpbDashboard.lastStep.observed.every((v, i) => Math.abs(v - {expected}[i]) < 0.01)"
+        )
         done = page.evaluate("rnnpbDashboard.lastStep.step")
-        there = page.wait_for_function(f"rnnpbDashboard.lastStep.step > {done} && {seen_there}"
-                                       " && rnnpbDashboard.lastStep.step", timeout=10000)
-        later = page.wait_for_function(f"rnnpbDashboard.lastStep.step > {there.json_value()} "
-                                       "&& rnnpbDashboard.lastStep.observed", timeout=10000)
-        np.testing.assert_allclose(np.array(later.json_value(), dtype=float), sensory[-1],
-                                   atol=0.01)
+        there = page.wait_for_function(
+            f"rnnpbDashboard.lastStep.step > {done} && {seen_there}"
+            " && rnnpbDashboard.lastStep.step",
+            timeout=10000,
+        )
+        later = page.wait_for_function(
+            f"rnnpbDashboard.lastStep.step > {there.json_value()} "
+            "&& rnnpbDashboard.lastStep.observed",
+            timeout=10000,
+        )
+        np.testing.assert_allclose(
+            np.array(later.json_value(), dtype=float), sensory[-1], atol=0.01
+        )
     finally:
         page.click("#stop")
     elapsed = time.monotonic() - started
     first = next((i for i, name in enumerate(nearest) if name == pattern), None)
     assert first is not None and first <= RECOGNISED_WITHIN, (
         f"pattern {pattern} not recognised within {RECOGNISED_WITHIN} samples: {nearest} "
-        f"(started nearest {start_nearest}; {elapsed:.1f} s)")
+        f"(started nearest {start_nearest}; {elapsed:.1f} s)"
+    )
     tail = nearest[-10:]
     assert tail.count(pattern) >= 6, f"the PB did not stay near pattern {pattern}: {nearest}"
-    print(f"mouse-traced pattern {pattern}: nearest learned PB from sample {first} on "
-          f"(started nearest {start_nearest}); {''.join(nearest)}")
+    print(
+        f"mouse-traced pattern {pattern}: nearest learned PB from sample {first} on "
+        f"(started nearest {start_nearest}); {''.join(nearest)}"
+    )
 
 
 # --- hostile text, the CSP and foreign pages (docs/robustness.md) ------------------------
@@ -167,9 +195,11 @@ HOSTILE_NAME = '<img src=x onerror="window.__injected = (window.__injected || 0)
 handler would run script in the dashboard's origin if the page ever parsed it as HTML."""
 FAST_DT = 0.05
 """The step while names are checked: only the page's rendering is under test."""
-WATCH_CSP = ("window.__cspViolations = [];"
-             "document.addEventListener('securitypolicyviolation', (e) =>"
-             " window.__cspViolations.push(`${e.violatedDirective} ${e.blockedURI}`));")
+WATCH_CSP = (
+    "window.__cspViolations = [];"
+    "document.addEventListener('securitypolicyviolation', (e) =>"
+    " window.__cspViolations.push(`${e.violatedDirective} ${e.blockedURI}`));"
+)
 
 
 def _rewrite_names(route) -> None:
@@ -215,8 +245,12 @@ def _strict_page(browser, server, route_ws=None):
         page.route_web_socket("**/ws", route_ws)
     try:
         page.goto(server.url)
-        _until(page, "window.rnnpbDashboard && rnnpbDashboard.state && "
-                     "rnnpbDashboard.state.model && !rnnpbDashboard.state.loading", 60000)
+        _until(
+            page,
+            "window.rnnpbDashboard && rnnpbDashboard.state && "
+            "rnnpbDashboard.state.model && !rnnpbDashboard.state.loading",
+            60000,
+        )
         yield page
     finally:
         page.close()
@@ -249,14 +283,24 @@ def _send(page, message: str, condition: str) -> None:
 def test_names_from_a_model_file_show_as_text_and_run_no_script(browser, server):
     with _strict_page(browser, server, _rewrite_names) as page:
         _send(page, f'{{type: "dt", dt: {FAST_DT}}}', f"rnnpbDashboard.state.dt === {FAST_DT}")
-        _send(page, '{type: "mode", mode: "demonstrator"}',
-              "rnnpbDashboard.state.mode === 'demonstrator'")
-        _send(page, '{type: "pattern", pattern: "1"}',
-              "rnnpbDashboard.state.demonstrator_pattern === '1'")
+        _send(
+            page,
+            '{type: "mode", mode: "demonstrator"}',
+            "rnnpbDashboard.state.mode === 'demonstrator'",
+        )
+        _send(
+            page,
+            '{type: "pattern", pattern: "1"}',
+            "rnnpbDashboard.state.demonstrator_pattern === '1'",
+        )
         page.click("#reset")
         page.click("#start")
-        _until(page, "rnnpbDashboard.steps > 3 && rnnpbDashboard.lastStep.nearest === "
-                     f"{json.dumps(HOSTILE_NAME)}", 30000)
+        _until(
+            page,
+            "rnnpbDashboard.steps > 3 && rnnpbDashboard.lastStep.nearest === "
+            f"{json.dumps(HOSTILE_NAME)}",
+            30000,
+        )
         page.click("#stop")
         _send(page, '{type: "model", name: "nope.npz"}', "rnnpbDashboard.errors.length > 0")
         page.wait_for_timeout(500)  # time for an image error handler to have run
@@ -381,6 +425,7 @@ def _shot(page, name: str, selector: str | None = None) -> Path:
 def _restyle(transform):
     """A WebSocket route passing messages through, each state message changed by
     ``transform(state)`` on its way to the page."""
+
     def route(ws_route) -> None:
         server = ws_route.connect_to_server()
 
@@ -389,7 +434,9 @@ def _restyle(transform):
             if message["type"] == "state":
                 transform(message)
             ws_route.send(json.dumps(message))
+
         server.on_message(forward)
+
     return route
 
 
@@ -410,14 +457,15 @@ def test_a_model_that_cannot_be_used_is_explained_and_start_is_off(browser, serv
 def test_user_named_patterns_offer_only_what_the_demonstrator_performs(browser, server):
     def user_names(state):
         pbs = list(state["pattern_pb"].values())
-        state["patterns"] = ["wave", "clap", "2"][:len(pbs)]
+        state["patterns"] = ["wave", "clap", "2"][: len(pbs)]
         state["pattern_pb"] = dict(zip(state["patterns"], pbs, strict=False))
 
     with _strict_page(browser, server, _restyle(user_names)) as page:
         _until(page, "document.querySelectorAll('#patterns button').length === 5")
         buttons = page.locator("#patterns button").all_text_contents()
-        offered = page.eval_on_selector_all("#patterns button",
-                                            "(all) => all.map((b) => b.dataset.pattern)")
+        offered = page.eval_on_selector_all(
+            "#patterns button", "(all) => all.map((b) => b.dataset.pattern)"
+        )
         assert offered == ["1", "2", "3", "4", "pause"]
         assert "not learned" in buttons[0] and "not learned" not in buttons[1]
         assert not any("wave" in b or "clap" in b for b in buttons)
@@ -425,8 +473,7 @@ def test_user_named_patterns_offer_only_what_the_demonstrator_performs(browser, 
         assert "wave" in note and "clap" in note and "mouse" in note
 
 
-def test_a_reload_keeps_the_plots_and_reset_and_stop_say_what_the_values_are(page, browser,
-                                                                           server):
+def test_a_reload_keeps_the_plots_and_reset_and_stop_say_what_the_values_are(page, browser, server):
     _set(page, f'{{type: "dt", dt: {FAST_DT}}}', f"rnnpbDashboard.state.dt === {FAST_DT}")
     page.click("#reset")
     page.click("#start")
@@ -443,14 +490,16 @@ def test_a_reload_keeps_the_plots_and_reset_and_stop_say_what_the_values_are(pag
     page.wait_for_function("!rnnpbDashboard.state.running")
     assert "stopped" in page.text_content("#readouts-note")
     page.click("#reset")
-    page.wait_for_function("rnnpbDashboard.state.steps === 0 && rnnpbDashboard.history"
-                           ".length === 0")
+    page.wait_for_function(
+        "rnnpbDashboard.state.steps === 0 && rnnpbDashboard.history.length === 0"
+    )
     assert page.text_content("#nearest") == "—" and page.text_content("#step") == "0"
     assert page.text_content("#readouts-note") == ""
 
 
 def test_controls_are_off_while_disconnected_and_a_command_then_is_not_lost_silently(
-        browser, server):
+    browser, server
+):
     routes = []
 
     def keep(ws_route) -> None:
@@ -458,44 +507,61 @@ def test_controls_are_off_while_disconnected_and_a_command_then_is_not_lost_sile
         ws_route.connect_to_server()
 
     with _strict_page(browser, server, keep) as page:
-        assert page.locator("#start").is_enabled() or page.evaluate(
-            "rnnpbDashboard.state.running")
+        assert page.locator("#start").is_enabled() or page.evaluate("rnnpbDashboard.state.running")
         routes[-1].close()
         _until(page, "!rnnpbDashboard.connected")
-        for control in ("#start", "#stop", "#reset", "#model", "#dt", "#camera-open",
-                        ".tab[data-mode=pointer]", "#patterns button >> nth=0"):
+        for control in (
+            "#start",
+            "#stop",
+            "#reset",
+            "#model",
+            "#dt",
+            "#camera-open",
+            ".tab[data-mode=pointer]",
+            "#patterns button >> nth=0",
+        ):
             assert page.locator(control).is_disabled(), control
         assert "disconnected" in page.text_content("#status")
         assert page.evaluate("rnnpbDashboard.send({type: 'control', action: 'start'})") is False
         assert "not connected" in page.text_content("#error")
-        _until(page, "rnnpbDashboard.connected && !document.querySelector('#reset').disabled",
-               15000)
+        _until(
+            page, "rnnpbDashboard.connected && !document.querySelector('#reset').disabled", 15000
+        )
 
 
 def test_the_plots_mark_switches_and_pauses_and_the_views_read_well(page, server):
     _set(page, f'{{type: "dt", dt: {FAST_DT}}}', f"rnnpbDashboard.state.dt === {FAST_DT}")
-    _set(page, '{type: "mode", mode: "demonstrator"}',
-         "rnnpbDashboard.state.mode === 'demonstrator'")
-    _set(page, '{type: "pattern", pattern: "1"}',
-         "rnnpbDashboard.state.demonstrator_pattern === '1'")
+    _set(
+        page, '{type: "mode", mode: "demonstrator"}', "rnnpbDashboard.state.mode === 'demonstrator'"
+    )
+    _set(
+        page, '{type: "pattern", pattern: "1"}', "rnnpbDashboard.state.demonstrator_pattern === '1'"
+    )
     page.click("#reset")
     page.click("#start")
     page.wait_for_function("rnnpbDashboard.history.length >= 30", timeout=20000)
     page.click("#patterns button[data-pattern='2']")
-    page.wait_for_function("rnnpbDashboard.history.filter((s) => s.truth === '2').length > 25",
-                           timeout=20000)
+    page.wait_for_function(
+        "rnnpbDashboard.history.filter((s) => s.truth === '2').length > 25", timeout=20000
+    )
     page.click("#patterns button[data-pattern='pause']")
-    page.wait_for_function("rnnpbDashboard.history.filter((s) => s.truth === 'pause')"
-                           ".length > 10", timeout=20000)
+    page.wait_for_function(
+        "rnnpbDashboard.history.filter((s) => s.truth === 'pause').length > 10", timeout=20000
+    )
     page.click("#patterns button[data-pattern='2']")
-    page.wait_for_function("rnnpbDashboard.history.slice(-10).every((s) => s.truth === '2')",
-                           timeout=20000)
+    page.wait_for_function(
+        "rnnpbDashboard.history.slice(-10).every((s) => s.truth === '2')", timeout=20000
+    )
     page.click("#stop")
     marks = page.evaluate("rnnpbDashboard.plotMarks")
     assert marks["switches"] >= 1 and marks["pauses"] >= 1, marks
     page.wait_for_timeout(600)  # the 3-D view eases to the last pose
-    for name, selector in (("page", None), ("view3d", "#view3d canvas"),
-                           ("plots", ".panel.plots"), ("pb", "#plot-pb")):
+    for name, selector in (
+        ("page", None),
+        ("view3d", "#view3d canvas"),
+        ("plots", ".panel.plots"),
+        ("pb", "#plot-pb"),
+    ):
         assert _shot(page, name, selector).stat().st_size > 1000
 
 
@@ -508,12 +574,11 @@ def test_learned_points_that_coincide_are_drawn_apart(browser, server):
         _until(page, "rnnpbDashboard.pbMarkers && rnnpbDashboard.pbMarkers.length === 3")
         markers = page.evaluate("rnnpbDashboard.pbMarkers")
         for i, a in enumerate(markers):
-            for b in markers[i + 1:]:
+            for b in markers[i + 1 :]:
                 assert np.hypot(a["x"] - b["x"], a["y"] - b["y"]) >= 16, markers
 
 
-def test_switching_models_shows_the_one_loading_and_the_robot_goes_on(browser, model_dir,
-                                                                     tmp_path):
+def test_switching_models_shows_the_one_loading_and_the_robot_goes_on(browser, model_dir, tmp_path):
     import shutil
 
     from rnnpb.web import DashboardServer, find_models
@@ -522,9 +587,12 @@ def test_switching_models_shows_the_one_loading_and_the_robot_goes_on(browser, m
     folder.mkdir()
     for name in ("a.npz", "b.npz"):
         shutil.copy(model_dir / "set1.npz", folder / name)
-    with DashboardServer(find_models(folder), port=0, dt=FAST_DT,
-                         workdir=tmp_path / "sessions") as dashboard, \
-            _strict_page(browser, dashboard) as page:
+    with (
+        DashboardServer(
+            find_models(folder), port=0, dt=FAST_DT, workdir=tmp_path / "sessions"
+        ) as dashboard,
+        _strict_page(browser, dashboard) as page,
+    ):
         page.click("#start")
         _until(page, "rnnpbDashboard.steps > 3")
         page.select_option("#model", "b.npz")
@@ -534,8 +602,12 @@ def test_switching_models_shows_the_one_loading_and_the_robot_goes_on(browser, m
         if page.evaluate("rnnpbDashboard.state.loading"):
             assert "b.npz" in page.text_content("#status")
         # ... and the robot runs on with the new model.
-        _until(page, "rnnpbDashboard.state.model === 'b.npz' && rnnpbDashboard.state.running"
-                     " && rnnpbDashboard.lastStep !== null", 60000)
+        _until(
+            page,
+            "rnnpbDashboard.state.model === 'b.npz' && rnnpbDashboard.state.running"
+            " && rnnpbDashboard.lastStep !== null",
+            60000,
+        )
         assert page.input_value("#model") == "b.npz"
         assert "model b.npz" in page.text_content("#status")
         page.click("#stop")

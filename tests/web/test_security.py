@@ -36,8 +36,7 @@ from rnnpb.web import (
     parse_client_message,
 )
 
-UNLIMITED = CommandLimits(commands_per_s=1e9, command_burst=1e9, hands_per_s=1e9,
-                          hands_burst=1e9)
+UNLIMITED = CommandLimits(commands_per_s=1e9, command_burst=1e9, hands_per_s=1e9, hands_burst=1e9)
 """Rate limits no test sends enough to reach (they are tested in test_session_robustness)."""
 HUGE = 10**309
 """An integer beyond the largest float (about 1.8e308)."""
@@ -47,8 +46,9 @@ HUGE = 10**309
 def idle_session(model_dir, tmp_path_factory):
     """A session that is never started: commands queue up and are never applied, so any
     stream of messages can be sent to its app without moving the shared robot."""
-    session = Session(find_models(model_dir), workdir=tmp_path_factory.mktemp("idle"),
-                      max_queued_commands=100_000)
+    session = Session(
+        find_models(model_dir), workdir=tmp_path_factory.mktemp("idle"), max_queued_commands=100_000
+    )
     yield session
     session.close()
 
@@ -62,9 +62,17 @@ def _serving(app):
 
     from rnnpb.web._server import WS_MAX_SIZE
 
-    server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=0, log_level="warning",
-                                           ws="websockets-sansio", ws_max_size=WS_MAX_SIZE,
-                                           lifespan="off"))
+    server = uvicorn.Server(
+        uvicorn.Config(
+            app,
+            host="127.0.0.1",
+            port=0,
+            log_level="warning",
+            ws="websockets-sansio",
+            ws_max_size=WS_MAX_SIZE,
+            lifespan="off",
+        )
+    )
     thread = threading.Thread(target=server.run, daemon=True)
     thread.start()
     deadline = time.monotonic() + 10
@@ -122,8 +130,17 @@ def _next(ws, kind: str, timeout: float = 10.0) -> dict:
 
 
 # --- Host: DNS rebinding -------------------------------------------------------------------
-@pytest.mark.parametrize("host", ["evil.example", "evil.example:{port}", "127.0.0.1.evil.example",
-                                  "localhost.:{port}", "0.0.0.0:{port}", "[::2]:{port}"])
+@pytest.mark.parametrize(
+    "host",
+    [
+        "evil.example",
+        "evil.example:{port}",
+        "127.0.0.1.evil.example",
+        "localhost.:{port}",
+        "0.0.0.0:{port}",
+        "[::2]:{port}",
+    ],
+)
 def test_a_request_under_a_foreign_host_name_gets_no_data(server, host):
     # Before the check the recording (there is one as soon as a model is loaded) downloaded
     # under any name, so a page on a name rebound to 127.0.0.1 could read it.
@@ -134,8 +151,10 @@ def test_a_request_under_a_foreign_host_name_gets_no_data(server, host):
         assert b"lhy" not in body and b"pattern_pb" not in body
 
 
-@pytest.mark.parametrize("host", ["127.0.0.1:{port}", "localhost:{port}", "[::1]:{port}",
-                                  "LOCALHOST:{port}", "127.0.0.1"])
+@pytest.mark.parametrize(
+    "host",
+    ["127.0.0.1:{port}", "localhost:{port}", "[::1]:{port}", "LOCALHOST:{port}", "127.0.0.1"],
+)
 def test_the_loopback_names_are_answered(server, host):
     status, body = _get(server, "/api/state", host=host.format(port=server.port))
     assert status == 200 and json.loads(body)["model"] == "set1.npz"
@@ -143,15 +162,26 @@ def test_the_loopback_names_are_answered(server, host):
 
 def test_a_websocket_under_a_foreign_host_name_is_refused(server):
     assert _refused(server.port, f"evil.example:{server.port}") == 400
-    assert _refused(server.port, f"evil.example:{server.port}",
-                    f"http://evil.example:{server.port}") == 400
+    assert (
+        _refused(server.port, f"evil.example:{server.port}", f"http://evil.example:{server.port}")
+        == 400
+    )
 
 
 # --- Origin: other web pages --------------------------------------------------------------
-FOREIGN_ORIGINS = ["http://evil.example", "null", "file://", "http://evil.example:{port}",
-                   "http://127.0.0.1:1", "https://127.0.0.1:{port}", "http://localhost",
-                   "http://127.0.0.1:{port}.evil.example", "chrome-extension://abc",
-                   "http://user@127.0.0.1:{port}", "not an origin"]
+FOREIGN_ORIGINS = [
+    "http://evil.example",
+    "null",
+    "file://",
+    "http://evil.example:{port}",
+    "http://127.0.0.1:1",
+    "https://127.0.0.1:{port}",
+    "http://localhost",
+    "http://127.0.0.1:{port}.evil.example",
+    "chrome-extension://abc",
+    "http://user@127.0.0.1:{port}",
+    "not an origin",
+]
 
 
 @pytest.mark.parametrize("origin", FOREIGN_ORIGINS)
@@ -160,8 +190,9 @@ def test_a_websocket_handshake_from_a_foreign_origin_is_refused(server, caplog, 
     dt_before = server.session.dt
     with caplog.at_level(logging.WARNING, logger="rnnpb.web"):
         with pytest.raises(InvalidStatus) as refused:
-            with connect(_ws_url(server), additional_headers={"Origin": origin},
-                         open_timeout=10) as ws:
+            with connect(
+                _ws_url(server), additional_headers={"Origin": origin}, open_timeout=10
+            ) as ws:
                 # Before the check: the page could steer the robot and see the camera.
                 ws.send(json.dumps({"type": "dt", "dt": 4.5}))
                 time.sleep(0.3)
@@ -171,8 +202,16 @@ def test_a_websocket_handshake_from_a_foreign_origin_is_refused(server, caplog, 
     assert server.session.dt == dt_before
 
 
-@pytest.mark.parametrize("origin", ["http://127.0.0.1:{port}", "http://localhost:{port}",
-                                    "http://[::1]:{port}", "HTTP://LocalHost:{port}", None])
+@pytest.mark.parametrize(
+    "origin",
+    [
+        "http://127.0.0.1:{port}",
+        "http://localhost:{port}",
+        "http://[::1]:{port}",
+        "HTTP://LocalHost:{port}",
+        None,
+    ],
+)
 def test_the_servers_own_page_and_scripts_without_origin_connect(server, origin):
     headers = {} if origin is None else {"Origin": origin.format(port=server.port)}
     with connect(_ws_url(server), additional_headers=headers, open_timeout=10) as ws:
@@ -185,23 +224,34 @@ def test_allowed_hosts_and_origins_open_the_dashboard_to_a_named_machine(idle_se
         # The page as another machine reaches it: http://robot.lab:8765 (a port forwarded
         # to this one, so the Host's port differs from the listening port).
         assert _request(port, "/api/state", host="robot.lab:8765")[0] == 200
-        for origin in ("http://robot.lab:8765", "https://proxy.lab", "https://proxy.lab:443",
-                       "http://127.0.0.1:8765"):
+        for origin in (
+            "http://robot.lab:8765",
+            "https://proxy.lab",
+            "https://proxy.lab:443",
+            "http://127.0.0.1:8765",
+        ):
             with _ws_as(port, "robot.lab:8765", origin) as ws:
                 assert _next(ws, "state")["type"] == "state"
-        for origin in ("http://robot.lab:9000", "http://proxy.lab", "https://robot.lab:8765",
-                       "http://evil.example:8765"):
+        for origin in (
+            "http://robot.lab:9000",
+            "http://proxy.lab",
+            "https://robot.lab:8765",
+            "http://evil.example:8765",
+        ):
             assert _refused(port, "robot.lab:8765", origin) == 403, origin
         assert _request(port, "/api/state", host="other.lab:8765")[0] == 400
 
 
-def test_the_listening_address_is_answered_unless_it_means_every_interface(model_dir,
-                                                                          tmp_path):
+def test_the_listening_address_is_answered_unless_it_means_every_interface(model_dir, tmp_path):
     models = find_models(model_dir)
     opened = DashboardServer(models, host="192.168.7.20", workdir=tmp_path / "a")
-    everywhere = DashboardServer(models, host="0.0.0.0", allow_hosts=("robot.lab",),
-                                 allow_origins=("http://robot.lab:9000",),
-                                 workdir=tmp_path / "b")
+    everywhere = DashboardServer(
+        models,
+        host="0.0.0.0",
+        allow_hosts=("robot.lab",),
+        allow_origins=("http://robot.lab:9000",),
+        workdir=tmp_path / "b",
+    )
     try:
         with _serving(opened.app) as port:
             assert _request(port, "/api/state", host="192.168.7.20:8765")[0] == 200
@@ -218,8 +268,11 @@ def test_the_listening_address_is_answered_unless_it_means_every_interface(model
 
 
 def test_access_policy_normalizes_names_and_refuses_what_is_not_a_host_or_origin():
-    policy = AccessPolicy.for_address("::", ["ROBOT.lab", "::1", "fe80::0:1", "10.0.0.2"],
-                                      ["http://Robot.Lab", "https://[::1]:8443/"])
+    policy = AccessPolicy.for_address(
+        "::",
+        ["ROBOT.lab", "::1", "fe80::0:1", "10.0.0.2"],
+        ["http://Robot.Lab", "https://[::1]:8443/"],
+    )
     assert policy.hosts == ("robot.lab", "[fe80::1]", "10.0.0.2")
     assert policy.origins == ("http://robot.lab:80", "https://[::1]:8443")
     assert policy.allowed_hosts[:3] == ("127.0.0.1", "localhost", "[::1]")
@@ -228,8 +281,14 @@ def test_access_policy_normalizes_names_and_refuses_what_is_not_a_host_or_origin
     for host in ("http://robot.lab", "robot.lab:8765", "*.lab", "robot lab", "", "a/b"):
         with pytest.raises(ConfigError, match="not a host name"):
             AccessPolicy(hosts=(host,))
-    for origin in ("robot.lab", "ftp://robot.lab", "http://robot.lab/page", "http://:80",
-                   "http://robot.lab:99999", "null"):
+    for origin in (
+        "robot.lab",
+        "ftp://robot.lab",
+        "http://robot.lab/page",
+        "http://:80",
+        "http://robot.lab:99999",
+        "null",
+    ):
         with pytest.raises(ConfigError, match="not a web origin"):
             AccessPolicy(origins=(origin,))
     with pytest.raises(ConfigError, match="not one string"):
@@ -263,8 +322,15 @@ def test_the_page_has_no_inline_script_and_its_script_no_html_sink():
     assert scripts and all(re.search(r'\bsrc="/static/', tag) for tag in scripts)
     assert not re.search(r"<[^>]*\s(on\w+|style)\s*=", html)  # handlers, inline styles
     app = (STATIC_DIR / "app.js").read_text()
-    for sink in ("innerHTML", "outerHTML", "insertAdjacentHTML", "document.write", "eval(",
-                 "new Function", "setAttribute"):
+    for sink in (
+        "innerHTML",
+        "outerHTML",
+        "insertAdjacentHTML",
+        "document.write",
+        "eval(",
+        "new Function",
+        "setAttribute",
+    ):
         assert sink not in app, sink
 
 
@@ -285,9 +351,12 @@ HUGE_MESSAGES = [
 
 @pytest.mark.parametrize(("text", "reason"), HUGE_MESSAGES, ids=[t[:40] for t, _ in HUGE_MESSAGES])
 def test_a_number_beyond_float_gets_an_error_reply_and_the_connection_stays(
-        server, caplog, text, reason):
-    with caplog.at_level(logging.WARNING, logger="rnnpb.web"), \
-            connect(_ws_url(server), open_timeout=10) as ws:
+    server, caplog, text, reason
+):
+    with (
+        caplog.at_level(logging.WARNING, logger="rnnpb.web"),
+        connect(_ws_url(server), open_timeout=10) as ws,
+    ):
         _next(ws, "state")
         ws.send(text)
         error = _next(ws, "error")
@@ -299,42 +368,57 @@ def test_a_number_beyond_float_gets_an_error_reply_and_the_connection_stays(
 
 
 NUMBERS = st.one_of(
-    st.integers(), st.integers(min_value=-10**400, max_value=10**400),
+    st.integers(),
+    st.integers(min_value=-(10**400), max_value=10**400),
     st.sampled_from([HUGE, -HUGE, 2**1024, 2**63, -1, 0, 1, 16, 17]),
-    st.floats(), st.booleans(), st.none())
+    st.floats(),
+    st.booleans(),
+    st.none(),
+)
 VALUES = st.recursive(
-    st.one_of(NUMBERS, st.text(max_size=12),
-              st.sampled_from(["1", "pause", "start", "webcam", "set1.npz", ""])),
-    lambda inner: st.lists(inner, max_size=5) | st.dictionaries(st.text(max_size=6), inner,
-                                                                 max_size=3),
-    max_leaves=8)
-KINDS = st.one_of(st.sampled_from(["hands", "mode", "camera", "pattern", "control", "dt",
-                                   "model", "ping"]), VALUES)
+    st.one_of(
+        NUMBERS,
+        st.text(max_size=12),
+        st.sampled_from(["1", "pause", "start", "webcam", "set1.npz", ""]),
+    ),
+    lambda inner: (
+        st.lists(inner, max_size=5) | st.dictionaries(st.text(max_size=6), inner, max_size=3)
+    ),
+    max_leaves=8,
+)
+KINDS = st.one_of(
+    st.sampled_from(["hands", "mode", "camera", "pattern", "control", "dt", "model", "ping"]),
+    VALUES,
+)
 FIELDS = ("hands", "mode", "index", "pattern", "action", "dt", "name", "extra")
 MESSAGES = st.one_of(
-    st.fixed_dictionaries({"type": KINDS}, optional={f: VALUES for f in FIELDS})
-    .map(json.dumps),
-    st.fixed_dictionaries({"type": st.just("hands"), "hands": st.lists(NUMBERS, min_size=4,
-                                                                       max_size=4)})
-    .map(json.dumps),
+    st.fixed_dictionaries({"type": KINDS}, optional={f: VALUES for f in FIELDS}).map(json.dumps),
+    st.fixed_dictionaries(
+        {"type": st.just("hands"), "hands": st.lists(NUMBERS, min_size=4, max_size=4)}
+    ).map(json.dumps),
     VALUES.map(json.dumps),
-    st.text(max_size=40))
+    st.text(max_size=40),
+)
 
 
-def test_any_hostile_message_is_answered_or_accepted_and_the_connection_stays(
-        idle_session, caplog):
+def test_any_hostile_message_is_answered_or_accepted_and_the_connection_stays(idle_session, caplog):
     """Hypothesis: whatever JSON a client sends, it gets exactly the answer the protocol
     promises (an error for what :func:`parse_client_message` rejects, nothing for a valid
     command, a pong for a ping), on a connection that stays open, with nothing logged above a
     warning."""
-    with caplog.at_level(logging.WARNING, logger="rnnpb.web"), \
-            _serving(create_app(idle_session, limits=UNLIMITED)) as port, \
-            connect(f"ws://127.0.0.1:{port}/ws", open_timeout=10) as ws:
+    with (
+        caplog.at_level(logging.WARNING, logger="rnnpb.web"),
+        _serving(create_app(idle_session, limits=UNLIMITED)) as port,
+        connect(f"ws://127.0.0.1:{port}/ws", open_timeout=10) as ws,
+    ):
         assert json.loads(ws.recv(timeout=10))["type"] == "state"
         assert json.loads(ws.recv(timeout=10))["type"] == "history"
 
-        @settings(max_examples=300, deadline=None,
-                  suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+        @settings(
+            max_examples=300,
+            deadline=None,
+            suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+        )
         @given(text=MESSAGES)
         def answered(text):
             try:

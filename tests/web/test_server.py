@@ -49,8 +49,12 @@ def test_page_and_vendored_assets_are_served_with_no_internet_reference(server):
     assert status == 200 and "text/html" in kind
     html = body.decode()
     assert "/static/app.js" in html
-    for path in ("/static/app.js", "/static/style.css", "/static/vendor/three.module.min.js",
-                 "/static/vendor/three-LICENSE.txt"):
+    for path in (
+        "/static/app.js",
+        "/static/style.css",
+        "/static/vendor/three.module.min.js",
+        "/static/vendor/three-LICENSE.txt",
+    ):
         assert _get(server, path)[0] == 200, path
     app = _get(server, "/static/app.js")[1].decode()
     for text in (html, app):
@@ -89,7 +93,8 @@ BAD_MESSAGES = [
 
 @pytest.mark.parametrize(("text", "reason"), BAD_MESSAGES, ids=[r for _, r in BAD_MESSAGES])
 def test_a_bad_message_is_rejected_and_logged_and_the_server_keeps_running(
-        server, caplog, text, reason):
+    server, caplog, text, reason
+):
     with caplog.at_level(logging.WARNING, logger="rnnpb.web"), _ws(server) as ws:
         _next(ws, "state")
         ws.send(text)
@@ -253,7 +258,8 @@ def test_find_models_and_the_command_line(model_dir, tmp_path, capsys):
 
 
 def test_only_models_that_load_are_offered_and_a_bad_one_is_refused_at_start(
-        model_dir, tmp_path, capsys, caplog):
+    model_dir, tmp_path, capsys, caplog
+):
     import shutil
 
     from rnnpb.cli import main
@@ -327,8 +333,9 @@ def test_a_new_client_starts_with_the_runs_recent_steps(server):
             assert state["type"] == "state" and history["type"] == "history"
             assert history["run"] == state["run"]
             steps = [m["step"] for m in history["steps"]]
-            assert 15 <= len(steps) <= RECENT_STEPS and steps == list(range(steps[0],
-                                                                            steps[-1] + 1))
+            assert 15 <= len(steps) <= RECENT_STEPS and steps == list(
+                range(steps[0], steps[-1] + 1)
+            )
             # Then the live steps follow on with no gap and no repeat.
             following = _next(late, "step")["step"]
             assert following == steps[-1] + 1

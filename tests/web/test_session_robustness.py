@@ -40,8 +40,12 @@ class _Watcher:
 
 @pytest.fixture()
 def session(model_dir, tmp_path):
-    session = Session(find_models(model_dir), dt=FAST_DT, workdir=tmp_path / "sessions",
-                      recording_limits=RecordingLimits(rows_per_file=8, keep_files=3))
+    session = Session(
+        find_models(model_dir),
+        dt=FAST_DT,
+        workdir=tmp_path / "sessions",
+        recording_limits=RecordingLimits(rows_per_file=8, keep_files=3),
+    )
     session.start()
     deadline = time.monotonic() + 90
     while session.mirror is None or session.loading:
@@ -78,8 +82,7 @@ def test_a_full_disk_turns_recording_off_and_the_robot_goes_on(session, monkeypa
     session.submit({"type": "control", "action": "stop"})
 
 
-def test_a_failing_step_stops_the_robot_visibly_and_later_commands_apply(session,
-                                                                       monkeypatch):
+def test_a_failing_step_stops_the_robot_visibly_and_later_commands_apply(session, monkeypatch):
     def broken(sensory):
         raise RuntimeError("the step went wrong")
 
@@ -171,7 +174,9 @@ def test_a_flood_of_commands_gets_error_replies_and_never_stalls_the_robot(serve
     gaps = [b - a for a, b in zip(arrivals, arrivals[1:], strict=False)]
     # Steps are 0.05 s apart; the old code stalled 13.7 s. The margin is for a loaded machine.
     assert max(gaps) < 2.0, f"the robot stalled {max(gaps):.2f} s during the flood"
-    print(f"flood of 3000 resets: {refused} refused, longest gap between steps "
-          f"{max(gaps):.3f} s, {len(files)} recordings kept")
+    print(
+        f"flood of 3000 resets: {refused} refused, longest gap between steps "
+        f"{max(gaps):.3f} s, {len(files)} recordings kept"
+    )
     assert refused >= 256  # a reply for each (the reply queue keeps the newest 256)
     assert len(files) <= keep, f"{len(files)} recordings kept (at most {keep})"

@@ -49,9 +49,12 @@ BRIDGE = 3
 MOVING_LEVEL = 0.02  # view units: below this spread over a cycle, an agent is still
 
 
-def movement_templates(patterns: tuple[str, ...] = PATTERNS, period: int = 12,
-                       config: PatternConfig | None = None,
-                       camera: RobotCamera | None = None) -> dict[str, np.ndarray]:
+def movement_templates(
+    patterns: tuple[str, ...] = PATTERNS,
+    period: int = 12,
+    config: PatternConfig | None = None,
+    camera: RobotCamera | None = None,
+) -> dict[str, np.ndarray]:
     """One cycle of each pattern as the robot's camera sees a person do it, ``period`` steps,
     each of shape (period, 4), each coordinate's mean removed."""
     config = config or PatternConfig()
@@ -59,8 +62,9 @@ def movement_templates(patterns: tuple[str, ...] = PATTERNS, period: int = 12,
     theta = 2 * np.pi * np.arange(period) / period
     out = {}
     for name in patterns:
-        views = camera.sensory_from_hands(config.body.hand_centres
-                                          + pattern_offsets(name, theta, config))
+        views = camera.sensory_from_hands(
+            config.body.hand_centres + pattern_offsets(name, theta, config)
+        )
         out[name] = views - views.mean(axis=0)
     return out
 
@@ -75,9 +79,12 @@ class MovementClass:
     misfit: np.ndarray
 
 
-def classify_movement(views: np.ndarray, templates: dict[str, np.ndarray],
-                      window: int = CLASS_WINDOW, tolerance: float = CLASS_TOLERANCE
-                      ) -> MovementClass:
+def classify_movement(
+    views: np.ndarray,
+    templates: dict[str, np.ndarray],
+    window: int = CLASS_WINDOW,
+    tolerance: float = CLASS_TOLERANCE,
+) -> MovementClass:
     """The movement class of each step (see the module's definitions).
 
     Parameters
@@ -94,7 +101,7 @@ def classify_movement(views: np.ndarray, templates: dict[str, np.ndarray],
     misfit = np.full(n, np.inf)
     names = list(templates)
     for t in range(window - 1, n):
-        segment = views[t - window + 1:t + 1]
+        segment = views[t - window + 1 : t + 1]
         if not np.isfinite(segment).all():
             continue
         segment = segment - segment.mean(axis=0)
@@ -102,7 +109,7 @@ def classify_movement(views: np.ndarray, templates: dict[str, np.ndarray],
         for name in names:
             cycle = templates[name]
             k = len(cycle)
-            scale = float(np.sqrt(np.mean(cycle ** 2)))
+            scale = float(np.sqrt(np.mean(cycle**2)))
             # The template's step j aligned with the segment's last step, every j.
             index = (np.arange(k)[:, None] + np.arange(-window + 1, 1)[None, :]) % k
             fits = np.sqrt(np.mean((cycle[index] - segment[None]) ** 2, axis=(1, 2))) / scale
@@ -115,8 +122,9 @@ def classify_movement(views: np.ndarray, templates: dict[str, np.ndarray],
     return MovementClass(pattern=pattern, phase=phase, misfit=misfit)
 
 
-def synchrony_error(a: np.ndarray, b: np.ndarray, window: int = CLASS_WINDOW,
-                    max_lag: int = MAX_LAG) -> np.ndarray:
+def synchrony_error(
+    a: np.ndarray, b: np.ndarray, window: int = CLASS_WINDOW, max_lag: int = MAX_LAG
+) -> np.ndarray:
     """Per step, the RMS difference of the two agents' last ``window`` steps, minimised over
     lags ``-max_lag … max_lag``; NaN before enough steps or where a value is NaN. (n,)"""
     a = np.asarray(a, dtype=np.float64)
@@ -136,8 +144,13 @@ def synchrony_error(a: np.ndarray, b: np.ndarray, window: int = CLASS_WINDOW,
     return out
 
 
-def coherence(class_a: np.ndarray, class_b: np.ndarray, sync_error: np.ndarray,
-              learned: tuple[str, ...], sync_tolerance: float = SYNC_TOLERANCE) -> np.ndarray:
+def coherence(
+    class_a: np.ndarray,
+    class_b: np.ndarray,
+    sync_error: np.ndarray,
+    learned: tuple[str, ...],
+    sync_tolerance: float = SYNC_TOLERANCE,
+) -> np.ndarray:
     """Per step, True where both agents move the same learned pattern in synchrony. (n,)"""
     class_a = np.asarray(class_a, dtype=object)
     class_b = np.asarray(class_b, dtype=object)
@@ -159,8 +172,12 @@ class Episode:
         return self.end - self.start
 
 
-def episodes(coherent: np.ndarray, joint_pattern: np.ndarray, min_steps: int = MIN_EPISODE,
-             bridge: int = BRIDGE) -> list[Episode]:
+def episodes(
+    coherent: np.ndarray,
+    joint_pattern: np.ndarray,
+    min_steps: int = MIN_EPISODE,
+    bridge: int = BRIDGE,
+) -> list[Episode]:
     """The joint-attention episodes of a run (see the module's definitions).
 
     ``joint_pattern`` (n,) names the pattern at each coherent step (e.g. agent A's class); an
@@ -178,8 +195,11 @@ def episodes(coherent: np.ndarray, joint_pattern: np.ndarray, min_steps: int = M
         while t < n and coherent[t]:
             t += 1
         # A short gap on the same pattern continues the run.
-        if runs and start - runs[-1][1] < bridge and \
-                joint_pattern[start] == joint_pattern[runs[-1][1] - 1]:
+        if (
+            runs
+            and start - runs[-1][1] < bridge
+            and joint_pattern[start] == joint_pattern[runs[-1][1] - 1]
+        ):
             runs[-1][1] = t
         else:
             runs.append([start, t])
@@ -187,9 +207,10 @@ def episodes(coherent: np.ndarray, joint_pattern: np.ndarray, min_steps: int = M
     for start, end in runs:
         if end - start < min_steps:
             continue
-        names, counts = np.unique([p for p, c in zip(joint_pattern[start:end],
-                                                     coherent[start:end], strict=False) if c],
-                                  return_counts=True)
+        names, counts = np.unique(
+            [p for p, c in zip(joint_pattern[start:end], coherent[start:end], strict=False) if c],
+            return_counts=True,
+        )
         out.append(Episode(start, end, str(names[int(np.argmax(counts))])))
     return out
 
@@ -207,10 +228,12 @@ class Shift:
     lead: int
 
 
-def shift_leader(class_a: np.ndarray, class_b: np.ndarray, start: int, pattern: str,
-                 since: int) -> tuple[str, int]:
+def shift_leader(
+    class_a: np.ndarray, class_b: np.ndarray, start: int, pattern: str, since: int
+) -> tuple[str, int]:
     """Which agent's movement class became ``pattern`` first within ``since … start``
     (the last change to it before the new episode's start), and by how many steps."""
+
     def onset(classes: np.ndarray) -> int | None:
         classes = np.asarray(classes, dtype=object)
         t = min(start, len(classes) - 1)
@@ -226,15 +249,15 @@ def shift_leader(class_a: np.ndarray, class_b: np.ndarray, start: int, pattern: 
     return ("a", on_b - on_a) if on_a < on_b else ("b", on_a - on_b)
 
 
-def pattern_shifts(found: list[Episode], class_a: np.ndarray, class_b: np.ndarray
-                   ) -> list[Shift]:
+def pattern_shifts(found: list[Episode], class_a: np.ndarray, class_b: np.ndarray) -> list[Shift]:
     """The pattern shifts between consecutive episodes, each with its leader."""
     out = []
     for previous, current in zip(found, found[1:], strict=False):
         if previous.pattern == current.pattern:
             continue
-        leader, lead = shift_leader(class_a, class_b, current.start, current.pattern,
-                                    previous.end - 1)
+        leader, lead = shift_leader(
+            class_a, class_b, current.start, current.pattern, previous.end - 1
+        )
         out.append(Shift(current.start, previous.pattern, current.pattern, leader, lead))
     return out
 
@@ -250,12 +273,12 @@ def leader_index(shifts: list[Shift]) -> float:
     """(shifts led by A − shifts led by B) / shifts; NaN without shifts."""
     if not shifts:
         return float("nan")
-    return (sum(s.leader == "a" for s in shifts) - sum(s.leader == "b" for s in shifts)) \
-        / len(shifts)
+    return (sum(s.leader == "a" for s in shifts) - sum(s.leader == "b" for s in shifts)) / len(
+        shifts
+    )
 
 
-def transfer_entropy(source: np.ndarray, target: np.ndarray, bins: int = 3, lag: int = 1
-                     ) -> float:
+def transfer_entropy(source: np.ndarray, target: np.ndarray, bins: int = 3, lag: int = 1) -> float:
     """TE(source → target) in bits: how much the source's value ``lag`` steps back tells about
     the target's next value beyond the target's own last value. Each series is binned into
     ``bins`` equally filled bins (a few bins: the runs are short). (n,) each."""
@@ -271,7 +294,7 @@ def transfer_entropy(source: np.ndarray, target: np.ndarray, bins: int = 3, lag:
         return np.searchsorted(edges, v, side="right")
 
     xb, yb = binned(x), binned(y)
-    y_next, y_now, x_then = yb[lag:], yb[lag - 1:-1], xb[:-lag]
+    y_next, y_now, x_then = yb[lag:], yb[lag - 1 : -1], xb[:-lag]
     joint = np.zeros((bins, bins, bins))
     np.add.at(joint, (y_next, y_now, x_then), 1.0)
     joint /= joint.sum()
@@ -292,8 +315,9 @@ def pb_change(pb: np.ndarray) -> np.ndarray:
     return out
 
 
-def patterns_found(found: list[Episode], n_steps: int, learned: tuple[str, ...],
-                   min_steps: int = MIN_EPISODE) -> np.ndarray:
+def patterns_found(
+    found: list[Episode], n_steps: int, learned: tuple[str, ...], min_steps: int = MIN_EPISODE
+) -> np.ndarray:
     """How many of the learned patterns had been found by each step (n_steps,): a pattern is
     found at the step its first episode became one (``min_steps`` coherent steps)."""
     out = np.zeros(n_steps, dtype=np.int64)
@@ -301,7 +325,7 @@ def patterns_found(found: list[Episode], n_steps: int, learned: tuple[str, ...],
     for episode in sorted(found, key=lambda e: e.start):
         if episode.pattern in learned and episode.pattern not in seen:
             seen.add(episode.pattern)
-            out[min(episode.start + min_steps, n_steps) - 1:] = len(seen)
+            out[min(episode.start + min_steps, n_steps) - 1 :] = len(seen)
     return out
 
 
@@ -335,8 +359,9 @@ class DyadMeasures:
             "coherent_share": self.coherent_share,
             "first_coherent": self.first_coherent,
             "episodes": len(self.episodes),
-            "mean_episode_steps": (float(np.mean([e.duration for e in self.episodes]))
-                                   if self.episodes else 0.0),
+            "mean_episode_steps": (
+                float(np.mean([e.duration for e in self.episodes])) if self.episodes else 0.0
+            ),
             "pattern_shifts": len(self.shifts),
             "shifts_per_minute": len(self.shifts) / minutes if minutes > 0 else 0.0,
             "phase_shifts": self.phase_shifts,
@@ -349,15 +374,19 @@ class DyadMeasures:
         }
 
 
-def moving(views: np.ndarray, window: int = CLASS_WINDOW, level: float = MOVING_LEVEL
-           ) -> np.ndarray:
+def moving(
+    views: np.ndarray, window: int = CLASS_WINDOW, level: float = MOVING_LEVEL
+) -> np.ndarray:
     """Per step, True where some coordinate's standard deviation over the last ``window``
     steps exceeds ``level`` (view units). (n,)"""
     views = np.asarray(views, dtype=np.float64)
     out = np.zeros(len(views), dtype=bool)
     for t in range(window - 1, len(views)):
-        spread = np.nanstd(views[t - window + 1:t + 1], axis=0) if \
-            np.isfinite(views[t - window + 1:t + 1]).any() else np.zeros(1)
+        spread = (
+            np.nanstd(views[t - window + 1 : t + 1], axis=0)
+            if np.isfinite(views[t - window + 1 : t + 1]).any()
+            else np.zeros(1)
+        )
         out[t] = bool(np.nanmax(spread) > level)
     return out
 
@@ -369,11 +398,17 @@ def recognised_classes(recognised: np.ndarray, views: np.ndarray) -> np.ndarray:
     return np.where(moving(views), recognised, "").astype(object)
 
 
-def measure_dyad(view_a: np.ndarray, view_b: np.ndarray, learned: tuple[str, ...],
-                 pb_a: np.ndarray | None = None, pb_b: np.ndarray | None = None,
-                 templates: dict[str, np.ndarray] | None = None,
-                 min_episode: int = MIN_EPISODE, recognised_a: np.ndarray | None = None,
-                 recognised_b: np.ndarray | None = None) -> DyadMeasures:
+def measure_dyad(
+    view_a: np.ndarray,
+    view_b: np.ndarray,
+    learned: tuple[str, ...],
+    pb_a: np.ndarray | None = None,
+    pb_b: np.ndarray | None = None,
+    templates: dict[str, np.ndarray] | None = None,
+    min_episode: int = MIN_EPISODE,
+    recognised_a: np.ndarray | None = None,
+    recognised_b: np.ndarray | None = None,
+) -> DyadMeasures:
     """All measures of a run from the two agents' movements in the person's sensory space,
     (n, 4) each, and their PBs (n, P) where they have one (the transfer entropy is on their
     PB changes; without PBs, on how far their movement class's phase jumps).
@@ -383,10 +418,16 @@ def measure_dyad(view_a: np.ndarray, view_b: np.ndarray, learned: tuple[str, ...
     (:func:`recognised_classes`); else the movement class against the demonstrator's
     templates."""
     templates = templates or movement_templates()
-    ca = classify_movement(view_a, templates).pattern if recognised_a is None \
+    ca = (
+        classify_movement(view_a, templates).pattern
+        if recognised_a is None
         else recognised_classes(recognised_a, view_a)
-    cb = classify_movement(view_b, templates).pattern if recognised_b is None \
+    )
+    cb = (
+        classify_movement(view_b, templates).pattern
+        if recognised_b is None
         else recognised_classes(recognised_b, view_b)
+    )
     sync = synchrony_error(view_a, view_b)
     coherent_steps = coherence(ca, cb, sync, learned)
     found = episodes(coherent_steps, ca, min_steps=min_episode)
@@ -395,14 +436,20 @@ def measure_dyad(view_a: np.ndarray, view_b: np.ndarray, learned: tuple[str, ...
     change_b = pb_change(pb_b) if pb_b is not None else _class_changes(cb)
     first = np.flatnonzero(coherent_steps)
     return DyadMeasures(
-        class_a=ca, class_b=cb, sync_error=sync, coherent=coherent_steps,
-        episodes=found, shifts=shifts, phase_shifts=phase_shifts(coherent_steps, found),
+        class_a=ca,
+        class_b=cb,
+        sync_error=sync,
+        coherent=coherent_steps,
+        episodes=found,
+        shifts=shifts,
+        phase_shifts=phase_shifts(coherent_steps, found),
         found=patterns_found(found, len(coherent_steps), learned, min_episode),
         coherent_share=float(coherent_steps.mean()) if len(coherent_steps) else 0.0,
         first_coherent=int(first[0]) if first.size else None,
         leader_index=leader_index(shifts),
         te_a_to_b=transfer_entropy(change_a, change_b),
-        te_b_to_a=transfer_entropy(change_b, change_a))
+        te_b_to_a=transfer_entropy(change_b, change_a),
+    )
 
 
 def _class_changes(classes: np.ndarray) -> np.ndarray:

@@ -53,8 +53,9 @@ class ClosedLoopRun(Protocol):
     context: np.ndarray  # (T, C)
 
 
-def save(fig: Figure, path: str | os.PathLike[str], dpi: int = 110,
-         bbox_inches: str | None = "tight") -> None:
+def save(
+    fig: Figure, path: str | os.PathLike[str], dpi: int = 110, bbox_inches: str | None = "tight"
+) -> None:
     """Write ``fig`` as a PNG, atomically."""
     with atomic_write(path, "wb") as handle:
         fig.savefig(handle, format="png", dpi=dpi, bbox_inches=bbox_inches)
@@ -62,8 +63,7 @@ def save(fig: Figure, path: str | os.PathLike[str], dpi: int = 110,
 
 def _shade(ax, spans, color="#eeeeee", label=None):
     for i, (start, end) in enumerate(spans):
-        ax.axvspan(start - 0.5, end - 0.5, color=color, zorder=0,
-                   label=label if i == 0 else None)
+        ax.axvspan(start - 0.5, end - 0.5, color=color, zorder=0, label=label if i == 0 else None)
 
 
 def _segments(labels: SequenceABC[str]) -> list[tuple[int, int, str]]:
@@ -130,11 +130,15 @@ def _caption(fig: Figure, text: str) -> None:
     fig.text(0.01, 0.03, text, ha="left", va="top", fontsize=8, wrap=True, color="#333333")
 
 
-def plot_session(session: dict[str, np.ndarray], path: str | os.PathLike[str], title: str = "",
-                 joint_limits: np.ndarray | None = None,
-                 marks: SequenceABC[tuple[int, str]] = (),
-                 pattern_pb: dict[str, np.ndarray] | None = None,
-                 caption: str | None = None) -> None:
+def plot_session(
+    session: dict[str, np.ndarray],
+    path: str | os.PathLike[str],
+    title: str = "",
+    joint_limits: np.ndarray | None = None,
+    marks: SequenceABC[tuple[int, str]] = (),
+    pattern_pb: dict[str, np.ndarray] | None = None,
+    caption: str | None = None,
+) -> None:
     """The paper's Figure 5/6 layout: target hands, predicted hands, robot joints, PB.
 
     Jumps of the PB (more than :data:`PB_JUMP` in one step: the regression's restarts) are
@@ -154,9 +158,15 @@ def plot_session(session: dict[str, np.ndarray], path: str | os.PathLike[str], t
                 if label == "pause":
                     _shade(ax, [(start, end)], "#fde2c8")
         for start, end, label in _segments(labels):
-            axes[0].text((start + end) / 2, 1.02, "pause" if label == "pause" else
-                         f"pattern {label}", ha="center", va="bottom", fontsize=8,
-                         transform=axes[0].get_xaxis_transform())
+            axes[0].text(
+                (start + end) / 2,
+                1.02,
+                "pause" if label == "pause" else f"pattern {label}",
+                ha="center",
+                va="bottom",
+                fontsize=8,
+                transform=axes[0].get_xaxis_transform(),
+            )
     for name, color in zip(SENSORY_NAMES, SENSORY_COLORS, strict=True):
         axes[0].plot(steps, session[name], color=color, label=name.upper())
         axes[1].plot(steps, session[PREDICTED_PREFIX + name], color=color, label=name.upper())
@@ -173,20 +183,24 @@ def plot_session(session: dict[str, np.ndarray], path: str | os.PathLike[str], t
             lo, hi = joint_limits[j]
             values = (values - lo) / (hi - lo)
         axes[2].plot(steps, values, color=cmap(k), label=name.upper())
-    axes[2].set_ylabel("robot joints\n(normalized)" if joint_limits is not None
-                       else "robot joints (rad)")
+    axes[2].set_ylabel(
+        "robot joints\n(normalized)" if joint_limits is not None else "robot joints (rad)"
+    )
     axes[2].legend(loc="upper right", ncol=6, fontsize=7, framealpha=0.8)
     for k in range(pb.shape[1]):
         axes[3].plot(steps, pb[:, k], color=PB_COLORS[k % len(PB_COLORS)], label=f"PB{k}")
     jumps = pb_jumps(pb)
     if len(jumps):
-        axes[3].plot(steps[jumps], np.full(len(jumps), 1.01), label="PB jump", clip_on=False,
-                     **JUMP_MARK)
+        axes[3].plot(
+            steps[jumps], np.full(len(jumps), 1.01), label="PB jump", clip_on=False, **JUMP_MARK
+        )
     axes[3].set_ylim(-0.05, 1.05)
     axes[3].set_ylabel("parametric bias")
-    sentences = ["Top to bottom: the user's hands as the robot sees them, the network's "
-                 "prediction of them made one step before, the robot's joints, and the "
-                 "parametric bias (PB)."]
+    sentences = [
+        "Top to bottom: the user's hands as the robot sees them, the network's "
+        "prediction of them made one step before, the robot's joints, and the "
+        "parametric bias (PB)."
+    ]
     if labels and any(label == "pause" for label in labels):
         sentences.append("Shaded: the user pauses (holds still).")
     if marks:
@@ -197,7 +211,8 @@ def plot_session(session: dict[str, np.ndarray], path: str | os.PathLike[str], t
             f"(steps {_spans_text([(int(steps[j]), int(steps[j]) + 1) for j in jumps], 6)}):"
             " the on-line regression restarting from a learned pattern's PB or from a state "
             "on a learned cycle, as it does to find the user's pattern and phase again "
-            "(docs/model.md).")
+            "(docs/model.md)."
+        )
     else:
         sentences.append(f"The PB never jumps by more than {PB_JUMP:g} in one step.")
     if pattern_pb and len(pb):
@@ -205,8 +220,7 @@ def plot_session(session: dict[str, np.ndarray], path: str | os.PathLike[str], t
         _nearest_strip(axes[3], steps, nearest, labels)
         if labels and any(labels):
             performed = np.array([lab not in ("", "pause") for lab in labels])
-            other = performed & np.array([n != lab for n, lab in zip(nearest, labels,
-                                                                     strict=True)])
+            other = performed & np.array([n != lab for n, lab in zip(nearest, labels, strict=True)])
             spans = _runs(other, steps)
             if spans:
                 sentences.append(
@@ -216,17 +230,21 @@ def plot_session(session: dict[str, np.ndarray], path: str | os.PathLike[str], t
                     "than the user's: there the PB lies nearer that pattern's learned value. "
                     "The PB need not sit at the learned value for the network to generate "
                     "the pattern: the predictions and joints above show whether the "
-                    "movement followed.")
+                    "movement followed."
+                )
             else:
-                sentences.append("The strip under the PB names the learned pattern whose PB "
-                                 "is nearest: always the one the user performs.")
+                sentences.append(
+                    "The strip under the PB names the learned pattern whose PB "
+                    "is nearest: always the one the user performs."
+                )
         axes[3].set_ylim(-0.3, 1.05)
     axes[3].legend(loc="upper right", ncol=5, fontsize=7, framealpha=0.8)
     for step, text in marks:
         for ax in axes:
             ax.axvline(step, color="k", lw=0.8, ls="--")
-        axes[0].text(step, 1.12, text, fontsize=8, ha="center",
-                     transform=axes[0].get_xaxis_transform())
+        axes[0].text(
+            step, 1.12, text, fontsize=8, ha="center", transform=axes[0].get_xaxis_transform()
+        )
     axes[3].set_xlabel("step (0.4 s each)")
     if title:
         fig.suptitle(title, y=1.0)
@@ -243,24 +261,52 @@ def _nearest_strip(ax, steps: np.ndarray, nearest: list[str], performed: list[st
     names = sorted(set(nearest))
     cmap = colormaps["Pastel1"]
     for start, end, name in _segments(nearest):
-        ax.broken_barh([(steps[start] - 0.5, end - start)], (-0.27, 0.15),
-                       facecolors=cmap(names.index(name) % 9), lw=0.0)
+        ax.broken_barh(
+            [(steps[start] - 0.5, end - start)],
+            (-0.27, 0.15),
+            facecolors=cmap(names.index(name) % 9),
+            lw=0.0,
+        )
         if end - start >= 6:
-            ax.text((steps[start] + steps[end - 1]) / 2, -0.195, name, ha="center",
-                    va="center", fontsize=7)
+            ax.text(
+                (steps[start] + steps[end - 1]) / 2,
+                -0.195,
+                name,
+                ha="center",
+                va="center",
+                fontsize=7,
+            )
     if performed:
-        other = np.array([p not in ("", "pause", n) for n, p in zip(nearest, performed,
-                                                                    strict=True)])
+        other = np.array(
+            [p not in ("", "pause", n) for n, p in zip(nearest, performed, strict=True)]
+        )
         for start, end in _runs(other, np.arange(len(steps))):
-            ax.broken_barh([(steps[start] - 0.5, end - start)], (-0.27, 0.15),
-                           facecolors="none", edgecolor="#c00000", hatch="////", lw=0.0)
-    ax.text(0.0, -0.195, "nearest ", ha="right", va="center", fontsize=7,
-            transform=ax.get_yaxis_transform())
+            ax.broken_barh(
+                [(steps[start] - 0.5, end - start)],
+                (-0.27, 0.15),
+                facecolors="none",
+                edgecolor="#c00000",
+                hatch="////",
+                lw=0.0,
+            )
+    ax.text(
+        0.0,
+        -0.195,
+        "nearest ",
+        ha="right",
+        va="center",
+        fontsize=7,
+        transform=ax.get_yaxis_transform(),
+    )
 
 
-def plot_switch_zoom(session: dict[str, np.ndarray], windows: SequenceABC[tuple[int, int]],
-                     path: str | os.PathLike[str], joint_limits: np.ndarray | None = None,
-                     switches: SequenceABC[int] = ()) -> None:
+def plot_switch_zoom(
+    session: dict[str, np.ndarray],
+    windows: SequenceABC[tuple[int, int]],
+    path: str | os.PathLike[str],
+    joint_limits: np.ndarray | None = None,
+    switches: SequenceABC[int] = (),
+) -> None:
     """The paper's Figure 7: enlargements of the switching periods (one column each)."""
     fig = Figure(figsize=(5 * len(windows), 8))
     axes = fig.subplots(4, len(windows), sharey="row", squeeze=False)
@@ -280,12 +326,18 @@ def plot_switch_zoom(session: dict[str, np.ndarray], windows: SequenceABC[tuple[
             ax[2].plot(steps[part], values[part], color=cmap(k), label=name.upper())
         pb = _pb_matrix(session)
         for k in range(pb.shape[1]):
-            ax[3].plot(steps[part], pb[part, k], color=PB_COLORS[k % len(PB_COLORS)],
-                       label=f"PB{k}")
+            ax[3].plot(
+                steps[part], pb[part, k], color=PB_COLORS[k % len(PB_COLORS)], label=f"PB{k}"
+            )
         jumps = [j for j in pb_jumps(pb) if part[j]]
         if jumps:
-            ax[3].plot(steps[jumps], np.full(len(jumps), 1.01), clip_on=False,
-                       label="PB jump" if col == len(windows) - 1 else None, **JUMP_MARK)
+            ax[3].plot(
+                steps[jumps],
+                np.full(len(jumps), 1.01),
+                clip_on=False,
+                label="PB jump" if col == len(windows) - 1 else None,
+                **JUMP_MARK,
+            )
         ax[3].set_ylim(-0.05, 1.05)
         for switch in switches:
             if start <= switch < end:
@@ -293,24 +345,34 @@ def plot_switch_zoom(session: dict[str, np.ndarray], windows: SequenceABC[tuple[
                     a.axvline(switch, color="k", ls="--", lw=0.8)
         ax[0].set_title(f"steps {start}–{end - 1}")
         ax[3].set_xlabel("step")
-    for row, label in enumerate(("user hands\n(seen)", "user hands\n(predicted)",
-                                 "robot joints\n(normalized)", "parametric bias")):
+    for row, label in enumerate(
+        (
+            "user hands\n(seen)",
+            "user hands\n(predicted)",
+            "robot joints\n(normalized)",
+            "parametric bias",
+        )
+    ):
         axes[row, 0].set_ylabel(label)
     axes[0, -1].legend(fontsize=7, loc="upper right", ncol=2)
     axes[2, -1].legend(fontsize=7, loc="upper right", ncol=3)
     axes[3, -1].legend(fontsize=7, loc="upper right", ncol=3)
     fig.suptitle("Switching: the dashed line is the user's switch", y=1.0)
-    _caption(fig, "Each column: from 10 steps before a switch of the user's pattern (dashed) "
-             "to 30 steps after it. Rows: the hands seen, the hands predicted one step "
-             "before, the robot's joints, the PB. ▼ marks a jump of the PB by more than "
-             f"{PB_JUMP:g} in one step: the on-line regression restarting from a learned "
-             "pattern's PB or a state on a learned cycle, which is how it catches the new "
-             "pattern within a few steps (docs/model.md).")
+    _caption(
+        fig,
+        "Each column: from 10 steps before a switch of the user's pattern (dashed) "
+        "to 30 steps after it. Rows: the hands seen, the hands predicted one step "
+        "before, the robot's joints, the PB. ▼ marks a jump of the PB by more than "
+        f"{PB_JUMP:g} in one step: the on-line regression restarting from a learned "
+        "pattern's PB or a state on a learned cycle, which is how it catches the new "
+        "pattern within a few steps (docs/model.md).",
+    )
     save(fig, path)
 
 
-def plot_novel_responses(runs: SequenceABC[NovelRun], path: str | os.PathLike[str],
-                         joint_limits: np.ndarray) -> None:
+def plot_novel_responses(
+    runs: SequenceABC[NovelRun], path: str | os.PathLike[str], joint_limits: np.ndarray
+) -> None:
     """The paper's Figure 8: robot joints (top) and PB (bottom) for novel-pattern runs."""
     fig = Figure(figsize=(5 * len(runs), 5.5))
     axes = fig.subplots(2, len(runs), squeeze=False, sharey="row")
@@ -321,14 +383,14 @@ def plot_novel_responses(runs: SequenceABC[NovelRun], path: str | os.PathLike[st
         for k, name in enumerate(PLOTTED_JOINTS):
             j = MOTOR_NAMES.index(name)
             lo, hi = joint_limits[j]
-            axes[0, col].plot((motor[show, j] - lo) / (hi - lo), color=cmap(k),
-                              label=name.upper())
+            axes[0, col].plot((motor[show, j] - lo) / (hi - lo), color=cmap(k), label=name.upper())
         for k in range(run.pb.shape[1]):
             axes[1, col].plot(run.pb[show, k], color=PB_COLORS[k], label=f"PB{k}")
-        shown = (f"x{run.amplitude:g}" if run.user_draw is None
-                 else f"by hand, draw {run.user_draw}")
-        axes[0, col].set_title(f"case {run.case}: set {run.learning_set}, novel pattern "
-                               f"{run.novel_pattern} ({shown})", fontsize=9)
+        shown = f"x{run.amplitude:g}" if run.user_draw is None else f"by hand, draw {run.user_draw}"
+        axes[0, col].set_title(
+            f"case {run.case}: set {run.learning_set}, novel pattern {run.novel_pattern} ({shown})",
+            fontsize=9,
+        )
         axes[1, col].set_xlabel("step")
         axes[1, col].set_ylim(-0.05, 1.05)
     axes[0, 0].set_ylabel("robot joints (normalized)")
@@ -345,8 +407,9 @@ def context_units(attractors: dict[str, ClosedLoopRun]) -> tuple[int, int]:
     return int(order[0]), int(order[1])
 
 
-def context_plane(attractors: dict[str, ClosedLoopRun]) -> tuple[np.ndarray, np.ndarray,
-                                                                  np.ndarray]:
+def context_plane(
+    attractors: dict[str, ClosedLoopRun],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The plane of Figure 9: the first two principal components of the context over the
     learned attractors.
 
@@ -366,16 +429,19 @@ def context_plane(attractors: dict[str, ClosedLoopRun]) -> tuple[np.ndarray, np.
     mean = stacked.mean(axis=0)
     _, singular, vt = np.linalg.svd(stacked - mean, full_matrices=False)
     components = np.zeros((2, stacked.shape[1]))
-    components[:len(vt[:2])] = vt[:2]
+    components[: len(vt[:2])] = vt[:2]
     largest = components[np.arange(2), np.argmax(np.abs(components), axis=1)]
     components *= np.where(largest < 0, -1.0, 1.0)[:, None]
     singular = np.pad(singular[:2], (0, max(0, 2 - len(singular))))
     total = float(((stacked - mean) ** 2).sum())
-    return mean, components, singular ** 2 / max(total, 1e-300)
+    return mean, components, singular**2 / max(total, 1e-300)
 
 
-def plot_attractors(rows: SequenceABC[tuple[NovelRun, dict[str, ClosedLoopRun]]],
-                    path: str | os.PathLike[str], transient: int) -> None:
+def plot_attractors(
+    rows: SequenceABC[tuple[NovelRun, dict[str, ClosedLoopRun]]],
+    path: str | os.PathLike[str],
+    transient: int,
+) -> None:
     """The paper's Figure 9: per row, the open-loop attractor while a novel pattern is
     repeated (left) and the closed-loop attractors of the learned patterns (right), in the
     plane of the context's first two principal components over that row's learned
@@ -388,8 +454,10 @@ def plot_attractors(rows: SequenceABC[tuple[NovelRun, dict[str, ClosedLoopRun]]]
         ctx = (run.context[transient:] - mean) @ plane.T
         ax = axes[r, 0]
         ax.plot(ctx[:, 0], ctx[:, 1], lw=0.6, color="#d62728")
-        ax.set_title(f"interaction: novel {run.novel_pattern}\n(set {run.learning_set}, "
-                     f"case {run.case})", fontsize=8)
+        ax.set_title(
+            f"interaction: novel {run.novel_pattern}\n(set {run.learning_set}, case {run.case})",
+            fontsize=8,
+        )
         shown = [ctx]
         for c, (name, attractor) in enumerate(attractors.items(), start=1):
             a = axes[r, c]
@@ -405,22 +473,28 @@ def plot_attractors(rows: SequenceABC[tuple[NovelRun, dict[str, ClosedLoopRun]]]
             a.set_ylim(low[1] - pad[1], high[1] + pad[1])
             a.tick_params(labelsize=6)
             a.set_xlabel(f"context PC1 ({explained[0]:.0%} of variance)", fontsize=7)
-        for a in axes[r, len(attractors) + 1:]:
+        for a in axes[r, len(attractors) + 1 :]:
             a.set_visible(False)
         axes[r, 0].set_ylabel(f"context PC2 ({explained[1]:.0%})", fontsize=8)
-    _caption(fig, "Each row, one novel pattern: left (red), the context while the user "
-             "repeats the novel pattern and the PB is regressed on-line, after the "
-             f"transient of {transient} steps; right (blue), the closed-loop attractor of "
-             "each learned pattern, the network running on its own from that pattern's PB. "
-             "Axes: the context's first two principal components over the row's learned "
-             "attractors, the same along a row, so that shapes and sizes compare. Case 1: "
-             "the robot's movement settles on a learned pattern's cycle; case 2: on a new "
-             "cycle of its own; case 3: on no cycle (the paper's section 3.3).")
+    _caption(
+        fig,
+        "Each row, one novel pattern: left (red), the context while the user "
+        "repeats the novel pattern and the PB is regressed on-line, after the "
+        f"transient of {transient} steps; right (blue), the closed-loop attractor of "
+        "each learned pattern, the network running on its own from that pattern's PB. "
+        "Axes: the context's first two principal components over the row's learned "
+        "attractors, the same along a row, so that shapes and sizes compare. Case 1: "
+        "the robot's movement settles on a learned pattern's cycle; case 2: on a new "
+        "cycle of its own; case 3: on no cycle (the paper's section 3.3).",
+    )
     save(fig, path)
 
 
-def plot_training(histories: dict[str, SequenceABC[tuple[int, float]]],
-                  path: str | os.PathLike[str], target: float = TRAIN_ERROR_TARGET) -> None:
+def plot_training(
+    histories: dict[str, SequenceABC[tuple[int, float]]],
+    path: str | os.PathLike[str],
+    target: float = TRAIN_ERROR_TARGET,
+) -> None:
     """Mean squared error during learning, one line per model."""
     fig = Figure(figsize=(7, 4))
     ax = fig.subplots()
@@ -430,9 +504,13 @@ def plot_training(histories: dict[str, SequenceABC[tuple[int, float]]],
         history = np.asarray(history, dtype=np.float64)
         history = history[history[:, 0] > 0]  # the starting error has no place on a log axis
         # One colour per learning set; the paper's algorithm dashed.
-        ax.plot(history[:, 0], history[:, 1], label=label,
-                color=cmap(groups.index(label.split(" (")[0]) % 10),
-                ls="--" if "paper" in label else "-")
+        ax.plot(
+            history[:, 0],
+            history[:, 1],
+            label=label,
+            color=cmap(groups.index(label.split(" (")[0]) % 10),
+            ls="--" if "paper" in label else "-",
+        )
     ax.axhline(target, color="k", ls="--", lw=0.8, label=f"paper's final error {target:g}")
     ax.set_xscale("log")
     ax.set_yscale("log")
@@ -442,8 +520,9 @@ def plot_training(histories: dict[str, SequenceABC[tuple[int, float]]],
     save(fig, path)
 
 
-def plot_switch_matrix(matrices: dict[str, dict[str, int | None]], path: str | os.PathLike[str],
-                       limit: int = 15) -> None:
+def plot_switch_matrix(
+    matrices: dict[str, dict[str, int | None]], path: str | os.PathLike[str], limit: int = 15
+) -> None:
     """Steps from the user's switch until the robot follows, per learning set and pair."""
     fig = Figure(figsize=(3.2 * len(matrices), 3.2))
     axes = fig.subplots(1, len(matrices), squeeze=False)
@@ -484,15 +563,15 @@ def _robot_images(sequences: SequenceABC, width: int, height: int) -> list[np.nd
             phase = np.asarray(seq.meta["phase"])
             cycle = np.flatnonzero(phase - phase[0] < 2 * np.pi)
             picks = cycle[np.linspace(0, len(cycle) - 1, 4).round().astype(int)]
-            frames = [renderer.render(seq.motor[t], "front").astype(np.float64)
-                      for t in picks[:-1]]
+            frames = [renderer.render(seq.motor[t], "front").astype(np.float64) for t in picks[:-1]]
             # The darkest value per pixel keeps each pose's arm visible: a motion trace.
             images.append(np.min(frames, axis=0).astype(np.uint8))
     return images
 
 
-def plot_patterns(sequences: SequenceABC, path: str | os.PathLike[str],
-                  render: bool = True) -> None:
+def plot_patterns(
+    sequences: SequenceABC, path: str | os.PathLike[str], render: bool = True
+) -> None:
     """The paper's Figure 4 for the demonstrations: the first sample of each pattern.
 
     Rows: (1) the user's hands in the robot camera's view plane (the path over the sample,
@@ -507,32 +586,42 @@ def plot_patterns(sequences: SequenceABC, path: str | os.PathLike[str],
     """
     from rnnpb.demonstrator import PATTERN_DESCRIPTIONS, PATTERNS
 
-    firsts = [next(s for s in sequences if s.pattern == p) for p in PATTERNS
-              if any(s.pattern == p for s in sequences)]
+    firsts = [
+        next(s for s in sequences if s.pattern == p)
+        for p in PATTERNS
+        if any(s.pattern == p for s in sequences)
+    ]
     n_rows = 4 if render else 3
     fig = Figure(figsize=(4.0 * len(firsts), 3.1 * n_rows))
-    axes = fig.subplots(n_rows, len(firsts), squeeze=False,
-                        gridspec_kw={"height_ratios": [1.25, 1, 1.15] + ([1.3] * render)})
+    axes = fig.subplots(
+        n_rows,
+        len(firsts),
+        squeeze=False,
+        gridspec_kw={"height_ratios": [1.25, 1, 1.15] + ([1.3] * render)},
+    )
     images = _robot_images(firsts, 480, 400) if render else []
     for col, seq in enumerate(firsts):
         ax = axes[0, col]
         yz = seq.sensory.reshape(-1, 2, 2)
         for hand, name in ((0, "left"), (1, "right")):
             y, z = yz[:, hand, 0], yz[:, hand, 1]
-            ax.plot(y, z, "-", color=_HAND_COLOURS[name], lw=1.0, alpha=0.8,
-                    label=f"user's {name} hand")
+            ax.plot(
+                y, z, "-", color=_HAND_COLOURS[name], lw=1.0, alpha=0.8, label=f"user's {name} hand"
+            )
             for t in range(0, min(len(y) - 1, 13), 3):
-                ax.annotate("", xy=(y[t + 1], z[t + 1]), xytext=(y[t], z[t]),
-                            arrowprops={"arrowstyle": "->", "color": _HAND_COLOURS[name],
-                                        "lw": 1.6})
+                ax.annotate(
+                    "",
+                    xy=(y[t + 1], z[t + 1]),
+                    xytext=(y[t], z[t]),
+                    arrowprops={"arrowstyle": "->", "color": _HAND_COLOURS[name], "lw": 1.6},
+                )
             ax.plot(y[0], z[0], "o", color=_HAND_COLOURS[name], ms=5)
         ax.set_xlim(0, 1)
         ax.set_ylim(0.3, 1)
         ax.set_aspect("equal")
         ax.set_xlabel("Y (robot's view, to its right)")
         ax.set_ylabel("Z (up)")
-        ax.set_title(f"pattern {seq.pattern}: {PATTERN_DESCRIPTIONS[seq.pattern]}",
-                     fontsize=11)
+        ax.set_title(f"pattern {seq.pattern}: {PATTERN_DESCRIPTIONS[seq.pattern]}", fontsize=11)
         if col == 0:
             ax.legend(loc="lower left", fontsize=8)
 
@@ -550,8 +639,13 @@ def plot_patterns(sequences: SequenceABC, path: str | os.PathLike[str],
         ax = axes[2, col]
         cmap = colormaps["tab10"]
         for j, name in enumerate(MOTOR_NAMES):
-            ax.plot(seq.motor[:, j], "-" if j < 4 else "--", color=cmap(j % 4), lw=1.2,
-                    label=name.upper())
+            ax.plot(
+                seq.motor[:, j],
+                "-" if j < 4 else "--",
+                color=cmap(j % 4),
+                lw=1.2,
+                label=name.upper(),
+            )
         ax.set_xlabel("step (0.4 s)")
         ax.set_ylabel("robot joints (rad)")
         if col == 0:
@@ -562,16 +656,22 @@ def plot_patterns(sequences: SequenceABC, path: str | os.PathLike[str],
             ax.imshow(images[col][40:, 60:-60])
             ax.set_axis_off()
             ax.set_title("robot, three phases overlaid", fontsize=9)
-    fig.suptitle("Synthetic demonstrations of the four movement patterns (cf. Ito & Tani 2004, "
-                 "Fig. 4): top, the user's hands as the robot sees them; middle, the robot's "
-                 "joint angles (solid: left arm, dashed: right)", fontsize=11)
+    fig.suptitle(
+        "Synthetic demonstrations of the four movement patterns (cf. Ito & Tani 2004, "
+        "Fig. 4): top, the user's hands as the robot sees them; middle, the robot's "
+        "joint angles (solid: left arm, dashed: right)",
+        fontsize=11,
+    )
     fig.tight_layout(rect=(0, 0, 1, 0.97))
     save(fig, path, dpi=90, bbox_inches=None)
 
 
-def plot_pb_safety_map(slices: SequenceABC[tuple[str, np.ndarray, np.ndarray]],
-                       learned: dict[str, np.ndarray], dims: tuple[int, int],
-                       path: str | os.PathLike[str]) -> None:
+def plot_pb_safety_map(
+    slices: SequenceABC[tuple[str, np.ndarray, np.ndarray]],
+    learned: dict[str, np.ndarray],
+    dims: tuple[int, int],
+    path: str | os.PathLike[str],
+) -> None:
     """The safety map of PB space (docs/safety.md): per slice, the learned risk (top) and the
     familiarity (bottom) over PB dimensions ``dims`` in [0, 1]², the other PB values fixed as
     the slice's title says; the learned PBs marked.
@@ -583,15 +683,28 @@ def plot_pb_safety_map(slices: SequenceABC[tuple[str, np.ndarray, np.ndarray]],
     fig = Figure(figsize=(3.2 * n, 6.0))
     axes = fig.subplots(2, n, squeeze=False)
     for j, (title, risk, familiar) in enumerate(slices):
-        for i, (values, label, cmap) in enumerate(((risk, "risk", "Reds"),
-                                                   (familiar, "familiarity", "Blues"))):
+        for i, (values, label, cmap) in enumerate(
+            ((risk, "risk", "Reds"), (familiar, "familiarity", "Blues"))
+        ):
             ax = axes[i, j]
-            image = ax.imshow(values, origin="lower", extent=(0, 1, 0, 1), vmin=0, vmax=1,
-                              cmap=cmap, aspect="equal")
+            image = ax.imshow(
+                values,
+                origin="lower",
+                extent=(0, 1, 0, 1),
+                vmin=0,
+                vmax=1,
+                cmap=cmap,
+                aspect="equal",
+            )
             for name, pb in learned.items():
                 ax.plot(pb[dims[0]], pb[dims[1]], "k*", ms=9)
-                ax.annotate(name, (pb[dims[0]], pb[dims[1]]), textcoords="offset points",
-                            xytext=(4, 4), fontsize=8)
+                ax.annotate(
+                    name,
+                    (pb[dims[0]], pb[dims[1]]),
+                    textcoords="offset points",
+                    xytext=(4, 4),
+                    fontsize=8,
+                )
             ax.set_xlabel(f"pb{dims[0]}")
             ax.set_ylabel(f"pb{dims[1]}")
             ax.set_title(f"{label}: {title}", fontsize=8)
@@ -603,31 +716,46 @@ def plot_pb_safety_map(slices: SequenceABC[tuple[str, np.ndarray, np.ndarray]],
 NOVELTY_STATES_SHOWN = ("familiar", "novel", "unstructured", "still", "undecided")
 
 
-def plot_confusion(matrices: dict[str, dict[str, dict[str, int]]],
-                   path: str | os.PathLike[str]) -> None:
+def plot_confusion(
+    matrices: dict[str, dict[str, dict[str, int]]], path: str | os.PathLike[str]
+) -> None:
     """The novelty states said (columns) per true kind of movement (rows), as shares of the
     row's steps, one panel per learning set (``rnnpb study novelty``)."""
     fig = Figure(figsize=(3.6 * len(matrices), 3.4))
     axes = fig.subplots(1, len(matrices), squeeze=False)
     for ax, (set_name, matrix) in zip(axes[0], matrices.items(), strict=True):
         kinds = list(matrix)
-        grid = np.array([[matrix[k].get(s, 0) for s in NOVELTY_STATES_SHOWN] for k in kinds],
-                        dtype=float)
+        grid = np.array(
+            [[matrix[k].get(s, 0) for s in NOVELTY_STATES_SHOWN] for k in kinds], dtype=float
+        )
         shares = grid / np.maximum(grid.sum(axis=1, keepdims=True), 1)
         ax.imshow(shares, cmap=colormaps["Blues"], vmin=0, vmax=1)
         for (a, b), value in np.ndenumerate(shares):
-            ax.text(b, a, f"{100 * value:.0f}", ha="center", va="center", fontsize=8,
-                    color="white" if value > 0.6 else "black")
-        ax.set_xticks(range(len(NOVELTY_STATES_SHOWN)), NOVELTY_STATES_SHOWN, rotation=45,
-                      ha="right", fontsize=8)
+            ax.text(
+                b,
+                a,
+                f"{100 * value:.0f}",
+                ha="center",
+                va="center",
+                fontsize=8,
+                color="white" if value > 0.6 else "black",
+            )
+        ax.set_xticks(
+            range(len(NOVELTY_STATES_SHOWN)),
+            NOVELTY_STATES_SHOWN,
+            rotation=45,
+            ha="right",
+            fontsize=8,
+        )
         ax.set_yticks(range(len(kinds)), kinds, fontsize=8)
         ax.set_title(f"learning set {set_name}", fontsize=9)
     fig.suptitle("Novelty state said (%) per true movement", y=1.02)
     save(fig, path)
 
 
-def plot_delays(delays: dict[str, SequenceABC[int | None]], path: str | os.PathLike[str],
-                period: int = 12) -> None:
+def plot_delays(
+    delays: dict[str, SequenceABC[int | None]], path: str | os.PathLike[str], period: int = 12
+) -> None:
     """Steps from a novel movement's start until it is called ``novel``, per learning set
     (never: drawn past the axis end)."""
     fig = Figure(figsize=(6.0, 3.2))
@@ -643,8 +771,9 @@ def plot_delays(delays: dict[str, SequenceABC[int | None]], path: str | os.PathL
     save(fig, path)
 
 
-def plot_roc(curves: dict[str, SequenceABC[tuple[float, float]]],
-             path: str | os.PathLike[str]) -> None:
+def plot_roc(
+    curves: dict[str, SequenceABC[tuple[float, float]]], path: str | os.PathLike[str]
+) -> None:
     """ROC of the novelty score (novel movements against learned ones), per learning set."""
     fig = Figure(figsize=(3.6, 3.4))
     ax = fig.subplots()
@@ -660,9 +789,14 @@ def plot_roc(curves: dict[str, SequenceABC[tuple[float, float]]],
 
 
 # --- mutual interaction (docs/dyad.md) -------------------------------------------------------
-def plot_dyad(run: dict[str, np.ndarray], coherent: np.ndarray, path: str | os.PathLike[str],
-              title: str = "", names: tuple[str, str] = ("A", "B"),
-              shifts: SequenceABC[tuple[int, str]] = ()) -> None:
+def plot_dyad(
+    run: dict[str, np.ndarray],
+    coherent: np.ndarray,
+    path: str | os.PathLike[str],
+    title: str = "",
+    names: tuple[str, str] = ("A", "B"),
+    shifts: SequenceABC[tuple[int, str]] = (),
+) -> None:
     """A two-agent run like the paper's figures: each agent's hands (``x_shown``) and PB
     (``x_pb``), coherent steps shaded, pattern shifts marked with their leader."""
     fig = Figure(figsize=(9, 7))
@@ -677,14 +811,12 @@ def plot_dyad(run: dict[str, np.ndarray], coherent: np.ndarray, path: str | os.P
     for i, (side, name) in enumerate(zip(("a", "b"), names, strict=False)):
         ax_hands, ax_pb = axes[2 * i], axes[2 * i + 1]
         for j, label in enumerate(SENSORY_NAMES):
-            ax_hands.plot(run[f"{side}_shown"][:, j], color=SENSORY_COLORS[j], lw=0.9,
-                          label=label)
+            ax_hands.plot(run[f"{side}_shown"][:, j], color=SENSORY_COLORS[j], lw=0.9, label=label)
         ax_hands.set_ylabel(f"{name}: hands")
         pb = run[f"{side}_pb"]
         if np.isfinite(pb).any():
             for j in range(pb.shape[1]):
-                ax_pb.plot(pb[:, j], color=PB_COLORS[j % len(PB_COLORS)], lw=0.9,
-                           label=f"pb{j}")
+                ax_pb.plot(pb[:, j], color=PB_COLORS[j % len(PB_COLORS)], lw=0.9, label=f"pb{j}")
             ax_pb.set_ylim(-0.05, 1.05)
         ax_pb.set_ylabel(f"{name}: PB")
         for ax in (ax_hands, ax_pb):
@@ -692,8 +824,13 @@ def plot_dyad(run: dict[str, np.ndarray], coherent: np.ndarray, path: str | os.P
             for step, leader in shifts:
                 ax.axvline(step, color="k", lw=0.7, ls="--")
                 if ax is axes[0]:
-                    ax.annotate(f"led by {leader or '?'}", (step, 1.0), fontsize=7,
-                                xycoords=("data", "axes fraction"), va="bottom")
+                    ax.annotate(
+                        f"led by {leader or '?'}",
+                        (step, 1.0),
+                        fontsize=7,
+                        xycoords=("data", "axes fraction"),
+                        va="bottom",
+                    )
     axes[0].legend(fontsize=7, ncol=5, loc="upper right")
     axes[1].legend(fontsize=7, ncol=4, loc="upper right")
     axes[-1].set_xlabel("step")
@@ -702,25 +839,38 @@ def plot_dyad(run: dict[str, np.ndarray], coherent: np.ndarray, path: str | os.P
     save(fig, path)
 
 
-def plot_phase_diagram(rates: SequenceABC[float], panels: dict[str, dict[str, np.ndarray]],
-                       path: str | os.PathLike[str]) -> None:
+def plot_phase_diagram(
+    rates: SequenceABC[float],
+    panels: dict[str, dict[str, np.ndarray]],
+    path: str | os.PathLike[str],
+) -> None:
     """Heat maps over agent A's (rows) and B's (columns) adaptation: one row of panels per
     setting (``panels[label][measure]``, each (len(rates), len(rates)))."""
     measures = ("coherent share", "shifts per 200 steps", "leader index")
-    limits = {"coherent share": (0, 1), "shifts per 200 steps": (0, None),
-              "leader index": (-1, 1)}
+    limits = {"coherent share": (0, 1), "shifts per 200 steps": (0, None), "leader index": (-1, 1)}
     fig = Figure(figsize=(11, 3.4 * len(panels)), layout="constrained")
     axes = np.atleast_2d(fig.subplots(len(panels), len(measures)))
     for row, (label, values) in zip(axes, panels.items(), strict=False):
         for ax, measure in zip(row, measures, strict=False):
             grid = np.asarray(values[measure], dtype=np.float64)
             low, high = limits[measure]
-            image = ax.imshow(grid, origin="lower", vmin=low,
-                              vmax=high if high is not None else max(1.0, np.nanmax(grid)),
-                              cmap="coolwarm" if measure == "leader index" else "viridis")
+            image = ax.imshow(
+                grid,
+                origin="lower",
+                vmin=low,
+                vmax=high if high is not None else max(1.0, np.nanmax(grid)),
+                cmap="coolwarm" if measure == "leader index" else "viridis",
+            )
             for (i, j), v in np.ndenumerate(grid):
-                ax.text(j, i, "no shift" if not np.isfinite(v) else f"{v:.2f}", ha="center",
-                        va="center", fontsize=7, color="w" if np.isfinite(v) else "k")
+                ax.text(
+                    j,
+                    i,
+                    "no shift" if not np.isfinite(v) else f"{v:.2f}",
+                    ha="center",
+                    va="center",
+                    fontsize=7,
+                    color="w" if np.isfinite(v) else "k",
+                )
             ax.set_xticks(range(len(rates)), [f"{r:g}" for r in rates])
             ax.set_yticks(range(len(rates)), [f"{r:g}" for r in rates])
             ax.set_xlabel("B's adaptation")
@@ -730,8 +880,9 @@ def plot_phase_diagram(rates: SequenceABC[float], panels: dict[str, dict[str, np
     save(fig, path)
 
 
-def plot_patterns_found(curves: dict[str, np.ndarray], dt: float, total: int,
-                        path: str | os.PathLike[str]) -> None:
+def plot_patterns_found(
+    curves: dict[str, np.ndarray], dt: float, total: int, path: str | os.PathLike[str]
+) -> None:
     """Patterns found over simulated time, one line per run (``curves[label]`` (n,))."""
     fig = Figure(figsize=(7, 3.5))
     ax = fig.subplots()
@@ -748,8 +899,9 @@ def plot_patterns_found(curves: dict[str, np.ndarray], dt: float, total: int,
     save(fig, path)
 
 
-def plot_forgetting(errors: dict[str, dict[str, SequenceABC[float]]],
-                    path: str | os.PathLike[str], limit: float) -> None:
+def plot_forgetting(
+    errors: dict[str, dict[str, SequenceABC[float]]], path: str | os.PathLike[str], limit: float
+) -> None:
     """Forgetting per consolidation method: how far each old pattern's closed-loop cycle
     moved from the starting model's (RMS, normalized joints), one panel per method, one
     column of points per learning set, the target ``limit`` dashed."""
@@ -781,9 +933,11 @@ class IntervalLike(Protocol):
     n: int
 
 
-def plot_distributions(panels: dict[str, dict[str, tuple[SequenceABC[float], IntervalLike]]],
-                       path: str | os.PathLike[str],
-                       limits: dict[str, float] | None = None) -> None:
+def plot_distributions(
+    panels: dict[str, dict[str, tuple[SequenceABC[float], IntervalLike]]],
+    path: str | os.PathLike[str],
+    limits: dict[str, float] | None = None,
+) -> None:
     """One panel per measure; in each, one column per setting: every run's value (dots,
     jittered) and the median with its 95 % interval (bar). ``panels[measure][setting] =
     (values, interval)``; ``limits`` draws the paper's limit of a measure as a dashed line."""
@@ -797,13 +951,18 @@ def plot_distributions(panels: dict[str, dict[str, tuple[SequenceABC[float], Int
     for ax, (measure, settings) in zip(axes, panels.items(), strict=False):
         for i, (values, interval) in enumerate(settings.values()):
             values = np.asarray([v for v in values if np.isfinite(v)], dtype=np.float64)
-            ax.scatter(i + rng.uniform(-0.15, 0.15, len(values)), values, s=8, alpha=0.4,
-                       color="#1f77b4")
+            ax.scatter(
+                i + rng.uniform(-0.15, 0.15, len(values)), values, s=8, alpha=0.4, color="#1f77b4"
+            )
             if interval.n:
-                ax.errorbar([i + 0.3], [interval.value],
-                            yerr=[[interval.value - interval.low],
-                                  [interval.high - interval.value]],
-                            fmt="o", color="black", capsize=4)
+                ax.errorbar(
+                    [i + 0.3],
+                    [interval.value],
+                    yerr=[[interval.value - interval.low], [interval.high - interval.value]],
+                    fmt="o",
+                    color="black",
+                    capsize=4,
+                )
         if measure in limits:
             ax.axhline(limits[measure], color="#d62728", ls="--", lw=1, label="paper's limit")
             ax.legend(fontsize=7, loc="upper right")
@@ -811,7 +970,7 @@ def plot_distributions(panels: dict[str, dict[str, tuple[SequenceABC[float], Int
         ax.set_xticklabels(list(settings), rotation=20, fontsize=7)
         ax.set_title(measure, fontsize=9)
         ax.grid(alpha=0.3)
-    for ax in axes[len(panels):]:
+    for ax in axes[len(panels) :]:
         ax.set_visible(False)
     fig.suptitle("every run (dots) and the median with its 95 % bootstrap interval")
     save(fig, path)

@@ -76,15 +76,19 @@ def sensory_error(predicted: np.ndarray, observed: np.ndarray) -> np.ndarray:
     diff = np.asarray(predicted, dtype=np.float64) - np.asarray(observed, dtype=np.float64)
     with np.errstate(invalid="ignore"):
         count = np.sum(np.isfinite(diff), axis=1)
-        total = np.nansum(diff ** 2, axis=1)
+        total = np.nansum(diff**2, axis=1)
         return np.where(count > 0, np.sqrt(total / np.maximum(count, 1)), np.nan)
 
 
-def steps_to_lock(motor_errors: np.ndarray, sensory_errors: np.ndarray | None = None,
-                  start: int = 0, end: int | None = None,
-                  motor_threshold: float = MOTOR_LOCK_THRESHOLD,
-                  sensory_threshold: float = SENSORY_LOCK_THRESHOLD,
-                  hold: int = LOCK_HOLD) -> int | None:
+def steps_to_lock(
+    motor_errors: np.ndarray,
+    sensory_errors: np.ndarray | None = None,
+    start: int = 0,
+    end: int | None = None,
+    motor_threshold: float = MOTOR_LOCK_THRESHOLD,
+    sensory_threshold: float = SENSORY_LOCK_THRESHOLD,
+    hold: int = LOCK_HOLD,
+) -> int | None:
     """Steps from ``start`` until the first step that begins ``hold`` locked steps (before
     ``end``); ``None`` if never. NaN sensory errors (nothing seen) do not count against."""
     motor_errors = np.asarray(motor_errors, dtype=np.float64)
@@ -94,7 +98,7 @@ def steps_to_lock(motor_errors: np.ndarray, sensory_errors: np.ndarray | None = 
         sensory_errors = np.asarray(sensory_errors, dtype=np.float64)
         ok &= ~(sensory_errors >= sensory_threshold)  # NaN passes
     for t in range(start, end - hold + 1):
-        if ok[t:t + hold].all():
+        if ok[t : t + hold].all():
             return t - start
     return None
 
@@ -111,9 +115,9 @@ def phase_lag(produced: np.ndarray, target: np.ndarray, max_lag: int = 6) -> flo
     costs = []
     for lag in lags:
         if lag >= 0:
-            a, b = produced[lag:], target[:n - lag]
+            a, b = produced[lag:], target[: n - lag]
         else:
-            a, b = produced[:n + lag], target[-lag:]
+            a, b = produced[: n + lag], target[-lag:]
         costs.append(np.mean((a - b) ** 2))
     costs = np.asarray(costs)
     i = int(np.argmin(costs))
@@ -124,13 +128,14 @@ def phase_lag(produced: np.ndarray, target: np.ndarray, max_lag: int = 6) -> flo
     return float(lags[i])
 
 
-def pb_settle_step(pbs: np.ndarray, bound: float = 0.02, hold: int = 5,
-                   start: int = 0) -> int | None:
+def pb_settle_step(
+    pbs: np.ndarray, bound: float = 0.02, hold: int = 5, start: int = 0
+) -> int | None:
     """Steps from ``start`` until the PB stays within ``bound`` per step for ``hold`` steps."""
     pbs = np.asarray(pbs, dtype=np.float64)
     change = np.r_[np.inf, np.max(np.abs(np.diff(pbs, axis=0)), axis=1)]
     for t in range(start, len(pbs) - hold + 1):
-        if np.all(change[t:t + hold] < bound):
+        if np.all(change[t : t + hold] < bound):
             return t - start
     return None
 
@@ -157,7 +162,7 @@ def return_error(x: np.ndarray, period: float) -> float:
     if spread < 1e-9:
         return 0.0
     ahead = _shifted(x, period)
-    return float(np.sqrt(np.mean((ahead - x[:len(ahead)]) ** 2)) / spread)
+    return float(np.sqrt(np.mean((ahead - x[: len(ahead)]) ** 2)) / spread)
 
 
 @dataclass(frozen=True)
@@ -179,8 +184,9 @@ def _refined(errors: dict[int, float], p: int) -> float:
     return p + float(np.clip(0.5 * (left - right) / curvature, -0.5, 0.5))
 
 
-def periodicity(x: np.ndarray, max_period: int = MAX_PERIOD,
-                tolerance: float = PERIODIC_TOLERANCE) -> Periodicity:
+def periodicity(
+    x: np.ndarray, max_period: int = MAX_PERIOD, tolerance: float = PERIODIC_TOLERANCE
+) -> Periodicity:
     """The smallest period, whole or fractional, whose return error is below ``tolerance``
     (see module doc); shape (T, D) or (T,)."""
     x = np.asarray(x, dtype=np.float64)
@@ -190,14 +196,16 @@ def periodicity(x: np.ndarray, max_period: int = MAX_PERIOD,
     errors = {p: return_error(x, p) for p in range(1, max_period + 1)}
     best_period, best_error = float(min(errors, key=errors.get)), min(errors.values())
     for p in sorted(errors):
-        at_minimum = errors[p] <= errors.get(p - 1, math.inf) and \
-            errors[p] <= errors.get(p + 1, math.inf)
+        at_minimum = errors[p] <= errors.get(p - 1, math.inf) and errors[p] <= errors.get(
+            p + 1, math.inf
+        )
         if not at_minimum:
             continue
         refined = _refined(errors, p)
         refined_error = return_error(x, refined) if refined != p else errors[p]
-        period, error = (refined, refined_error) if refined_error < errors[p] else \
-            (float(p), errors[p])
+        period, error = (
+            (refined, refined_error) if refined_error < errors[p] else (float(p), errors[p])
+        )
         if error < best_error:
             best_period, best_error = period, error
         if error < tolerance:
@@ -249,22 +257,29 @@ class ResponseCase:
         if self.case == 3:
             return f"case 3: unsteady (return error {self.return_error:.2f} at best period)"
         if self.case == 1:
-            return (f"case 1: limit cycle of period {self.period:g} like learned pattern "
-                    f"{self.nearest_pattern} (distance {self.distance:.3f})")
-        return (f"case 2: new limit cycle of period {self.period:g} (nearest learned pattern "
-                f"{self.nearest_pattern} at distance {self.distance:.3f})")
+            return (
+                f"case 1: limit cycle of period {self.period:g} like learned pattern "
+                f"{self.nearest_pattern} (distance {self.distance:.3f})"
+            )
+        return (
+            f"case 2: new limit cycle of period {self.period:g} (nearest learned pattern "
+            f"{self.nearest_pattern} at distance {self.distance:.3f})"
+        )
 
 
-def classify_response(response: np.ndarray, learned_cycles: dict[str, np.ndarray],
-                      tolerance: float = PERIODIC_TOLERANCE, similar: float = SIMILAR_CYCLE,
-                      max_period: int = MAX_PERIOD) -> ResponseCase:
+def classify_response(
+    response: np.ndarray,
+    learned_cycles: dict[str, np.ndarray],
+    tolerance: float = PERIODIC_TOLERANCE,
+    similar: float = SIMILAR_CYCLE,
+    max_period: int = MAX_PERIOD,
+) -> ResponseCase:
     """Classify a (normalized) motor trajectory after its transient, shape (T, D)."""
     found = periodicity(response, max_period=max_period, tolerance=tolerance)
     if found.period is None:
         return ResponseCase(3, None, found.return_error, None, math.nan)
     cycle = last_cycle(response, found.period)
-    distances = {name: cycle_distance(cycle, learned) for name, learned in
-                 learned_cycles.items()}
+    distances = {name: cycle_distance(cycle, learned) for name, learned in learned_cycles.items()}
     nearest = min(distances, key=distances.get)
     case = 1 if distances[nearest] < similar else 2
     return ResponseCase(case, found.period, found.return_error, nearest, distances[nearest])

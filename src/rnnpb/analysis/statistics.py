@@ -36,10 +36,13 @@ class Interval:
         return f"{self.value:.{digits}f} [{self.low:.{digits}f}, {self.high:.{digits}f}]"
 
 
-def bootstrap_interval(sample: Sequence[float] | np.ndarray,
-                       statistic: Callable[[np.ndarray], float] = np.median,
-                       confidence: float = CONFIDENCE, resamples: int = RESAMPLES,
-                       seed: int = BOOTSTRAP_SEED) -> Interval:
+def bootstrap_interval(
+    sample: Sequence[float] | np.ndarray,
+    statistic: Callable[[np.ndarray], float] = np.median,
+    confidence: float = CONFIDENCE,
+    resamples: int = RESAMPLES,
+    seed: int = BOOTSTRAP_SEED,
+) -> Interval:
     """``statistic`` of ``sample`` (shape (n,)) and its percentile bootstrap interval;
     ``statistic(x, axis=...)`` reduces along an axis, as :func:`numpy.median` does."""
     from scipy.stats import bootstrap
@@ -52,9 +55,15 @@ def bootstrap_interval(sample: Sequence[float] | np.ndarray,
     if np.all(values == values[0]):
         # Every resample is the sample itself; scipy would warn of a degenerate distribution.
         return Interval(value, value, value, n)
-    result = bootstrap((values,), lambda x, axis: statistic(x, axis=axis),
-                       vectorized=True, confidence_level=confidence, n_resamples=resamples,
-                       method="percentile", rng=np.random.default_rng(seed))
+    result = bootstrap(
+        (values,),
+        lambda x, axis: statistic(x, axis=axis),
+        vectorized=True,
+        confidence_level=confidence,
+        n_resamples=resamples,
+        method="percentile",
+        rng=np.random.default_rng(seed),
+    )
     low, high = result.confidence_interval
     return Interval(value, float(low), float(high), n)
 

@@ -12,17 +12,16 @@ from rnnpb.errors import ConfigError
 MAX_STEPS = 2_500_000
 
 
-def finite_seconds(option: str, value: float, low: float = 0.0,
-                   high: float = 3600.0) -> float:
+def finite_seconds(option: str, value: float, low: float = 0.0, high: float = 3600.0) -> float:
     """A duration in seconds: finite and in (``low``, ``high``]."""
     if not math.isfinite(value) or not low < value <= high:
-        raise ConfigError(f"{option} must be a number of seconds in ({low:g}, {high:g}], "
-                          f"got {value}")
+        raise ConfigError(
+            f"{option} must be a number of seconds in ({low:g}, {high:g}], got {value}"
+        )
     return value
 
 
-def step_count(option: str, value: int | None, low: int = 1,
-               high: int = MAX_STEPS) -> int | None:
+def step_count(option: str, value: int | None, low: int = 1, high: int = MAX_STEPS) -> int | None:
     """A number of steps in [``low``, ``high``] (``None`` passes: the option was not given)."""
     if value is not None and not low <= value <= high:
         raise ConfigError(f"{option} must be in [{low}, {high:,}], got {value:,}")

@@ -36,13 +36,16 @@ SAFETY_GUARD_TIMED = "barrier"
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", metavar="FILE", help="also write the figures as JSON")
-    parser.add_argument("--steps", type=int, default=300,
-                        help="timed on-line steps (default 300)")
-    parser.add_argument("--reference-steps", type=int, default=5,
-                        help="timed NumPy reference steps (default 5)")
+    parser.add_argument("--steps", type=int, default=300, help="timed on-line steps (default 300)")
+    parser.add_argument(
+        "--reference-steps", type=int, default=5, help="timed NumPy reference steps (default 5)"
+    )
     parser.add_argument("--no-tracking", action="store_true", help="skip the tracking bench")
-    parser.add_argument("--no-progress", action="store_true",
-                        help="no progress bar (there is none when stderr is not a terminal)")
+    parser.add_argument(
+        "--no-progress",
+        action="store_true",
+        help="no progress bar (there is none when stderr is not a terminal)",
+    )
 
 
 def _single_core() -> str:
@@ -95,9 +98,15 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb.robot import JOINT_LIMITS
 
     parts = ["learning", "on-line step", "NumPy reference"] + (
-        [] if args.no_tracking else ["tracking"])
-    bar = progress_bar(total=len(parts), unit="part", desc="bench", disable=args.no_progress,
-                       bar_format="{desc}: {n}/{total} parts [{elapsed}]{postfix}")
+        [] if args.no_tracking else ["tracking"]
+    )
+    bar = progress_bar(
+        total=len(parts),
+        unit="part",
+        desc="bench",
+        disable=args.no_progress,
+        bar_format="{desc}: {n}/{total} parts [{elapsed}]{postfix}",
+    )
 
     def next_part(done: bool = True) -> None:
         if done:
@@ -127,10 +136,15 @@ def run(args: argparse.Namespace) -> int:
     # The on-line step costs the same for any weights: time it with a fresh network.
     params = init_params(network, jax.random.PRNGKey(0))
     rng = np.random.default_rng(0)
-    model = TrainedModel(network=network, params=params, lower=data.lower, upper=data.upper,
-                         sequence_pb=rng.uniform(0.2, 0.8, (len(sequences), network.pb_size)),
-                         sequence_patterns=data.patterns,
-                         initial_context=np.full((len(sequences), network.context_size), 0.5))
+    model = TrainedModel(
+        network=network,
+        params=params,
+        lower=data.lower,
+        upper=data.upper,
+        sequence_pb=rng.uniform(0.2, 0.8, (len(sequences), network.pb_size)),
+        sequence_patterns=data.patterns,
+        initial_context=np.full((len(sequences), network.context_size), 0.5),
+    )
     online = OnlineConfig()
     # The default step and the same step without phase restarts, timed alternately so that
     # both see the same machine: the difference is what phase restarts cost.
@@ -143,10 +157,12 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb.safety import CommandFilter, MetaConfig, init_meta
 
     meta = init_meta(network.pb_size, MetaConfig().hidden, 0)
-    guards = {"barrier": replace(online, safety_guard="barrier"),
-              "barrier_3_steps": replace(online, safety_guard="barrier", barrier_span=3),
-              "barrier_window": replace(online, safety_guard="barrier", barrier_span=0),
-              "projection": replace(online, safety_guard="projection")}
+    guards = {
+        "barrier": replace(online, safety_guard="barrier"),
+        "barrier_3_steps": replace(online, safety_guard="barrier", barrier_span=3),
+        "barrier_window": replace(online, safety_guard="barrier", barrier_span=0),
+        "projection": replace(online, safety_guard="projection"),
+    }
     guarded = {name: compiled(model, cfg, meta=meta) for name, cfg in guards.items()}
     command_filter = CommandFilter()
     stream = np.concatenate([s.sensory for s in sequences])
@@ -201,8 +217,9 @@ def run(args: argparse.Namespace) -> int:
     # forward kinematics and the cameras — against one agent's on-line step, alternately.
     from rnnpb.interaction.dyad import Dyad, RobotAgent
 
-    pair = Dyad(RobotAgent(model, online=online, name="a"),
-                RobotAgent(model, online=online, name="b"))
+    pair = Dyad(
+        RobotAgent(model, online=online, name="a"), RobotAgent(model, online=online, name="b")
+    )
     for _ in range(40):
         pair.step()
     dyad_times, single_times = [], []
@@ -223,13 +240,18 @@ def run(args: argparse.Namespace) -> int:
         "online_step_without_phase_restarts_ms_median": float(np.median(plain_times)),
         # The step with the guard the default uses when a map exists (the barrier on the
         # newest steps), plus the filter; then each guard's step alone.
-        "online_step_safety_on_ms_median": float(np.median(
-            np.add(guarded_times[SAFETY_GUARD_TIMED], filter_times[SAFETY_GUARD_TIMED]))),
-        **{f"online_step_{name}_ms_median": float(np.median(times))
-           for name, times in guarded_times.items()},
+        "online_step_safety_on_ms_median": float(
+            np.median(np.add(guarded_times[SAFETY_GUARD_TIMED], filter_times[SAFETY_GUARD_TIMED]))
+        ),
+        **{
+            f"online_step_{name}_ms_median": float(np.median(times))
+            for name, times in guarded_times.items()
+        },
         "command_filter_ms_median": float(np.median(filter_times[SAFETY_GUARD_TIMED])),
-        **{f"online_step_{name}_cpu_ms_median": float(np.median(times))
-           for name, times in cpu_times.items()},
+        **{
+            f"online_step_{name}_cpu_ms_median": float(np.median(times))
+            for name, times in cpu_times.items()
+        },
         "online_step_reference_numpy_ms_median": reference_ms,
         "online_speedup_vs_numpy": reference_ms / float(np.median(step_times)),
         "dyad_step_ms_median": dyad_ms,
@@ -246,43 +268,74 @@ def run(args: argparse.Namespace) -> int:
         next_part()
     bar.close()
 
-    print(f"rnnpb {__version__} bench — {note}, jax {jax.__version__}, "
-          f"{platform.processor() or platform.machine()}")
-    print(f"  learning iteration (6 seq x 50 steps):   {train_ms:8.3f} ms median "
-          f"(50,000 iterations ~ {train_ms * 50:.0f} s)")
-    print(f"  on-line step (L={online.window}, {online.iterations} it.): "
-          f"{figures['online_step_ms_median']:8.3f} ms median, "
-          f"{figures['online_step_ms_p99']:.3f} ms p99 (over {args.steps} steps)")
-    cost = (figures["online_step_ms_median"]
-            / figures["online_step_without_phase_restarts_ms_median"] - 1)
-    print(f"  on-line step without phase restarts:     "
-          f"{figures['online_step_without_phase_restarts_ms_median']:8.3f} ms median "
-          f"(phase restarts cost {cost:+.0%})")
-    print(f"  on-line step, safety on ({SAFETY_GUARD_TIMED}+filter):"
-          f"{figures['online_step_safety_on_ms_median']:8.3f} ms median (the filter "
-          f"{figures['command_filter_ms_median']:.3f} ms of it)")
-    print(f"    processor time per step (no waiting for a core): guard off "
-          f"{figures['online_step_off_cpu_ms_median']:.3f} ms median")
+    print(
+        f"rnnpb {__version__} bench — {note}, jax {jax.__version__}, "
+        f"{platform.processor() or platform.machine()}"
+    )
+    print(
+        f"  learning iteration (6 seq x 50 steps):   {train_ms:8.3f} ms median "
+        f"(50,000 iterations ~ {train_ms * 50:.0f} s)"
+    )
+    print(
+        f"  on-line step (L={online.window}, {online.iterations} it.): "
+        f"{figures['online_step_ms_median']:8.3f} ms median, "
+        f"{figures['online_step_ms_p99']:.3f} ms p99 (over {args.steps} steps)"
+    )
+    cost = (
+        figures["online_step_ms_median"] / figures["online_step_without_phase_restarts_ms_median"]
+        - 1
+    )
+    print(
+        f"  on-line step without phase restarts:     "
+        f"{figures['online_step_without_phase_restarts_ms_median']:8.3f} ms median "
+        f"(phase restarts cost {cost:+.0%})"
+    )
+    print(
+        f"  on-line step, safety on ({SAFETY_GUARD_TIMED}+filter):"
+        f"{figures['online_step_safety_on_ms_median']:8.3f} ms median (the filter "
+        f"{figures['command_filter_ms_median']:.3f} ms of it)"
+    )
+    print(
+        f"    processor time per step (no waiting for a core): guard off "
+        f"{figures['online_step_off_cpu_ms_median']:.3f} ms median"
+    )
     for name in guarded:
-        label = {"barrier": "barrier (newest step)", "barrier_3_steps": "barrier on 3 steps",
-                 "barrier_window": "barrier on the window"}.get(name, name)
-        print(f"    the step with the {label} alone: "
-              f"{figures[f'online_step_{name}_ms_median']:8.3f} ms median, processor time "
-              f"{figures[f'online_step_{name}_cpu_ms_median']:.3f} ms")
-    print(f"  on-line step, NumPy reference:           {reference_ms:8.1f} ms median "
-          f"(over {args.reference_steps} steps) — compiled is "
-          f"{figures['online_speedup_vs_numpy']:.0f}x faster")
-    print(f"  two coupled agents, one step of both:    {dyad_ms:8.3f} ms median "
-          f"({figures['dyad_step_vs_one_agent']:.2f}x one agent's step, timed alternately)")
+        label = {
+            "barrier": "barrier (newest step)",
+            "barrier_3_steps": "barrier on 3 steps",
+            "barrier_window": "barrier on the window",
+        }.get(name, name)
+        print(
+            f"    the step with the {label} alone: "
+            f"{figures[f'online_step_{name}_ms_median']:8.3f} ms median, processor time "
+            f"{figures[f'online_step_{name}_cpu_ms_median']:.3f} ms"
+        )
+    print(
+        f"  on-line step, NumPy reference:           {reference_ms:8.1f} ms median "
+        f"(over {args.reference_steps} steps) — compiled is "
+        f"{figures['online_speedup_vs_numpy']:.0f}x faster"
+    )
+    print(
+        f"  two coupled agents, one step of both:    {dyad_ms:8.3f} ms median "
+        f"({figures['dyad_step_vs_one_agent']:.2f}x one agent's step, timed alternately)"
+    )
     if "tracking_frames_per_s" in figures:
-        print(f"  colour-ball tracking 640x480:            {figures['tracking_ms_median']:8.3f} "
-              f"ms median ({figures['tracking_frames_per_s']:.0f} frames/s); centre error "
-              f"{figures['tracking_clean_error_px']:.2f} px clean, "
-              f"{figures['tracking_noisy_error_px']:.2f} px noisy")
+        print(
+            f"  colour-ball tracking 640x480:            {figures['tracking_ms_median']:8.3f} "
+            f"ms median ({figures['tracking_frames_per_s']:.0f} frames/s); centre error "
+            f"{figures['tracking_clean_error_px']:.2f} px clean, "
+            f"{figures['tracking_noisy_error_px']:.2f} px noisy"
+        )
     if args.json:
-        document = {**figures, "rnnpb_version": __version__, "jax_version": jax.__version__,
-                    "machine": platform.machine(), "python": platform.python_version(),
-                    "note": note, "online_config": online.to_dict()}
+        document = {
+            **figures,
+            "rnnpb_version": __version__,
+            "jax_version": jax.__version__,
+            "machine": platform.machine(),
+            "python": platform.python_version(),
+            "note": note,
+            "online_config": online.to_dict(),
+        }
         with atomic_write(args.json, "w", encoding="utf-8") as handle:
             json.dump(document, handle, indent=2)
         print(f"wrote {args.json}")

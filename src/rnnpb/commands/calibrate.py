@@ -34,19 +34,37 @@ def _pixel(text: str) -> tuple[int, int]:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("source", metavar="SOURCE",
-                        help="webcam:INDEX, video:PATH, images:DIR or synthetic:PATTERN")
-    parser.add_argument("--out", required=True, metavar="FILE.json",
-                        help="where to write the colour file")
-    parser.add_argument("--preview", metavar="FILE.png",
-                        help="where to write the preview (default: next to --out, .png)")
-    parser.add_argument("--frame", type=int, default=0, metavar="N",
-                        help="use frame N of the source (default 0; for a webcam, frames "
-                             "before N let its exposure settle)")
-    parser.add_argument("--left-pixel", type=_pixel, metavar="X,Y",
-                        help="a pixel in the middle of the ball on the user's left hand")
-    parser.add_argument("--right-pixel", type=_pixel, metavar="X,Y",
-                        help="a pixel in the middle of the ball on the user's right hand")
+    parser.add_argument(
+        "source", metavar="SOURCE", help="webcam:INDEX, video:PATH, images:DIR or synthetic:PATTERN"
+    )
+    parser.add_argument(
+        "--out", required=True, metavar="FILE.json", help="where to write the colour file"
+    )
+    parser.add_argument(
+        "--preview",
+        metavar="FILE.png",
+        help="where to write the preview (default: next to --out, .png)",
+    )
+    parser.add_argument(
+        "--frame",
+        type=int,
+        default=0,
+        metavar="N",
+        help="use frame N of the source (default 0; for a webcam, frames "
+        "before N let its exposure settle)",
+    )
+    parser.add_argument(
+        "--left-pixel",
+        type=_pixel,
+        metavar="X,Y",
+        help="a pixel in the middle of the ball on the user's left hand",
+    )
+    parser.add_argument(
+        "--right-pixel",
+        type=_pixel,
+        metavar="X,Y",
+        help="a pixel in the middle of the ball on the user's right hand",
+    )
     parser.add_argument("--left-name", default=None, help="name of the left ball's colour")
     parser.add_argument("--right-name", default=None, help="name of the right ball's colour")
 
@@ -85,20 +103,27 @@ def run(args: argparse.Namespace) -> int:
             raise RnnpbError(f"{args.source}: has no frame {args.frame}")
 
     calibrations = []
-    for side, pixel, broad, name in (("left", args.left_pixel, BROAD_RED, args.left_name),
-                                     ("right", args.right_pixel, BROAD_BLUE, args.right_name)):
+    for side, pixel, broad, name in (
+        ("left", args.left_pixel, BROAD_RED, args.left_name),
+        ("right", args.right_pixel, BROAD_BLUE, args.right_name),
+    ):
         if pixel is not None:
             height, width = frame.shape[:2]
             if not (0 <= pixel[0] < width and 0 <= pixel[1] < height):
-                raise RnnpbError(f"--{side}-pixel {pixel[0]},{pixel[1]} is outside the "
-                                 f"{width}x{height} frame")
+                raise RnnpbError(
+                    f"--{side}-pixel {pixel[0]},{pixel[1]} is outside the {width}x{height} frame"
+                )
             cal = calibrate_from_pixel(frame, pixel, name)
         else:
             cal = calibrate_automatically(recent, broad)
         if name and cal.color.name != name:
             c = cal.color
-            cal = type(cal)(BallColor(name, c.hue, c.saturation, c.value), cal.center_px,
-                            cal.radius_px, cal.n_pixels)
+            cal = type(cal)(
+                BallColor(name, c.hue, c.saturation, c.value),
+                cal.center_px,
+                cal.radius_px,
+                cal.n_pixels,
+            )
         calibrations.append(cal)
     colors = BallColors(calibrations[0].color, calibrations[1].color)
 
@@ -109,24 +134,29 @@ def run(args: argparse.Namespace) -> int:
             raise RnnpbError(f"calibration: the fitted {side} range finds no ball in the frame")
         off = float(((found[0] - cal.center_px) ** 2).sum() ** 0.5)
         if off > max(3.0, cal.radius_px):
-            raise RnnpbError(f"calibration: with the fitted {side} range the tracker picks a "
-                             f"blob {off:.0f} px away from the calibrated ball; another object "
-                             "has the same colour — move it away or give --"
-                             f"{side}-pixel")
+            raise RnnpbError(
+                f"calibration: with the fitted {side} range the tracker picks a "
+                f"blob {off:.0f} px away from the calibrated ball; another object "
+                "has the same colour — move it away or give --"
+                f"{side}-pixel"
+            )
     save_ball_colors(args.out, colors)
     preview = Path(args.preview) if args.preview else Path(args.out).with_suffix(".png")
-    ok, png = cv2.imencode(".png", calibration_preview(frame, colors,
-                                                       (calibrations[0], calibrations[1])))
+    ok, png = cv2.imencode(
+        ".png", calibration_preview(frame, colors, (calibrations[0], calibrations[1]))
+    )
     if not ok:
         raise RnnpbError(f"{preview}: cannot encode the preview")
     with atomic_write(preview, "wb") as handle:
         handle.write(png.tobytes())
     for side, cal in zip(("left", "right"), calibrations, strict=True):
         c = cal.color
-        print(f"{side} ball ({c.name}): hue {c.hue[0]}..{c.hue[1]}, saturation "
-              f"{c.saturation[0]}..{c.saturation[1]}, value {c.value[0]}..{c.value[1]}; "
-              f"found at {cal.center_px[0]:.1f},{cal.center_px[1]:.1f}, radius "
-              f"{cal.radius_px:.1f} px")
+        print(
+            f"{side} ball ({c.name}): hue {c.hue[0]}..{c.hue[1]}, saturation "
+            f"{c.saturation[0]}..{c.saturation[1]}, value {c.value[0]}..{c.value[1]}; "
+            f"found at {cal.center_px[0]:.1f},{cal.center_px[1]:.1f}, radius "
+            f"{cal.radius_px:.1f} px"
+        )
     print(f"colour file -> {args.out}")
     print(f"preview -> {preview}")
     return 0

@@ -39,7 +39,7 @@ class CameraInfo:
 
     def describe(self) -> str:
         rate = f"{self.fps:g} frames/s" if self.fps > 0 else "frame rate not reported"
-        return (f"webcam:{self.index}  {self.device}  {self.width}x{self.height}, {rate}")
+        return f"webcam:{self.index}  {self.device}  {self.width}x{self.height}, {rate}"
 
 
 def candidate_devices() -> list[tuple[int, str]]:
@@ -59,8 +59,9 @@ def candidate_devices() -> list[tuple[int, str]]:
     return [(i, str(i)) for i in FALLBACK_INDICES]
 
 
-def probe_cameras(devices: Iterable[tuple[int, str]],
-                  open_capture: Callable[[int], Any] | None = None) -> list[CameraInfo]:
+def probe_cameras(
+    devices: Iterable[tuple[int, str]], open_capture: Callable[[int], Any] | None = None
+) -> list[CameraInfo]:
     """The devices that open and deliver a frame, with what they report.
 
     ``open_capture(index)`` returns an object with OpenCV's ``VideoCapture`` interface
@@ -81,8 +82,11 @@ def probe_cameras(devices: Iterable[tuple[int, str]],
                 continue
             height, width = frame.shape[:2]
             fps = float(capture.get(cv2.CAP_PROP_FPS) or 0.0)
-            cameras.append(CameraInfo(index, device, int(width), int(height),
-                                      fps if fps > 0 and fps < 1e4 else 0.0))
+            cameras.append(
+                CameraInfo(
+                    index, device, int(width), int(height), fps if fps > 0 and fps < 1e4 else 0.0
+                )
+            )
         finally:
             capture.release()
     return cameras
@@ -100,11 +104,16 @@ def run(args: argparse.Namespace) -> int:
     devices = candidate_devices()
     cameras = probe_cameras(devices)
     if not cameras:
-        where = (f"none of {len(devices)} video device(s) delivered a frame" if devices
-                 else "no video devices (/dev/video*)")
-        print(f"no camera found: {where}. Without one, drive the robot with a video "
-              "(--source video:FILE), the demonstrator (synthetic:1) or the dashboard "
-              "(rnnpb serve).")
+        where = (
+            f"none of {len(devices)} video device(s) delivered a frame"
+            if devices
+            else "no video devices (/dev/video*)"
+        )
+        print(
+            f"no camera found: {where}. Without one, drive the robot with a video "
+            "(--source video:FILE), the demonstrator (synthetic:1) or the dashboard "
+            "(rnnpb serve)."
+        )
         return 0
     print(f"{len(cameras)} camera(s):")
     for camera in cameras:

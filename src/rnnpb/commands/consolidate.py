@@ -33,20 +33,40 @@ Example:
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--model", required=True, metavar="MODEL", help="the learned model")
-    parser.add_argument("--add", nargs="+", required=True, metavar="FILE_OR_DIR",
-                        help="sequence CSV files (or directories) of the new pattern(s)")
-    parser.add_argument("--out", required=True, metavar="MODEL",
-                        help="where to write the new model (.npz)")
-    parser.add_argument("--method", choices=("rehearsal", "finetune", "replay", "scratch"),
-                        default="rehearsal", help="how to add them (default: rehearsal)")
-    parser.add_argument("--replay-data", nargs="+", metavar="FILE_OR_DIR",
-                        help="the original training data (replay and scratch)")
+    parser.add_argument(
+        "--add",
+        nargs="+",
+        required=True,
+        metavar="FILE_OR_DIR",
+        help="sequence CSV files (or directories) of the new pattern(s)",
+    )
+    parser.add_argument(
+        "--out", required=True, metavar="MODEL", help="where to write the new model (.npz)"
+    )
+    parser.add_argument(
+        "--method",
+        choices=("rehearsal", "finetune", "replay", "scratch"),
+        default="rehearsal",
+        help="how to add them (default: rehearsal)",
+    )
+    parser.add_argument(
+        "--replay-data",
+        nargs="+",
+        metavar="FILE_OR_DIR",
+        help="the original training data (replay and scratch)",
+    )
     parser.add_argument("--iterations", type=int, help="learning iterations")
     parser.add_argument("--seed", type=int, help="random seed (default: the model's)")
-    parser.add_argument("--checkpoint-every", type=int, default=1000, metavar="N",
-                        help="write a checkpoint every N iterations (default 1000)")
-    parser.add_argument("--resume", action="store_true",
-                        help="continue from OUT.checkpoint.npz if it exists")
+    parser.add_argument(
+        "--checkpoint-every",
+        type=int,
+        default=1000,
+        metavar="N",
+        help="write a checkpoint every N iterations (default 1000)",
+    )
+    parser.add_argument(
+        "--resume", action="store_true", help="continue from OUT.checkpoint.npz if it exists"
+    )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
@@ -72,18 +92,25 @@ def run(args: argparse.Namespace) -> int:
     new = read_sequence_files(args.add)
     replay = read_sequence_files(args.replay_data) if args.replay_data else None
     if replay is not None and args.method not in ("replay", "scratch"):
-        raise ConfigError(f"--replay-data is for the methods replay and scratch, not "
-                          f"{args.method} (rehearsal needs no original data)")
+        raise ConfigError(
+            f"--replay-data is for the methods replay and scratch, not "
+            f"{args.method} (rehearsal needs no original data)"
+        )
     config = ConsolidationConfig(method=args.method)
     learning = config.learning_for(model)
     changes = {"iterations": args.iterations, "seed": args.seed}
-    learning = replace(learning, checkpoint_every=args.checkpoint_every,
-                       **{k: v for k, v in changes.items() if v is not None})
+    learning = replace(
+        learning,
+        checkpoint_every=args.checkpoint_every,
+        **{k: v for k, v in changes.items() if v is not None},
+    )
     config = replace(config, train=learning)
     added = sorted({s.pattern for s in new})
-    print(f"adding {len(new)} sequence(s) of pattern(s) {', '.join(added)} to {args.model} "
-          f"({', '.join(model.patterns)}) by {args.method}: {learning.iterations} iterations "
-          f"({learning.optimizer})")
+    print(
+        f"adding {len(new)} sequence(s) of pattern(s) {', '.join(added)} to {args.model} "
+        f"({', '.join(model.patterns)}) by {args.method}: {learning.iterations} iterations "
+        f"({learning.optimizer})"
+    )
     bar = None
     if not args.no_progress:
         from tqdm.auto import tqdm
@@ -98,19 +125,30 @@ def run(args: argparse.Namespace) -> int:
         _interrupt.check()
 
     try:
-        grown = consolidate(model, new, config, replay_data=replay, parent=args.model,
-                            progress=after_chunk, checkpoint_path=checkpoint_path_for(args.out),
-                            resume=args.resume)
+        grown = consolidate(
+            model,
+            new,
+            config,
+            replay_data=replay,
+            parent=args.model,
+            progress=after_chunk,
+            checkpoint_path=checkpoint_path_for(args.out),
+            resume=args.resume,
+        )
     finally:
         if bar is not None:
             bar.close()
     _interrupt.check()  # interrupted during the last chunk: no model file
     grown.save(args.out)
     entry = grown.history[-1]
-    print(f"wrote {args.out}: patterns {', '.join(grown.patterns)} after {entry.iterations} "
-          f"iterations in {entry.seconds:.1f} s; training error (MSE) max "
-          f"{grown.meta['training']['mse_max']:.2e}")
+    print(
+        f"wrote {args.out}: patterns {', '.join(grown.patterns)} after {entry.iterations} "
+        f"iterations in {entry.seconds:.1f} s; training error (MSE) max "
+        f"{grown.meta['training']['mse_max']:.2e}"
+    )
     if entry.details.get("replay_data_matches_record") is False:
-        print("note: the original data differ from the data the model recorded (CSV files "
-              "round values); the new model records that")
+        print(
+            "note: the original data differ from the data the model recorded (CSV files "
+            "round values); the new model records that"
+        )
     return 0

@@ -24,13 +24,20 @@ example:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", required=True, metavar="DIR", help="output directory")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    parser.add_argument("--period", type=float, default=12.0, metavar="STEPS",
-                        help="steps per movement cycle (default 12, i.e. 4.8 s)")
+    parser.add_argument(
+        "--period",
+        type=float,
+        default=12.0,
+        metavar="STEPS",
+        help="steps per movement cycle (default 12, i.e. 4.8 s)",
+    )
     parser.add_argument("--steps", type=int, default=50, help="steps per sample (default 50)")
-    parser.add_argument("--samples", type=int, default=2,
-                        help="samples per pattern (default 2)")
-    parser.add_argument("--no-render", action="store_true",
-                        help="leave the rendered robot poses out of the figure (no MuJoCo)")
+    parser.add_argument("--samples", type=int, default=2, help="samples per pattern (default 2)")
+    parser.add_argument(
+        "--no-render",
+        action="store_true",
+        help="leave the rendered robot poses out of the figure (no MuJoCo)",
+    )
 
 
 FIGURE_FILE = "figure4.png"
@@ -42,8 +49,13 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb.analysis.figures import plot_patterns
     from rnnpb.demonstrator import write_dataset
 
-    result = write_dataset(args.out, seed=args.seed, period_steps=args.period,
-                           n_steps=args.steps, samples_per_pattern=args.samples)
+    result = write_dataset(
+        args.out,
+        seed=args.seed,
+        period_steps=args.period,
+        n_steps=args.steps,
+        samples_per_pattern=args.samples,
+    )
     figure = Path(args.out) / FIGURE_FILE
     plot_patterns(result["sequences"], figure, render=not args.no_render)
     print(f"wrote {len(result['files'])} sequences to {result['patterns_dir']}")

@@ -27,14 +27,23 @@ Example:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--out", default="results/demo", metavar="DIR",
-                        help="output directory (default results/demo)")
+    parser.add_argument(
+        "--out",
+        default="results/demo",
+        metavar="DIR",
+        help="output directory (default results/demo)",
+    )
     parser.add_argument("--quick", action="store_true", help="the short run")
-    parser.add_argument("--workers", type=int, default=2,
-                        help="runs at once, on a local Ray instance (default 2)")
-    parser.add_argument("--samples-per-pattern", type=int, default=2, metavar="N",
-                        help="demonstrations of each pattern in every learning set (default 2, "
-                        "as in the paper)")
+    parser.add_argument(
+        "--workers", type=int, default=2, help="runs at once, on a local Ray instance (default 2)"
+    )
+    parser.add_argument(
+        "--samples-per-pattern",
+        type=int,
+        default=2,
+        metavar="N",
+        help="demonstrations of each pattern in every learning set (default 2, as in the paper)",
+    )
 
 
 #: Minutes the run took on the 2-core reference machine with 2 workers (docs/experiments.md).
@@ -45,10 +54,15 @@ def _estimate(config) -> str:
     """What to expect: the measured time, scaled by the workers (the work is the same)."""
     base = MEASURED_MINUTES["quick" if config.quick else "full"]
     minutes = base * 2 / min(config.workers, 2)
-    more = (f", longer with {config.samples_per_pattern} demonstrations per pattern"
-            if config.samples_per_pattern > 2 else "")
-    return (f"about {minutes:.0f} minutes on 2 cores with {config.workers} worker(s)"
-            f"{more} (longer while other programs use the cores)")
+    more = (
+        f", longer with {config.samples_per_pattern} demonstrations per pattern"
+        if config.samples_per_pattern > 2
+        else ""
+    )
+    return (
+        f"about {minutes:.0f} minutes on 2 cores with {config.workers} worker(s)"
+        f"{more} (longer while other programs use the cores)"
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -65,8 +79,7 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(f"--workers must be >= 1, got {args.workers}")
     config = ExperimentConfig.quick_run() if args.quick else ExperimentConfig()
     config = replace(config, workers=args.workers, samples_per_pattern=args.samples_per_pattern)
-    print(f"rnnpb demo ({'quick' if args.quick else 'full'} run): {_estimate(config)}",
-          flush=True)
+    print(f"rnnpb demo ({'quick' if args.quick else 'full'} run): {_estimate(config)}", flush=True)
     started = time.monotonic()
 
     def log(message: str) -> None:
@@ -75,8 +88,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"[{minutes:2d}:{seconds:02d}] {message}", flush=True)
 
     results = run_demo(args.out, config, log=log, runner=ray_runner(workers=args.workers))
-    print(f"wrote {args.out}/report.md and {args.out}/results.json in "
-          f"{results.runtime_s:.0f} s")
+    print(f"wrote {args.out}/report.md and {args.out}/results.json in {results.runtime_s:.0f} s")
     for key, target in results.targets.items():
         print(f"  {key}: {'met' if target.met else 'NOT met'} ({target.detail})")
     return 0

@@ -23,8 +23,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     which.add_argument("--pattern", help="name of a learned pattern")
     which.add_argument("--pb", help="PB values, comma-separated, each in [0, 1]")
     parser.add_argument("--steps", type=int, default=100, help="steps to write (default 100)")
-    parser.add_argument("--transient", type=int, default=0, metavar="K",
-                        help="generate K steps first and drop them (default 0)")
+    parser.add_argument(
+        "--transient",
+        type=int,
+        default=0,
+        metavar="K",
+        help="generate K steps first and drop them (default 0)",
+    )
     parser.add_argument("--out", required=True, help="output sequence CSV")
 
 
@@ -40,13 +45,17 @@ def run(args: argparse.Namespace) -> int:
     step_count("--steps", args.steps, low=2)
     step_count("--transient", args.transient, low=0)
     if args.steps + args.transient > MAX_STEPS:
-        raise ConfigError(f"--steps plus --transient must be at most {MAX_STEPS:,}, got "
-                          f"{args.steps + args.transient:,}")
+        raise ConfigError(
+            f"--steps plus --transient must be at most {MAX_STEPS:,}, got "
+            f"{args.steps + args.transient:,}"
+        )
     model = TrainedModel.load(args.model)
     if args.pattern is not None:
         if args.pattern not in model.pattern_pb:
-            raise ConfigError(f"pattern {args.pattern!r} is not in {args.model} (it has "
-                              f"{', '.join(model.patterns)})")
+            raise ConfigError(
+                f"pattern {args.pattern!r} is not in {args.model} (it has "
+                f"{', '.join(model.patterns)})"
+            )
         pb = model.pattern_pb[args.pattern]
         context = model.pattern_initial_context(args.pattern)
         label = args.pattern
@@ -59,8 +68,9 @@ def run(args: argparse.Namespace) -> int:
         label = "pb"
     generated = generate(model, pb, args.steps + args.transient, initial_context=context)
     k = args.transient
-    write_sequence(args.out, Sequence(generated.sensory[k:], generated.motor[k:], label,
-                                      args.out))
-    print(f"wrote {args.steps} steps generated from PB {np.array2string(pb, precision=3)} "
-          f"to {args.out}")
+    write_sequence(args.out, Sequence(generated.sensory[k:], generated.motor[k:], label, args.out))
+    print(
+        f"wrote {args.steps} steps generated from PB {np.array2string(pb, precision=3)} "
+        f"to {args.out}"
+    )
     return 0

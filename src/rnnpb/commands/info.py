@@ -60,10 +60,14 @@ def run(args: argparse.Namespace) -> int:
 
     model = TrainedModel.load(args.model)
     net = model.network
-    print(f"{args.model}: {len(model.patterns)} pattern(s), {len(model.sequence_patterns)} "
-          f"training sequence(s); model fingerprint {model.fingerprint[:16]}")
-    print(f"network: {net.sensory_size} sensory + {net.motor_size} motor values, "
-          f"{net.pb_size} PB, {net.hidden_size} hidden, {net.context_size} context units")
+    print(
+        f"{args.model}: {len(model.patterns)} pattern(s), {len(model.sequence_patterns)} "
+        f"training sequence(s); model fingerprint {model.fingerprint[:16]}"
+    )
+    print(
+        f"network: {net.sensory_size} sensory + {net.motor_size} motor values, "
+        f"{net.pb_size} PB, {net.hidden_size} hidden, {net.context_size} context units"
+    )
     print("patterns (PB: the mean of its sequences' learned PBs):")
     counts = {p: model.sequence_patterns.count(p) for p in model.patterns}
     for name, pb in model.pattern_pb.items():
@@ -71,24 +75,33 @@ def run(args: argparse.Namespace) -> int:
     config = model.meta.get("train_config")
     preset = preset_of(config)
     if isinstance(config, dict):
-        print(f"learning: {preset} preset, {config.get('optimizer')}, "
-              f"{config.get('iterations')} iterations, learning rate "
-              f"{config.get('learning_rate')}, input noise {config.get('input_noise')}, "
-              f"seed {config.get('seed')}")
+        print(
+            f"learning: {preset} preset, {config.get('optimizer')}, "
+            f"{config.get('iterations')} iterations, learning rate "
+            f"{config.get('learning_rate')}, input noise {config.get('input_noise')}, "
+            f"seed {config.get('seed')}"
+        )
     else:
         print("learning: not recorded")
     print(f"on-line regression: {suited_regression(preset)}")
     training = model.meta.get("training")
     if isinstance(training, dict) and "mse_max" in training:
-        print(f"training error (MSE over outputs): max {training['mse_max']:.2e}, mean "
-              f"{training.get('mse_mean', float('nan')):.2e}; {training.get('seconds', 0):.1f} s")
+        print(
+            f"training error (MSE over outputs): max {training['mse_max']:.2e}, mean "
+            f"{training.get('mse_mean', float('nan')):.2e}; {training.get('seconds', 0):.1f} s"
+        )
     print("history:")
     for k, entry in enumerate(model.history):
         when = entry.created or "time not recorded"
-        source = (f" from {entry.parent} ({(entry.parent_fingerprint or '')[:16]})"
-                  if entry.parent or entry.parent_fingerprint else "")
-        print(f"  {k}. {entry.method}: learned {', '.join(entry.added)}{source}; "
-              f"{entry.iterations} iterations, {entry.seconds:.1f} s; {when}")
+        source = (
+            f" from {entry.parent} ({(entry.parent_fingerprint or '')[:16]})"
+            if entry.parent or entry.parent_fingerprint
+            else ""
+        )
+        print(
+            f"  {k}. {entry.method}: learned {', '.join(entry.added)}{source}; "
+            f"{entry.iterations} iterations, {entry.seconds:.1f} s; {when}"
+        )
         if entry.details:
             shown = ", ".join(f"{key} {value}" for key, value in entry.details.items())
             print(f"     {shown}")

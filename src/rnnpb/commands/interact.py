@@ -65,38 +65,66 @@ Example:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--model", help="trained model (.npz) or a folder of them (default: "
-                        "./models/, ./results/demo/models/, else the shipped model)")
+    parser.add_argument(
+        "--model",
+        help="trained model (.npz) or a folder of them (default: "
+        "./models/, ./results/demo/models/, else the shipped model)",
+    )
     parser.add_argument("--source", required=True, help="what drives the robot (see above)")
     parser.add_argument("--out", required=True, metavar="DIR", help="output directory")
-    parser.add_argument("--robot", choices=("kinematic", "mujoco"), default="kinematic",
-                        help="simulated robot (default kinematic: instant, no physics)")
-    parser.add_argument("--online", choices=("auto", "default", "paper", "ungated"),
-                        default="auto",
-                        help="on-line regression settings (auto, the default: the one that "
-                        "suits how the model was learned; default: the best measured for the "
-                        "paper's algorithm; ungated: without the surprise gate, for models "
-                        "learned with --preset fast; paper: the paper's)")
-    parser.add_argument("--paced", action="store_true",
-                        help="run in real time, one step every --dt seconds")
+    parser.add_argument(
+        "--robot",
+        choices=("kinematic", "mujoco"),
+        default="kinematic",
+        help="simulated robot (default kinematic: instant, no physics)",
+    )
+    parser.add_argument(
+        "--online",
+        choices=("auto", "default", "paper", "ungated"),
+        default="auto",
+        help="on-line regression settings (auto, the default: the one that "
+        "suits how the model was learned; default: the best measured for the "
+        "paper's algorithm; ungated: without the surprise gate, for models "
+        "learned with --preset fast; paper: the paper's)",
+    )
+    parser.add_argument(
+        "--paced", action="store_true", help="run in real time, one step every --dt seconds"
+    )
     parser.add_argument("--dt", type=float, default=0.4, help="seconds per step (default 0.4)")
     parser.add_argument("--steps", type=int, help="stop after this many steps")
     parser.add_argument("--colors", help="colour config JSON for camera sources")
-    parser.add_argument("--frame-step", type=int,
-                        help="use every N-th camera frame (default: video fps x dt)")
+    parser.add_argument(
+        "--frame-step", type=int, help="use every N-th camera frame (default: video fps x dt)"
+    )
     parser.add_argument("--seed", type=int, default=0, help="seed for scenario sources")
-    parser.add_argument("--render", action="store_true",
-                        help="also write session.mp4: camera frame | simulated robot")
-    parser.add_argument("--learn", action="store_true",
-                        help="learn new movements on-line: keep them in the short-term memory, "
-                        "consolidate them into a new model version, swap it in (see above)")
-    parser.add_argument("--consolidation-iterations", type=int, metavar="N",
-                        help="with --learn: learning iterations of each consolidation "
-                        "(default: the consolidation's own, docs/model.md)")
-    parser.add_argument("--no-safety", action="store_true",
-                        help="no command filter and no PB guard (docs/safety.md)")
-    parser.add_argument("--no-progress", action="store_true",
-                        help="no progress bar (there is none when stderr is not a terminal)")
+    parser.add_argument(
+        "--render",
+        action="store_true",
+        help="also write session.mp4: camera frame | simulated robot",
+    )
+    parser.add_argument(
+        "--learn",
+        action="store_true",
+        help="learn new movements on-line: keep them in the short-term memory, "
+        "consolidate them into a new model version, swap it in (see above)",
+    )
+    parser.add_argument(
+        "--consolidation-iterations",
+        type=int,
+        metavar="N",
+        help="with --learn: learning iterations of each consolidation "
+        "(default: the consolidation's own, docs/model.md)",
+    )
+    parser.add_argument(
+        "--no-safety",
+        action="store_true",
+        help="no command filter and no PB guard (docs/safety.md)",
+    )
+    parser.add_argument(
+        "--no-progress",
+        action="store_true",
+        help="no progress bar (there is none when stderr is not a terminal)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -141,8 +169,14 @@ def run(args: argparse.Namespace) -> int:
     loop_config = LoopConfig(dt=args.dt, paced=args.paced, max_steps=args.steps)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    source = open_source(args.source, seed=args.seed, dt=args.dt, frame_step=args.frame_step,
-                         colors=args.colors, steps=args.steps)
+    source = open_source(
+        args.source,
+        seed=args.seed,
+        dt=args.dt,
+        frame_step=args.frame_step,
+        colors=args.colors,
+        steps=args.steps,
+    )
     if args.robot == "mujoco":
         os.environ.setdefault("MUJOCO_GL", "egl")
         from rnnpb.robot import MujocoRobot
@@ -163,10 +197,10 @@ def run(args: argparse.Namespace) -> int:
         stack.enter_context(robot)
         if safety.command_filter is not None:
             safety.command_filter.reset(robot.read())  # the pose the first command leaves
-        recorder = stack.enter_context(SessionRecorder(out / "session.csv",
-                                                       model.network.pb_size))
-        loop = InteractionLoop(mirror, source, robot, recorder, loop_config,
-                               command_filter=safety.command_filter)
+        recorder = stack.enter_context(SessionRecorder(out / "session.csv", model.network.pb_size))
+        loop = InteractionLoop(
+            mirror, source, robot, recorder, loop_config, command_filter=safety.command_filter
+        )
         if args.render:
             from rnnpb.interaction.render import SessionVideo
 
@@ -176,19 +210,26 @@ def run(args: argparse.Namespace) -> int:
         if args.learn:
             teacher = _start_teaching(stack, loop, model_path, source, args, online)
         # One line, printed just before the first compilation starts.
-        print(f"interacting: {args.source} -> {model_path} ({online_name} on-line regression"
-              f"{why}; {args.robot} robot{', paced' if args.paced else ''}); Ctrl-C stops",
-              flush=True)
+        print(
+            f"interacting: {args.source} -> {model_path} ({online_name} on-line regression"
+            f"{why}; {args.robot} robot{', paced' if args.paced else ''}); Ctrl-C stops",
+            flush=True,
+        )
         print(safety.note, flush=True)
-        bar = stack.enter_context(progress_bar(
-            total=args.steps or _source_length(source), unit="step", desc="interacting",
-            disable=args.no_progress))
+        bar = stack.enter_context(
+            progress_bar(
+                total=args.steps or _source_length(source),
+                unit="step",
+                desc="interacting",
+                disable=args.no_progress,
+            )
+        )
         answers: list[tuple[str | None, str]] = []
         said = [0]  # teaching events printed so far
         unlearned: list[str] = []  # patterns kept and not yet in a consolidation
 
         def say_teaching() -> None:
-            for event in teacher.events[said[0]:]:
+            for event in teacher.events[said[0] :]:
                 if event.kind == "kept":
                     unlearned.append(event.pattern)
                 if event.kind not in _TEACHING_LINES:
@@ -226,8 +267,9 @@ def run(args: argparse.Namespace) -> int:
             _interrupt.check()
 
         try:
-            summary = loop.run(on_step=after_step,
-                               between_steps=between_steps if teacher is not None else None)
+            summary = loop.run(
+                on_step=after_step, between_steps=between_steps if teacher is not None else None
+            )
             if teacher is not None and teacher.job is not None:
                 # An episode kept near the end: its consolidation finishes, so that the run
                 # leaves the version it started (paced too: the interaction is over).
@@ -239,8 +281,10 @@ def run(args: argparse.Namespace) -> int:
             bar.close()
             if teacher is not None and teacher.job is not None:
                 teacher.job.cancel()
-                print("interrupted: the running consolidation is cancelled, the kept "
-                      "episodes stay in the memory")
+                print(
+                    "interrupted: the running consolidation is cancelled, the kept "
+                    "episodes stay in the memory"
+                )
             print("interrupted: the recording keeps every step so far")
         teaching = None if teacher is None else _teaching_summary(teacher)
     timeline = recognition_timeline(answers)
@@ -250,29 +294,51 @@ def run(args: argparse.Namespace) -> int:
         print(f"  steps {part['first'] + 1:>4}-{part['last'] + 1:<4} {text}")
     session = read_session(out / "session.csv")
     if len(session["step"]):
-        plot_session(session, out / "session.png", title=f"{args.source} — {model_path}",
-                     joint_limits=JOINT_LIMITS)
-    document = {"rnnpb_version": __version__, "model": str(model_path), "source": args.source,
-                "online": online_name, "online_config": online.to_dict(), "loop": summary.to_dict(),
-                "dt": args.dt, "paced": args.paced, "robot": args.robot,
-                "recognition_config": mirror.recognition.to_dict(),
-                "recognition_timeline": timeline,
-                "safety": {**safety.to_dict(), "unsafe_commands": loop.unsafe_commands,
-                           "prevented_commands": loop.prevented_commands}}
+        plot_session(
+            session,
+            out / "session.png",
+            title=f"{args.source} — {model_path}",
+            joint_limits=JOINT_LIMITS,
+        )
+    document = {
+        "rnnpb_version": __version__,
+        "model": str(model_path),
+        "source": args.source,
+        "online": online_name,
+        "online_config": online.to_dict(),
+        "loop": summary.to_dict(),
+        "dt": args.dt,
+        "paced": args.paced,
+        "robot": args.robot,
+        "recognition_config": mirror.recognition.to_dict(),
+        "recognition_timeline": timeline,
+        "safety": {
+            **safety.to_dict(),
+            "unsafe_commands": loop.unsafe_commands,
+            "prevented_commands": loop.prevented_commands,
+        },
+    }
     if teaching is not None:
         document["teaching"] = teaching
     with atomic_write(out / "summary.json", "w", encoding="utf-8") as handle:
         json.dump(document, handle, indent=2)
     print(summary.describe())
     if safety.command_filter is not None:
-        print(f"safety: {loop.unsafe_commands} unsafe commands generated, "
-              f"{loop.prevented_commands} held, shortened or slowed by the filter")
+        print(
+            f"safety: {loop.unsafe_commands} unsafe commands generated, "
+            f"{loop.prevented_commands} held, shortened or slowed by the filter"
+        )
     if teaching is not None:
         versions = [Path(v).name for v in teaching["versions_written"]]
-        print(f"learned: {len(teaching['episodes'])} episode(s) kept, model versions written: "
-              + (", ".join(versions) or "none") + f"; memory {teaching['memory']}")
-    print(f"wrote {out / 'session.csv'}, {out / 'session.png'}, {out / 'summary.json'}"
-          + (f", {out / 'session.mp4'}" if args.render else ""))
+        print(
+            f"learned: {len(teaching['episodes'])} episode(s) kept, model versions written: "
+            + (", ".join(versions) or "none")
+            + f"; memory {teaching['memory']}"
+        )
+    print(
+        f"wrote {out / 'session.csv'}, {out / 'session.png'}, {out / 'summary.json'}"
+        + (f", {out / 'session.mp4'}" if args.render else "")
+    )
     return 0
 
 
@@ -304,28 +370,54 @@ def _start_teaching(stack, loop, model_path, source, args, online):
         model_path = copy
     memory = stack.enter_context(MemoryStore(memory_path_for(model_path)))
     # On cancel/exit a consolidation still running must not outlive the command.
-    teacher = Teacher(loop, model_path, memory,
-                      make_mirror=lambda model: MirrorSystem(model, online),
-                      source=args.source, hands_of=tracked_hands(source),
-                      iterations=args.consolidation_iterations)
+    teacher = Teacher(
+        loop,
+        model_path,
+        memory,
+        make_mirror=lambda model: MirrorSystem(model, online),
+        source=args.source,
+        hands_of=tracked_hands(source),
+        iterations=args.consolidation_iterations,
+    )
     stack.callback(lambda: teacher.job.cancel() if teacher.job is not None else None)
-    print(f"learning new movements: short-term memory {memory.path}"
-          + (", waiting for each consolidation" if teacher.wait else
-             ", consolidating in the background"), flush=True)
+    print(
+        f"learning new movements: short-term memory {memory.path}"
+        + (
+            ", waiting for each consolidation"
+            if teacher.wait
+            else ", consolidating in the background"
+        ),
+        flush=True,
+    )
     return teacher
 
 
 def _teaching_summary(teacher) -> dict:
     """summary.json's ``teaching``: the episodes this run kept and the versions it wrote."""
     kept = set(teacher.keeper.kept)
-    episodes = [{"id": e.id, "pattern": e.pattern, "status": e.status,
-                 "n_cycles": e.n_cycles, "n_steps": e.n_steps, "note": e.note}
-                for e in teacher.memory.episodes() if e.id in kept]
-    return {"memory": str(teacher.memory.path), "episodes": episodes,
-            "versions_written": [str(v) for v in teacher.versions[1:]],
-            "running_model": teacher.model_path,
-            "events": [{"step": e.step, "kind": e.kind, "text": e.text}
-                       for e in teacher.events if e.kind in _TEACHING_LINES]}
+    episodes = [
+        {
+            "id": e.id,
+            "pattern": e.pattern,
+            "status": e.status,
+            "n_cycles": e.n_cycles,
+            "n_steps": e.n_steps,
+            "note": e.note,
+        }
+        for e in teacher.memory.episodes()
+        if e.id in kept
+    ]
+    return {
+        "memory": str(teacher.memory.path),
+        "episodes": episodes,
+        "versions_written": [str(v) for v in teacher.versions[1:]],
+        "running_model": teacher.model_path,
+        "events": [
+            {"step": e.step, "kind": e.kind, "text": e.text}
+            for e in teacher.events
+            if e.kind in _TEACHING_LINES
+        ],
+    }
 
 
 @contextlib.contextmanager

@@ -25,8 +25,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     actions = parser.add_subparsers(dest="action", metavar="ACTION", required=True)
     listing = actions.add_parser("list", help="the episodes and the consolidations")
     listing.add_argument("memory", metavar="MEMORY", help="model .npz or .memory.sqlite file")
-    listing.add_argument("--status", choices=("kept", "learned", "discarded"),
-                         help="only episodes of this status")
+    listing.add_argument(
+        "--status", choices=("kept", "learned", "discarded"), help="only episodes of this status"
+    )
     show = actions.add_parser("show", help="one episode in detail")
     show.add_argument("memory", metavar="MEMORY")
     show.add_argument("id", type=int, metavar="ID")
@@ -36,10 +37,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     export = actions.add_parser("export", help="episodes as sequence CSVs")
     export.add_argument("memory", metavar="MEMORY")
     export.add_argument("--out", required=True, metavar="DIR")
-    export.add_argument("--id", type=int, nargs="+", dest="ids", metavar="ID",
-                        help="these episodes (default every episode of --status)")
-    export.add_argument("--status", choices=("kept", "learned", "discarded"),
-                        help="only episodes of this status (default all)")
+    export.add_argument(
+        "--id",
+        type=int,
+        nargs="+",
+        dest="ids",
+        metavar="ID",
+        help="these episodes (default every episode of --status)",
+    )
+    export.add_argument(
+        "--status",
+        choices=("kept", "learned", "discarded"),
+        help="only episodes of this status (default all)",
+    )
 
 
 def _when(seconds: float) -> str:
@@ -62,30 +72,35 @@ def run(args: argparse.Namespace) -> int:
             episodes = memory.episodes(args.status)
             print(f"{memory.path}: {len(episodes)} episode{'' if len(episodes) == 1 else 's'}")
             for e in episodes:
-                print(f"  {e.id:4d}  {_when(e.created_at)}  {e.status:9s}  {e.pattern:12s}  "
-                      f"{e.n_steps:4d} steps, {e.n_cycles} cycles  from {e.source}  "
-                      f"(model {e.model})")
+                print(
+                    f"  {e.id:4d}  {_when(e.created_at)}  {e.status:9s}  {e.pattern:12s}  "
+                    f"{e.n_steps:4d} steps, {e.n_cycles} cycles  from {e.source}  "
+                    f"(model {e.model})"
+                )
             consolidations = memory.consolidations()
             if consolidations:
                 print(f"{len(consolidations)} consolidations")
             for c in consolidations:
                 learned = ", ".join(str(i) for i in c.episode_ids) or "none"
-                print(f"  {c.id:4d}  {_when(c.created_at)}  {c.status:6s}  episodes {learned}, "
-                      f"{c.n_rehearsed} rehearsed sequences, {c.seconds:.1f} s  "
-                      f"{c.model_before} -> {c.model_after}"
-                      + (f"  ({c.message})" if c.message else ""))
+                print(
+                    f"  {c.id:4d}  {_when(c.created_at)}  {c.status:6s}  episodes {learned}, "
+                    f"{c.n_rehearsed} rehearsed sequences, {c.seconds:.1f} s  "
+                    f"{c.model_before} -> {c.model_after}"
+                    + (f"  ({c.message})" if c.message else "")
+                )
         elif args.action == "show":
             episode = memory.episode(args.id)
             e = episode.summary
             print(f"episode {e.id}: pattern {e.pattern!r}, {e.status}")
             print(f"  kept {_when(e.created_at)} from {e.source}, seen by model {e.model}")
-            print(f"  {e.n_steps} steps, {e.n_cycles} whole cycles" + (
-                f"; note: {e.note}" if e.note else ""))
+            print(
+                f"  {e.n_steps} steps, {e.n_cycles} whole cycles"
+                + (f"; note: {e.note}" if e.note else "")
+            )
             low, high = episode.sensory.min(axis=0), episode.sensory.max(axis=0)
             for name, a, b in zip(("lhy", "lhz", "rhy", "rhz"), low, high, strict=True):
                 print(f"  {name} {a:.3f} .. {b:.3f}")
-            print(f"  joint range (rad) {float(np.ptp(episode.motor, axis=0).max()):.3f} at "
-                  "most")
+            print(f"  joint range (rad) {float(np.ptp(episode.motor, axis=0).max()):.3f} at most")
         elif args.action == "forget":
             memory.forget(args.id)
             print(f"forgot episode {args.id} ({memory.path})")
@@ -101,6 +116,8 @@ def run(args: argparse.Namespace) -> int:
                 episode = memory.episode(episode_id)
                 path = out / f"{episode.summary.pattern}_{episode_id}.csv"
                 write_sequence(path, episode.sequence())
-                print(f"episode {episode_id} ({episode.summary.pattern}, "
-                      f"{episode.summary.n_steps} steps) -> {path}")
+                print(
+                    f"episode {episode_id} ({episode.summary.pattern}, "
+                    f"{episode.summary.n_steps} steps) -> {path}"
+                )
     return 0

@@ -33,24 +33,56 @@ Examples:
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("source", metavar="SOURCE", help="where the movement comes from")
-    parser.add_argument("--out", required=True, metavar="DIR",
-                        help="directory to write the sequence CSVs into")
-    parser.add_argument("--pattern", default="new",
-                        help="name of the movement pattern (default: new)")
-    parser.add_argument("--steps", type=int, metavar="N",
-                        help="record at most N steps (synthetic: render N frames, default 200)")
-    parser.add_argument("--cut", choices=("cycles", "length"), default="cycles",
-                        help="cut into whole cycles or fixed-length sequences (default cycles)")
-    parser.add_argument("--cycles", type=int, default=4, metavar="N",
-                        help="whole cycles per sequence with --cut cycles (default 4)")
-    parser.add_argument("--length", type=int, default=50, metavar="STEPS",
-                        help="steps per sequence with --cut length (default 50)")
-    parser.add_argument("--colors", metavar="FILE.json",
-                        help="ball colour ranges (from `rnnpb calibrate`); default red/blue")
-    parser.add_argument("--ball-radius", type=float, default=0.04, metavar="M",
-                        help="the balls' real radius in metres (default 0.04)")
-    parser.add_argument("--plane-x", type=float, metavar="M",
-                        help="x of the hands' plane for sources without depth (default 0.68)")
+    parser.add_argument(
+        "--out", required=True, metavar="DIR", help="directory to write the sequence CSVs into"
+    )
+    parser.add_argument(
+        "--pattern", default="new", help="name of the movement pattern (default: new)"
+    )
+    parser.add_argument(
+        "--steps",
+        type=int,
+        metavar="N",
+        help="record at most N steps (synthetic: render N frames, default 200)",
+    )
+    parser.add_argument(
+        "--cut",
+        choices=("cycles", "length"),
+        default="cycles",
+        help="cut into whole cycles or fixed-length sequences (default cycles)",
+    )
+    parser.add_argument(
+        "--cycles",
+        type=int,
+        default=4,
+        metavar="N",
+        help="whole cycles per sequence with --cut cycles (default 4)",
+    )
+    parser.add_argument(
+        "--length",
+        type=int,
+        default=50,
+        metavar="STEPS",
+        help="steps per sequence with --cut length (default 50)",
+    )
+    parser.add_argument(
+        "--colors",
+        metavar="FILE.json",
+        help="ball colour ranges (from `rnnpb calibrate`); default red/blue",
+    )
+    parser.add_argument(
+        "--ball-radius",
+        type=float,
+        default=0.04,
+        metavar="M",
+        help="the balls' real radius in metres (default 0.04)",
+    )
+    parser.add_argument(
+        "--plane-x",
+        type=float,
+        metavar="M",
+        help="x of the hands' plane for sources without depth (default 0.68)",
+    )
     parser.add_argument("--dt", type=float, default=0.4, help="seconds per step (default 0.4)")
     parser.add_argument("--seed", type=int, default=0, help="seed of a synthetic source")
 
@@ -72,24 +104,37 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise ConfigError(f"--out {out}: exists and is not a directory")
-    source = open_source(args.source, seed=args.seed, dt=args.dt, colors=args.colors,
-                         steps=args.steps)
+    source = open_source(
+        args.source, seed=args.seed, dt=args.dt, colors=args.colors, steps=args.steps
+    )
     with source:
         demonstration = record_demonstration(
-            source, steps=args.steps, depth=DepthConfig(ball_radius_m=args.ball_radius),
-            plane_x=MOUSE_PLANE_X if args.plane_x is None else args.plane_x)
-    sequences = cut_sequences(demonstration, args.pattern, mode=args.cut,
-                              cycles_per_sequence=args.cycles, length=args.length)
+            source,
+            steps=args.steps,
+            depth=DepthConfig(ball_radius_m=args.ball_radius),
+            plane_x=MOUSE_PLANE_X if args.plane_x is None else args.plane_x,
+        )
+    sequences = cut_sequences(
+        demonstration,
+        args.pattern,
+        mode=args.cut,
+        cycles_per_sequence=args.cycles,
+        length=args.length,
+    )
     out.mkdir(parents=True, exist_ok=True)
     for i, sequence in enumerate(sequences, 1):
         write_sequence(out / f"{args.pattern}_{i}.csv", sequence)
     valid = demonstration.valid
     reach = demonstration.ik_residual[valid]
-    print(f"recorded {demonstration.n_steps} steps from {demonstration.source} "
-          f"(depth from {'ball size' if demonstration.depth == 'size' else 'a fixed plane'}); "
-          f"{int(valid.sum())} with both hands recovered")
+    print(
+        f"recorded {demonstration.n_steps} steps from {demonstration.source} "
+        f"(depth from {'ball size' if demonstration.depth == 'size' else 'a fixed plane'}); "
+        f"{int(valid.sum())} with both hands recovered"
+    )
     if len(reach):
         print(f"robot hands within {float(np.max(reach)) * 100:.1f} cm of their targets")
-    print(f"{len(sequences)} sequences of pattern {args.pattern!r} "
-          f"({', '.join(str(s.n_steps) for s in sequences)} steps) -> {out}")
+    print(
+        f"{len(sequences)} sequences of pattern {args.pattern!r} "
+        f"({', '.join(str(s.n_steps) for s in sequences)} steps) -> {out}"
+    )
     return 0

@@ -27,12 +27,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     actions = parser.add_subparsers(dest="action", required=True, metavar="ACTION")
     learn = actions.add_parser("learn", help="explore the PB space and learn the map")
     learn.add_argument("--model", required=True, metavar="MODEL", help="trained model (.npz)")
-    learn.add_argument("--out", metavar="MAP", help="where to write the map "
-                       "(default: MODEL.safety.npz beside the model)")
-    learn.add_argument("--samples", type=int, default=2000,
-                       help="PB values explored (default 2000)")
-    learn.add_argument("--steps", type=int, default=80,
-                       help="closed-loop steps generated from each (default 80)")
+    learn.add_argument(
+        "--out",
+        metavar="MAP",
+        help="where to write the map (default: MODEL.safety.npz beside the model)",
+    )
+    learn.add_argument(
+        "--samples", type=int, default=2000, help="PB values explored (default 2000)"
+    )
+    learn.add_argument(
+        "--steps", type=int, default=80, help="closed-loop steps generated from each (default 80)"
+    )
     learn.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     learn.add_argument("--no-progress", action="store_true", help="no progress bar")
     show = actions.add_parser("show", help="describe the stored map")
@@ -65,8 +70,7 @@ def run(args: argparse.Namespace) -> int:
             bar.update(done - bar.n)
 
     try:
-        stored = learn_safety_map(model, exploration, MetaConfig(seed=args.seed),
-                                  progress=progress)
+        stored = learn_safety_map(model, exploration, MetaConfig(seed=args.seed), progress=progress)
     finally:
         if bar is not None:
             bar.close()

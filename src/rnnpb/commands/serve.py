@@ -38,30 +38,55 @@ Examples:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--model", metavar="MODEL_OR_DIR",
-                        help="a trained model (.npz) or a folder searched for *.npz "
-                             "(default: ./models/, ./results/demo/models/, else the model "
-                             "shipped with rnnpb)")
-    parser.add_argument("--host", default="127.0.0.1",
-                        help="address to listen on (default 127.0.0.1: this computer only)")
+    parser.add_argument(
+        "--model",
+        metavar="MODEL_OR_DIR",
+        help="a trained model (.npz) or a folder searched for *.npz "
+        "(default: ./models/, ./results/demo/models/, else the model "
+        "shipped with rnnpb)",
+    )
+    parser.add_argument(
+        "--host",
+        default="127.0.0.1",
+        help="address to listen on (default 127.0.0.1: this computer only)",
+    )
     parser.add_argument("--port", type=int, default=8765, help="port (default 8765; 0: any free)")
-    parser.add_argument("--dt", type=float, default=0.4,
-                        help="seconds per network step (default 0.4, as in the paper; "
-                             "changeable on the page)")
-    parser.add_argument("--allow-host", action="append", default=[], metavar="NAME",
-                        help="also answer requests addressed to this host name or IP address "
-                             "(repeatable; 127.0.0.1, localhost, [::1] and --host always are)")
-    parser.add_argument("--allow-origin", action="append", default=[], metavar="ORIGIN",
-                        help="also accept the WebSocket of pages from this origin, "
-                             "scheme://host[:port] (repeatable; the server's own page "
-                             "always is)")
-    parser.add_argument("--no-safety", action="store_true",
-                        help="no command filter and no PB guard (docs/safety.md; by default "
-                        "the filter checks every command, and a model's safety map beside it "
-                        "guards its PB)")
-    parser.add_argument("--log-level", default="warning",
-                        choices=("debug", "info", "warning", "error"),
-                        help="server log detail (default warning)")
+    parser.add_argument(
+        "--dt",
+        type=float,
+        default=0.4,
+        help="seconds per network step (default 0.4, as in the paper; changeable on the page)",
+    )
+    parser.add_argument(
+        "--allow-host",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help="also answer requests addressed to this host name or IP address "
+        "(repeatable; 127.0.0.1, localhost, [::1] and --host always are)",
+    )
+    parser.add_argument(
+        "--allow-origin",
+        action="append",
+        default=[],
+        metavar="ORIGIN",
+        help="also accept the WebSocket of pages from this origin, "
+        "scheme://host[:port] (repeatable; the server's own page "
+        "always is)",
+    )
+    parser.add_argument(
+        "--no-safety",
+        action="store_true",
+        help="no command filter and no PB guard (docs/safety.md; by default "
+        "the filter checks every command, and a model's safety map beside it "
+        "guards its PB)",
+    )
+    parser.add_argument(
+        "--log-level",
+        default="warning",
+        choices=("debug", "info", "warning", "error"),
+        help="server log detail (default warning)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -84,16 +109,25 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb.models import default_model
 
     models = find_models(args.model if args.model is not None else default_model())
-    server = DashboardServer(models, host=args.host, port=args.port, dt=args.dt,
-                             log_level=args.log_level, allow_hosts=access.hosts,
-                             allow_origins=access.origins)
+    server = DashboardServer(
+        models,
+        host=args.host,
+        port=args.port,
+        dt=args.dt,
+        log_level=args.log_level,
+        allow_hosts=access.hosts,
+        allow_origins=access.origins,
+    )
     server.session.safety_enabled = not args.no_safety  # read when a model loads
     server.start()
-    print(f"rnnpb dashboard: {server.url}  (models: {', '.join(models)}; Ctrl-C to stop)",
-          flush=True)
-    print(f"answering for: {', '.join(access.allowed_hosts)}"
-          + (f"; pages from: {', '.join(access.origins)}" if access.origins else ""),
-          flush=True)
+    print(
+        f"rnnpb dashboard: {server.url}  (models: {', '.join(models)}; Ctrl-C to stop)", flush=True
+    )
+    print(
+        f"answering for: {', '.join(access.allowed_hosts)}"
+        + (f"; pages from: {', '.join(access.origins)}" if access.origins else ""),
+        flush=True,
+    )
     _print_safety(models, args.no_safety)
     try:
         server.wait()
@@ -124,8 +158,10 @@ def _check_port_free(host: str, port: int) -> None:
         except OSError as error:
             reason = error.strerror or str(error)
             if error.errno == errno.EADDRINUSE:
-                reason = ("the port is in use (another `rnnpb serve`?); choose another with "
-                          "--port, or --port 0 for any free one")
+                reason = (
+                    "the port is in use (another `rnnpb serve`?); choose another with "
+                    "--port, or --port 0 for any free one"
+                )
             raise ConfigError(f"cannot serve on {host}:{port}: {reason}") from None
 
 
@@ -137,7 +173,12 @@ def _print_safety(models: dict, off: bool) -> None:
         print("safety: off (--no-safety): no command filter, no PB guard", flush=True)
         return
     mapped = [name for name, path in models.items() if safety_map_path(path).exists()]
-    print("safety: the command filter checks every command; "
-          + (f"safety maps guard the PB of {', '.join(mapped)}" if mapped else
-             "no model has a safety map (`rnnpb safety learn`), so the filter alone guards"),
-          flush=True)
+    print(
+        "safety: the command filter checks every command; "
+        + (
+            f"safety maps guard the PB of {', '.join(mapped)}"
+            if mapped
+            else "no model has a safety map (`rnnpb safety learn`), so the filter alone guards"
+        ),
+        flush=True,
+    )

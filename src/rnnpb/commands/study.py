@@ -21,12 +21,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     # `rnnpb --help` stays fast. docs/experiments.md describes each study.
     from rnnpb.experiments.studies import study_names
 
-    parser.add_argument("name", metavar="NAME", choices=study_names(),
-                        help="the study: " + ", ".join(study_names()))
+    parser.add_argument(
+        "name", metavar="NAME", choices=study_names(), help="the study: " + ", ".join(study_names())
+    )
     parser.add_argument("--out", required=True, metavar="DIR", help="output directory")
     parser.add_argument("--quick", action="store_true", help="the short form")
-    parser.add_argument("--workers", type=int, default=2,
-                        help="parallel worker processes (default 2)")
+    parser.add_argument(
+        "--workers", type=int, default=2, help="parallel worker processes (default 2)"
+    )
     parser.add_argument("--seed", type=int, default=0, help="the first seed (default 0)")
 
 
@@ -38,8 +40,7 @@ def run(args: argparse.Namespace) -> int:
     study = load_study(args.name)
     options = StudyOptions(quick=args.quick, workers=args.workers, seed=args.seed)
     outcome = study.run(Path(args.out), options)
-    print(f"wrote {args.out}/report.md and {args.out}/results.json in "
-          f"{outcome.runtime_s:.0f} s")
+    print(f"wrote {args.out}/report.md and {args.out}/results.json in {outcome.runtime_s:.0f} s")
     for key, target in outcome.targets.items():
         print(f"  {key}: {'met' if target.met else 'NOT met'} ({target.detail})")
     return 0

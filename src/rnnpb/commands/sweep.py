@@ -25,11 +25,20 @@ Example:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("spec", metavar="SPEC", help="the sweep's TOML file")
     parser.add_argument("--out", required=True, metavar="DIR", help="output directory")
-    parser.add_argument("--address", metavar="ADDRESS", default=None,
-                        help="an existing Ray cluster (HOST:PORT, ray://HOST:PORT or auto); "
-                        "default: a local instance")
-    parser.add_argument("--workers", type=int, default=None, metavar="N",
-                        help="runs at once (default: every CPU of the machine or cluster)")
+    parser.add_argument(
+        "--address",
+        metavar="ADDRESS",
+        default=None,
+        help="an existing Ray cluster (HOST:PORT, ray://HOST:PORT or auto); "
+        "default: a local instance",
+    )
+    parser.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        metavar="N",
+        help="runs at once (default: every CPU of the machine or cluster)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -43,8 +52,10 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(f"--workers must be >= 1, got {args.workers}")
     spec = load_spec(args.spec)
     outcome = run_sweep(spec, args.out, address=args.address, workers=args.workers)
-    print(f"wrote {outcome.table}, {args.out}/report.md and {args.out}/results.json in "
-          f"{outcome.runtime_s:.0f} s ({outcome.ran} runs run, "
-          f"{len(outcome.records) - outcome.ran} finished before, "
-          f"{len(outcome.failed)} failed)")
+    print(
+        f"wrote {outcome.table}, {args.out}/report.md and {args.out}/results.json in "
+        f"{outcome.runtime_s:.0f} s ({outcome.ran} runs run, "
+        f"{len(outcome.records) - outcome.ran} finished before, "
+        f"{len(outcome.failed)} failed)"
+    )
     return 1 if outcome.failed else 0

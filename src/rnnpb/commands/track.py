@@ -25,23 +25,43 @@ Examples:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("source", metavar="SOURCE",
-                        help="webcam:INDEX, video:PATH, images:DIR or synthetic:PATTERN")
-    parser.add_argument("--out", required=True, metavar="FILE.csv",
-                        help="where to write the sensory stream")
-    parser.add_argument("--colors", metavar="FILE.json",
-                        help="ball colour ranges (from `rnnpb calibrate`); default red/blue")
-    parser.add_argument("--steps", type=int, metavar="N",
-                        help="track at most N frames (synthetic: render N frames, default 200)")
-    parser.add_argument("--render", metavar="OUT.mp4",
-                        help="also write a video (.mp4 or .avi) with the tracked balls marked")
-    parser.add_argument("--fps", type=float, default=10.0,
-                        help="frame rate of the --render video (default 10)")
-    parser.add_argument("--smoothing", type=float, default=0.0,
-                        help="exponential smoothing of the ball centres in [0, 1) (default 0)")
+    parser.add_argument(
+        "source", metavar="SOURCE", help="webcam:INDEX, video:PATH, images:DIR or synthetic:PATTERN"
+    )
+    parser.add_argument(
+        "--out", required=True, metavar="FILE.csv", help="where to write the sensory stream"
+    )
+    parser.add_argument(
+        "--colors",
+        metavar="FILE.json",
+        help="ball colour ranges (from `rnnpb calibrate`); default red/blue",
+    )
+    parser.add_argument(
+        "--steps",
+        type=int,
+        metavar="N",
+        help="track at most N frames (synthetic: render N frames, default 200)",
+    )
+    parser.add_argument(
+        "--render",
+        metavar="OUT.mp4",
+        help="also write a video (.mp4 or .avi) with the tracked balls marked",
+    )
+    parser.add_argument(
+        "--fps", type=float, default=10.0, help="frame rate of the --render video (default 10)"
+    )
+    parser.add_argument(
+        "--smoothing",
+        type=float,
+        default=0.0,
+        help="exponential smoothing of the ball centres in [0, 1) (default 0)",
+    )
     parser.add_argument("--seed", type=int, default=0, help="seed of the synthetic source")
-    parser.add_argument("--no-progress", action="store_true",
-                        help="no progress bar (there is none when stderr is not a terminal)")
+    parser.add_argument(
+        "--no-progress",
+        action="store_true",
+        help="no progress bar (there is none when stderr is not a terminal)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -72,20 +92,26 @@ def run(args: argparse.Namespace) -> int:
     config = TrackerConfig(smoothing=args.smoothing)
     if args.colors:
         config = replace(config, colors=load_ball_colors(args.colors))
-    source = open_camera_source(spec.kind, spec.argument, tracker_config=config,
-                                steps=args.steps, seed=args.seed)
+    source = open_camera_source(
+        spec.kind, spec.argument, tracker_config=config, steps=args.steps, seed=args.seed
+    )
     rows = []
     writer = VideoWriter(args.render, args.fps) if args.render else None
     ok = False
     try:
-        with source, progress_bar(total=args.steps, unit="frame", desc="tracking",
-                                  disable=args.no_progress) as bar:
+        with (
+            source,
+            progress_bar(
+                total=args.steps, unit="frame", desc="tracking", disable=args.no_progress
+            ) as bar,
+        ):
             while (observation := source.read()) is not None:
                 rows.append(observation.sensory)
                 bar.update(1)
                 if writer is not None and source.last_result is not None:
-                    writer.write(draw_tracking(observation.frame, source.last_result,
-                                               config.colors))
+                    writer.write(
+                        draw_tracking(observation.frame, source.last_result, config.colors)
+                    )
         ok = True
     finally:
         if writer is not None:
@@ -98,8 +124,10 @@ def run(args: argparse.Namespace) -> int:
     n = len(rows)
     left, right = (int(v) for v in source.lost_frames)
     print(f"tracked {n} frames from {source.description} -> {args.out}")
-    print(f"left ball ({config.colors.left.name}) lost in {left} of {n} frames, "
-          f"right ball ({config.colors.right.name}) lost in {right} of {n} frames")
+    print(
+        f"left ball ({config.colors.left.name}) lost in {left} of {n} frames, "
+        f"right ball ({config.colors.right.name}) lost in {right} of {n} frames"
+    )
     if writer is not None:
         print(f"marked video -> {args.render}")
     return 0

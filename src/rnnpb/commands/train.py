@@ -32,33 +32,56 @@ Example:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--data", nargs="+", required=True, metavar="FILE_OR_DIR",
-                        help="sequence CSV files, or directories of them")
-    parser.add_argument("--out", required=True, metavar="MODEL",
-                        help="where to write the trained model (.npz)")
-    parser.add_argument("--preset", choices=("paper", "fast"), default="paper",
-                        help="training algorithm preset (default: paper)")
+    parser.add_argument(
+        "--data",
+        nargs="+",
+        required=True,
+        metavar="FILE_OR_DIR",
+        help="sequence CSV files, or directories of them",
+    )
+    parser.add_argument(
+        "--out", required=True, metavar="MODEL", help="where to write the trained model (.npz)"
+    )
+    parser.add_argument(
+        "--preset",
+        choices=("paper", "fast"),
+        default="paper",
+        help="training algorithm preset (default: paper)",
+    )
     parser.add_argument("--iterations", type=int, help="learning iterations")
-    parser.add_argument("--optimizer", choices=("momentum", "adam"),
-                        help="weight update rule")
+    parser.add_argument("--optimizer", choices=("momentum", "adam"), help="weight update rule")
     parser.add_argument("--learning-rate", type=float, help="weight learning rate")
     parser.add_argument("--pb-learning-rate", type=float, help="PB learning rate (eq. 2's ε)")
-    parser.add_argument("--integration-length", type=int,
-                        help="PB integration length l of eq. 1 (steps)")
-    parser.add_argument("--input-noise", type=float,
-                        help="std. dev. of noise on the teacher-forced inputs")
+    parser.add_argument(
+        "--integration-length", type=int, help="PB integration length l of eq. 1 (steps)"
+    )
+    parser.add_argument(
+        "--input-noise", type=float, help="std. dev. of noise on the teacher-forced inputs"
+    )
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     parser.add_argument("--hidden", type=int, default=40, help="hidden units (default 40)")
     parser.add_argument("--context", type=int, default=30, help="context units (default 30)")
     parser.add_argument("--pb-size", type=int, default=4, help="PB units (default 4)")
-    parser.add_argument("--checkpoint-every", type=int, default=5000, metavar="N",
-                        help="write a checkpoint every N iterations (default 5000)")
-    parser.add_argument("--resume", action="store_true",
-                        help="continue from MODEL.checkpoint.npz if it exists")
-    parser.add_argument("--keep-checkpoint", action="store_true",
-                        help="keep MODEL.checkpoint.npz after the model is written")
-    parser.add_argument("--no-progress", action="store_true",
-                        help="no progress bar (there is none when stderr is not a terminal)")
+    parser.add_argument(
+        "--checkpoint-every",
+        type=int,
+        default=5000,
+        metavar="N",
+        help="write a checkpoint every N iterations (default 5000)",
+    )
+    parser.add_argument(
+        "--resume", action="store_true", help="continue from MODEL.checkpoint.npz if it exists"
+    )
+    parser.add_argument(
+        "--keep-checkpoint",
+        action="store_true",
+        help="keep MODEL.checkpoint.npz after the model is written",
+    )
+    parser.add_argument(
+        "--no-progress",
+        action="store_true",
+        help="no progress bar (there is none when stderr is not a terminal)",
+    )
 
 
 def checkpoint_path_for(model_path: str) -> str:
@@ -90,24 +113,39 @@ def run(args: argparse.Namespace) -> int:
     step_count("--checkpoint-every", args.checkpoint_every, high=10_000_000)
     sequences = read_sequence_files(args.data)
     config = TrainConfig.paper() if args.preset == "paper" else TrainConfig.fast()
-    changes = {k: v for k, v in {
-        "iterations": args.iterations, "optimizer": args.optimizer,
-        "learning_rate": args.learning_rate, "input_noise": args.input_noise}.items()
-        if v is not None}
-    pb_changes = {k: v for k, v in {"learning_rate": args.pb_learning_rate,
-                                    "integration_length": args.integration_length}.items()
-                  if v is not None}
+    changes = {
+        k: v
+        for k, v in {
+            "iterations": args.iterations,
+            "optimizer": args.optimizer,
+            "learning_rate": args.learning_rate,
+            "input_noise": args.input_noise,
+        }.items()
+        if v is not None
+    }
+    pb_changes = {
+        k: v
+        for k, v in {
+            "learning_rate": args.pb_learning_rate,
+            "integration_length": args.integration_length,
+        }.items()
+        if v is not None
+    }
     if pb_changes:
         changes["pb"] = replace(config.pb, **pb_changes)
     config = replace(config, seed=args.seed, checkpoint_every=args.checkpoint_every, **changes)
-    network = NetworkConfig(pb_size=args.pb_size, hidden_size=args.hidden,
-                            context_size=args.context)
+    network = NetworkConfig(
+        pb_size=args.pb_size, hidden_size=args.hidden, context_size=args.context
+    )
     patterns = sorted({s.pattern for s in sequences})
-    print(f"training on {len(sequences)} sequences of {len(patterns)} pattern(s): "
-          f"{', '.join(patterns)}; {config.iterations} iterations ({args.preset} preset, "
-          f"{config.optimizer})")
-    bar = progress_bar(total=config.iterations, unit="it", desc="training",
-                       disable=args.no_progress)
+    print(
+        f"training on {len(sequences)} sequences of {len(patterns)} pattern(s): "
+        f"{', '.join(patterns)}; {config.iterations} iterations ({args.preset} preset, "
+        f"{config.optimizer})"
+    )
+    bar = progress_bar(
+        total=config.iterations, unit="it", desc="training", disable=args.no_progress
+    )
 
     def after_chunk(progress) -> None:
         bar.update(progress.iteration - bar.n)
@@ -117,8 +155,15 @@ def run(args: argparse.Namespace) -> int:
 
     checkpoint = Path(checkpoint_path_for(args.out))
     try:
-        model = train(sequences, JOINT_LIMITS, network, config, progress=after_chunk,
-                      checkpoint_path=checkpoint, resume=args.resume)
+        model = train(
+            sequences,
+            JOINT_LIMITS,
+            network,
+            config,
+            progress=after_chunk,
+            checkpoint_path=checkpoint,
+            resume=args.resume,
+        )
     finally:
         bar.close()
     _interrupt.check()  # interrupted during the last chunk: no model file
@@ -131,8 +176,10 @@ def run(args: argparse.Namespace) -> int:
     mse = np.asarray(info["mse_per_output"])
     names = (*SENSORY_NAMES, *MOTOR_NAMES)
     print(f"wrote {args.out} after {info['iterations']} iterations in {info['seconds']:.1f} s")
-    print(f"final mean squared error per output: max {mse.max():.2e}, mean {mse.mean():.2e} "
-          f"(RMS max {np.sqrt(mse.max()):.2e}); worst output: {names[int(mse.argmax())]}")
+    print(
+        f"final mean squared error per output: max {mse.max():.2e}, mean {mse.mean():.2e} "
+        f"(RMS max {np.sqrt(mse.max()):.2e}); worst output: {names[int(mse.argmax())]}"
+    )
     for name, pb in model.pattern_pb.items():
         print(f"  pattern {name}: PB = {np.array2string(pb, precision=3)}")
     return 0

@@ -43,8 +43,11 @@ STATUS_COLUMNS = ("truth_pattern", "recognised", "confidence", "novelty", "unsaf
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("session", metavar="SESSION", help="session.csv or a folder holding it")
-    parser.add_argument("--save", metavar="FILE.rrd",
-                        help="write a rerun recording file instead of opening the viewer")
+    parser.add_argument(
+        "--save",
+        metavar="FILE.rrd",
+        help="write a rerun recording file instead of opening the viewer",
+    )
 
 
 def _import_rerun():
@@ -53,8 +56,10 @@ def _import_rerun():
     try:
         import rerun
     except ImportError:
-        raise ConfigError("rnnpb view needs the rerun viewer: pip install 'rnnpb[view]' "
-                          "(or pip install rerun-sdk)") from None
+        raise ConfigError(
+            "rnnpb view needs the rerun viewer: pip install 'rnnpb[view]' "
+            "(or pip install rerun-sdk)"
+        ) from None
     return rerun
 
 
@@ -91,11 +96,13 @@ def arm_strips(joints: np.ndarray) -> np.ndarray:
 
     hands, elbows = forward_kinematics(joints)
     hip = np.array([0.0, 0.0, 0.0])
-    return np.stack([
-        np.stack([SHOULDERS[0], elbows[0], hands[0]]),
-        np.stack([SHOULDERS[1], elbows[1], hands[1]]),
-        np.stack([SHOULDERS[0], hip, SHOULDERS[1]]),
-    ])
+    return np.stack(
+        [
+            np.stack([SHOULDERS[0], elbows[0], hands[0]]),
+            np.stack([SHOULDERS[1], elbows[1], hands[1]]),
+            np.stack([SHOULDERS[0], hip, SHOULDERS[1]]),
+        ]
+    )
 
 
 def log_session(session: dict[str, np.ndarray], recording: Any, rr: Any) -> int:
@@ -113,50 +120,69 @@ def log_session(session: dict[str, np.ndarray], recording: Any, rr: Any) -> int:
         index.append(rr.TimeColumn("time", duration=np.asarray(times, dtype=np.float64)))
 
     def series(path: str, values: np.ndarray) -> None:
-        rr.send_columns(path, indexes=index,
-                        columns=rr.Scalars.columns(scalars=np.asarray(values, np.float64)),
-                        recording=recording)
+        rr.send_columns(
+            path,
+            indexes=index,
+            columns=rr.Scalars.columns(scalars=np.asarray(values, np.float64)),
+            recording=recording,
+        )
 
     for name in MOTOR_NAMES:
         series(f"joints/{name}", session[name])
-    pb_names = sorted((c for c in session if c.startswith("pb") and c[2:].isdigit()),
-                      key=lambda c: int(c[2:]))
+    pb_names = sorted(
+        (c for c in session if c.startswith("pb") and c[2:].isdigit()), key=lambda c: int(c[2:])
+    )
     for name in pb_names:
         series(f"pb/{name}", session[name])
     for name in ("prediction_error", "window_error"):
         if name in session:
             series(f"errors/{name}", session[name])
     # The view plane as the camera sees it: y to the right, z up (rerun's 2-D y points down).
-    rr.log("hands/frame", rr.Boxes2D(mins=[0, 0], sizes=[1, 1], colors=[(160, 160, 160)]),
-           static=True, recording=recording)
+    rr.log(
+        "hands/frame",
+        rr.Boxes2D(mins=[0, 0], sizes=[1, 1], colors=[(160, 160, 160)]),
+        static=True,
+        recording=recording,
+    )
     observed = np.stack([session[name] for name in SENSORY_NAMES], axis=1)
-    predicted = (np.stack([session[PREDICTED_PREFIX + name] for name in SENSORY_NAMES], axis=1)
-                 if all(PREDICTED_PREFIX + name in session for name in SENSORY_NAMES)
-                 else np.full_like(observed, np.nan))
+    predicted = (
+        np.stack([session[PREDICTED_PREFIX + name] for name in SENSORY_NAMES], axis=1)
+        if all(PREDICTED_PREFIX + name in session for name in SENSORY_NAMES)
+        else np.full_like(observed, np.nan)
+    )
     motor = np.stack([session[name] for name in MOTOR_NAMES], axis=1)
     status = [c for c in STATUS_COLUMNS if c in session]
     for i in range(n):
         rr.set_time("step", sequence=int(steps[i]), recording=recording)
         if len(index) > 1:
             rr.set_time("time", duration=float(times[i]), recording=recording)
-        for what, values, radius in (("observed", observed[i], 0.025),
-                                     ("predicted", predicted[i], 0.04)):
+        for what, values, radius in (
+            ("observed", observed[i], 0.025),
+            ("predicted", predicted[i], 0.04),
+        ):
             points = values.reshape(2, 2)
             seen = np.all(np.isfinite(points), axis=1)
             colours = np.array([LEFT_RGB, RIGHT_RGB])[seen]
             xy = np.column_stack([points[seen, 0], 1.0 - points[seen, 1]])
-            rr.log(f"hands/{what}", rr.Points2D(xy, radii=radius, colors=colours),
-                   recording=recording)
+            rr.log(
+                f"hands/{what}", rr.Points2D(xy, radii=radius, colors=colours), recording=recording
+            )
         if np.all(np.isfinite(motor[i])):
-            rr.log("robot/arms", rr.LineStrips3D(arm_strips(motor[i]), radii=0.012,
-                                                 colors=[LEFT_RGB, RIGHT_RGB, (90, 90, 90)]),
-                   recording=recording)
+            rr.log(
+                "robot/arms",
+                rr.LineStrips3D(
+                    arm_strips(motor[i]), radii=0.012, colors=[LEFT_RGB, RIGHT_RGB, (90, 90, 90)]
+                ),
+                recording=recording,
+            )
         for name in status:
             value = session[name][i]
-            text = "" if value is None or (isinstance(value, float) and np.isnan(value)) \
+            text = (
+                ""
+                if value is None or (isinstance(value, float) and np.isnan(value))
                 else str(value)
-            rr.log(f"status/{name}", rr.TextLog(f"{name}: {text or '—'}"),
-                   recording=recording)
+            )
+            rr.log(f"status/{name}", rr.TextLog(f"{name}: {text or '—'}"), recording=recording)
     return n
 
 

@@ -18,8 +18,13 @@ LEARNING_SETS_FILE = "learning_sets.json"
 PATTERNS_DIR = "patterns"
 
 
-def write_dataset(out: str | os.PathLike[str], seed: int = 0, period_steps: float = 12.0,
-                  n_steps: int = 50, samples_per_pattern: int = 2) -> dict[str, Any]:
+def write_dataset(
+    out: str | os.PathLike[str],
+    seed: int = 0,
+    period_steps: float = 12.0,
+    n_steps: int = 50,
+    samples_per_pattern: int = 2,
+) -> dict[str, Any]:
     """Write the four patterns' demonstrations and the learning-set index.
 
     ``learning_sets.json`` maps each learning set (``"1"``-``"4"``, ``"full"``) to its
@@ -44,17 +49,27 @@ def write_dataset(out: str | os.PathLike[str], seed: int = 0, period_steps: floa
     index = {
         "format": "rnnpb-learning-sets",
         "version": 1,
-        "generator": {"seed": seed, "period_steps": period_steps, "dt": config.dt,
-                      "n_steps": n_steps, "samples_per_pattern": samples_per_pattern},
-        "patterns": {p: {"description": PATTERN_DESCRIPTIONS[p], "files": files[p]}
-                     for p in PATTERNS},
-        "learning_sets": {name: {"patterns": list(patterns),
-                                 "files": [f for p in patterns for f in files[p]]}
-                          for name, patterns in LEARNING_SETS.items()},
+        "generator": {
+            "seed": seed,
+            "period_steps": period_steps,
+            "dt": config.dt,
+            "n_steps": n_steps,
+            "samples_per_pattern": samples_per_pattern,
+        },
+        "patterns": {
+            p: {"description": PATTERN_DESCRIPTIONS[p], "files": files[p]} for p in PATTERNS
+        },
+        "learning_sets": {
+            name: {"patterns": list(patterns), "files": [f for p in patterns for f in files[p]]}
+            for name, patterns in LEARNING_SETS.items()
+        },
     }
     with atomic_write(out / LEARNING_SETS_FILE, "w", encoding="utf-8") as handle:
         json.dump(index, handle, indent=2)
         handle.write("\n")
-    return {"files": [out / f for p in PATTERNS for f in files[p]],
-            "patterns_dir": out / PATTERNS_DIR, "learning_sets": out / LEARNING_SETS_FILE,
-            "sequences": sequences}
+    return {
+        "files": [out / f for p in PATTERNS for f in files[p]],
+        "patterns_dir": out / PATTERNS_DIR,
+        "learning_sets": out / LEARNING_SETS_FILE,
+        "sequences": sequences,
+    }

@@ -48,13 +48,20 @@ def novel_pattern(learning_set: str | int) -> str:
 
 def sample_rng(seed: int, pattern: str, sample: int) -> np.random.Generator:
     """The random stream of one demonstration."""
-    return np.random.default_rng([int(seed), MOVEMENTS.index(resolve_pattern(pattern)),
-                                  int(sample)])
+    return np.random.default_rng(
+        [int(seed), MOVEMENTS.index(resolve_pattern(pattern)), int(sample)]
+    )
 
 
-def demonstration(pattern: str, rng: np.random.Generator, n_steps: int = DEFAULT_STEPS,
-                  config: PatternConfig | None = None, mapping: MirrorMapping | None = None,
-                  camera: RobotCamera | None = None, source: str = "") -> Sequence:
+def demonstration(
+    pattern: str,
+    rng: np.random.Generator,
+    n_steps: int = DEFAULT_STEPS,
+    config: PatternConfig | None = None,
+    mapping: MirrorMapping | None = None,
+    camera: RobotCamera | None = None,
+    source: str = "",
+) -> Sequence:
     """One demonstration of a pattern as a paired sensory/motor :class:`Sequence`.
 
     The sensory values are the measured hands as the robot camera sees them; the motor values
@@ -75,14 +82,23 @@ def demonstration(pattern: str, rng: np.random.Generator, n_steps: int = DEFAULT
         motor=ik.joints,
         pattern=pattern,
         source=source or f"synthetic pattern {pattern}",
-        meta={"hands": motion.hands, "measured": motion.measured, "phase": motion.phase,
-              "ik_residual": ik.residual, "dt": config.dt},
+        meta={
+            "hands": motion.hands,
+            "measured": motion.measured,
+            "phase": motion.phase,
+            "ik_residual": ik.residual,
+            "dt": config.dt,
+        },
     )
 
 
-def pattern_dataset(seed: int = 0, patterns: tuple[str, ...] = PATTERNS,
-                    samples_per_pattern: int = DEFAULT_SAMPLES, n_steps: int = DEFAULT_STEPS,
-                    config: PatternConfig | None = None) -> list[Sequence]:
+def pattern_dataset(
+    seed: int = 0,
+    patterns: tuple[str, ...] = PATTERNS,
+    samples_per_pattern: int = DEFAULT_SAMPLES,
+    n_steps: int = DEFAULT_STEPS,
+    config: PatternConfig | None = None,
+) -> list[Sequence]:
     """Demonstrations of each pattern (``samples_per_pattern`` each, pattern by pattern).
 
     Sample ``k`` of a pattern has ``meta["sample"] == k`` and ``source``
@@ -96,16 +112,26 @@ def pattern_dataset(seed: int = 0, patterns: tuple[str, ...] = PATTERNS,
     out = []
     for pattern in (resolve_pattern(p) for p in patterns):
         for k in range(samples_per_pattern):
-            seq = demonstration(pattern, sample_rng(seed, pattern, k), n_steps, config, mapping,
-                                camera, f"synthetic pattern {pattern} sample {k + 1} seed {seed}")
+            seq = demonstration(
+                pattern,
+                sample_rng(seed, pattern, k),
+                n_steps,
+                config,
+                mapping,
+                camera,
+                f"synthetic pattern {pattern} sample {k + 1} seed {seed}",
+            )
             seq.meta["sample"] = k + 1
             out.append(seq)
     return out
 
 
-def learning_set(name: str | int, seed: int = 0, samples_per_pattern: int = DEFAULT_SAMPLES,
-                 n_steps: int = DEFAULT_STEPS, config: PatternConfig | None = None
-                 ) -> list[Sequence]:
+def learning_set(
+    name: str | int,
+    seed: int = 0,
+    samples_per_pattern: int = DEFAULT_SAMPLES,
+    n_steps: int = DEFAULT_STEPS,
+    config: PatternConfig | None = None,
+) -> list[Sequence]:
     """The training sequences of a learning set (paper: 3 patterns x 2 samples of 50 steps)."""
-    return pattern_dataset(seed, learning_set_patterns(name), samples_per_pattern, n_steps,
-                           config)
+    return pattern_dataset(seed, learning_set_patterns(name), samples_per_pattern, n_steps, config)

@@ -68,4 +68,3 @@ class MirrorMapping:
     def motor_from_hands(self, hands: np.ndarray) -> np.ndarray:
         """User hands (..., 2, 3) → robot joint angles (..., 8), radians."""
         return self.inverse_kinematics(hands).joints
-

@@ -75,9 +75,14 @@ class Scenario:
         }
 
 
-def make_scenario(segments: list[tuple[str, int]], seed: int = 0,
-                  config: PatternConfig | None = None, name: str = "",
-                  novel: tuple[str, ...] = (), transition_steps: int = 2) -> Scenario:
+def make_scenario(
+    segments: list[tuple[str, int]],
+    seed: int = 0,
+    config: PatternConfig | None = None,
+    name: str = "",
+    novel: tuple[str, ...] = (),
+    transition_steps: int = 2,
+) -> Scenario:
     """A scenario from segments ``[(pattern or "pause", n_steps), ...]`` performed in order."""
     config = config or PatternConfig()
     rng = np.random.default_rng(seed)
@@ -98,41 +103,65 @@ def make_scenario(segments: list[tuple[str, int]], seed: int = 0,
     )
 
 
-def held_scenario(pattern: str = "1", n_steps: int = 150, seed: int = 0,
-                  config: PatternConfig | None = None) -> Scenario:
+def held_scenario(
+    pattern: str = "1", n_steps: int = 150, seed: int = 0, config: PatternConfig | None = None
+) -> Scenario:
     """The user keeps performing one pattern."""
     pattern = resolve_pattern(pattern)
     return make_scenario([(pattern, n_steps)], seed, config, f"pattern {pattern} held")
 
 
-def pause_scenario(pattern: str = "1", before: int = 75, pause: int = 5, after: int = 45,
-                   seed: int = 0, config: PatternConfig | None = None) -> Scenario:
+def pause_scenario(
+    pattern: str = "1",
+    before: int = 75,
+    pause: int = 5,
+    after: int = 45,
+    seed: int = 0,
+    config: PatternConfig | None = None,
+) -> Scenario:
     """The user performs a pattern, freezes the hands for ``pause`` steps, then goes on
     (paper section 3.1: steps 75-80 of pattern 1)."""
     pattern = resolve_pattern(pattern)
-    return make_scenario([(pattern, before), (PAUSE, pause), (pattern, after)], seed, config,
-                         f"pattern {pattern} with a {pause}-step pause")
+    return make_scenario(
+        [(pattern, before), (PAUSE, pause), (pattern, after)],
+        seed,
+        config,
+        f"pattern {pattern} with a {pause}-step pause",
+    )
 
 
-def switch_scenario(patterns: tuple[str, ...] = ("1", "2", "3"), steps_each: int = 50,
-                    seed: int = 0, config: PatternConfig | None = None) -> Scenario:
+def switch_scenario(
+    patterns: tuple[str, ...] = ("1", "2", "3"),
+    steps_each: int = 50,
+    seed: int = 0,
+    config: PatternConfig | None = None,
+) -> Scenario:
     """The user performs patterns one after another (paper section 3.2: 1, 2, 3, about 20 s
     each); any ordered pair is ``switch_scenario((a, b))``."""
     if len(patterns) < 1:
         raise ConfigError("switch_scenario needs at least one pattern")
     names = [resolve_pattern(p) for p in patterns]
-    return make_scenario([(p, steps_each) for p in names], seed, config,
-                         "switch " + " -> ".join(names))
+    return make_scenario(
+        [(p, steps_each) for p in names], seed, config, "switch " + " -> ".join(names)
+    )
 
 
-def novel_scenario(learning_set: str | int = "1", n_steps: int = 150, seed: int = 0,
-                   config: PatternConfig | None = None) -> Scenario:
+def novel_scenario(
+    learning_set: str | int = "1",
+    n_steps: int = 150,
+    seed: int = 0,
+    config: PatternConfig | None = None,
+) -> Scenario:
     """The user performs the pattern a learning set left out (paper section 3.3)."""
     learning_set_patterns(learning_set)
     pattern = novel_pattern(learning_set)
-    return make_scenario([(pattern, n_steps)], seed, config,
-                         f"novel pattern {pattern} for learning set {learning_set}",
-                         novel=(pattern,))
+    return make_scenario(
+        [(pattern, n_steps)],
+        seed,
+        config,
+        f"novel pattern {pattern} for learning set {learning_set}",
+        novel=(pattern,),
+    )
 
 
 def scenario_arrays(scenario: Scenario) -> tuple[np.ndarray, list[dict[str, Any]]]:

@@ -129,22 +129,31 @@ class UserBody:
         if not 0.3 <= self.distance <= 3.0:
             raise ConfigError(f"user distance must be in [0.3, 3] m, got {self.distance}")
         if not 0.1 <= self.hand_depth < self.distance:
-            raise ConfigError("user hand_depth must be in [0.1, distance) m, got "
-                              f"{self.hand_depth}")
+            raise ConfigError(
+                f"user hand_depth must be in [0.1, distance) m, got {self.hand_depth}"
+            )
         if self.arm_reach <= 0 or self.shoulder_half_width <= 0 or self.hand_half_spacing <= 0:
             raise ConfigError("user arm_reach, shoulder_half_width, hand_half_spacing must be > 0")
 
     @property
     def shoulders(self) -> np.ndarray:
         """Shoulder centres (left, right), shape (2, 3)."""
-        return np.array([[self.distance, -self.shoulder_half_width, self.shoulder_height],
-                         [self.distance, self.shoulder_half_width, self.shoulder_height]])
+        return np.array(
+            [
+                [self.distance, -self.shoulder_half_width, self.shoulder_height],
+                [self.distance, self.shoulder_half_width, self.shoulder_height],
+            ]
+        )
 
     @property
     def hand_centres(self) -> np.ndarray:
         """Centres the hands move about (left, right), shape (2, 3)."""
-        return np.array([[self.hand_depth, -self.hand_half_spacing, self.hand_height],
-                         [self.hand_depth, self.hand_half_spacing, self.hand_height]])
+        return np.array(
+            [
+                [self.hand_depth, -self.hand_half_spacing, self.hand_height],
+                [self.hand_depth, self.hand_half_spacing, self.hand_height],
+            ]
+        )
 
 
 @dataclass(frozen=True)
@@ -176,8 +185,7 @@ class Imperfection:
     shape_jitter: float = 0.05
 
     def __post_init__(self) -> None:
-        for name in ("sensor_noise", "drift", "period_jitter", "amplitude_jitter",
-                     "shape_jitter"):
+        for name in ("sensor_noise", "drift", "period_jitter", "amplitude_jitter", "shape_jitter"):
             if getattr(self, name) < 0:
                 raise ConfigError(f"imperfection {name} must be >= 0, got {getattr(self, name)}")
         if self.period_jitter >= 0.5:
@@ -259,8 +267,8 @@ def pattern_offsets(pattern: str, theta: np.ndarray, config: PatternConfig) -> n
         out[..., 0, 2] = out[..., 1, 2] = 0.6 * a_v * np.sin(2 * theta)
     elif pattern == "diagonal":
         swing = np.sin(theta) / np.sqrt(2.0)
-        out[..., 0, 1] = out[..., 1, 1] = -a_h * swing   # view Y to the right
-        out[..., 0, 2] = out[..., 1, 2] = a_v * swing    # and up
+        out[..., 0, 1] = out[..., 1, 1] = -a_h * swing  # view Y to the right
+        out[..., 0, 2] = out[..., 1, 2] = a_v * swing  # and up
     elif pattern == "1":
         swing = config.horizontal_amplitude * np.sin(theta)
         out[..., 0, 1] = swing
@@ -273,8 +281,8 @@ def pattern_offsets(pattern: str, theta: np.ndarray, config: PatternConfig) -> n
         r, s = config.rotation_radius, config.direction
         second = theta + np.pi if pattern == "3" else theta
         for hand, angle in ((0, theta), (1, second)):
-            out[..., hand, 1] = -r * np.cos(angle)           # view Y = r cos
-            out[..., hand, 2] = s * r * np.sin(angle)        # view Z = r sin (CCW for s=+1)
+            out[..., hand, 1] = -r * np.cos(angle)  # view Y = r cos
+            out[..., hand, 2] = s * r * np.sin(angle)  # view Z = r sin (CCW for s=+1)
     return out
 
 
@@ -289,8 +297,9 @@ def _smooth_noise(rng: np.random.Generator, n: int, steps: float, shape: tuple) 
     return out
 
 
-def unstructured_offsets(movement: str, n_steps: int, config: PatternConfig,
-                         rng: np.random.Generator) -> np.ndarray:
+def unstructured_offsets(
+    movement: str, n_steps: int, config: PatternConfig, rng: np.random.Generator
+) -> np.ndarray:
     """Hand offsets of an unstructured movement (one of :data:`UNSTRUCTURED`), shape
     (n_steps, 2, 3), within the pattern amplitudes about the hands' centres.
 
@@ -314,11 +323,12 @@ def unstructured_offsets(movement: str, n_steps: int, config: PatternConfig,
             t = 0
             while t < n_steps:
                 hold = int(rng.integers(2, 6))
-                out[t:t + hold, hand, 1:] = rng.uniform(-1.0, 1.0, 2) * box
+                out[t : t + hold, hand, 1:] = rng.uniform(-1.0, 1.0, 2) * box
                 t += hold
     else:
-        raise ConfigError(f"movement {movement!r} is not unstructured "
-                          f"(unstructured: {', '.join(UNSTRUCTURED)})")
+        raise ConfigError(
+            f"movement {movement!r} is not unstructured (unstructured: {', '.join(UNSTRUCTURED)})"
+        )
     return out
 
 
@@ -344,8 +354,13 @@ class HandMotion:
     phase: np.ndarray
 
 
-def perform(segments: list[tuple[str, int]], config: PatternConfig, rng: np.random.Generator,
-            phase: float | None = None, transition_steps: int = 2) -> HandMotion:
+def perform(
+    segments: list[tuple[str, int]],
+    config: PatternConfig,
+    rng: np.random.Generator,
+    phase: float | None = None,
+    transition_steps: int = 2,
+) -> HandMotion:
     """The user performs patterns and pauses one after another.
 
     Parameters
@@ -376,17 +391,18 @@ def perform(segments: list[tuple[str, int]], config: PatternConfig, rng: np.rand
     # interpolate smoothly in phase, so each cycle differs from the last.
     n_cycles = int(np.ceil(n_steps / (0.5 * config.period_steps))) + 3  # periods >= P / 2
     period_per_cycle = config.period_steps * np.clip(
-        1 + imp.period_jitter * rng.standard_normal(n_cycles), 0.5, 1.5)
+        1 + imp.period_jitter * rng.standard_normal(n_cycles), 0.5, 1.5
+    )
     size_per_cycle = np.clip(1 + imp.amplitude_jitter * rng.standard_normal(n_cycles), 0.5, 1.5)
-    hand_size_per_cycle = np.clip(1 + imp.shape_jitter * rng.standard_normal((n_cycles, 2)),
-                                  0.5, 1.5)
+    hand_size_per_cycle = np.clip(
+        1 + imp.shape_jitter * rng.standard_normal((n_cycles, 2)), 0.5, 1.5
+    )
     drift = imp.drift * _smooth_noise(rng, n_steps, imp.drift_steps, (2, 3))
     drift[..., 0] *= 0.5  # people wander less in depth than across the view
     noise = imp.sensor_noise * rng.standard_normal((n_steps, 2, 3))
     # Drawn after everything else, and only when needed, so that a performance of the paper's
     # patterns draws the same numbers as before these movements existed.
-    tracks = {m: unstructured_offsets(m, n_steps, config, rng)
-              for m in UNSTRUCTURED if m in labels}
+    tracks = {m: unstructured_offsets(m, n_steps, config, rng) for m in UNSTRUCTURED if m in labels}
 
     def per_cycle(values: np.ndarray, theta: float) -> np.ndarray:
         c = (theta - theta0) / (2 * np.pi)

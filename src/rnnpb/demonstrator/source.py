@@ -35,8 +35,7 @@ class ScenarioSource(UserSource):
             self._step = 0
         t = self._step
         self._step += 1
-        return Observation(sensory=self.scenario.sensory[t].copy(),
-                           truth=self.scenario.truth(t))
+        return Observation(sensory=self.scenario.sensory[t].copy(), truth=self.scenario.truth(t))
 
     def close(self) -> None:
         self._open = False

@@ -49,8 +49,7 @@ class ExperimentConfig:
     train: TrainConfig = field(default_factory=TrainConfig.paper)
     # The larger set (3.4): 30,000 iterations followed best over five draws of the user
     # (20,000: 45/50 seed-runs, 30,000: 47/50, 50,000: 26/30 over three draws).
-    larger_train: TrainConfig = field(
-        default_factory=lambda: TrainConfig.paper(iterations=30_000))
+    larger_train: TrainConfig = field(default_factory=lambda: TrainConfig.paper(iterations=30_000))
     online: OnlineConfig = field(default_factory=OnlineConfig)
     # The comparison: the paper's on-line regression, on the same models.
     paper_online: OnlineConfig = field(default_factory=OnlineConfig.paper)
@@ -78,19 +77,29 @@ class ExperimentConfig:
         if len(set(seeds)) != len(seeds):
             raise ConfigError(f"scenario seeds must differ from each other, got {seeds}")
         if not self.training_seeds or len(set(self.training_seeds)) != len(self.training_seeds):
-            raise ConfigError(f"training seeds must be one or more distinct seeds, got "
-                              f"{self.training_seeds}")
+            raise ConfigError(
+                f"training seeds must be one or more distinct seeds, got {self.training_seeds}"
+            )
 
     @classmethod
     def quick_run(cls) -> ExperimentConfig:
-        return cls(quick=True, train=TrainConfig.fast(iterations=4000),
-                   larger_train=TrainConfig.fast(iterations=6000), online=OnlineConfig.ungated(),
-                   larger_set_seeds=3, attractor_steps=400, attractor_transient=150,
-                   novel_amplitudes=(1.0,), compare_paper=False, extra_scenario_seeds=(200,),
-                   training_seeds=(0, 1))
+        return cls(
+            quick=True,
+            train=TrainConfig.fast(iterations=4000),
+            larger_train=TrainConfig.fast(iterations=6000),
+            online=OnlineConfig.ungated(),
+            larger_set_seeds=3,
+            attractor_steps=400,
+            attractor_transient=150,
+            novel_amplitudes=(1.0,),
+            compare_paper=False,
+            extra_scenario_seeds=(200,),
+            training_seeds=(0, 1),
+        )
 
 
 # --- running a scenario ------------------------------------------------------------------
+
 
 @dataclass(frozen=True)
 class Run:
@@ -110,8 +119,10 @@ class Run:
 
     def session(self) -> dict[str, np.ndarray]:
         """The run as the columns of a session recording (for the plots)."""
-        out: dict[str, Any] = {STEP_COLUMN: np.arange(len(self.labels)),
-                               TRUTH_PATTERN_COLUMN: np.array(self.labels, dtype=object)}
+        out: dict[str, Any] = {
+            STEP_COLUMN: np.arange(len(self.labels)),
+            TRUTH_PATTERN_COLUMN: np.array(self.labels, dtype=object),
+        }
         for j, name in enumerate(SENSORY_NAMES):
             out[name] = self.observed[:, j]
             out[PREDICTED_PREFIX + name] = self.predicted[:, j]
@@ -122,8 +133,13 @@ class Run:
         return out
 
 
-def run_scenario(model: TrainedModel, scenario, online: OnlineConfig,
-                 joint_limits: np.ndarray, meta: MetaParams | None = None) -> Run:
+def run_scenario(
+    model: TrainedModel,
+    scenario,
+    online: OnlineConfig,
+    joint_limits: np.ndarray,
+    meta: MetaParams | None = None,
+) -> Run:
     """Drive the mirror system with a demonstrator scenario through the interaction loop.
     ``meta``: a safety map's risk network, for the guard ``online.safety_guard`` names
     (docs/safety.md); None runs unguarded."""
@@ -134,17 +150,24 @@ def run_scenario(model: TrainedModel, scenario, online: OnlineConfig,
     mirror = MirrorSystem(model, online, meta=meta)
     with ScenarioSource(scenario) as source:
         InteractionLoop(mirror, source, config=LoopConfig(dt=scenario.dt)).run(
-            on_step=records.append)
+            on_step=records.append
+        )
     observed = np.array([r.observed for r in records])
     predicted = np.array([r.predicted for r in records])
     motor = np.array([r.motor for r in records])
     return Run(
-        name=scenario.name, labels=list(scenario.labels),
-        switch_steps=list(scenario.switch_steps), observed=observed, predicted=predicted,
-        motor=motor, truth_motor=scenario.motor, pb=np.array([r.pb for r in records]),
+        name=scenario.name,
+        labels=list(scenario.labels),
+        switch_steps=list(scenario.switch_steps),
+        observed=observed,
+        predicted=predicted,
+        motor=motor,
+        truth_motor=scenario.motor,
+        pb=np.array([r.pb for r in records]),
         context=np.array([r.context for r in records]),
         motor_error=metrics.motor_error(motor, scenario.motor, joint_limits),
-        sensory_error=metrics.sensory_error(predicted, observed))
+        sensory_error=metrics.sensory_error(predicted, observed),
+    )
 
 
 def _normalized_motor(model: TrainedModel, motor: np.ndarray) -> np.ndarray:
@@ -153,6 +176,7 @@ def _normalized_motor(model: TrainedModel, motor: np.ndarray) -> np.ndarray:
 
 
 # --- 3.1 synchronization and pause ---------------------------------------------------------
+
 
 @dataclass(frozen=True)
 class Synchronization:
@@ -178,10 +202,17 @@ class Synchronization:
         return replace(self, run=None)
 
 
-def synchronization(model: TrainedModel, pattern: str, online: OnlineConfig,
-                    joint_limits: np.ndarray, seed: int = 0, before: int = 75,
-                    pause: int = PAUSE_STEPS, after: int = 45,
-                    meta: MetaParams | None = None) -> Synchronization:
+def synchronization(
+    model: TrainedModel,
+    pattern: str,
+    online: OnlineConfig,
+    joint_limits: np.ndarray,
+    seed: int = 0,
+    before: int = 75,
+    pause: int = PAUSE_STEPS,
+    after: int = 45,
+    meta: MetaParams | None = None,
+) -> Synchronization:
     """The user performs ``pattern``, pauses, and goes on (paper Figure 5). ``meta``: see
     :func:`run_scenario`."""
     from rnnpb.demonstrator import pause_scenario
@@ -193,8 +224,11 @@ def synchronization(model: TrainedModel, pattern: str, online: OnlineConfig,
     lag = math.nan
     if lock is not None and before - lock >= 18:
         segment = slice(lock, before)
-        lag = metrics.phase_lag(_normalized_motor(model, run.motor[segment]),
-                                _normalized_motor(model, run.truth_motor[segment]), max_lag=5)
+        lag = metrics.phase_lag(
+            _normalized_motor(model, run.motor[segment]),
+            _normalized_motor(model, run.truth_motor[segment]),
+            max_lag=5,
+        )
     pause_end = before + pause
     window = slice(before, pause_end)
     preceding = slice(before - pause, before)
@@ -204,13 +238,22 @@ def synchronization(model: TrainedModel, pattern: str, online: OnlineConfig,
     relock = metrics.steps_to_lock(run.motor_error, run.sensory_error, pause_end)
     recognized, distance = model.nearest_pattern(run.pb[before - 1])
     return Synchronization(
-        pattern=pattern, steps_to_lock=lock, pb_settle_steps=settle, phase_lag_steps=lag,
-        recognized_pattern=recognized, pb_distance_to_learned=distance,
-        pause_relative_motion=relative_motion, pause_steps_to_relock=relock,
-        pause_start=before, pause_end=pause_end, run=run)
+        pattern=pattern,
+        steps_to_lock=lock,
+        pb_settle_steps=settle,
+        phase_lag_steps=lag,
+        recognized_pattern=recognized,
+        pb_distance_to_learned=distance,
+        pause_relative_motion=relative_motion,
+        pause_steps_to_relock=relock,
+        pause_start=before,
+        pause_end=pause_end,
+        run=run,
+    )
 
 
 # --- 3.2 switching ---------------------------------------------------------------------------
+
 
 @dataclass(frozen=True)
 class Switching:
@@ -219,19 +262,28 @@ class Switching:
     pairs: dict[str, int | None]
 
 
-def switching(model: TrainedModel, online: OnlineConfig, joint_limits: np.ndarray,
-              seed: int = 0, steps_each: int = SWITCH_STEPS_EACH,
-              meta: MetaParams | None = None) -> Switching:
+def switching(
+    model: TrainedModel,
+    online: OnlineConfig,
+    joint_limits: np.ndarray,
+    seed: int = 0,
+    steps_each: int = SWITCH_STEPS_EACH,
+    meta: MetaParams | None = None,
+) -> Switching:
     """Every ordered pair of learned patterns: steps from the switch until the robot follows
     the new pattern (locked on it). ``meta``: see :func:`run_scenario`."""
     from rnnpb.demonstrator import switch_scenario
 
     pairs = {}
     for a, b in permutations(model.patterns, 2):
-        run = run_scenario(model, switch_scenario((a, b), steps_each=steps_each, seed=seed),
-                           online, joint_limits, meta)
-        pairs[f"{a}->{b}"] = metrics.steps_to_lock(run.motor_error, run.sensory_error,
-                                                   steps_each)
+        run = run_scenario(
+            model,
+            switch_scenario((a, b), steps_each=steps_each, seed=seed),
+            online,
+            joint_limits,
+            meta,
+        )
+        pairs[f"{a}->{b}"] = metrics.steps_to_lock(run.motor_error, run.sensory_error, steps_each)
     return Switching(pairs)
 
 
@@ -243,15 +295,26 @@ class SwitchingSequence:
     steps_to_follow: list[int | None]  # per switch
 
 
-def switching_sequence(model: TrainedModel, online: OnlineConfig, joint_limits: np.ndarray,
-                       seed: int = 0, steps_each: int = 55) -> SwitchingSequence:
+def switching_sequence(
+    model: TrainedModel,
+    online: OnlineConfig,
+    joint_limits: np.ndarray,
+    seed: int = 0,
+    steps_each: int = 55,
+) -> SwitchingSequence:
     """The paper's Figure 6: the user performs the learned patterns one after another."""
     from rnnpb.demonstrator import switch_scenario
 
-    run = run_scenario(model, switch_scenario(tuple(model.patterns), steps_each=steps_each,
-                                              seed=seed), online, joint_limits)
-    follow = [metrics.steps_to_lock(run.motor_error, run.sensory_error, s, s + steps_each)
-              for s in run.switch_steps]
+    run = run_scenario(
+        model,
+        switch_scenario(tuple(model.patterns), steps_each=steps_each, seed=seed),
+        online,
+        joint_limits,
+    )
+    follow = [
+        metrics.steps_to_lock(run.motor_error, run.sensory_error, s, s + steps_each)
+        for s in run.switch_steps
+    ]
     return SwitchingSequence(run, follow)
 
 
@@ -270,6 +333,7 @@ class Draw:
 
 # --- 3.3 novel patterns and attractors -----------------------------------------------------
 
+
 @dataclass(frozen=True)
 class Attractor:
     """A learned pattern's closed-loop attractor after the transient."""
@@ -281,20 +345,24 @@ class Attractor:
     return_error: float
 
 
-def learned_attractors(model: TrainedModel, n_steps: int, transient: int
-                       ) -> dict[str, Attractor]:
+def learned_attractors(model: TrainedModel, n_steps: int, transient: int) -> dict[str, Attractor]:
     """Closed-loop run (no input) from each learned pattern's PB: motor and context after
     the transient, and one cycle of the motor trajectory."""
     out = {}
     for name, pb in model.pattern_pb.items():
-        generated = generate(model, pb, n_steps,
-                             initial_context=model.pattern_initial_context(name))
+        generated = generate(
+            model, pb, n_steps, initial_context=model.pattern_initial_context(name)
+        )
         motor = _normalized_motor(model, generated.motor[transient:])
         found = metrics.periodicity(motor)
         period = found.period or found.best_period
-        out[name] = Attractor(motor=motor, context=generated.context[transient:],
-                              cycle=metrics.last_cycle(motor, period), period=found.period,
-                              return_error=found.return_error)
+        out[name] = Attractor(
+            motor=motor,
+            context=generated.context[transient:],
+            cycle=metrics.last_cycle(motor, period),
+            period=found.period,
+            return_error=found.return_error,
+        )
     return out
 
 
@@ -324,50 +392,89 @@ class NovelResponse:
 
     def to_json(self) -> dict[str, Any]:
         """The measures as ``results.json`` keeps them (the arrays stay out)."""
-        return {"learning_set": self.learning_set, "novel_pattern": self.novel_pattern,
-                "amplitude": self.amplitude, "user_draw": self.user_draw, "case": self.case,
-                "description": self.description, "period": self.period,
-                "nearest_pattern": self.nearest_pattern, "distance": self.distance,
-                "return_error": self.return_error}
+        return {
+            "learning_set": self.learning_set,
+            "novel_pattern": self.novel_pattern,
+            "amplitude": self.amplitude,
+            "user_draw": self.user_draw,
+            "case": self.case,
+            "description": self.description,
+            "period": self.period,
+            "nearest_pattern": self.nearest_pattern,
+            "distance": self.distance,
+            "return_error": self.return_error,
+        }
 
 
-def novel_response(model: TrainedModel, learning_set: str, online: OnlineConfig,
-                   joint_limits: np.ndarray, attractors: dict[str, Attractor],
-                   n_steps: int, transient: int, amplitude: float = 1.0) -> NovelResponse:
+def novel_response(
+    model: TrainedModel,
+    learning_set: str,
+    online: OnlineConfig,
+    joint_limits: np.ndarray,
+    attractors: dict[str, Attractor],
+    n_steps: int,
+    transient: int,
+    amplitude: float = 1.0,
+) -> NovelResponse:
     """One cycle of the novel pattern, repeated for ``n_steps`` with on-line PB regression
     (the paper's open-loop attractor analysis); the response is classified."""
     from rnnpb.demonstrator import Imperfection, PatternConfig, make_scenario, novel_pattern
 
     pattern = novel_pattern(learning_set)
     base = PatternConfig(imperfection=Imperfection.none())
-    config = replace(base, horizontal_amplitude=base.horizontal_amplitude * amplitude,
-                     vertical_amplitude=base.vertical_amplitude * amplitude,
-                     rotation_radius=base.rotation_radius * amplitude)
+    config = replace(
+        base,
+        horizontal_amplitude=base.horizontal_amplitude * amplitude,
+        vertical_amplitude=base.vertical_amplitude * amplitude,
+        rotation_radius=base.rotation_radius * amplitude,
+    )
     period = int(round(config.period_steps))
     cycle = make_scenario([(pattern, period)], seed=0, config=config, novel=(pattern,))
     repeats = int(math.ceil(n_steps / period))
     sensory = np.tile(cycle.sensory, (repeats, 1))[:n_steps]
-    return _classified_response(model, learning_set, pattern, amplitude, sensory, online,
-                                attractors, transient)
+    return _classified_response(
+        model, learning_set, pattern, amplitude, sensory, online, attractors, transient
+    )
 
 
-def novel_by_hand(model: TrainedModel, learning_set: str, online: OnlineConfig,
-                  attractors: dict[str, Attractor], n_steps: int, transient: int,
-                  seed: int) -> NovelResponse:
+def novel_by_hand(
+    model: TrainedModel,
+    learning_set: str,
+    online: OnlineConfig,
+    attractors: dict[str, Attractor],
+    n_steps: int,
+    transient: int,
+    seed: int,
+) -> NovelResponse:
     """The user demonstrates the novel pattern by hand for ``n_steps``: imperfect cycles
     (period, size and shape vary from cycle to cycle, drawn with ``seed``), as in the paper's
     interaction experiment; the response is classified."""
     from rnnpb.demonstrator import novel_pattern, novel_scenario
 
     scenario = novel_scenario(learning_set, n_steps=n_steps, seed=seed)
-    response = _classified_response(model, learning_set, novel_pattern(learning_set), 1.0,
-                                    scenario.sensory, online, attractors, transient)
+    response = _classified_response(
+        model,
+        learning_set,
+        novel_pattern(learning_set),
+        1.0,
+        scenario.sensory,
+        online,
+        attractors,
+        transient,
+    )
     return replace(response, user_draw=seed)
 
 
-def _classified_response(model: TrainedModel, learning_set: str, pattern: str,
-                         amplitude: float, sensory: np.ndarray, online: OnlineConfig,
-                         attractors: dict[str, Attractor], transient: int) -> NovelResponse:
+def _classified_response(
+    model: TrainedModel,
+    learning_set: str,
+    pattern: str,
+    amplitude: float,
+    sensory: np.ndarray,
+    online: OnlineConfig,
+    attractors: dict[str, Attractor],
+    transient: int,
+) -> NovelResponse:
     mirror = MirrorSystem(model, online)
     motor, pbs, contexts = [], [], []
     for u in sensory:
@@ -380,13 +487,23 @@ def _classified_response(model: TrainedModel, learning_set: str, pattern: str,
     learned_cycles = {name: a.cycle for name, a in attractors.items()}
     case = metrics.classify_response(normalized[transient:], learned_cycles)
     return NovelResponse(
-        learning_set=learning_set, novel_pattern=pattern, amplitude=amplitude, case=case.case,
-        description=case.describe(), period=case.period, nearest_pattern=case.nearest_pattern,
-        distance=case.distance, return_error=case.return_error, motor=motor,
-        pb=np.array(pbs), context=np.array(contexts))
+        learning_set=learning_set,
+        novel_pattern=pattern,
+        amplitude=amplitude,
+        case=case.case,
+        description=case.describe(),
+        period=case.period,
+        nearest_pattern=case.nearest_pattern,
+        distance=case.distance,
+        return_error=case.return_error,
+        motor=motor,
+        pb=np.array(pbs),
+        context=np.array(contexts),
+    )
 
 
 # --- 3.4 the larger set ----------------------------------------------------------------------
+
 
 @dataclass(frozen=True)
 class FollowsEveryPattern:
@@ -396,24 +513,32 @@ class FollowsEveryPattern:
     follows_all: bool  # every pattern within metrics.SWITCH_LIMIT steps
 
 
-def follows_every_pattern(model: TrainedModel, online: OnlineConfig, joint_limits: np.ndarray,
-                          seed: int = 0, steps_each: int = SWITCH_STEPS_EACH
-                          ) -> FollowsEveryPattern:
+def follows_every_pattern(
+    model: TrainedModel,
+    online: OnlineConfig,
+    joint_limits: np.ndarray,
+    seed: int = 0,
+    steps_each: int = SWITCH_STEPS_EACH,
+) -> FollowsEveryPattern:
     """The user switches through all learned patterns; does the robot follow each within
     ``metrics.SWITCH_LIMIT`` steps?"""
     from rnnpb.demonstrator import switch_scenario
 
     order = list(model.patterns)
-    run = run_scenario(model, switch_scenario(tuple(order), steps_each=steps_each, seed=seed),
-                       online, joint_limits)
+    run = run_scenario(
+        model, switch_scenario(tuple(order), steps_each=steps_each, seed=seed), online, joint_limits
+    )
     starts = [0, *run.switch_steps]
-    follow = {p: metrics.steps_to_lock(run.motor_error, run.sensory_error, s, s + steps_each)
-              for p, s in zip(order, starts, strict=True)}
+    follow = {
+        p: metrics.steps_to_lock(run.motor_error, run.sensory_error, s, s + steps_each)
+        for p, s in zip(order, starts, strict=True)
+    }
     ok = all(v is not None and v <= metrics.SWITCH_LIMIT for v in follow.values())
     return FollowsEveryPattern(follow, ok)
 
 
 # --- one job per model (run in worker processes) -------------------------------------------
+
 
 def sequence_file_name(sequence) -> str:
     """``P_K.csv``: pattern P, demonstration K (from 1), as ``data/`` keeps the learning sets."""
@@ -455,13 +580,18 @@ class LearningSetResult:
 
     def without_arrays(self) -> LearningSetResult:
         """The measures alone (no runs or trajectories for the figures)."""
+
         def light(draw: Draw | None) -> Draw | None:
             return None if draw is None else draw.without_runs()
 
-        return replace(self, synchronization=[s.without_run() for s in self.synchronization],
-                       compare=light(self.compare), sequence=None,
-                       novel=[r.without_arrays() for r in self.novel],
-                       compare_novel=[r.without_arrays() for r in self.compare_novel])
+        return replace(
+            self,
+            synchronization=[s.without_run() for s in self.synchronization],
+            compare=light(self.compare),
+            sequence=None,
+            novel=[r.without_arrays() for r in self.novel],
+            compare_novel=[r.without_arrays() for r in self.compare_novel],
+        )
 
     def compared_draws_by_seed(self) -> dict[int, Draw]:
         """Every draw with the compared on-line regression, this result's own first."""
@@ -477,16 +607,31 @@ class LearningSetResult:
         """The same model with the compared on-line regression in place of the default's."""
         if self.compare is None:
             raise ValueError("this job ran no comparison")
-        return replace(self, label=label, synchronization=self.compare.synchronization,
-                       switching=self.compare.switching, compare=None,
-                       draws=self.compare_draws, compare_draws={}, novel=self.compare_novel,
-                       compare_novel=[])
+        return replace(
+            self,
+            label=label,
+            synchronization=self.compare.synchronization,
+            switching=self.compare.switching,
+            compare=None,
+            draws=self.compare_draws,
+            compare_draws={},
+            novel=self.compare_novel,
+            compare_novel=[],
+        )
 
 
-def learning_set_job(set_name: str, train_config: TrainConfig, online: OnlineConfig,
-                     config: ExperimentConfig, model_path: str, data_dir: str | None,
-                     label: str, full: bool = True, compare: OnlineConfig | None = None,
-                     light: bool = False) -> LearningSetResult:
+def learning_set_job(
+    set_name: str,
+    train_config: TrainConfig,
+    online: OnlineConfig,
+    config: ExperimentConfig,
+    model_path: str,
+    data_dir: str | None,
+    label: str,
+    full: bool = True,
+    compare: OnlineConfig | None = None,
+    light: bool = False,
+) -> LearningSetResult:
     """Train on one learning set and run experiments 3.1–3.3 on it; with ``compare``, also
     run them with that on-line regression (``result.compare``, ``compare_draws``,
     ``compare_novel``). ``full`` adds the other draws of the user, the attractors and the novel
@@ -496,8 +641,9 @@ def learning_set_job(set_name: str, train_config: TrainConfig, online: OnlineCon
     from rnnpb.sequences import write_sequence
 
     limits = _limits()
-    sequences = learning_set(set_name, seed=config.data_seed,
-                             samples_per_pattern=config.samples_per_pattern)
+    sequences = learning_set(
+        set_name, seed=config.data_seed, samples_per_pattern=config.samples_per_pattern
+    )
     if data_dir is not None:
         for seq in sequences:
             write_sequence(os.path.join(data_dir, sequence_file_name(seq)), seq)
@@ -507,9 +653,13 @@ def learning_set_job(set_name: str, train_config: TrainConfig, online: OnlineCon
     seed = config.scenario_seed
 
     def draw(regression: OnlineConfig, scenario_seed: int) -> Draw:
-        return Draw([synchronization(model, p, regression, limits, seed=scenario_seed)
-                     for p in model.patterns],
-                    switching(model, regression, limits, seed=scenario_seed))
+        return Draw(
+            [
+                synchronization(model, p, regression, limits, seed=scenario_seed)
+                for p in model.patterns
+            ],
+            switching(model, regression, limits, seed=scenario_seed),
+        )
 
     primary = draw(online, seed)
     extra: dict[str, Any] = {}
@@ -523,29 +673,48 @@ def learning_set_job(set_name: str, train_config: TrainConfig, online: OnlineCon
                 extra["compare_draws"][other] = draw(compare, other).without_runs()
         if not light:
             extra["sequence"] = switching_sequence(model, online, limits, seed=seed)
-        attractors = learned_attractors(model, config.attractor_steps,
-                                        config.attractor_transient)
+        attractors = learned_attractors(model, config.attractor_steps, config.attractor_transient)
         extra["attractors"] = attractors
         steps, transient = config.attractor_steps, config.attractor_transient
         draws = (seed, *config.extra_scenario_seeds)
         extra["novel"] = [
-            *(novel_response(model, set_name, online, limits, attractors, steps, transient,
-                             amplitude) for amplitude in config.novel_amplitudes),
-            *(novel_by_hand(model, set_name, online, attractors, steps, transient, seed=d)
-              for d in draws)]
+            *(
+                novel_response(
+                    model, set_name, online, limits, attractors, steps, transient, amplitude
+                )
+                for amplitude in config.novel_amplitudes
+            ),
+            *(
+                novel_by_hand(model, set_name, online, attractors, steps, transient, seed=d)
+                for d in draws
+            ),
+        ]
         if compare is not None:
             # The paper's regression: the exact cycle at the learned size, and by hand.
             extra["compare_novel"] = [
                 novel_response(model, set_name, compare, limits, attractors, steps, transient),
-                *(novel_by_hand(model, set_name, compare, attractors, steps, transient, seed=d)
-                  for d in draws)]
+                *(
+                    novel_by_hand(model, set_name, compare, attractors, steps, transient, seed=d)
+                    for d in draws
+                ),
+            ]
     result = LearningSetResult(
-        label=label, learning_set=set_name, model=model_path, patterns=list(model.patterns),
+        label=label,
+        learning_set=set_name,
+        model=model_path,
+        patterns=list(model.patterns),
         pattern_pb={k: v.tolist() for k, v in model.pattern_pb.items()},
-        train_mse_per_output=info["mse_per_output"], train_mse_max=info["mse_max"],
-        train_rms_max=math.sqrt(info["mse_max"]), train_seconds=info["seconds"],
-        train_history=info["history"], scenario_seed=seed, training_seed=train_config.seed,
-        synchronization=primary.synchronization, switching=primary.switching, **extra)
+        train_mse_per_output=info["mse_per_output"],
+        train_mse_max=info["mse_max"],
+        train_rms_max=math.sqrt(info["mse_max"]),
+        train_seconds=info["seconds"],
+        train_history=info["history"],
+        scenario_seed=seed,
+        training_seed=train_config.seed,
+        synchronization=primary.synchronization,
+        switching=primary.switching,
+        **extra,
+    )
     return result.without_arrays() if light else result
 
 
@@ -563,29 +732,50 @@ class LargerSetRun:
 
     def draws_by_seed(self) -> dict[int, FollowsEveryPattern]:
         """Every draw, this run's own first, by scenario seed."""
-        return {self.scenario_seed: FollowsEveryPattern(self.steps_to_follow, self.follows_all),
-                **self.draws}
+        return {
+            self.scenario_seed: FollowsEveryPattern(self.steps_to_follow, self.follows_all),
+            **self.draws,
+        }
 
     def to_json(self) -> dict[str, Any]:
         """The run as ``results.json`` keeps it (the other draws are summarized apart)."""
-        return {"seed": self.seed, "model": self.model, "train_mse_max": self.train_mse_max,
-                "steps_to_follow": self.steps_to_follow, "follows_all": self.follows_all}
+        return {
+            "seed": self.seed,
+            "model": self.model,
+            "train_mse_max": self.train_mse_max,
+            "steps_to_follow": self.steps_to_follow,
+            "follows_all": self.follows_all,
+        }
 
 
-def larger_set_job(seed: int, train_config: TrainConfig, online: OnlineConfig,
-                   config: ExperimentConfig, model_path: str) -> LargerSetRun:
+def larger_set_job(
+    seed: int,
+    train_config: TrainConfig,
+    online: OnlineConfig,
+    config: ExperimentConfig,
+    model_path: str,
+) -> LargerSetRun:
     """Train the 4-pattern set with one seed; does the robot follow every pattern?"""
     from rnnpb.demonstrator import learning_set
 
     limits = _limits()
-    model = train(learning_set("full", seed=config.data_seed,
-                               samples_per_pattern=config.samples_per_pattern), limits,
-                  config=replace(train_config, seed=seed))
+    model = train(
+        learning_set("full", seed=config.data_seed, samples_per_pattern=config.samples_per_pattern),
+        limits,
+        config=replace(train_config, seed=seed),
+    )
     model.save(model_path)
     follow = follows_every_pattern(model, online, limits, seed=config.scenario_seed + seed)
-    draws = {extra: follows_every_pattern(model, online, limits, seed=extra + seed)
-             for extra in config.extra_scenario_seeds}
-    return LargerSetRun(seed=seed, model=model_path,
-                        train_mse_max=model.meta["training"]["mse_max"],
-                        steps_to_follow=follow.steps_to_follow, follows_all=follow.follows_all,
-                        scenario_seed=config.scenario_seed, draws=draws)
+    draws = {
+        extra: follows_every_pattern(model, online, limits, seed=extra + seed)
+        for extra in config.extra_scenario_seeds
+    }
+    return LargerSetRun(
+        seed=seed,
+        model=model_path,
+        train_mse_max=model.meta["training"]["mse_max"],
+        steps_to_follow=follow.steps_to_follow,
+        follows_all=follow.follows_all,
+        scenario_seed=config.scenario_seed,
+        draws=draws,
+    )

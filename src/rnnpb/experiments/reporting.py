@@ -80,9 +80,14 @@ def versions() -> dict[str, str]:
     import jax
     import mujoco
 
-    return {"python": platform.python_version(), "jax": jax.__version__,
-            "numpy": np.__version__, "mujoco": mujoco.__version__,
-            "machine": platform.machine(), "cpus": str(os.cpu_count())}
+    return {
+        "python": platform.python_version(),
+        "jax": jax.__version__,
+        "numpy": np.__version__,
+        "mujoco": mujoco.__version__,
+        "machine": platform.machine(),
+        "cpus": str(os.cpu_count()),
+    }
 
 
 def jsonable(value: Any) -> Any:
@@ -112,8 +117,9 @@ def write_lines(path: str | os.PathLike[str], lines: Sequence[str]) -> None:
         handle.write("\n".join(lines))
 
 
-def write_outputs(out: str | os.PathLike[str], report: Sequence[str],
-                  results: dict[str, Any]) -> None:
+def write_outputs(
+    out: str | os.PathLike[str], report: Sequence[str], results: dict[str, Any]
+) -> None:
     """Write ``out/results.json`` and ``out/report.md``, each atomically."""
     out = Path(out)
     write_json(out / RESULTS_FILE, results)

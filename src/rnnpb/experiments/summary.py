@@ -62,16 +62,20 @@ class StepTarget:
 
     def judge(self, values: Sequence[Any]) -> Target:
         worst = _max_or_none(list(values))
-        return Target(worst is not None and worst <= self.limit,
-                      f"{within(values, self.limit)}/{len(values)} within {self.limit:g}")
+        return Target(
+            worst is not None and worst <= self.limit,
+            f"{within(values, self.limit)}/{len(values)} within {self.limit:g}",
+        )
 
 
 STEP_TARGETS = (
     StepTarget("sync_steps_to_lock", f"lock_within_{metrics.LOCK_LIMIT}", metrics.LOCK_LIMIT),
-    StepTarget("pb_settle_steps", f"pb_settles_within_{metrics.SETTLE_LIMIT}",
-               metrics.SETTLE_LIMIT),
-    StepTarget("pause_steps_to_relock", f"relock_within_{metrics.RELOCK_LIMIT}",
-               metrics.RELOCK_LIMIT),
+    StepTarget(
+        "pb_settle_steps", f"pb_settles_within_{metrics.SETTLE_LIMIT}", metrics.SETTLE_LIMIT
+    ),
+    StepTarget(
+        "pause_steps_to_relock", f"relock_within_{metrics.RELOCK_LIMIT}", metrics.RELOCK_LIMIT
+    ),
     StepTarget("switch_steps", f"switch_within_{metrics.SWITCH_LIMIT}", metrics.SWITCH_LIMIT),
 )
 TRAIN_TARGET = f"train_mse_below_{sci(metrics.TRAIN_ERROR_TARGET)}"
@@ -114,8 +118,10 @@ class Summary:
 
 
 def _per_pattern(draws: Mapping[str, Draw], measure: str) -> PerPattern:
-    return {name: {s.pattern: getattr(s, measure) for s in d.synchronization}
-            for name, d in draws.items()}
+    return {
+        name: {s.pattern: getattr(s, measure) for s in d.synchronization}
+        for name, d in draws.items()
+    }
 
 
 def summarize(results: Mapping[str, LearningSetResult]) -> Summary:
@@ -136,24 +142,33 @@ def summarize(results: Mapping[str, LearningSetResult]) -> Summary:
         pause_relative_motion=_per_pattern(runs, "pause_relative_motion"),
         pause_steps_to_relock=_per_pattern(runs, "pause_steps_to_relock"),
         switch_steps={k: r.switching.pairs for k, r in ordered.items()},
-        recognized_correctly=int(sum(a == b for a, b in zip(flat(recognized), patterns,
-                                                             strict=True))),
-        recognition_runs=len(patterns))
+        recognized_correctly=int(
+            sum(a == b for a, b in zip(flat(recognized), patterns, strict=True))
+        ),
+        recognition_runs=len(patterns),
+    )
 
 
-def targets(summary: Summary, larger: Sequence[LargerSetRun], novel_cases: Sequence[int]
-            ) -> dict[str, Target]:
+def targets(
+    summary: Summary, larger: Sequence[LargerSetRun], novel_cases: Sequence[int]
+) -> dict[str, Target]:
     """The paper's figures met or not by one configuration."""
     mse = list(summary.train_mse.values())
-    out = {TRAIN_TARGET: Target(all(v < metrics.TRAIN_ERROR_TARGET for v in mse),
-                                f"max {max(mse):.2e}")}
+    out = {
+        TRAIN_TARGET: Target(
+            all(v < metrics.TRAIN_ERROR_TARGET for v in mse), f"max {max(mse):.2e}"
+        )
+    }
     for target in STEP_TARGETS:
         out[target.name] = target.judge(flat(getattr(summary, target.measure)))
     if novel_cases:
         seen = sorted(set(novel_cases))
         every = seen == list(metrics.RESPONSE_CASES)
-        out[NOVEL_TARGET] = Target(every, f"cases seen: {seen}" + (
-            "" if every else "; the report explains why, from the attractor analysis"))
+        out[NOVEL_TARGET] = Target(
+            every,
+            f"cases seen: {seen}"
+            + ("" if every else "; the report explains why, from the attractor analysis"),
+        )
     if larger:
         out[LARGER_TARGET] = larger_target(sum(r.follows_all for r in larger), len(larger))
     return out
@@ -188,14 +203,18 @@ class DrawsSummary:
     targets: dict[str, Target]
 
     def to_json(self) -> dict[str, Any]:
-        return {"scenario_seeds": self.scenario_seeds,
-                "by_seed": {k: d.to_json() for k, d in self.by_seed.items()},
-                "targets": {k: t.to_json() for k, t in self.targets.items()}}
+        return {
+            "scenario_seeds": self.scenario_seeds,
+            "by_seed": {k: d.to_json() for k, d in self.by_seed.items()},
+            "targets": {k: t.to_json() for k, t in self.targets.items()},
+        }
 
 
-def draws_summary(sets: Mapping[str, Mapping[int, Draw]],
-                  larger: Sequence[Mapping[int, FollowsEveryPattern]],
-                  scenario_seeds: Sequence[int]) -> DrawsSummary:
+def draws_summary(
+    sets: Mapping[str, Mapping[int, Draw]],
+    larger: Sequence[Mapping[int, FollowsEveryPattern]],
+    scenario_seeds: Sequence[int],
+) -> DrawsSummary:
     """The measures for every draw of the user's imperfection (``scenario_seeds``, the
     report's first), each draw's target counts, and the targets over all draws pooled.
 
@@ -212,20 +231,26 @@ def draws_summary(sets: Mapping[str, Mapping[int, Draw]],
             "sync_steps_to_lock": _per_pattern(runs, "steps_to_lock"),
             "pb_settle_steps": _per_pattern(runs, "pb_settle_steps"),
             "pause_steps_to_relock": _per_pattern(runs, "pause_steps_to_relock"),
-            "switch_steps": {k: d.switching.pairs for k, d in runs.items()}}
+            "switch_steps": {k: d.switching.pairs for k, d in runs.items()},
+        }
         success = int(sum(f.follows_all for f in follows))
         judged = {t.name: t.judge(flat(measures[t.measure])) for t in STEP_TARGETS}
         if larger:
             judged[LARGER_TARGET] = larger_target(success, len(follows))
         by_seed[str(seed)] = DrawSummary(
-            **measures, larger_set_success=success,
-            larger_set_steps_to_follow=[f.steps_to_follow for f in follows], targets=judged)
-    pooled = {t.name: t.judge([v for d in by_seed.values()
-                               for v in flat(getattr(d, t.measure))])
-              for t in STEP_TARGETS}
+            **measures,
+            larger_set_success=success,
+            larger_set_steps_to_follow=[f.steps_to_follow for f in follows],
+            targets=judged,
+        )
+    pooled = {
+        t.name: t.judge([v for d in by_seed.values() for v in flat(getattr(d, t.measure))])
+        for t in STEP_TARGETS
+    }
     if larger:
         pooled[LARGER_TARGET] = larger_target(
-            sum(d.larger_set_success for d in by_seed.values()), len(larger) * len(by_seed))
+            sum(d.larger_set_success for d in by_seed.values()), len(larger) * len(by_seed)
+        )
     return DrawsSummary([int(s) for s in by_seed], by_seed, pooled)
 
 
@@ -233,9 +258,12 @@ def draws_summary(sets: Mapping[str, Mapping[int, Draw]],
 
 # The synchronization measures of 3.1 (a Synchronization field each) and their limits.
 SYNC_MEASURES: dict[str, float | None] = {
-    "steps_to_lock": metrics.LOCK_LIMIT, "pb_settle_steps": metrics.SETTLE_LIMIT,
-    "phase_lag_steps": None, "pause_relative_motion": None,
-    "pause_steps_to_relock": metrics.RELOCK_LIMIT}
+    "steps_to_lock": metrics.LOCK_LIMIT,
+    "pb_settle_steps": metrics.SETTLE_LIMIT,
+    "phase_lag_steps": None,
+    "pause_relative_motion": None,
+    "pause_steps_to_relock": metrics.RELOCK_LIMIT,
+}
 NOVEL_INPUTS = ("repeated cycle", "by hand")
 
 
@@ -253,15 +281,25 @@ class Distribution:
     within: Interval | None  # share at most ``limit``; never counts as outside
 
     def to_json(self) -> dict[str, Any]:
-        return {"measure": self.measure, "n": self.n, "never": self.never,
-                "median": asdict(self.median), "limit": self.limit,
-                "within": asdict(self.within) if self.within else None}
+        return {
+            "measure": self.measure,
+            "n": self.n,
+            "never": self.never,
+            "median": asdict(self.median),
+            "limit": self.limit,
+            "within": asdict(self.within) if self.within else None,
+        }
 
 
 def distribution(measure: str, values: Sequence[Any], limit: float | None) -> Distribution:
-    return Distribution(measure, len(values), sum(v is None for v in values),
-                        median_interval(values), limit,
-                        None if limit is None else share_within(values, limit))
+    return Distribution(
+        measure,
+        len(values),
+        sum(v is None for v in values),
+        median_interval(values),
+        limit,
+        None if limit is None else share_within(values, limit),
+    )
 
 
 @dataclass(frozen=True)
@@ -279,27 +317,34 @@ class Distributions:
     larger_set_follows: Interval | None  # share of larger-set (seed, draw) runs that follow all
 
     def to_json(self) -> dict[str, Any]:
-        return {"training_seeds": self.training_seeds, "scenario_seeds": self.scenario_seeds,
-                "measures": {k: d.to_json() for k, d in self.measures.items()},
-                "recognised": asdict(self.recognised),
-                "train_below_target": asdict(self.train_below_target),
-                "novel_cases": self.novel_cases,
-                "closed_loop_periodic": list(self.closed_loop_periodic),
-                "larger_set_follows": (asdict(self.larger_set_follows)
-                                       if self.larger_set_follows else None)}
+        return {
+            "training_seeds": self.training_seeds,
+            "scenario_seeds": self.scenario_seeds,
+            "measures": {k: d.to_json() for k, d in self.measures.items()},
+            "recognised": asdict(self.recognised),
+            "train_below_target": asdict(self.train_below_target),
+            "novel_cases": self.novel_cases,
+            "closed_loop_periodic": list(self.closed_loop_periodic),
+            "larger_set_follows": (
+                asdict(self.larger_set_follows) if self.larger_set_follows else None
+            ),
+        }
 
 
-def distributions(by_seed: Mapping[int, Mapping[str, LearningSetResult]],
-                  larger: Sequence[LargerSetRun], scenario_seeds: Sequence[int]
-                  ) -> Distributions:
+def distributions(
+    by_seed: Mapping[int, Mapping[str, LearningSetResult]],
+    larger: Sequence[LargerSetRun],
+    scenario_seeds: Sequence[int],
+) -> Distributions:
     """Pool every learning set's results over training seeds and draws (each result's
     :meth:`~LearningSetResult.draws_by_seed`) and the larger set's over seeds and draws."""
     sync: dict[str, list[Any]] = {m: [] for m in SYNC_MEASURES}
     switches: list[Any] = []
     recognised: list[float] = []
     errors: list[float] = []
-    cases: dict[str, dict[int, int]] = {k: dict.fromkeys(metrics.RESPONSE_CASES, 0)
-                                        for k in NOVEL_INPUTS}
+    cases: dict[str, dict[int, int]] = {
+        k: dict.fromkeys(metrics.RESPONSE_CASES, 0) for k in NOVEL_INPUTS
+    }
     periods: list[Any] = []
     for results in by_seed.values():
         for result in results.values():
@@ -308,8 +353,9 @@ def distributions(by_seed: Mapping[int, Mapping[str, LearningSetResult]],
                 for run in draw.synchronization:
                     for measure in SYNC_MEASURES:
                         value = getattr(run, measure)
-                        sync[measure].append(None if isinstance(value, float)
-                                             and math.isnan(value) else value)
+                        sync[measure].append(
+                            None if isinstance(value, float) and math.isnan(value) else value
+                        )
                     recognised.append(float(run.recognized_pattern == run.pattern))
                 switches.extend(draw.switching.pairs.values())
             for response in result.novel:
@@ -321,17 +367,26 @@ def distributions(by_seed: Mapping[int, Mapping[str, LearningSetResult]],
     follows = [f for run in larger for f in run.draws_by_seed().values()]
     if follows:
         measures["steps_to_follow"] = distribution(
-            "steps_to_follow", [v for f in follows for v in f.steps_to_follow.values()],
-            metrics.SWITCH_LIMIT)
+            "steps_to_follow",
+            [v for f in follows for v in f.steps_to_follow.values()],
+            metrics.SWITCH_LIMIT,
+        )
     return Distributions(
-        training_seeds=list(by_seed), scenario_seeds=list(scenario_seeds), measures=measures,
+        training_seeds=list(by_seed),
+        scenario_seeds=list(scenario_seeds),
+        measures=measures,
         recognised=bootstrap_interval(recognised, np.mean),
         train_below_target=bootstrap_interval(
-            [float(e < metrics.TRAIN_ERROR_TARGET) for e in errors], np.mean),
+            [float(e < metrics.TRAIN_ERROR_TARGET) for e in errors], np.mean
+        ),
         novel_cases=cases,
         closed_loop_periodic=(sum(p is not None for p in periods), len(periods)),
-        larger_set_follows=(bootstrap_interval([float(f.follows_all) for f in follows], np.mean)
-                            if follows else None))
+        larger_set_follows=(
+            bootstrap_interval([float(f.follows_all) for f in follows], np.mean)
+            if follows
+            else None
+        ),
+    )
 
 
 @dataclass(frozen=True)
@@ -349,9 +404,11 @@ class OutputFiles:
     figures: list[str]
 
     def to_json(self) -> dict[str, Any]:
-        return {"models": self.models,
-                "learning_sets": {k: asdict(v) for k, v in self.learning_sets.items()},
-                "figures": self.figures}
+        return {
+            "models": self.models,
+            "learning_sets": {k: asdict(v) for k, v in self.learning_sets.items()},
+            "figures": self.figures,
+        }
 
 
 @dataclass(frozen=True)
@@ -404,10 +461,13 @@ class DemoResults:
         if self.paper is not None:
             out["paper_regression"] = {
                 **self.paper.to_json(),
-                "targets": {k: t.to_json() for k, t in (self.paper_targets or {}).items()}}
+                "targets": {k: t.to_json() for k, t in (self.paper_targets or {}).items()},
+            }
         if self.distributions is not None:
-            out["distributions"] = {"default": self.distributions.to_json(),
-                                    "novel_case": [r.to_json() for r in self.novel_all]}
+            out["distributions"] = {
+                "default": self.distributions.to_json(),
+                "novel_case": [r.to_json() for r in self.novel_all],
+            }
             if self.paper_distributions is not None:
                 out["distributions"]["paper_regression"] = self.paper_distributions.to_json()
         out["runtime_s"] = self.runtime_s

@@ -63,8 +63,9 @@ def robot_to_person_scale(body: UserBody | None = None) -> float:
     return body.arm_reach / (UPPER_ARM_LENGTH + FOREARM_LENGTH)
 
 
-def person_hands(joints: np.ndarray, body: UserBody | None = None, view: str = "mirrored"
-                 ) -> np.ndarray:
+def person_hands(
+    joints: np.ndarray, body: UserBody | None = None, view: str = "mirrored"
+) -> np.ndarray:
     """A robot's joint angles (..., 8) → its hands in the person's space (..., 2, 3): where a
     person's hands would be (robot frame of the robot that sees it), [left, right]."""
     if view not in VIEWS:
@@ -149,9 +150,11 @@ class AgentConfig:
         if self.adaptation == 0.0:
             # No regression, and no restarts (they jump the PB to what fits): the PB stays.
             return replace(base, iterations=0, restart_span=0, phase_restarts=0)
-        return replace(base, pb=replace(base.pb, learning_rate=base.pb.learning_rate
-                                        * self.adaptation),
-                       onset_learning_rate=base.onset_learning_rate * self.adaptation)
+        return replace(
+            base,
+            pb=replace(base.pb, learning_rate=base.pb.learning_rate * self.adaptation),
+            onset_learning_rate=base.onset_learning_rate * self.adaptation,
+        )
 
 
 @dataclass(frozen=True)
@@ -200,11 +203,19 @@ class Agent(Protocol):
 class RobotAgent:
     """A mirror system moving a simulated body (kinematic: the joints go where commanded)."""
 
-    def __init__(self, model: TrainedModel, config: AgentConfig | None = None, *,
-                 online: OnlineConfig | None = None, seed: int = 0, name: str = "robot",
-                 body: UserBody | None = None, view: str = "mirrored",
-                 initial_pb: np.ndarray | None = None,
-                 initial_joints: np.ndarray | None = None) -> None:
+    def __init__(
+        self,
+        model: TrainedModel,
+        config: AgentConfig | None = None,
+        *,
+        online: OnlineConfig | None = None,
+        seed: int = 0,
+        name: str = "robot",
+        body: UserBody | None = None,
+        view: str = "mirrored",
+        initial_pb: np.ndarray | None = None,
+        initial_joints: np.ndarray | None = None,
+    ) -> None:
         self.model = model
         self.config = config or AgentConfig()
         self.name = name
@@ -215,10 +226,13 @@ class RobotAgent:
         self.patterns = tuple(model.patterns)
         if initial_pb is not None:
             self.mirror.reset(np.asarray(initial_pb, dtype=np.float64))
-        lower = np.asarray(model.lower)[model.network.sensory_size:]
-        upper = np.asarray(model.upper)[model.network.sensory_size:]
-        self.joints = (np.asarray(initial_joints, dtype=np.float64) if initial_joints is not None
-                       else 0.5 * (lower + upper))
+        lower = np.asarray(model.lower)[model.network.sensory_size :]
+        upper = np.asarray(model.upper)[model.network.sensory_size :]
+        self.joints = (
+            np.asarray(initial_joints, dtype=np.float64)
+            if initial_joints is not None
+            else 0.5 * (lower + upper)
+        )
         self._hands = person_hands(self.joints, self.body, view)
         self._stable = 0
         self._unstable = 0
@@ -261,11 +275,15 @@ class RobotAgent:
             others = [p for p in self.patterns if p != current] or list(self.patterns)
             pattern = str(self.rng.choice(others))
         if pattern not in self.patterns:
-            raise ConfigError(f"pattern {pattern!r} is not one this robot learned "
-                              f"({', '.join(self.patterns)})")
+            raise ConfigError(
+                f"pattern {pattern!r} is not one this robot learned ({', '.join(self.patterns)})"
+            )
         self.mirror.reset(self.model.pattern_pb[pattern])
-        self._play(self.model.pattern_pb[pattern], self.config.lead_steps + LEAD_HORIZON,
-                   self.model.pattern_initial_context(pattern))
+        self._play(
+            self.model.pattern_pb[pattern],
+            self.config.lead_steps + LEAD_HORIZON,
+            self.model.pattern_initial_context(pattern),
+        )
         self._stable, self._unstable, self._led, self._intent = 0, 0, 0, pattern
         self._patience = self._draw_patience()
         self._recent.clear()
@@ -275,8 +293,9 @@ class RobotAgent:
         if n_steps > 0:
             # The closed loop of a model learned from short demonstrations takes a few cycles
             # to settle on its pattern (docs/dyad.md): the robot plays it from then on.
-            generated = generate(self.model, np.clip(pb, 0.0, 1.0), WARMUP + n_steps,
-                                 initial_context=context)
+            generated = generate(
+                self.model, np.clip(pb, 0.0, 1.0), WARMUP + n_steps, initial_context=context
+            )
             self._plan = list(generated.motor[WARMUP:])
 
     def act(self, view: np.ndarray) -> AgentStep:
@@ -290,8 +309,7 @@ class RobotAgent:
                 self._play(self.mirror.pb, LEADER_HORIZON)
             self.joints = self._plan.pop(0)
             self._hands = person_hands(self.joints, self.body, self.view_kind)
-            return AgentStep(hands=self._hands, view=seen, pb=self.mirror.pb,
-                             motor=self.joints)
+            return AgentStep(hands=self._hands, view=seen, pb=self.mirror.pb, motor=self.joints)
         if self._plan and self._led >= self.config.lead_steps and self._unstable >= RELEASE:
             # The partner no longer follows: look and follow again (and wait a while of its own
             # before initiating again, so that two agents do not keep initiating together).
@@ -299,15 +317,20 @@ class RobotAgent:
             self._unstable, self._patience = 0, self._draw_patience()
         leading = bool(self._plan)
         persistence = self.config.persistence
-        if (persistence is not None and self._stable >= persistence) or \
-                (not leading and ((self._patience is not None
-                                   and self._unstable >= self._patience)
-                                  or self._left_alone())):
+        if (persistence is not None and self._stable >= persistence) or (
+            not leading
+            and (
+                (self._patience is not None and self._unstable >= self._patience)
+                or self._left_alone()
+            )
+        ):
             self.take_initiative()
             initiative = leading = True
         result = self.mirror.step(seen)
-        stable = math.isfinite(result.prediction_error) and \
-            math.sqrt(result.prediction_error) < self.config.stable_error
+        stable = (
+            math.isfinite(result.prediction_error)
+            and math.sqrt(result.prediction_error) < self.config.stable_error
+        )
         if leading:
             # Led: stable while the partner follows the led pattern (the mirror system, which
             # watches it, recognises that pattern in it).
@@ -326,11 +349,18 @@ class RobotAgent:
         else:
             self._intent = ""
             self._recent.append(seen)
-            del self._recent[:-max(self.config.alone_steps or 1, 1)]
+            del self._recent[: -max(self.config.alone_steps or 1, 1)]
             self.joints = result.motor
         self._hands = person_hands(self.joints, self.body, self.view_kind)
-        return AgentStep(hands=self._hands, view=seen, pb=result.pb, motor=self.joints,
-                         intent=self._intent, initiative=initiative, result=result)
+        return AgentStep(
+            hands=self._hands,
+            view=seen,
+            pb=result.pb,
+            motor=self.joints,
+            intent=self._intent,
+            initiative=initiative,
+            result=result,
+        )
 
 
 @dataclass(frozen=True)
@@ -388,10 +418,16 @@ class SubjectConfig:
 class ScriptedSubject:
     """A person who explores the robot's repertoire (:class:`SubjectConfig`)."""
 
-    def __init__(self, config: SubjectConfig | None = None, *, seed: int = 0,
-                 agent: AgentConfig | None = None, name: str = "subject",
-                 pattern_config: PatternConfig | None = None,
-                 camera: RobotCamera | None = None) -> None:
+    def __init__(
+        self,
+        config: SubjectConfig | None = None,
+        *,
+        seed: int = 0,
+        agent: AgentConfig | None = None,
+        name: str = "subject",
+        pattern_config: PatternConfig | None = None,
+        camera: RobotCamera | None = None,
+    ) -> None:
         self.config = config or SubjectConfig()
         self.agent = agent or AgentConfig()
         self.name = name
@@ -402,9 +438,10 @@ class ScriptedSubject:
         theta = 2 * np.pi * np.arange(period) / period
         self._templates = {}
         for name in self.config.repertoire:
-            cycle = self.camera.sensory_from_hands(self.pattern_config.body.hand_centres
-                                                   + pattern_offsets(name, theta,
-                                                                     self.pattern_config))
+            cycle = self.camera.sensory_from_hands(
+                self.pattern_config.body.hand_centres
+                + pattern_offsets(name, theta, self.pattern_config)
+            )
             self._templates[name] = cycle - cycle.mean(axis=0)
         self._period = period
         self.pattern = str(self.rng.choice(self.config.repertoire))
@@ -423,13 +460,18 @@ class ScriptedSubject:
 
     def _pose(self) -> np.ndarray:
         return self.pattern_config.body.hand_centres + pattern_offsets(
-            self.pattern, np.array(self.theta), self.pattern_config)
+            self.pattern, np.array(self.theta), self.pattern_config
+        )
 
     def _initiate(self) -> None:
-        unfound = [p for p in self.config.repertoire
-                   if p not in self.believed_found and p != self.pattern]
-        choices = unfound or [p for p in self.config.repertoire if p != self.pattern] \
+        unfound = [
+            p for p in self.config.repertoire if p not in self.believed_found and p != self.pattern
+        ]
+        choices = (
+            unfound
+            or [p for p in self.config.repertoire if p != self.pattern]
             or list(self.config.repertoire)
+        )
         self.pattern = str(self.rng.choice(choices))
         self._matched = self._unmatched = self._dwell = 0
         self._other = ("", 0)
@@ -448,8 +490,9 @@ class ScriptedSubject:
         index = (np.arange(w)[:, None] + np.arange(-w + 1, 1)[None, :]) % w
         best = (np.inf, "", -1)
         for name, cycle in self._templates.items():
-            fits = np.sqrt(np.mean((cycle[index] - segment[None]) ** 2, axis=(1, 2))) \
-                / np.sqrt(np.mean(cycle ** 2))
+            fits = np.sqrt(np.mean((cycle[index] - segment[None]) ** 2, axis=(1, 2))) / np.sqrt(
+                np.mean(cycle**2)
+            )
             j = int(np.argmin(fits))
             if fits[j] < best[0]:
                 best = (float(fits[j]), name, j)
@@ -460,7 +503,7 @@ class ScriptedSubject:
         if self.agent.noise > 0:
             seen = seen + self.agent.noise * self.rng.standard_normal(seen.shape)
         self._views.append(seen)
-        del self._views[:-self._period]
+        del self._views[: -self._period]
         robot, phase = self._robot_movement()
         config = self.config
         initiative = False
@@ -472,11 +515,11 @@ class ScriptedSubject:
             robot_theta = 2 * np.pi * phase / self._period
             gap = (robot_theta - self.theta + np.pi) % (2 * np.pi) - np.pi
             self.theta += config.phase_coupling * gap
-            if self._matched == config.memorize_steps and self.pattern not in \
-                    self.believed_found:
+            if self._matched == config.memorize_steps and self.pattern not in self.believed_found:
                 self.believed_found.append(self.pattern)
-            if self._matched >= 2 * config.memorize_steps and \
-                    len(self.believed_found) < len(config.repertoire):
+            if self._matched >= 2 * config.memorize_steps and len(self.believed_found) < len(
+                config.repertoire
+            ):
                 self._initiate()  # memorised: explore another
                 initiative = True
         else:
@@ -492,15 +535,16 @@ class ScriptedSubject:
                     self._other = ("", 0)
             else:
                 self._other = ("", 0)
-            if self._unmatched >= config.patience or \
-                    self._dwell >= config.patience + 2 * config.memorize_steps:
+            if (
+                self._unmatched >= config.patience
+                or self._dwell >= config.patience + 2 * config.memorize_steps
+            ):
                 # They cannot match (or not for long enough to remember it): try another.
                 self._initiate()
                 initiative = True
         self.theta += 2 * np.pi / config.period_steps
         self._hands = self._pose()
-        return AgentStep(hands=self._hands, view=seen, intent=self.pattern,
-                         initiative=initiative)
+        return AgentStep(hands=self._hands, view=seen, intent=self.pattern, initiative=initiative)
 
 
 @dataclass(frozen=True)
@@ -541,10 +585,16 @@ class Dyad:
         self.steps += 1
         return record
 
-    def run(self, n_steps: int, *, dt: float = 0.4, paced: bool = False,
-            on_step: Callable[[DyadStep], None] | None = None,
-            between_steps: Callable[[float], None] | None = None,
-            should_stop: Callable[[], bool] | None = None) -> DyadRun:
+    def run(
+        self,
+        n_steps: int,
+        *,
+        dt: float = 0.4,
+        paced: bool = False,
+        on_step: Callable[[DyadStep], None] | None = None,
+        between_steps: Callable[[float], None] | None = None,
+        should_stop: Callable[[], bool] | None = None,
+    ) -> DyadRun:
         """``n_steps`` steps, as fast as possible or one every ``dt`` seconds (the pacing of
         :class:`rnnpb.interaction.InteractionLoop`: a late step starts the next at once;
         ``between_steps(wait_s)`` is called while waiting)."""
@@ -557,8 +607,7 @@ class Dyad:
                     between_steps(wait_s)
                 elif wait_s > 0:
                     time.sleep(wait_s)
-                if (should_stop is not None and should_stop()) or \
-                        time.perf_counter() >= deadline:
+                if (should_stop is not None and should_stop()) or time.perf_counter() >= deadline:
                     break
             if should_stop is not None and should_stop():
                 break
@@ -586,14 +635,16 @@ class DyadRun:
         for side in ("a", "b"):
             parts = [getattr(s, side) for s in steps]
             out[f"{side}_view"] = np.array([p.view for p in parts]).reshape(-1, 4)
-            out[f"{side}_shown"] = np.array([getattr(s, f"shown_{side}") for s in steps]
-                                            ).reshape(-1, 4)
+            out[f"{side}_shown"] = np.array([getattr(s, f"shown_{side}") for s in steps]).reshape(
+                -1, 4
+            )
             pb_size = next((len(p.pb) for p in parts if p.pb is not None), 4)
-            out[f"{side}_pb"] = np.array([p.pb if p.pb is not None else np.full(pb_size, np.nan)
-                                          for p in parts]).reshape(-1, pb_size)
-            out[f"{side}_motor"] = np.array([p.motor if p.motor is not None
-                                             else np.full(8, np.nan) for p in parts]
-                                            ).reshape(-1, 8)
+            out[f"{side}_pb"] = np.array(
+                [p.pb if p.pb is not None else np.full(pb_size, np.nan) for p in parts]
+            ).reshape(-1, pb_size)
+            out[f"{side}_motor"] = np.array(
+                [p.motor if p.motor is not None else np.full(8, np.nan) for p in parts]
+            ).reshape(-1, 8)
             out[f"{side}_intent"] = np.array([p.intent for p in parts], dtype=object)
             out[f"{side}_initiative"] = np.array([p.initiative for p in parts], dtype=bool)
         out["seconds"] = np.array([s.seconds for s in steps])
@@ -616,26 +667,61 @@ def random_start(model: TrainedModel, rng: np.random.Generator) -> tuple[np.ndar
     return pb, rng.uniform(lower, upper)
 
 
-def robot_pair(model_a: TrainedModel, model_b: TrainedModel, a: AgentConfig | None = None,
-               b: AgentConfig | None = None, *, seed: int = 0,
-               online: OnlineConfig | None = None, view: str = "mirrored") -> Dyad:
+def robot_pair(
+    model_a: TrainedModel,
+    model_b: TrainedModel,
+    a: AgentConfig | None = None,
+    b: AgentConfig | None = None,
+    *,
+    seed: int = 0,
+    online: OnlineConfig | None = None,
+    view: str = "mirrored",
+) -> Dyad:
     """Two robots from random starts (drawn from ``seed``)."""
     rng = np.random.default_rng([int(seed), 18])
     pb_a, joints_a = random_start(model_a, rng)
     pb_b, joints_b = random_start(model_b, rng)
-    robot_a = RobotAgent(model_a, a, online=online, seed=int(rng.integers(2**31)), name="a",
-                         view=view, initial_pb=pb_a, initial_joints=joints_a)
-    robot_b = RobotAgent(model_b, b, online=online, seed=int(rng.integers(2**31)), name="b",
-                         view=view, initial_pb=pb_b, initial_joints=joints_b)
+    robot_a = RobotAgent(
+        model_a,
+        a,
+        online=online,
+        seed=int(rng.integers(2**31)),
+        name="a",
+        view=view,
+        initial_pb=pb_a,
+        initial_joints=joints_a,
+    )
+    robot_b = RobotAgent(
+        model_b,
+        b,
+        online=online,
+        seed=int(rng.integers(2**31)),
+        name="b",
+        view=view,
+        initial_pb=pb_b,
+        initial_joints=joints_b,
+    )
     return Dyad(robot_a, robot_b)
 
 
-def robot_and_subject(model: TrainedModel, robot: AgentConfig | None = None,
-                      subject: SubjectConfig | None = None, *, seed: int = 0,
-                      online: OnlineConfig | None = None) -> Dyad:
+def robot_and_subject(
+    model: TrainedModel,
+    robot: AgentConfig | None = None,
+    subject: SubjectConfig | None = None,
+    *,
+    seed: int = 0,
+    online: OnlineConfig | None = None,
+) -> Dyad:
     """A robot (agent A, from a random start) and a scripted subject (agent B)."""
     rng = np.random.default_rng([int(seed), 42])
     pb, joints = random_start(model, rng)
-    robot_agent = RobotAgent(model, robot, online=online, seed=int(rng.integers(2**31)),
-                             name="robot", initial_pb=pb, initial_joints=joints)
+    robot_agent = RobotAgent(
+        model,
+        robot,
+        online=online,
+        seed=int(rng.integers(2**31)),
+        name="robot",
+        initial_pb=pb,
+        initial_joints=joints,
+    )
     return Dyad(robot_agent, ScriptedSubject(subject, seed=int(rng.integers(2**31))))

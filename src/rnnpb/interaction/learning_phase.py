@@ -76,14 +76,20 @@ class Demonstration:
     @property
     def valid(self) -> np.ndarray:
         """Steps whose sensory and motor values are all finite, shape (n_steps,)."""
-        return np.asarray(np.isfinite(self.sensory).all(axis=1)
-                          & np.isfinite(self.motor).all(axis=1))
+        return np.asarray(
+            np.isfinite(self.sensory).all(axis=1) & np.isfinite(self.motor).all(axis=1)
+        )
 
 
-def record_demonstration(source: UserSource, *, steps: int | None = None,
-                         mapping: MirrorMapping | None = None, camera: RobotCamera | None = None,
-                         depth: DepthConfig | None = None,
-                         plane_x: float = MOUSE_PLANE_X) -> Demonstration:
+def record_demonstration(
+    source: UserSource,
+    *,
+    steps: int | None = None,
+    mapping: MirrorMapping | None = None,
+    camera: RobotCamera | None = None,
+    depth: DepthConfig | None = None,
+    plane_x: float = MOUSE_PLANE_X,
+) -> Demonstration:
     """Read a connected source to its end (or ``steps``) and turn it into a demonstration.
 
     A :class:`rnnpb.perception.TrackedUserSource` gives depth from the balls' sizes; every other
@@ -118,12 +124,14 @@ def record_demonstration(source: UserSource, *, steps: int | None = None,
             if observation.frame is not None:
                 frame_size = (observation.frame.shape[1], observation.frame.shape[0])
     if len(sensory) < 2:
-        raise RnnpbError(f"{_described(source)}: gave {len(sensory)} steps; a demonstration "
-                         "needs at least 2")
+        raise RnnpbError(
+            f"{_described(source)}: gave {len(sensory)} steps; a demonstration needs at least 2"
+        )
     sensory_array = np.array(sensory)
     if tracked:
-        hands = hands_from_balls(np.array(centers), np.array(radii), camera, depth,
-                                 image_size=frame_size)
+        hands = hands_from_balls(
+            np.array(centers), np.array(radii), camera, depth, image_size=frame_size
+        )
     else:
         hands = hands_on_plane(sensory_array, camera, plane_x)
     found = np.isfinite(hands).all(axis=(1, 2))
@@ -132,16 +140,18 @@ def record_demonstration(source: UserSource, *, steps: int | None = None,
     if found.any():
         ik = mapping.inverse_kinematics(hands[found])
         motor[found], residual[found] = ik.joints, ik.residual
-    return Demonstration(sensory_array, hands, motor, residual, "size" if tracked else "plane",
-                         _described(source))
+    return Demonstration(
+        sensory_array, hands, motor, residual, "size" if tracked else "plane", _described(source)
+    )
 
 
 def _described(source: UserSource) -> str:
     return str(getattr(source, "description", "") or type(source).__name__)
 
 
-def dominant_period(signal: np.ndarray, min_period: int = MIN_PERIOD,
-                    max_period: int = MAX_PERIOD) -> int | None:
+def dominant_period(
+    signal: np.ndarray, min_period: int = MIN_PERIOD, max_period: int = MAX_PERIOD
+) -> int | None:
     """The lag of the autocorrelation's first strong peak in [min_period, max_period], or None
     when the signal does not repeat. ``signal`` shape (n_steps,).
 
@@ -157,9 +167,14 @@ def dominant_period(signal: np.ndarray, min_period: int = MIN_PERIOD,
         return None
     lags = np.arange(1, max_period + 2)
     correlation = np.array([x[:-k] @ x[k:] / energy * len(x) / (len(x) - k) for k in lags])
-    peaks = [i for i in range(min_period - 1, len(lags) - 1)
-             if correlation[i] >= correlation[i - 1] and correlation[i] >= correlation[i + 1]
-             and correlation[i] > 0.3 and correlation[i] - correlation[:i].min() >= 0.6]
+    peaks = [
+        i
+        for i in range(min_period - 1, len(lags) - 1)
+        if correlation[i] >= correlation[i - 1]
+        and correlation[i] >= correlation[i + 1]
+        and correlation[i] > 0.3
+        and correlation[i] - correlation[:i].min() >= 0.6
+    ]
     if not peaks:
         return None
     # the first strong peak: later peaks are its multiples
@@ -196,8 +211,14 @@ def _valid_runs(valid: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(np.where(edges == 1)[0], np.where(edges == -1)[0], strict=True))
 
 
-def cut_sequences(demonstration: Demonstration, pattern: str, *, mode: str = "cycles",
-                  cycles_per_sequence: int = 4, length: int = 50) -> list[Sequence]:
+def cut_sequences(
+    demonstration: Demonstration,
+    pattern: str,
+    *,
+    mode: str = "cycles",
+    cycles_per_sequence: int = 4,
+    length: int = 50,
+) -> list[Sequence]:
     """Cut a demonstration into training sequences of ``pattern`` (see the module doc).
 
     Raises :class:`RnnpbError` when nothing whole is left to cut (no repeating movement, or
@@ -215,16 +236,24 @@ def cut_sequences(demonstration: Demonstration, pattern: str, *, mode: str = "cy
             pieces = [(s, s + length) for s in range(start, stop - length + 1, length)]
         else:
             cycles = cycle_bounds(demonstration.sensory[start:stop])
-            pieces = [(start + cycles[i][0], start + cycles[i + cycles_per_sequence - 1][1])
-                      for i in range(0, len(cycles) - cycles_per_sequence + 1,
-                                     cycles_per_sequence)]
+            pieces = [
+                (start + cycles[i][0], start + cycles[i + cycles_per_sequence - 1][1])
+                for i in range(0, len(cycles) - cycles_per_sequence + 1, cycles_per_sequence)
+            ]
         for a, b in pieces:
-            sequences.append(Sequence(demonstration.sensory[a:b], demonstration.motor[a:b],
-                                      pattern, f"{demonstration.source} steps {a}-{b - 1}",
-                                      meta={"hands": demonstration.hands[a:b], "first_step": a}))
+            sequences.append(
+                Sequence(
+                    demonstration.sensory[a:b],
+                    demonstration.motor[a:b],
+                    pattern,
+                    f"{demonstration.source} steps {a}-{b - 1}",
+                    meta={"hands": demonstration.hands[a:b], "first_step": a},
+                )
+            )
     if not sequences:
-        what = (f"{cycles_per_sequence} whole cycles" if mode == "cycles"
-                else f"{length} steps")
-        raise RnnpbError(f"{demonstration.source}: no stretch of {what} with both hands seen "
-                         f"in {demonstration.n_steps} steps (is the movement repeating?)")
+        what = f"{cycles_per_sequence} whole cycles" if mode == "cycles" else f"{length} steps"
+        raise RnnpbError(
+            f"{demonstration.source}: no stretch of {what} with both hands seen "
+            f"in {demonstration.n_steps} steps (is the movement repeating?)"
+        )
     return sequences

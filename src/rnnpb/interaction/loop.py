@@ -71,8 +71,7 @@ class LoopConfig:
         steps = self.max_steps
         if steps is not None:
             if isinstance(steps, bool) or not isinstance(steps, numbers.Integral):
-                raise ConfigError(f"max_steps must be a whole number or None, got "
-                                  f"{steps!r:.40}")
+                raise ConfigError(f"max_steps must be a whole number or None, got {steps!r:.40}")
             if steps < 0:
                 raise ConfigError(f"max_steps must be >= 0, got {steps}")
             object.__setattr__(self, "max_steps", int(steps))
@@ -123,16 +122,25 @@ class LoopSummary:
     held_steps: int
 
     def to_dict(self) -> dict[str, Any]:
-        return {"steps": self.steps, "missed_deadlines": self.missed_deadlines,
-                "section_ms": self.section_ms, "lost_steps": self.lost_steps,
-                "held_steps": self.held_steps}
+        return {
+            "steps": self.steps,
+            "missed_deadlines": self.missed_deadlines,
+            "section_ms": self.section_ms,
+            "lost_steps": self.lost_steps,
+            "held_steps": self.held_steps,
+        }
 
     def describe(self) -> str:
-        parts = [f"{name} {v['median']:.2f} ms (p99 {v['p99']:.2f})"
-                 for name, v in self.section_ms.items()]
-        return (f"{self.steps} steps; per step: " + ", ".join(parts)
-                + f"; missed deadlines: {self.missed_deadlines}; steps with a hand lost: "
-                f"{self.lost_steps}")
+        parts = [
+            f"{name} {v['median']:.2f} ms (p99 {v['p99']:.2f})"
+            for name, v in self.section_ms.items()
+        ]
+        return (
+            f"{self.steps} steps; per step: "
+            + ", ".join(parts)
+            + f"; missed deadlines: {self.missed_deadlines}; steps with a hand lost: "
+            f"{self.lost_steps}"
+        )
 
 
 class InteractionLoop:
@@ -150,9 +158,15 @@ class InteractionLoop:
         (:class:`rnnpb.safety.CommandFilter`); ``prevented_commands`` counts what it changed.
     """
 
-    def __init__(self, mirror: MirrorSystem, source: UserSource, robot: Any | None = None,
-                 recorder: SessionRecorder | None = None, config: LoopConfig | None = None,
-                 command_filter: Callable[[np.ndarray], Any] | None = None) -> None:
+    def __init__(
+        self,
+        mirror: MirrorSystem,
+        source: UserSource,
+        robot: Any | None = None,
+        recorder: SessionRecorder | None = None,
+        config: LoopConfig | None = None,
+        command_filter: Callable[[np.ndarray], Any] | None = None,
+    ) -> None:
         self.mirror = mirror
         self.source = source
         self.robot = robot
@@ -160,8 +174,9 @@ class InteractionLoop:
         self.config = config or LoopConfig()
         self._subscribers: list[Callable[[StepRecord], None]] = []
         # Bounded: the summary covers the last TIMING_WINDOW steps of a long run.
-        self._timings: dict[str, deque[float]] = {name: deque(maxlen=TIMING_WINDOW)
-                                                  for name in SECTIONS}
+        self._timings: dict[str, deque[float]] = {
+            name: deque(maxlen=TIMING_WINDOW) for name in SECTIONS
+        }
         self._predicted = np.full(mirror.model.network.sensory_size, math.nan)
         self.steps = 0
         self.missed_deadlines = 0
@@ -176,8 +191,7 @@ class InteractionLoop:
     def subscribe(self, callback: Callable[[StepRecord], None]) -> Callable[[], None]:
         """Call ``callback(record)`` after every step; returns a function that unsubscribes."""
         self._subscribers.append(callback)
-        return lambda: self._subscribers.remove(callback) if callback in self._subscribers \
-            else None
+        return lambda: self._subscribers.remove(callback) if callback in self._subscribers else None
 
     def step(self) -> StepRecord | None:
         """Run one step; ``None`` when the source has ended."""
@@ -200,19 +214,31 @@ class InteractionLoop:
             self.robot.send(motor)
         t3 = time.perf_counter()
         record = StepRecord(
-            step=self.steps, time_s=t0 - self._start, observed=observation.sensory.copy(),
-            predicted=self._predicted.copy(), predicted_next=result.predicted_hands,
-            motor=motor, pb=result.pb, prediction_error=result.prediction_error,
-            window_error=result.window_error, held=result.held, truth=observation.truth,
-            frame=observation.frame, context=result.context, unsafe=unsafe, filtered=filtered,
-            recognised=result.recognised, confidence=result.confidence, novelty=result.novelty,
-            pattern_confidence=result.pattern_confidence)
+            step=self.steps,
+            time_s=t0 - self._start,
+            observed=observation.sensory.copy(),
+            predicted=self._predicted.copy(),
+            predicted_next=result.predicted_hands,
+            motor=motor,
+            pb=result.pb,
+            prediction_error=result.prediction_error,
+            window_error=result.window_error,
+            held=result.held,
+            truth=observation.truth,
+            frame=observation.frame,
+            context=result.context,
+            unsafe=unsafe,
+            filtered=filtered,
+            recognised=result.recognised,
+            confidence=result.confidence,
+            novelty=result.novelty,
+            pattern_confidence=result.pattern_confidence,
+        )
         self._predicted = result.predicted_hands.copy()
         if self.recorder is not None:
             self.recorder.write(record)
         t4 = time.perf_counter()
-        record.timings = {"perceive": t1 - t0, "mirror": t2 - t1, "act": t3 - t2,
-                          "record": t4 - t3}
+        record.timings = {"perceive": t1 - t0, "mirror": t2 - t1, "act": t3 - t2, "record": t4 - t3}
         for name, value in record.timings.items():
             self._timings[name].append(value)
         self.steps += 1
@@ -225,8 +251,11 @@ class InteractionLoop:
             callback(record)
         return record
 
-    def run(self, on_step: Callable[[StepRecord], None] | None = None,
-            between_steps: Callable[[float], None] | None = None) -> LoopSummary:
+    def run(
+        self,
+        on_step: Callable[[StepRecord], None] | None = None,
+        between_steps: Callable[[float], None] | None = None,
+    ) -> LoopSummary:
         """Run until the source ends, ``max_steps`` or :meth:`stop`; paced at ``dt`` if
         configured.
 
@@ -258,8 +287,7 @@ class InteractionLoop:
                 deadline = max(deadline + self.config.dt, time.perf_counter())
         return self.summary()
 
-    def _wait_until(self, deadline: float, between_steps: Callable[[float], None] | None
-                    ) -> None:
+    def _wait_until(self, deadline: float, between_steps: Callable[[float], None] | None) -> None:
         if between_steps is None:
             delay = deadline - time.perf_counter()
             if self.config.paced and delay > 0:
@@ -289,9 +317,13 @@ class InteractionLoop:
                 values = values[1:]  # the first step includes compilation
             array = np.asarray(values) * 1e3
             if array.size:
-                stats[name] = {"median": float(np.median(array)),
-                               "p99": float(np.percentile(array, 99)), "max": float(array.max())}
+                stats[name] = {
+                    "median": float(np.median(array)),
+                    "p99": float(np.percentile(array, 99)),
+                    "max": float(array.max()),
+                }
             else:
                 stats[name] = {"median": math.nan, "p99": math.nan, "max": math.nan}
-        return LoopSummary(self.steps, self.missed_deadlines, stats, self.lost_steps,
-                           self.held_steps)
+        return LoopSummary(
+            self.steps, self.missed_deadlines, stats, self.lost_steps, self.held_steps
+        )

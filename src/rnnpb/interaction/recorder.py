@@ -42,16 +42,30 @@ def _is_text(name: str) -> bool:
     """Whether column ``name`` holds words (an agent's ``a_``/``b_`` columns included)."""
     for prefix in DYAD_PREFIXES:
         if name.startswith(prefix):
-            return name[len(prefix):] in (*TEXT_COLUMNS, "intent")
+            return name[len(prefix) :] in (*TEXT_COLUMNS, "intent")
     return name in TEXT_COLUMNS
 
 
 def session_columns(pb_size: int) -> list[str]:
-    return [STEP_COLUMN, "time_s", *SENSORY_NAMES,
-            *(PREDICTED_PREFIX + name for name in SENSORY_NAMES), *MOTOR_NAMES,
-            *(f"{PB_COLUMNS_PREFIX}{i}" for i in range(pb_size)),
-            "prediction_error", "window_error", "lost_left", "lost_right", "held",
-            "recognised", "confidence", "novelty", "truth_pattern", "unsafe", "filtered"]
+    return [
+        STEP_COLUMN,
+        "time_s",
+        *SENSORY_NAMES,
+        *(PREDICTED_PREFIX + name for name in SENSORY_NAMES),
+        *MOTOR_NAMES,
+        *(f"{PB_COLUMNS_PREFIX}{i}" for i in range(pb_size)),
+        "prediction_error",
+        "window_error",
+        "lost_left",
+        "lost_right",
+        "held",
+        "recognised",
+        "confidence",
+        "novelty",
+        "truth_pattern",
+        "unsafe",
+        "filtered",
+    ]
 
 
 def _fmt(value: float) -> str:
@@ -81,12 +95,25 @@ class SessionRecorder:
             self.open()
         assert self._writer is not None and self._handle is not None  # open() set both
         seen = np.isfinite(record.observed)
-        row = [record.step, f"{record.time_s:.4f}", *(_fmt(v) for v in record.observed),
-               *(_fmt(v) for v in record.predicted), *(f"{v:.6f}" for v in record.motor),
-               *(f"{v:.6f}" for v in record.pb), _fmt(record.prediction_error),
-               _fmt(record.window_error), int(not seen[:2].all()), int(not seen[2:].all()),
-               int(record.held), record.recognised or "", _fmt(record.confidence),
-               record.novelty, record.truth.get("pattern", ""), record.unsafe, record.filtered]
+        row = [
+            record.step,
+            f"{record.time_s:.4f}",
+            *(_fmt(v) for v in record.observed),
+            *(_fmt(v) for v in record.predicted),
+            *(f"{v:.6f}" for v in record.motor),
+            *(f"{v:.6f}" for v in record.pb),
+            _fmt(record.prediction_error),
+            _fmt(record.window_error),
+            int(not seen[:2].all()),
+            int(not seen[2:].all()),
+            int(record.held),
+            record.recognised or "",
+            _fmt(record.confidence),
+            record.novelty,
+            record.truth.get("pattern", ""),
+            record.unsafe,
+            record.filtered,
+        ]
         self._writer.writerow(row)
         self._handle.flush()
         self.rows += 1
@@ -107,8 +134,9 @@ class SessionRecorder:
         self.close()
 
 
-def read_session(path: str | os.PathLike[str], required: list[str] | None = None
-                 ) -> dict[str, np.ndarray]:
+def read_session(
+    path: str | os.PathLike[str], required: list[str] | None = None
+) -> dict[str, np.ndarray]:
     """Read a session recording into arrays by column (empty cells → NaN; strings kept).
 
     A last line without its line break is a row cut short by an interrupted write and is left
@@ -126,9 +154,15 @@ def read_session(path: str | os.PathLike[str], required: list[str] | None = None
     # surrogateescape: bytes that are not UTF-8 are kept as lone surrogates rather than raised
     # at once, because a write cut short may split a character in the unfinished last row, which
     # is left out anyway; in any other line they are an error.
-    handle = open_regular_file(path, DataFileError, "a session recording (.csv)",
-                               MAX_TEXT_FILE_BYTES, newline="", encoding="utf-8-sig",
-                               errors="surrogateescape")
+    handle = open_regular_file(
+        path,
+        DataFileError,
+        "a session recording (.csv)",
+        MAX_TEXT_FILE_BYTES,
+        newline="",
+        encoding="utf-8-sig",
+        errors="surrogateescape",
+    )
     undecodable = re.compile("[\udc80-\udcff]")
 
     def complete_lines():
@@ -158,14 +192,16 @@ def read_session(path: str | os.PathLike[str], required: list[str] | None = None
             required = required or [STEP_COLUMN, *SENSORY_NAMES, *MOTOR_NAMES]
             missing = [c for c in required if c not in header]
             if missing:
-                raise DataFileError(f"{path}: not a session recording: missing column(s) "
-                                    f"{', '.join(missing)}")
+                raise DataFileError(
+                    f"{path}: not a session recording: missing column(s) {', '.join(missing)}"
+                )
             repeated = sorted({name for name in header if name and header.count(name) > 1})
             if repeated:
-                raise DataFileError(f"{path}: column(s) {', '.join(map(repr, repeated))[:200]} "
-                                    "appear more than once in the header")
-            columns = {name: [] if _is_text(name) else array.array("d")
-                       for name in header}
+                raise DataFileError(
+                    f"{path}: column(s) {', '.join(map(repr, repeated))[:200]} "
+                    "appear more than once in the header"
+                )
+            columns = {name: [] if _is_text(name) else array.array("d") for name in header}
             cells = list(columns.values())
             numeric = [not isinstance(cell, list) for cell in cells]
             labels: dict[str, str] = {}  # one string object per distinct truth label
@@ -173,8 +209,10 @@ def read_session(path: str | os.PathLike[str], required: list[str] | None = None
                 if not row:
                     continue
                 if len(row) != len(header):
-                    raise DataFileError(f"{path}: line {reader.line_num}: expected "
-                                        f"{len(header)} fields, found {len(row)}")
+                    raise DataFileError(
+                        f"{path}: line {reader.line_num}: expected "
+                        f"{len(header)} fields, found {len(row)}"
+                    )
                 for name, value, cell, is_number in zip(header, row, cells, numeric, strict=True):
                     if not is_number:
                         cell.append(labels.setdefault(value, value))
@@ -182,14 +220,20 @@ def read_session(path: str | os.PathLike[str], required: list[str] | None = None
                     try:
                         cell.append(float(value) if value.strip() else math.nan)
                     except ValueError:
-                        raise DataFileError(f"{path}: line {reader.line_num}, column {name!r}: "
-                                            f"{value[:40]!r} is not a number") from None
+                        raise DataFileError(
+                            f"{path}: line {reader.line_num}, column {name!r}: "
+                            f"{value[:40]!r} is not a number"
+                        ) from None
     except csv.Error as error:
         raise DataFileError(f"{path}: malformed CSV: {error}") from None
     except OSError as error:
         raise DataFileError(f"{path}: cannot read: {error.strerror or error}") from None
-    return {name: np.array(cell, dtype=object) if isinstance(cell, list)
-            else np.frombuffer(cell, dtype=np.float64) for name, cell in columns.items()}
+    return {
+        name: np.array(cell, dtype=object)
+        if isinstance(cell, list)
+        else np.frombuffer(cell, dtype=np.float64)
+        for name, cell in columns.items()
+    }
 
 
 # --- two-agent recordings ------------------------------------------------------------------
@@ -202,19 +246,27 @@ def dyad_columns(pb_size: int) -> list[str]:
     (``shown_lhy`` …), its motor command (a subject's is empty), its PB, its prediction and
     window errors, the pattern it means to play (``intent``) and whether it took the
     initiative this step (``initiative``, 1 or 0)."""
-    per_agent = [*SENSORY_NAMES, *(f"shown_{name}" for name in SENSORY_NAMES), *MOTOR_NAMES,
-                 *(f"{PB_COLUMNS_PREFIX}{i}" for i in range(pb_size)), "prediction_error",
-                 "window_error", *DYAD_AGENT_COLUMNS]
-    return [STEP_COLUMN, "time_s",
-            *(prefix + name for prefix in DYAD_PREFIXES for name in per_agent)]
+    per_agent = [
+        *SENSORY_NAMES,
+        *(f"shown_{name}" for name in SENSORY_NAMES),
+        *MOTOR_NAMES,
+        *(f"{PB_COLUMNS_PREFIX}{i}" for i in range(pb_size)),
+        "prediction_error",
+        "window_error",
+        *DYAD_AGENT_COLUMNS,
+    ]
+    return [
+        STEP_COLUMN,
+        "time_s",
+        *(prefix + name for prefix in DYAD_PREFIXES for name in per_agent),
+    ]
 
 
 class DyadRecorder(SessionRecorder):
     """Writes a two-agent recording row by row (:func:`dyad_columns`); rows are
     :class:`rnnpb.interaction.dyad.DyadStep`. :func:`read_session` reads it back."""
 
-    def __init__(self, path: str | os.PathLike[str], pb_size: int = 4, dt: float = 0.4
-                 ) -> None:
+    def __init__(self, path: str | os.PathLike[str], pb_size: int = 4, dt: float = 0.4) -> None:
         super().__init__(path, pb_size)
         self.columns = dyad_columns(pb_size)
         self.pb_size = pb_size
@@ -229,11 +281,16 @@ class DyadRecorder(SessionRecorder):
             result = agent.result
             motor = agent.motor if agent.motor is not None else np.full(len(MOTOR_NAMES), np.nan)
             pb = agent.pb if agent.pb is not None else np.full(self.pb_size, np.nan)
-            row += [*(_fmt(v) for v in agent.view), *(_fmt(v) for v in shown),
-                    *(_fmt(v) for v in motor), *(_fmt(v) for v in pb),
-                    _fmt(result.prediction_error if result is not None else math.nan),
-                    _fmt(result.window_error if result is not None else math.nan),
-                    agent.intent, int(agent.initiative)]
+            row += [
+                *(_fmt(v) for v in agent.view),
+                *(_fmt(v) for v in shown),
+                *(_fmt(v) for v in motor),
+                *(_fmt(v) for v in pb),
+                _fmt(result.prediction_error if result is not None else math.nan),
+                _fmt(result.window_error if result is not None else math.nan),
+                agent.intent,
+                int(agent.initiative),
+            ]
         self._writer.writerow(row)
         self._handle.flush()
         self.rows += 1
@@ -241,5 +298,10 @@ class DyadRecorder(SessionRecorder):
 
 def read_dyad_session(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
     """Read a two-agent recording (:func:`dyad_columns`) as :func:`read_session` does."""
-    return read_session(path, [STEP_COLUMN, *(prefix + name for prefix in DYAD_PREFIXES
-                                              for name in (*SENSORY_NAMES, *MOTOR_NAMES))])
+    return read_session(
+        path,
+        [
+            STEP_COLUMN,
+            *(prefix + name for prefix in DYAD_PREFIXES for name in (*SENSORY_NAMES, *MOTOR_NAMES)),
+        ],
+    )

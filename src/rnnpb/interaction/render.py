@@ -34,8 +34,9 @@ class SessionVideo:
     path removes it first.
     """
 
-    def __init__(self, path: str | os.PathLike[str], fps: float = 2.5,
-                 camera: RobotCamera | None = None) -> None:
+    def __init__(
+        self, path: str | os.PathLike[str], fps: float = 2.5, camera: RobotCamera | None = None
+    ) -> None:
         from rnnpb.perception import VideoWriter
         from rnnpb.robot import RobotRenderer
 
@@ -62,13 +63,28 @@ class SessionVideo:
             if np.all(np.isfinite(values)):
                 x, y = self.camera.pixels_from_normalized(values)
                 cv2.circle(left, (int(x), int(y)), 18, colour, 2, cv2.LINE_AA)
-        cv2.putText(left, f"step {record.step}  seen (disc) / predicted (ring)", (10, 24),
-                    cv2.FONT_HERSHEY_SIMPLEX, 0.6, (30, 30, 30), 1, cv2.LINE_AA)
-        right = cv2.cvtColor(self._renderer.render(record.motor, camera="front"),
-                             cv2.COLOR_RGB2BGR)
+        cv2.putText(
+            left,
+            f"step {record.step}  seen (disc) / predicted (ring)",
+            (10, 24),
+            cv2.FONT_HERSHEY_SIMPLEX,
+            0.6,
+            (30, 30, 30),
+            1,
+            cv2.LINE_AA,
+        )
+        right = cv2.cvtColor(self._renderer.render(record.motor, camera="front"), cv2.COLOR_RGB2BGR)
         pb = " ".join(f"{v:.2f}" for v in record.pb)
-        cv2.putText(right, f"robot   PB {pb}", (10, 24), cv2.FONT_HERSHEY_SIMPLEX, 0.6,
-                    (30, 30, 30), 1, cv2.LINE_AA)
+        cv2.putText(
+            right,
+            f"robot   PB {pb}",
+            (10, 24),
+            cv2.FONT_HERSHEY_SIMPLEX,
+            0.6,
+            (30, 30, 30),
+            1,
+            cv2.LINE_AA,
+        )
         self._writer.write(np.concatenate([left, right], axis=1))
 
     def __enter__(self) -> SessionVideo:

@@ -86,8 +86,9 @@ def parse_source_spec(spec: str, kinds: tuple[str, ...] = SOURCE_KINDS) -> Sourc
     if kind not in SOURCE_KINDS:
         raise ConfigError(f"source {text!r}: unknown kind {kind!r}; expected one of {forms}")
     if kind not in kinds:
-        raise ConfigError(f"source {text!r}: a {kind} source cannot be used here; expected "
-                          f"one of {forms}")
+        raise ConfigError(
+            f"source {text!r}: a {kind} source cannot be used here; expected one of {forms}"
+        )
     if kind == "webcam":
         try:
             return SourceSpec(kind, int(argument))
@@ -102,8 +103,9 @@ def parse_scenario(spec: str, seed: int = 0):
 
     kind, _, argument = spec.partition(":")
     if kind not in SCENARIO_KINDS:
-        raise ConfigError(f"unknown scenario {kind!r}: use one of "
-                          f"{', '.join(k + ':…' for k in SCENARIO_KINDS)}")
+        raise ConfigError(
+            f"unknown scenario {kind!r}: use one of {', '.join(k + ':…' for k in SCENARIO_KINDS)}"
+        )
     if not argument:
         raise ConfigError(f"scenario {kind!r} needs an argument, e.g. scenario:{kind}:1")
     try:
@@ -139,8 +141,15 @@ def _segments(argument: str) -> list[tuple[str, int]]:
     return segments
 
 
-def open_source(spec: str, *, seed: int = 0, dt: float = 0.4, frame_step: int | None = None,
-                colors: str | None = None, steps: int | None = None) -> UserSource:
+def open_source(
+    spec: str,
+    *,
+    seed: int = 0,
+    dt: float = 0.4,
+    frame_step: int | None = None,
+    colors: str | None = None,
+    steps: int | None = None,
+) -> UserSource:
     """Open the user source a specification string names (see the module doc).
 
     Parameters
@@ -166,8 +175,7 @@ def open_source(spec: str, *, seed: int = 0, dt: float = 0.4, frame_step: int | 
         return CsvSensorySource(str(parsed.argument))
     from rnnpb.perception import open_camera_source
 
-    source = open_camera_source(parsed.kind, parsed.argument, colors=colors, steps=steps,
-                                seed=seed)
+    source = open_camera_source(parsed.kind, parsed.argument, colors=colors, steps=steps, seed=seed)
     if frame_step is None and parsed.kind == "video":
         frame_step = _video_frame_step(str(parsed.argument), dt)
     if frame_step and frame_step > 1:

@@ -70,8 +70,9 @@ class TeachingConfig:
         if self.episode_cycles < 1:
             raise ConfigError(f"episode_cycles must be >= 1, got {self.episode_cycles}")
         if not 1 <= self.confirm_cycles <= self.episode_cycles:
-            raise ConfigError(f"confirm_cycles must be in [1, episode_cycles], got "
-                              f"{self.confirm_cycles}")
+            raise ConfigError(
+                f"confirm_cycles must be in [1, episode_cycles], got {self.confirm_cycles}"
+            )
         if self.tolerance_steps < 0:
             raise ConfigError(f"tolerance_steps must be >= 0, got {self.tolerance_steps}")
         if self.max_run_steps < 16:
@@ -109,8 +110,10 @@ class CutterStatus:
 
     def describe(self) -> str:
         if self.state == RECORDING:
-            return (f"recording a new movement (cycle {min(self.cycles + 1, self.episode_cycles)}"
-                    f" of {self.episode_cycles})")
+            return (
+                f"recording a new movement (cycle {min(self.cycles + 1, self.episode_cycles)}"
+                f" of {self.episode_cycles})"
+            )
         if self.state == KEPT:
             return "new movement kept"
         return ""
@@ -126,9 +129,12 @@ class EpisodeCutter:
     camera : RobotCamera, optional
     """
 
-    def __init__(self, config: TeachingConfig | None = None,
-                 mapping: MirrorMapping | None = None,
-                 camera: RobotCamera | None = None) -> None:
+    def __init__(
+        self,
+        config: TeachingConfig | None = None,
+        mapping: MirrorMapping | None = None,
+        camera: RobotCamera | None = None,
+    ) -> None:
         self.config = config or TeachingConfig()
         self.mapping = mapping or MirrorMapping()
         self.camera = camera or RobotCamera()
@@ -154,8 +160,9 @@ class EpisodeCutter:
             state = WATCHING
         return CutterStatus(state, self._cycles, config.episode_cycles)
 
-    def observe(self, step: int, observed: np.ndarray, novelty: str,
-                hands: np.ndarray | None = None) -> KeptMovement | None:
+    def observe(
+        self, step: int, observed: np.ndarray, novelty: str, hands: np.ndarray | None = None
+    ) -> KeptMovement | None:
         """One step: the hands seen (4,), the step's novelty word, optionally the 3-D hands
         (2, 3); returns the episode on the step it is complete, else None."""
         observed = np.asarray(observed, dtype=np.float64).reshape(4)
@@ -171,8 +178,11 @@ class EpisodeCutter:
             return None
         self._steps.append(int(step))
         self._sensory.append(observed)
-        self._hands.append(np.full((2, 3), np.nan) if hands is None
-                           else np.asarray(hands, dtype=np.float64).reshape(2, 3))
+        self._hands.append(
+            np.full((2, 3), np.nan)
+            if hands is None
+            else np.asarray(hands, dtype=np.float64).reshape(2, 3)
+        )
         if len(self._steps) > self.config.max_run_steps:
             del self._steps[0], self._sensory[0], self._hands[0]
         cycles = cycle_bounds(np.array(self._sensory))
@@ -187,8 +197,9 @@ class EpisodeCutter:
             hands[missing] = hands_on_plane(sensory[missing], self.camera, self.config.plane_x)
         motor = self.mapping.motor_from_hands(hands)
         self._kept = True
-        return KeptMovement(sensory, motor, self.config.episode_cycles, self._steps[start],
-                            self._steps[stop - 1])
+        return KeptMovement(
+            sensory, motor, self.config.episode_cycles, self._steps[start], self._steps[stop - 1]
+        )
 
 
 @dataclass(frozen=True)
@@ -227,8 +238,15 @@ class EpisodeKeeper:
     ``events`` lists what happened, newest last; ``kept`` the stored episodes' ids.
     """
 
-    def __init__(self, memory, model: str, source: str, config: TeachingConfig | None = None,
-                 hands_of=None, mapping: MirrorMapping | None = None) -> None:
+    def __init__(
+        self,
+        memory,
+        model: str,
+        source: str,
+        config: TeachingConfig | None = None,
+        hands_of=None,
+        mapping: MirrorMapping | None = None,
+    ) -> None:
         self.memory = memory
         self.model = str(model)
         self.source = str(source)
@@ -248,8 +266,9 @@ class EpisodeKeeper:
 
     def __call__(self, record) -> None:
         hands = self.hands_of(record) if self.hands_of is not None else None
-        episode = self.cutter.observe(record.step, record.observed,
-                                      getattr(record, "novelty", ""), hands)
+        episode = self.cutter.observe(
+            record.step, record.observed, getattr(record, "novelty", ""), hands
+        )
         text = self.cutter.status.describe()
         if episode is None:
             if text != self._last_text and self.cutter.status.state == RECORDING:
@@ -262,16 +281,28 @@ class EpisodeKeeper:
 
         try:
             episode_id = self.memory.add_episode(
-                episode.sensory, episode.motor, source=self.source, model=self.model,
-                pattern=pattern, n_cycles=episode.n_cycles,
-                note=f"steps {episode.first_step}-{episode.last_step}")
+                episode.sensory,
+                episode.motor,
+                source=self.source,
+                model=self.model,
+                pattern=pattern,
+                n_cycles=episode.n_cycles,
+                note=f"steps {episode.first_step}-{episode.last_step}",
+            )
         except RnnpbError as error:
             self.events.append(TeachingEvent(record.step, "refused", str(error)))
             return
         self.kept.append(episode_id)
-        self.events.append(TeachingEvent(
-            record.step, "kept", f"kept a new movement as {pattern} ({episode.n_cycles} cycles, "
-            f"{len(episode.sensory)} steps)", episode_id, pattern))
+        self.events.append(
+            TeachingEvent(
+                record.step,
+                "kept",
+                f"kept a new movement as {pattern} ({episode.n_cycles} cycles, "
+                f"{len(episode.sensory)} steps)",
+                episode_id,
+                pattern,
+            )
+        )
 
 
 def tracked_hands(source):
@@ -295,8 +326,14 @@ def version_path(model_path: str | os.PathLike[str], version: int) -> Path:
     return path.with_name(f"{stem}.v{int(version)}.npz")
 
 
-def _consolidation_worker(model_path: str, memory_path: str, episode_ids: list[int],
-                          out_path: str, queue, iterations: int | None = None) -> None:
+def _consolidation_worker(
+    model_path: str,
+    memory_path: str,
+    episode_ids: list[int],
+    out_path: str,
+    queue,
+    iterations: int | None = None,
+) -> None:
     """In a spawned process: consolidate the episodes into the model, write the new version,
     record the consolidation in the memory; report progress and the outcome on ``queue``."""
     start = time.perf_counter()
@@ -315,28 +352,39 @@ def _consolidation_worker(model_path: str, memory_path: str, episode_ids: list[i
 
         config = ConsolidationConfig()
         if iterations is not None:
-            config = ConsolidationConfig(train=replace(config.learning_for(model),
-                                                       iterations=int(iterations)))
+            config = ConsolidationConfig(
+                train=replace(config.learning_for(model), iterations=int(iterations))
+            )
         learned = consolidate(model, sequences, config, parent=model_path, progress=progress)
         learned.save(out_path)
         rehearsed = rehearse(model)
         seconds = time.perf_counter() - start
         with MemoryStore(memory_path, create=False) as memory:
-            memory.add_consolidation(model_before=model_path, model_after=out_path,
-                                     episode_ids=episode_ids,
-                                     rehearsed=[*rehearsed, *sequences], seconds=seconds)
+            memory.add_consolidation(
+                model_before=model_path,
+                model_after=out_path,
+                episode_ids=episode_ids,
+                rehearsed=[*rehearsed, *sequences],
+                seconds=seconds,
+            )
         queue.put(("done", out_path, seconds))
     except BaseException as error:  # the parent keeps its model and says why
-        message = f"{type(error).__name__}: {error}" if not str(error).startswith("rnnpb") \
-            else str(error)
+        message = (
+            f"{type(error).__name__}: {error}" if not str(error).startswith("rnnpb") else str(error)
+        )
         try:
             from rnnpb.memory import MemoryStore
 
             with MemoryStore(memory_path, create=False) as memory:
-                memory.add_consolidation(model_before=model_path, model_after="",
-                                         episode_ids=episode_ids, rehearsed=[],
-                                         status="failed", message=message[:500],
-                                         seconds=time.perf_counter() - start)
+                memory.add_consolidation(
+                    model_before=model_path,
+                    model_after="",
+                    episode_ids=episode_ids,
+                    rehearsed=[],
+                    status="failed",
+                    message=message[:500],
+                    seconds=time.perf_counter() - start,
+                )
         except BaseException:  # noqa: BLE001 - the message to the parent matters more
             pass
         queue.put(("failed", message))
@@ -371,18 +419,31 @@ class BackgroundConsolidation:
     records the consolidation in the memory; :meth:`poll` never blocks, :meth:`wait` does.
     """
 
-    def __init__(self, model_path: str | os.PathLike[str],
-                 memory_path: str | os.PathLike[str], episode_ids: list[int],
-                 out_path: str | os.PathLike[str], iterations: int | None = None) -> None:
+    def __init__(
+        self,
+        model_path: str | os.PathLike[str],
+        memory_path: str | os.PathLike[str],
+        episode_ids: list[int],
+        out_path: str | os.PathLike[str],
+        iterations: int | None = None,
+    ) -> None:
         import multiprocessing
 
         context = multiprocessing.get_context("spawn")
         self._queue = context.Queue()
         self.out_path = str(out_path)
         self._process = context.Process(
-            target=_consolidation_worker, daemon=True,
-            args=(str(model_path), str(memory_path), list(episode_ids), self.out_path,
-                  self._queue, iterations))
+            target=_consolidation_worker,
+            daemon=True,
+            args=(
+                str(model_path),
+                str(memory_path),
+                list(episode_ids),
+                self.out_path,
+                self._queue,
+                iterations,
+            ),
+        )
         self.state = ConsolidationState("running")
         self._process.start()
 
@@ -397,7 +458,8 @@ class BackgroundConsolidation:
                 if not self._process.is_alive() and self._queue.empty():
                     code = self._process.exitcode
                     self.state = ConsolidationState(
-                        "failed", message=f"the consolidation process ended (exit code {code})")
+                        "failed", message=f"the consolidation process ended (exit code {code})"
+                    )
                 break
             self._take(message)
         return self.state
@@ -439,10 +501,20 @@ class Teacher:
     scripted run repeats; paced it never waits.
     """
 
-    def __init__(self, loop, model_path: str | os.PathLike[str], memory, *,
-                 make_mirror, source: str = "", config: TeachingConfig | None = None,
-                 auto: bool = True, wait: bool | None = None, hands_of=None,
-                 iterations: int | None = None) -> None:
+    def __init__(
+        self,
+        loop,
+        model_path: str | os.PathLike[str],
+        memory,
+        *,
+        make_mirror,
+        source: str = "",
+        config: TeachingConfig | None = None,
+        auto: bool = True,
+        wait: bool | None = None,
+        hands_of=None,
+        iterations: int | None = None,
+    ) -> None:
         self.iterations = iterations
         self.loop = loop
         self.memory = memory
@@ -475,10 +547,16 @@ class Teacher:
             return
         out = version_path(self.model_path, len(self.versions) + 1)
         ids, self.pending = self.pending, []
-        self.job = BackgroundConsolidation(self.model_path, self.memory.path, ids, out,
-                                           self.iterations)
-        self.events.append(TeachingEvent(self.loop.steps, "consolidating",
-                                         f"consolidating {len(ids)} episode(s) into {out.name}"))
+        self.job = BackgroundConsolidation(
+            self.model_path, self.memory.path, ids, out, self.iterations
+        )
+        self.events.append(
+            TeachingEvent(
+                self.loop.steps,
+                "consolidating",
+                f"consolidating {len(ids)} episode(s) into {out.name}",
+            )
+        )
 
     def between_steps(self, wait_s: float) -> None:
         start = time.perf_counter()
@@ -503,9 +581,14 @@ class Teacher:
         self.versions.append(state.model_path)
         self.swapped_at.append(self.loop.steps)
         learned = ", ".join(p for p in model.patterns if p.startswith("new-")) or "?"
-        self.events.append(TeachingEvent(self.loop.steps, "learned",
-                                         f"learned as pattern {learned} "
-                                         f"({state.seconds:.0f} s, {Path(state.model_path).name})"))
+        self.events.append(
+            TeachingEvent(
+                self.loop.steps,
+                "learned",
+                f"learned as pattern {learned} "
+                f"({state.seconds:.0f} s, {Path(state.model_path).name})",
+            )
+        )
 
     def undo(self) -> None:
         """Go back to the previous model version (the newer file stays on disk)."""
@@ -515,5 +598,6 @@ class Teacher:
             return
         self.versions.pop()
         self.loop.mirror = self.make_mirror(TrainedModel.load(self.model_path))
-        self.events.append(TeachingEvent(self.loop.steps, "undone",
-                                         f"back to {Path(self.model_path).name}"))
+        self.events.append(
+            TeachingEvent(self.loop.steps, "undone", f"back to {Path(self.model_path).name}")
+        )

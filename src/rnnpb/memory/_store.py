@@ -139,8 +139,12 @@ class Episode:
 
     def sequence(self, pattern: str | None = None) -> Sequence:
         """The episode as a training :class:`Sequence` (of its pattern unless one is given)."""
-        return Sequence(self.sensory, self.motor, pattern or self.summary.pattern,
-                        f"memory episode {self.summary.id}")
+        return Sequence(
+            self.sensory,
+            self.motor,
+            pattern or self.summary.pattern,
+            f"memory episode {self.summary.id}",
+        )
 
 
 @dataclass(frozen=True)
@@ -181,8 +185,7 @@ def _arrays(sensory: np.ndarray, motor: np.ndarray, where: str) -> tuple[bytes, 
 def _text(value: object, name: str) -> str:
     text = str(value)
     if len(text) > _TEXT_LIMIT or any(ord(c) < 32 and c not in "\t" for c in text):
-        raise DataFileError(f"memory: {name} must be at most {_TEXT_LIMIT} printable "
-                            "characters")
+        raise DataFileError(f"memory: {name} must be at most {_TEXT_LIMIT} printable characters")
     return text
 
 
@@ -226,8 +229,9 @@ class MemoryStore:
         elif not self._create:
             raise MemoryFileError(f"{path}: no such memory file")
         try:
-            connection = sqlite3.connect(path, timeout=10.0, isolation_level=None,
-                                         check_same_thread=False)
+            connection = sqlite3.connect(
+                path, timeout=10.0, isolation_level=None, check_same_thread=False
+            )
         except sqlite3.Error as error:
             raise MemoryFileError(f"{path}: cannot open the memory file: {error}") from None
         try:
@@ -253,18 +257,23 @@ class MemoryStore:
             application_id = connection.execute("PRAGMA application_id").fetchone()[0]
             version = connection.execute("PRAGMA user_version").fetchone()[0]
             tables = connection.execute(
-                "SELECT count(*) FROM sqlite_schema WHERE type = 'table'").fetchone()[0]
+                "SELECT count(*) FROM sqlite_schema WHERE type = 'table'"
+            ).fetchone()[0]
         except sqlite3.DatabaseError as error:
             raise MemoryFileError(f"{path}: is damaged or not a memory file: {error}") from None
         if application_id == 0 and version == 0 and tables == 0:
             self._initialise(connection, path)
             return
         if application_id != APPLICATION_ID:
-            raise MemoryFileError(f"{path}: is another program's SQLite database, not an rnnpb "
-                                  f"memory file (application_id {application_id:#x})")
+            raise MemoryFileError(
+                f"{path}: is another program's SQLite database, not an rnnpb "
+                f"memory file (application_id {application_id:#x})"
+            )
         if version > SCHEMA_VERSION:
-            raise MemoryFileError(f"{path}: memory schema {version} is newer than this rnnpb "
-                                  f"reads ({SCHEMA_VERSION}); upgrade rnnpb")
+            raise MemoryFileError(
+                f"{path}: memory schema {version} is newer than this rnnpb "
+                f"reads ({SCHEMA_VERSION}); upgrade rnnpb"
+            )
         if version < 1:
             raise MemoryFileError(f"{path}: memory schema {version} is unknown")
         try:
@@ -330,32 +339,60 @@ class MemoryStore:
         return result
 
     # --- episodes ----------------------------------------------------------------------
-    def add_episode(self, sensory: np.ndarray, motor: np.ndarray, *, source: str, model: str,
-                    pattern: str, n_cycles: int, status: str = "kept", note: str = "",
-                    created_at: float | None = None) -> int:
+    def add_episode(
+        self,
+        sensory: np.ndarray,
+        motor: np.ndarray,
+        *,
+        source: str,
+        model: str,
+        pattern: str,
+        n_cycles: int,
+        status: str = "kept",
+        note: str = "",
+        created_at: float | None = None,
+    ) -> int:
         """Store one episode (one transaction); returns its id.
 
         ``sensory`` (n_steps, 4) and ``motor`` (n_steps, 8, radians) are whole cycles of the
         movement, all finite.
         """
         if status not in STATUSES:
-            raise DataFileError(f"memory: status must be one of {', '.join(STATUSES)}, got "
-                                f"{status!r}")
+            raise DataFileError(
+                f"memory: status must be one of {', '.join(STATUSES)}, got {status!r}"
+            )
         if n_cycles < 0:
             raise DataFileError(f"memory: n_cycles must be >= 0, got {n_cycles}")
         s, m, n = _arrays(sensory, motor, f"memory episode from {source}")
-        row = (time.time() if created_at is None else float(created_at),
-               _text(source, "source"), _text(model, "model"), _pattern(pattern), status, n,
-               int(n_cycles), s, m, _digest(s, m), _text(note, "note"))
-        return self._write(lambda db: db.execute(
-            "INSERT INTO episodes (created_at, source, model, pattern, status, n_steps, "
-            "n_cycles, sensory, motor, digest, note) VALUES (?,?,?,?,?,?,?,?,?,?,?)",
-            row).lastrowid)
+        row = (
+            time.time() if created_at is None else float(created_at),
+            _text(source, "source"),
+            _text(model, "model"),
+            _pattern(pattern),
+            status,
+            n,
+            int(n_cycles),
+            s,
+            m,
+            _digest(s, m),
+            _text(note, "note"),
+        )
+        return self._write(
+            lambda db: (
+                db.execute(
+                    "INSERT INTO episodes (created_at, source, model, pattern, status, n_steps, "
+                    "n_cycles, sensory, motor, digest, note) VALUES (?,?,?,?,?,?,?,?,?,?,?)",
+                    row,
+                ).lastrowid
+            )
+        )
 
     def episodes(self, status: str | None = None) -> list[EpisodeSummary]:
         """Every episode (of one status), oldest first, without the arrays."""
-        query = ("SELECT id, created_at, source, model, pattern, status, n_steps, n_cycles, "
-                 "note FROM episodes")
+        query = (
+            "SELECT id, created_at, source, model, pattern, status, n_steps, n_cycles, "
+            "note FROM episodes"
+        )
         arguments: tuple = ()
         if status is not None:
             query += " WHERE status = ?"
@@ -365,33 +402,42 @@ class MemoryStore:
 
     def episode(self, episode_id: int) -> Episode:
         """One episode with its arrays; raises :class:`MemoryFileError` when absent or damaged."""
-        rows = self._read("SELECT id, created_at, source, model, pattern, status, n_steps, "
-                          "n_cycles, note, sensory, motor, digest FROM episodes WHERE id = ?",
-                          (int(episode_id),))
+        rows = self._read(
+            "SELECT id, created_at, source, model, pattern, status, n_steps, "
+            "n_cycles, note, sensory, motor, digest FROM episodes WHERE id = ?",
+            (int(episode_id),),
+        )
         if not rows:
             raise MemoryFileError(f"{self.path}: no episode {episode_id}")
         *fields, sensory, motor, digest = rows[0]
         summary = EpisodeSummary(*fields)
-        return Episode(summary, *self._decode(sensory, motor, digest, summary.n_steps,
-                                              f"episode {episode_id}"))
+        return Episode(
+            summary, *self._decode(sensory, motor, digest, summary.n_steps, f"episode {episode_id}")
+        )
 
-    def _decode(self, sensory: bytes, motor: bytes, digest: str, n_steps: int,
-                what: str) -> tuple[np.ndarray, np.ndarray]:
+    def _decode(
+        self, sensory: bytes, motor: bytes, digest: str, n_steps: int, what: str
+    ) -> tuple[np.ndarray, np.ndarray]:
         if _digest(sensory, motor) != digest:
-            raise MemoryFileError(f"{self.path}: {what} is damaged (its checksum does not "
-                                  "match)")
-        return (np.frombuffer(sensory, "<f8").reshape(n_steps, SENSORY_SIZE).copy(),
-                np.frombuffer(motor, "<f8").reshape(n_steps, MOTOR_SIZE).copy())
+            raise MemoryFileError(f"{self.path}: {what} is damaged (its checksum does not match)")
+        return (
+            np.frombuffer(sensory, "<f8").reshape(n_steps, SENSORY_SIZE).copy(),
+            np.frombuffer(motor, "<f8").reshape(n_steps, MOTOR_SIZE).copy(),
+        )
 
     def set_status(self, episode_id: int, status: str) -> None:
         if status not in STATUSES:
             raise DataFileError(f"memory: status must be one of {', '.join(STATUSES)}")
-        self._change("UPDATE episodes SET status = ? WHERE id = ?", (status, int(episode_id)),
-                     episode_id)
+        self._change(
+            "UPDATE episodes SET status = ? WHERE id = ?", (status, int(episode_id)), episode_id
+        )
 
     def rename(self, episode_id: int, pattern: str) -> None:
-        self._change("UPDATE episodes SET pattern = ? WHERE id = ?",
-                     (_pattern(pattern), int(episode_id)), episode_id)
+        self._change(
+            "UPDATE episodes SET pattern = ? WHERE id = ?",
+            (_pattern(pattern), int(episode_id)),
+            episode_id,
+        )
 
     def forget(self, episode_id: int) -> None:
         """Delete an episode and its movement (the consolidations keep their rehearsals)."""
@@ -403,17 +449,25 @@ class MemoryStore:
             raise MemoryFileError(f"{self.path}: no episode {episode_id}")
 
     # --- consolidations ------------------------------------------------------------------
-    def add_consolidation(self, *, model_before: str, model_after: str,
-                          episode_ids: Iterable[int], rehearsed: Iterable[Sequence],
-                          status: str = "done", message: str = "",
-                          seconds: float = 0.0) -> int:
+    def add_consolidation(
+        self,
+        *,
+        model_before: str,
+        model_after: str,
+        episode_ids: Iterable[int],
+        rehearsed: Iterable[Sequence],
+        status: str = "done",
+        message: str = "",
+        seconds: float = 0.0,
+    ) -> int:
         """Record one consolidation and the sequences it rehearsed (one transaction).
 
         When ``status`` is ``done`` its episodes become ``learned``.
         """
         if status not in CONSOLIDATION_STATUSES:
-            raise DataFileError(f"memory: consolidation status must be one of "
-                                f"{', '.join(CONSOLIDATION_STATUSES)}")
+            raise DataFileError(
+                f"memory: consolidation status must be one of {', '.join(CONSOLIDATION_STATUSES)}"
+            )
         ids = [int(i) for i in episode_ids]
         rows = []
         for position, sequence in enumerate(rehearsed):
@@ -424,47 +478,74 @@ class MemoryStore:
             consolidation = db.execute(
                 "INSERT INTO consolidations (created_at, model_before, model_after, status, "
                 "message, seconds) VALUES (?,?,?,?,?,?)",
-                (time.time(), _text(model_before, "model"), _text(model_after, "model"),
-                 status, _text(message, "message"), float(seconds))).lastrowid
+                (
+                    time.time(),
+                    _text(model_before, "model"),
+                    _text(model_after, "model"),
+                    status,
+                    _text(message, "message"),
+                    float(seconds),
+                ),
+            ).lastrowid
             for episode_id in ids:
-                if db.execute("SELECT 1 FROM episodes WHERE id = ?",
-                              (episode_id,)).fetchone() is None:
+                if (
+                    db.execute("SELECT 1 FROM episodes WHERE id = ?", (episode_id,)).fetchone()
+                    is None
+                ):
                     raise MemoryFileError(f"{self.path}: no episode {episode_id}")
-                db.execute("INSERT INTO consolidation_episodes VALUES (?, ?)",
-                           (consolidation, episode_id))
+                db.execute(
+                    "INSERT INTO consolidation_episodes VALUES (?, ?)", (consolidation, episode_id)
+                )
                 if status == "done":
-                    db.execute("UPDATE episodes SET status = 'learned' WHERE id = ?",
-                               (episode_id,))
-            db.executemany("INSERT INTO rehearsals VALUES (?,?,?,?,?,?,?)",
-                           [(consolidation, *row) for row in rows])
+                    db.execute("UPDATE episodes SET status = 'learned' WHERE id = ?", (episode_id,))
+            db.executemany(
+                "INSERT INTO rehearsals VALUES (?,?,?,?,?,?,?)",
+                [(consolidation, *row) for row in rows],
+            )
             return consolidation
 
         return self._write(statements)
 
     def consolidations(self) -> list[ConsolidationSummary]:
-        rows = self._read("SELECT id, created_at, model_before, model_after, status, message, "
-                          "seconds FROM consolidations ORDER BY id")
+        rows = self._read(
+            "SELECT id, created_at, model_before, model_after, status, message, "
+            "seconds FROM consolidations ORDER BY id"
+        )
         out = []
         for row in rows:
-            episodes = tuple(r[0] for r in self._read(
-                "SELECT episode_id FROM consolidation_episodes WHERE consolidation_id = ? "
-                "ORDER BY episode_id", (row[0],)))
-            count = self._read("SELECT count(*) FROM rehearsals WHERE consolidation_id = ?",
-                               (row[0],))[0][0]
+            episodes = tuple(
+                r[0]
+                for r in self._read(
+                    "SELECT episode_id FROM consolidation_episodes WHERE consolidation_id = ? "
+                    "ORDER BY episode_id",
+                    (row[0],),
+                )
+            )
+            count = self._read(
+                "SELECT count(*) FROM rehearsals WHERE consolidation_id = ?", (row[0],)
+            )[0][0]
             out.append(ConsolidationSummary(*row, episode_ids=episodes, n_rehearsed=count))
         return out
 
     def rehearsed(self, consolidation_id: int) -> list[Sequence]:
         """The sequences a consolidation rehearsed, in order."""
-        rows = self._read("SELECT position, pattern, n_steps, sensory, motor, digest FROM "
-                          "rehearsals WHERE consolidation_id = ? ORDER BY position",
-                          (int(consolidation_id),))
+        rows = self._read(
+            "SELECT position, pattern, n_steps, sensory, motor, digest FROM "
+            "rehearsals WHERE consolidation_id = ? ORDER BY position",
+            (int(consolidation_id),),
+        )
         out = []
         for position, pattern, n, sensory, motor, digest in rows:
-            s, m = self._decode(sensory, motor, digest, n,
-                                f"rehearsal {position} of consolidation {consolidation_id}")
-            out.append(Sequence(s, m, pattern, f"consolidation {consolidation_id} rehearsal "
-                                               f"{position}"))
+            s, m = self._decode(
+                sensory,
+                motor,
+                digest,
+                n,
+                f"rehearsal {position} of consolidation {consolidation_id}",
+            )
+            out.append(
+                Sequence(s, m, pattern, f"consolidation {consolidation_id} rehearsal {position}")
+            )
         return out
 
     def integrity(self) -> str:

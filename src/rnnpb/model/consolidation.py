@@ -90,13 +90,14 @@ class ConsolidationConfig:
 
     def __post_init__(self) -> None:
         if self.method not in CONSOLIDATION_METHODS:
-            raise ConfigError(f"consolidation method must be one of "
-                              f"{', '.join(CONSOLIDATION_METHODS)}, got {self.method!r}")
+            raise ConfigError(
+                f"consolidation method must be one of "
+                f"{', '.join(CONSOLIDATION_METHODS)}, got {self.method!r}"
+            )
         if self.rehearsal_steps < 2:
             raise ConfigError(f"rehearsal_steps must be >= 2, got {self.rehearsal_steps}")
         if self.rehearsal_transient < 1:
-            raise ConfigError(f"rehearsal_transient must be >= 1, got "
-                              f"{self.rehearsal_transient}")
+            raise ConfigError(f"rehearsal_transient must be >= 1, got {self.rehearsal_transient}")
 
     def learning_for(self, model: TrainedModel) -> TrainConfig:
         """The :class:`TrainConfig` this consolidation of ``model`` learns with."""
@@ -104,11 +105,16 @@ class ConsolidationConfig:
             return self.train
         recorded = model.meta.get("train_config")
         try:
-            own = TrainConfig.from_dict(recorded) if isinstance(recorded, dict) \
+            own = (
+                TrainConfig.from_dict(recorded)
+                if isinstance(recorded, dict)
                 else TrainConfig.paper()
+            )
         except (TypeError, ValueError, KeyError) as error:
-            raise ConfigError(f"the model's recorded training config is not usable ({error}); "
-                              "give the consolidation's learning explicitly") from None
+            raise ConfigError(
+                f"the model's recorded training config is not usable ({error}); "
+                "give the consolidation's learning explicitly"
+            ) from None
         if self.method == "scratch":
             # The first training's length: a consolidated model records its consolidation's.
             first = model.history[0].train_config.get("iterations")
@@ -123,8 +129,9 @@ def model_joint_limits(model: TrainedModel) -> np.ndarray:
     return np.column_stack([model.lower[s:], model.upper[s:]])
 
 
-def rehearse(model: TrainedModel, n_steps: int = REHEARSAL_STEPS,
-             transient: int = REHEARSAL_TRANSIENT) -> list[Sequence]:
+def rehearse(
+    model: TrainedModel, n_steps: int = REHEARSAL_STEPS, transient: int = REHEARSAL_TRANSIENT
+) -> list[Sequence]:
     """Each learned sequence regenerated in closed loop from its learned PB and initial
     context, without the original data.
 
@@ -141,20 +148,27 @@ def rehearse(model: TrainedModel, n_steps: int = REHEARSAL_STEPS,
         sensory in [0, 1], motor in radians).
     """
     if n_steps < 2 or transient < 1:
-        raise ConfigError(f"rehearsal needs n_steps >= 2 and transient >= 1, got {n_steps} "
-                          f"and {transient}")
+        raise ConfigError(
+            f"rehearsal needs n_steps >= 2 and transient >= 1, got {n_steps} and {transient}"
+        )
     out = []
     for i, pattern in enumerate(model.sequence_patterns):
         pb = model.sequence_pb[i]
-        generated = generate(model, pb, transient - 1 + n_steps,
-                             initial_context=model.initial_context[i])
+        generated = generate(
+            model, pb, transient - 1 + n_steps, initial_context=model.initial_context[i]
+        )
         # Row k of the run is x̂_{k+1} with the context c_{k+1} made in the same step, which
         # the next step takes with it: the sequence starts at x̂_transient, context c_transient.
         start = transient - 1
-        out.append(Sequence(
-            sensory=generated.sensory[start:], motor=generated.motor[start:], pattern=pattern,
-            source=f"rehearsed pattern {pattern} (sequence {i + 1})",
-            meta={"initial_context": generated.context[start], "pb": np.asarray(pb)}))
+        out.append(
+            Sequence(
+                sensory=generated.sensory[start:],
+                motor=generated.motor[start:],
+                pattern=pattern,
+                source=f"rehearsed pattern {pattern} (sequence {i + 1})",
+                meta={"initial_context": generated.context[start], "pb": np.asarray(pb)},
+            )
+        )
     return out
 
 
@@ -167,37 +181,49 @@ def _check_new(model: TrainedModel, new_sequences: SequenceABC[Sequence]) -> Non
             raise ConfigError(
                 f"{seq.source or 'a new sequence'}: has {seq.sensory.shape[1]} sensory and "
                 f"{seq.motor.shape[1]} motor values per step but the model's network has "
-                f"{net.sensory_size} and {net.motor_size}: a model of another network size")
+                f"{net.sensory_size} and {net.motor_size}: a model of another network size"
+            )
     clashes = sorted({s.pattern for s in new_sequences} & set(model.patterns))
     if clashes:
         raise ConfigError(
             f"new pattern name(s) {', '.join(repr(c) for c in clashes)} already learned by the "
             f"model (it holds {', '.join(model.patterns)}); a consolidation adds new patterns "
-            "only: give the new one another name (its file name or `pattern` column)")
+            "only: give the new one another name (its file name or `pattern` column)"
+        )
 
 
-def _original(model: TrainedModel, replay_data: SequenceABC[Sequence] | None,
-              method: str) -> list[Sequence]:
+def _original(
+    model: TrainedModel, replay_data: SequenceABC[Sequence] | None, method: str
+) -> list[Sequence]:
     """The stored original data, in the model's pattern order; it must hold exactly the
     model's patterns."""
     if not replay_data:
-        raise ConfigError(f"method {method!r} needs the original training data of the model's "
-                          f"patterns ({', '.join(model.patterns)}); pass it (--replay-data)")
+        raise ConfigError(
+            f"method {method!r} needs the original training data of the model's "
+            f"patterns ({', '.join(model.patterns)}); pass it (--replay-data)"
+        )
     given = {s.pattern for s in replay_data}
     missing = [p for p in model.patterns if p not in given]
     extra = sorted(given - set(model.patterns))
     if missing or extra:
         raise ConfigError(
             "the original data must hold the model's patterns exactly: "
-            + "; ".join(part for part in (
-                f"missing {', '.join(missing)}" if missing else "",
-                f"not learned by the model: {', '.join(extra)}" if extra else "") if part))
+            + "; ".join(
+                part
+                for part in (
+                    f"missing {', '.join(missing)}" if missing else "",
+                    f"not learned by the model: {', '.join(extra)}" if extra else "",
+                )
+                if part
+            )
+        )
     order = {p: i for i, p in enumerate(model.patterns)}
     return sorted(replay_data, key=lambda s: order[s.pattern])  # stable: keeps the file order
 
 
-def _replay_matches(model: TrainedModel, original: SequenceABC[Sequence],
-                    limits: np.ndarray) -> bool:
+def _replay_matches(
+    model: TrainedModel, original: SequenceABC[Sequence], limits: np.ndarray
+) -> bool:
     """Whether the original data are, bit for bit, those the model's history recorded
     (rounding when data are written to CSV can make them differ)."""
     for entry in model.history:
@@ -208,12 +234,17 @@ def _replay_matches(model: TrainedModel, original: SequenceABC[Sequence],
     return True
 
 
-def consolidate(model: TrainedModel, new_sequences: SequenceABC[Sequence],
-                config: ConsolidationConfig | None = None, *,
-                replay_data: SequenceABC[Sequence] | None = None, parent: str | None = None,
-                progress: bool | Callable[[TrainingProgress], None] = False,
-                checkpoint_path: str | os.PathLike[str] | None = None,
-                resume: bool = False) -> TrainedModel:
+def consolidate(
+    model: TrainedModel,
+    new_sequences: SequenceABC[Sequence],
+    config: ConsolidationConfig | None = None,
+    *,
+    replay_data: SequenceABC[Sequence] | None = None,
+    parent: str | None = None,
+    progress: bool | Callable[[TrainingProgress], None] = False,
+    checkpoint_path: str | os.PathLike[str] | None = None,
+    resume: bool = False,
+) -> TrainedModel:
     """Add the patterns of ``new_sequences`` to ``model``; return the new model.
 
     Parameters
@@ -253,11 +284,15 @@ def consolidate(model: TrainedModel, new_sequences: SequenceABC[Sequence],
     tag = f"{model.fingerprint}:{config.method}"
     if config.method == "rehearsal":
         old = rehearse(model, config.rehearsal_steps, config.rehearsal_transient)
-        warm = WarmStart(model.params,
-                         np.vstack([[s.meta["initial_context"] for s in old], fresh_context]),
-                         np.vstack([[s.meta["pb"] for s in old], fresh_pb]), tag)
-        details.update(rehearsal_steps=config.rehearsal_steps,
-                       rehearsal_transient=config.rehearsal_transient)
+        warm = WarmStart(
+            model.params,
+            np.vstack([[s.meta["initial_context"] for s in old], fresh_context]),
+            np.vstack([[s.meta["pb"] for s in old], fresh_pb]),
+            tag,
+        )
+        details.update(
+            rehearsal_steps=config.rehearsal_steps, rehearsal_transient=config.rehearsal_transient
+        )
         sequences = [*old, *new]
     elif config.method == "finetune":
         warm = WarmStart(model.params, fresh_context, fresh_pb, tag)
@@ -266,31 +301,49 @@ def consolidate(model: TrainedModel, new_sequences: SequenceABC[Sequence],
         old = _original(model, replay_data, config.method)
         details["replay_data_matches_record"] = _replay_matches(model, old, limits)
         if config.method == "replay":
-            pbs, contexts = model.pattern_pb, {p: model.pattern_initial_context(p)
-                                               for p in model.patterns}
-            warm = WarmStart(model.params,
-                             np.vstack([[contexts[s.pattern] for s in old], fresh_context]),
-                             np.vstack([[pbs[s.pattern] for s in old], fresh_pb]), tag)
+            pbs, contexts = (
+                model.pattern_pb,
+                {p: model.pattern_initial_context(p) for p in model.patterns},
+            )
+            warm = WarmStart(
+                model.params,
+                np.vstack([[contexts[s.pattern] for s in old], fresh_context]),
+                np.vstack([[pbs[s.pattern] for s in old], fresh_pb]),
+                tag,
+            )
         sequences = [*old, *new]
-    learned = train(sequences, limits, net, learning, progress=progress,
-                    checkpoint_path=checkpoint_path, resume=resume, warm_start=warm)
+    learned = train(
+        sequences,
+        limits,
+        net,
+        learning,
+        progress=progress,
+        checkpoint_path=checkpoint_path,
+        resume=resume,
+        warm_start=warm,
+    )
     if config.method == "finetune":
         # The old patterns were not trained: they keep their PBs and initial contexts.
         learned = replace(
             learned,
             sequence_pb=np.vstack([model.sequence_pb, learned.sequence_pb]),
             sequence_patterns=(*model.sequence_patterns, *learned.sequence_patterns),
-            initial_context=np.vstack([model.initial_context, learned.initial_context]))
+            initial_context=np.vstack([model.initial_context, learned.initial_context]),
+        )
     training = learned.meta["training"]
     entry = HistoryEntry(
-        method=config.method, added=tuple(dict.fromkeys(s.pattern for s in new)),
-        patterns=learned.patterns, parent=Path(parent).name if parent else None,
-        parent_fingerprint=model.fingerprint, train_config=learning.to_dict(),
+        method=config.method,
+        added=tuple(dict.fromkeys(s.pattern for s in new)),
+        patterns=learned.patterns,
+        parent=Path(parent).name if parent else None,
+        parent_fingerprint=model.fingerprint,
+        train_config=learning.to_dict(),
         data_fingerprint=training["data_fingerprint"],
-        added_data_fingerprint=new_data.fingerprint, iterations=int(training["iterations"]),
+        added_data_fingerprint=new_data.fingerprint,
+        iterations=int(training["iterations"]),
         seconds=float(training["seconds"]),
         created=datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
-        details=details)
-    meta = {**learned.meta,
-            "history": [e.to_json() for e in (*model.history, entry)]}
+        details=details,
+    )
+    meta = {**learned.meta, "history": [e.to_json() for e in (*model.history, entry)]}
     return replace(learned, meta=meta)

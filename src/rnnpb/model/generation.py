@@ -36,9 +36,13 @@ class Generated:
     context: np.ndarray
 
 
-def generate(model: TrainedModel, pb: np.ndarray, n_steps: int,
-             initial_context: np.ndarray | None = None,
-             first_input: np.ndarray | None = None) -> Generated:
+def generate(
+    model: TrainedModel,
+    pb: np.ndarray,
+    n_steps: int,
+    initial_context: np.ndarray | None = None,
+    first_input: np.ndarray | None = None,
+) -> Generated:
     """Run the network in closed loop with a constant PB for ``n_steps`` steps.
 
     Parameters
@@ -61,12 +65,14 @@ def generate(model: TrainedModel, pb: np.ndarray, n_steps: int,
     context = model.mean_initial_context if initial_context is None else initial_context
     x0 = np.full(net.io_size, 0.5) if first_input is None else np.asarray(first_input)
     pbs = jnp.broadcast_to(jnp.asarray(pb, jnp.float32), (n_steps, net.pb_size))
-    predictions, contexts = _closed_loop(model.params, jnp.asarray(context, jnp.float32),
-                                         jnp.asarray(x0, jnp.float32), pbs)
+    predictions, contexts = _closed_loop(
+        model.params, jnp.asarray(context, jnp.float32), jnp.asarray(x0, jnp.float32), pbs
+    )
     raw = model.denormalize(np.asarray(predictions, dtype=np.float64))
     s = net.sensory_size
-    return Generated(sensory=raw[:, :s], motor=raw[:, s:],
-                     context=np.asarray(contexts, dtype=np.float64))
+    return Generated(
+        sensory=raw[:, :s], motor=raw[:, s:], context=np.asarray(contexts, dtype=np.float64)
+    )
 
 
 _closed_loop = jax.jit(closed_loop)

@@ -128,17 +128,20 @@ class HistoryEntry:
     def from_json(cls, path: Path | str, data: object) -> HistoryEntry:
         """An entry of a model file's meta.json, checked; :class:`ModelFileError` otherwise."""
         if not isinstance(data, dict):
-            raise ModelFileError(f"{path}: a history entry is {type(data).__name__}, not an "
-                                 "object")
+            raise ModelFileError(f"{path}: a history entry is {type(data).__name__}, not an object")
         known = {f for f in cls.__dataclass_fields__}
         unknown = sorted(set(data) - known)
         if unknown:
-            raise ModelFileError(f"{path}: a history entry has unknown field(s) "
-                                 f"{', '.join(_shown(k) for k in unknown[:5])}")
+            raise ModelFileError(
+                f"{path}: a history entry has unknown field(s) "
+                f"{', '.join(_shown(k) for k in unknown[:5])}"
+            )
         method = data.get("method")
         if method not in HISTORY_METHODS:
-            raise ModelFileError(f"{path}: history method {_shown(method)} is not one of "
-                                 f"{', '.join(HISTORY_METHODS)}")
+            raise ModelFileError(
+                f"{path}: history method {_shown(method)} is not one of "
+                f"{', '.join(HISTORY_METHODS)}"
+            )
         names: dict[str, tuple[str, ...]] = {}
         for key in ("added", "patterns"):
             value = data.get(key)
@@ -147,11 +150,15 @@ class HistoryEntry:
             for name in value:
                 problem = pattern_name_problem(name)
                 if problem:
-                    raise ModelFileError(f"{path}: history pattern name {_shown(name)} "
-                                         f"{problem}")
+                    raise ModelFileError(f"{path}: history pattern name {_shown(name)} {problem}")
             names[key] = tuple(value)
-        kinds = {"parent": str, "parent_fingerprint": str, "data_fingerprint": str,
-                 "added_data_fingerprint": str, "created": str}
+        kinds = {
+            "parent": str,
+            "parent_fingerprint": str,
+            "data_fingerprint": str,
+            "added_data_fingerprint": str,
+            "created": str,
+        }
         for key, kind in kinds.items():
             value = data.get(key)
             if value is not None and (not isinstance(value, kind) or len(value) > 4096):
@@ -162,8 +169,11 @@ class HistoryEntry:
         iterations, seconds = data.get("iterations", 0), data.get("seconds", 0.0)
         if not isinstance(iterations, int) or isinstance(iterations, bool) or iterations < 0:
             raise ModelFileError(f"{path}: history field 'iterations' is {_shown(iterations)}")
-        if not isinstance(seconds, (int, float)) or isinstance(seconds, bool) or not (
-                math.isfinite(seconds) and seconds >= 0):
+        if (
+            not isinstance(seconds, (int, float))
+            or isinstance(seconds, bool)
+            or not (math.isfinite(seconds) and seconds >= 0)
+        ):
             raise ModelFileError(f"{path}: history field 'seconds' is {_shown(seconds)}")
         return cls(**{**data, **names, "seconds": float(seconds)})
 
@@ -179,11 +189,15 @@ def first_training_entry(meta: dict[str, Any], patterns: tuple[str, ...]) -> His
     seconds = training.get("seconds", 0.0)
     fingerprint = training.get("data_fingerprint")
     return HistoryEntry(
-        method="train", added=patterns, patterns=patterns, train_config=dict(config),
+        method="train",
+        added=patterns,
+        patterns=patterns,
+        train_config=dict(config),
         data_fingerprint=fingerprint if isinstance(fingerprint, str) else None,
         added_data_fingerprint=fingerprint if isinstance(fingerprint, str) else None,
         iterations=iterations if isinstance(iterations, int) else 0,
-        seconds=float(seconds) if isinstance(seconds, (int, float)) else 0.0)
+        seconds=float(seconds) if isinstance(seconds, (int, float)) else 0.0,
+    )
 
 
 @dataclass(frozen=True)
@@ -291,14 +305,18 @@ class TrainedModel:
             "history": [entry.to_json() for entry in self.history],
         }
         arrays = {f"params/{k}": v for k, v in params_to_numpy(self.params).items()}
-        arrays.update(lower=np.asarray(self.lower), upper=np.asarray(self.upper),
-                      sequence_pb=np.asarray(self.sequence_pb),
-                      initial_context=np.asarray(self.initial_context))
+        arrays.update(
+            lower=np.asarray(self.lower),
+            upper=np.asarray(self.upper),
+            sequence_pb=np.asarray(self.sequence_pb),
+            initial_context=np.asarray(self.initial_context),
+        )
         save_archive(path, meta, arrays)
 
     @classmethod
-    def load(cls, path: str | os.PathLike[str],
-             joint_limits: np.ndarray | None = None) -> TrainedModel:
+    def load(
+        cls, path: str | os.PathLike[str], joint_limits: np.ndarray | None = None
+    ) -> TrainedModel:
         """Read a model file; any problem raises :class:`ModelFileError` naming the file.
 
         Parameters
@@ -321,25 +339,34 @@ class TrainedModel:
             # Both are sigmoid outputs; anything outside [0, 1] was not written by training.
             if np.any((arrays[name] < 0) | (arrays[name] > 1)):
                 raise ModelFileError(f"{path}: array {name!r} has values outside [0, 1]")
-        params = params_from_numpy({k[len("params/"):]: v for k, v in arrays.items()
-                                    if k.startswith("params/")})
-        extra = {k: v for k, v in meta.items()
-                 if k not in ("format", "format_version", "network", "sequence_patterns",
-                              "history")}
+        params = params_from_numpy(
+            {k[len("params/") :]: v for k, v in arrays.items() if k.startswith("params/")}
+        )
+        extra = {
+            k: v
+            for k, v in meta.items()
+            if k not in ("format", "format_version", "network", "sequence_patterns", "history")
+        }
         if history is not None:
             extra["history"] = [entry.to_json() for entry in history]
-        model = cls(network=network, params=params, lower=arrays["lower"].astype(np.float64),
-                    upper=arrays["upper"].astype(np.float64),
-                    sequence_pb=arrays["sequence_pb"].astype(np.float64),
-                    sequence_patterns=patterns,
-                    initial_context=arrays["initial_context"].astype(np.float64), meta=extra)
+        model = cls(
+            network=network,
+            params=params,
+            lower=arrays["lower"].astype(np.float64),
+            upper=arrays["upper"].astype(np.float64),
+            sequence_pb=arrays["sequence_pb"].astype(np.float64),
+            sequence_patterns=patterns,
+            initial_context=arrays["initial_context"].astype(np.float64),
+            meta=extra,
+        )
         if joint_limits is not None:
             check_joint_limits(model, joint_limits, str(path))
         return model
 
 
-def _model_layout(path: Path, meta: dict[str, Any]
-                  ) -> tuple[NetworkConfig, tuple[str, ...], dict[str, tuple[int, ...]]]:
+def _model_layout(
+    path: Path, meta: dict[str, Any]
+) -> tuple[NetworkConfig, tuple[str, ...], dict[str, tuple[int, ...]]]:
     """The network, the pattern names and every array's shape a model's meta.json implies."""
     try:
         network = NetworkConfig(**meta["network"])
@@ -347,11 +374,14 @@ def _model_layout(path: Path, meta: dict[str, Any]
         if not isinstance(patterns, list):
             raise TypeError(f"sequence_patterns is {type(patterns).__name__}, not a list")
     except (KeyError, TypeError, ValueError) as error:
-        raise ModelFileError(f"{path}: bad network config or pattern list in meta.json "
-                             f"({_one_line(error)})") from None
+        raise ModelFileError(
+            f"{path}: bad network config or pattern list in meta.json ({_one_line(error)})"
+        ) from None
     if not patterns:
-        raise ModelFileError(f"{path}: holds no training sequences (its pattern list is empty); "
-                             "a model needs at least one learned pattern")
+        raise ModelFileError(
+            f"{path}: holds no training sequences (its pattern list is empty); "
+            "a model needs at least one learned pattern"
+        )
     for name in patterns:
         problem = pattern_name_problem(name)
         if problem:
@@ -359,9 +389,12 @@ def _model_layout(path: Path, meta: dict[str, Any]
             raise ModelFileError(f"{path}: pattern name {shown} {problem}")
     shapes = {f"params/{k}": s for k, s in param_shapes(network).items()}
     n_seq = len(patterns)
-    shapes.update(lower=(network.io_size,), upper=(network.io_size,),
-                  sequence_pb=(n_seq, network.pb_size),
-                  initial_context=(n_seq, network.context_size))
+    shapes.update(
+        lower=(network.io_size,),
+        upper=(network.io_size,),
+        sequence_pb=(n_seq, network.pb_size),
+        initial_context=(n_seq, network.context_size),
+    )
     return network, tuple(patterns), shapes
 
 
@@ -371,12 +404,14 @@ def _checked_history(path: Path, meta: dict[str, Any]) -> tuple[HistoryEntry, ..
     if recorded is None and meta.get("format_version") == 1:
         return None
     if not isinstance(recorded, list) or not recorded or len(recorded) > MAX_HISTORY:
-        raise ModelFileError(f"{path}: meta.json's history is not a list of 1 to "
-                             f"{MAX_HISTORY} entries")
+        raise ModelFileError(
+            f"{path}: meta.json's history is not a list of 1 to {MAX_HISTORY} entries"
+        )
     entries = tuple(HistoryEntry.from_json(path, entry) for entry in recorded)
     if entries[-1].patterns != tuple(dict.fromkeys(meta["sequence_patterns"])):
-        raise ModelFileError(f"{path}: the history's last entry names other patterns than "
-                             "the model holds")
+        raise ModelFileError(
+            f"{path}: the history's last entry names other patterns than the model holds"
+        )
     return entries
 
 
@@ -385,23 +420,23 @@ def _checkpoint_members(path: Path, meta: dict[str, Any]) -> dict[str, tuple[int
     # training state as state/0000 …; their shapes depend on the training data, which the
     # checkpoint does not record, so only names, count and the total size are bounded here.
     n_leaves = meta.get("n_leaves")
-    if not isinstance(n_leaves, int) or isinstance(n_leaves, bool) or not (
-            0 < n_leaves < MAX_MEMBERS):
-        raise ModelFileError(f"{path}: checkpoint meta.json has no valid 'n_leaves' "
-                             f"({n_leaves!r})")
+    if (
+        not isinstance(n_leaves, int)
+        or isinstance(n_leaves, bool)
+        or not (0 < n_leaves < MAX_MEMBERS)
+    ):
+        raise ModelFileError(f"{path}: checkpoint meta.json has no valid 'n_leaves' ({n_leaves!r})")
     return {f"state/{i:04d}": None for i in range(n_leaves)}
 
 
 # Which members each archive format holds, from its meta.json: name -> shape (None: any shape).
-_ARCHIVE_MEMBERS: dict[str, Callable[[Path, dict[str, Any]],
-                                     dict[str, tuple[int, ...] | None]]] = {
+_ARCHIVE_MEMBERS: dict[str, Callable[[Path, dict[str, Any]], dict[str, tuple[int, ...] | None]]] = {
     MODEL_FORMAT: lambda path, meta: dict(_model_layout(path, meta)[2]),
     "rnnpb-checkpoint": _checkpoint_members,
 }
 
 
-def check_joint_limits(model: TrainedModel, joint_limits: np.ndarray, where: str = "model"
-                       ) -> None:
+def check_joint_limits(model: TrainedModel, joint_limits: np.ndarray, where: str = "model") -> None:
     """Refuse a model whose motor normalization lies outside the robot's joint limits.
 
     :class:`~rnnpb.model.MirrorSystem` turns the network's motor output in [0, 1] into radians
@@ -420,21 +455,27 @@ def check_joint_limits(model: TrainedModel, joint_limits: np.ndarray, where: str
     s = model.network.sensory_size
     lower, upper = np.asarray(model.lower)[s:], np.asarray(model.upper)[s:]
     if limits.shape != (lower.shape[0], 2):
-        raise ModelFileError(f"{where}: the model has {lower.shape[0]} motor values but the "
-                             f"robot has joint limits of shape {limits.shape}")
-    outside = ((lower < limits[:, 0] - JOINT_LIMIT_TOLERANCE)
-               | (upper > limits[:, 1] + JOINT_LIMIT_TOLERANCE))
+        raise ModelFileError(
+            f"{where}: the model has {lower.shape[0]} motor values but the "
+            f"robot has joint limits of shape {limits.shape}"
+        )
+    outside = (lower < limits[:, 0] - JOINT_LIMIT_TOLERANCE) | (
+        upper > limits[:, 1] + JOINT_LIMIT_TOLERANCE
+    )
     if np.any(outside):
         j = int(np.argmax(outside))
         name = MOTOR_NAMES[j] if len(MOTOR_NAMES) == len(lower) else f"motor {j}"
-        raise ModelFileError(f"{where}: normalization of joint {name} is [{lower[j]:.4g}, "
-                             f"{upper[j]:.4g}] rad, outside the robot's joint limits "
-                             f"[{limits[j, 0]:.4g}, {limits[j, 1]:.4g}]; refused, as it would "
-                             "command the robot past its joints")
+        raise ModelFileError(
+            f"{where}: normalization of joint {name} is [{lower[j]:.4g}, "
+            f"{upper[j]:.4g}] rad, outside the robot's joint limits "
+            f"[{limits[j, 0]:.4g}, {limits[j, 1]:.4g}]; refused, as it would "
+            "command the robot past its joints"
+        )
 
 
-def save_archive(path: str | os.PathLike[str], meta: dict[str, Any],
-                 arrays: dict[str, np.ndarray]) -> None:
+def save_archive(
+    path: str | os.PathLike[str], meta: dict[str, Any], arrays: dict[str, np.ndarray]
+) -> None:
     """Write ``meta`` (JSON) and ``arrays`` into one ``.npz`` file, atomically."""
     payload = dict(arrays)
     payload["meta.json"] = np.frombuffer(json.dumps(meta, indent=1).encode("utf-8"), np.uint8)
@@ -445,9 +486,12 @@ def save_archive(path: str | os.PathLike[str], meta: dict[str, Any],
         handle.write(buffer.getvalue())
 
 
-def load_archive(path: str | os.PathLike[str], fmt: str, version: int | tuple[int, ...],
-                 members: Callable[[Path, dict[str, Any]], dict[str, tuple[int, ...] | None]]
-                 | None = None) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+def load_archive(
+    path: str | os.PathLike[str],
+    fmt: str,
+    version: int | tuple[int, ...],
+    members: Callable[[Path, dict[str, Any]], dict[str, tuple[int, ...] | None]] | None = None,
+) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     """Read an archive written by :func:`save_archive` and check its format and version.
 
     The zip's central directory is checked before anything is decompressed: every member must
@@ -463,70 +507,95 @@ def load_archive(path: str | os.PathLike[str], fmt: str, version: int | tuple[in
     """
     path = Path(path)
     kind = fmt.removeprefix("rnnpb-")  # what the messages call the file: "model", "checkpoint"
-    handle = open_regular_file(path, ModelFileError, f"an rnnpb {kind} file (.npz)",
-                               MAX_ARCHIVE_BYTES, "rb")
+    handle = open_regular_file(
+        path, ModelFileError, f"an rnnpb {kind} file (.npz)", MAX_ARCHIVE_BYTES, "rb"
+    )
     with handle:
         if handle.read(len(_NPY_MAGIC)) == _NPY_MAGIC:
-            raise ModelFileError(f"{path}: is a single .npy array, not an .npz archive (an "
-                                 f"rnnpb {kind} file is a zip of .npy arrays)")
+            raise ModelFileError(
+                f"{path}: is a single .npy array, not an .npz archive (an "
+                f"rnnpb {kind} file is a zip of .npy arrays)"
+            )
         handle.seek(0)
         try:
             with zipfile.ZipFile(handle) as archive:
-                return _read_archive(path, archive, fmt, version,
-                                     members or _ARCHIVE_MEMBERS.get(fmt))
+                return _read_archive(
+                    path, archive, fmt, version, members or _ARCHIVE_MEMBERS.get(fmt)
+                )
         # Damage inside a zip surfaces, besides BadZipFile, as zlib.error (a compressed
         # member), NotImplementedError (a flipped compression method) or RuntimeError (a
         # flipped "encrypted" flag); all three were found by fuzzing. A damaged .npy header
         # inside can also stop NumPy's header parser with tokenize.TokenError or SyntaxError
         # (fuzzing too).
-        except (zipfile.BadZipFile, zlib.error, NotImplementedError, RuntimeError, EOFError,
-                OSError, ValueError, tokenize.TokenError, SyntaxError) as error:
+        except (
+            zipfile.BadZipFile,
+            zlib.error,
+            NotImplementedError,
+            RuntimeError,
+            EOFError,
+            OSError,
+            ValueError,
+            tokenize.TokenError,
+            SyntaxError,
+        ) as error:
             if isinstance(error, ModelFileError):
                 raise
-            raise ModelFileError(f"{path}: not a readable rnnpb {kind} file (truncated or not "
-                                 f"an .npz archive: {_one_line(error)})") from None
+            raise ModelFileError(
+                f"{path}: not a readable rnnpb {kind} file (truncated or not "
+                f"an .npz archive: {_one_line(error)})"
+            ) from None
 
 
-def _read_archive(path: Path, archive: zipfile.ZipFile, fmt: str,
-                  version: int | tuple[int, ...],
-                  members: Callable[[Path, dict[str, Any]], dict[str, tuple[int, ...] | None]]
-                  | None) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+def _read_archive(
+    path: Path,
+    archive: zipfile.ZipFile,
+    fmt: str,
+    version: int | tuple[int, ...],
+    members: Callable[[Path, dict[str, Any]], dict[str, tuple[int, ...] | None]] | None,
+) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     kind = fmt.removeprefix("rnnpb-")
     infos = archive.infolist()
     if len(infos) > MAX_MEMBERS:
-        raise ModelFileError(f"{path}: holds {len(infos)} members, more than the "
-                             f"{MAX_MEMBERS} an rnnpb {kind} file may have")
+        raise ModelFileError(
+            f"{path}: holds {len(infos)} members, more than the "
+            f"{MAX_MEMBERS} an rnnpb {kind} file may have"
+        )
     by_name: dict[str, zipfile.ZipInfo] = {}
     for info in infos:
         if not info.filename.endswith(".npy"):
-            raise ModelFileError(f"{path}: holds the member {_shown(info.filename)}, which is "
-                                 "not a .npy array")
-        key = info.filename[:-len(".npy")]
+            raise ModelFileError(
+                f"{path}: holds the member {_shown(info.filename)}, which is not a .npy array"
+            )
+        key = info.filename[: -len(".npy")]
         if key in by_name:
             raise ModelFileError(f"{path}: holds the member {_shown(info.filename)} twice")
         by_name[key] = info
     total = sum(info.file_size for info in infos)
     if total > MAX_ARCHIVE_BYTES:
-        raise ModelFileError(f"{path}: its members would take {total / 2**20:.0f} MiB "
-                             f"uncompressed, more than the {MAX_ARCHIVE_BYTES // 2**20} MiB "
-                             f"an rnnpb {kind} file may hold")
+        raise ModelFileError(
+            f"{path}: its members would take {total / 2**20:.0f} MiB "
+            f"uncompressed, more than the {MAX_ARCHIVE_BYTES // 2**20} MiB "
+            f"an rnnpb {kind} file may hold"
+        )
     meta_info = by_name.pop("meta.json", None)
     if meta_info is None:
         raise ModelFileError(f"{path}: not an rnnpb {kind} file (no meta.json inside)")
     if meta_info.file_size > MAX_META_BYTES:
-        raise ModelFileError(f"{path}: meta.json is {meta_info.file_size / 2**20:.0f} MiB, more "
-                             f"than the {MAX_META_BYTES // 2**20} MiB allowed")
+        raise ModelFileError(
+            f"{path}: meta.json is {meta_info.file_size / 2**20:.0f} MiB, more "
+            f"than the {MAX_META_BYTES // 2**20} MiB allowed"
+        )
     meta_array = _read_npy(path, archive, meta_info, None)
     if meta_array.dtype != np.uint8 or meta_array.ndim != 1:
-        raise ModelFileError(f"{path}: meta.json is not stored as bytes "
-                             f"({meta_array.dtype} {meta_array.shape})")
+        raise ModelFileError(
+            f"{path}: meta.json is not stored as bytes ({meta_array.dtype} {meta_array.shape})"
+        )
     try:
         meta = json.loads(meta_array.tobytes().decode("utf-8"))
     # ValueError covers bad UTF-8, bad JSON and integers too long to convert; RecursionError
     # a document nested too deeply.
     except (ValueError, RecursionError) as error:
-        raise ModelFileError(f"{path}: meta.json is not valid JSON "
-                             f"({_one_line(error)})") from None
+        raise ModelFileError(f"{path}: meta.json is not valid JSON ({_one_line(error)})") from None
     if not isinstance(meta, dict) or meta.get("format") != fmt:
         found = meta.get("format") if isinstance(meta, dict) else None
         raise ModelFileError(f"{path}: not an rnnpb {kind} file (format is {_shown(found)})")
@@ -534,16 +603,21 @@ def _read_archive(path: Path, archive: zipfile.ZipFile, fmt: str,
     found_version = meta.get("format_version")
     if isinstance(found_version, bool) or found_version not in versions:
         expected = " or ".join(str(v) for v in versions)
-        raise ModelFileError(f"{path}: {kind} format version "
-                             f"{_shown(found_version)} is not supported by rnnpb "
-                             f"{__version__} (expects {expected})")
+        raise ModelFileError(
+            f"{path}: {kind} format version "
+            f"{_shown(found_version)} is not supported by rnnpb "
+            f"{__version__} (expects {expected})"
+        )
     shapes: dict[str, tuple[int, ...] | None] = (
-        members(path, meta) if members is not None else dict.fromkeys(by_name))
+        members(path, meta) if members is not None else dict.fromkeys(by_name)
+    )
     unknown = [name for name in by_name if name not in shapes]
     if unknown:
-        raise ModelFileError(f"{path}: holds the unexpected member(s) "
-                             f"{', '.join(_shown(n) for n in unknown[:5])}; an rnnpb {kind} file "
-                             "holds only its own arrays")
+        raise ModelFileError(
+            f"{path}: holds the unexpected member(s) "
+            f"{', '.join(_shown(n) for n in unknown[:5])}; an rnnpb {kind} file "
+            "holds only its own arrays"
+        )
     for name, shape in shapes.items():
         if name not in by_name:
             raise ModelFileError(f"{path}: missing array {name!r}")
@@ -553,15 +627,17 @@ def _read_archive(path: Path, archive: zipfile.ZipFile, fmt: str,
                 raise ModelFileError(
                     f"{path}: member {name!r} is {by_name[name].file_size:,} bytes uncompressed, "
                     f"more than an array of shape {shape} takes ({limit:,} at most); refused "
-                    "before reading it")
+                    "before reading it"
+                )
     arrays = {name: _read_npy(path, archive, by_name[name], shapes[name]) for name in shapes}
     return meta, arrays
 
 
-def _read_npy(path: Path, archive: zipfile.ZipFile, info: zipfile.ZipInfo,
-              shape: tuple[int, ...] | None) -> np.ndarray:
+def _read_npy(
+    path: Path, archive: zipfile.ZipFile, info: zipfile.ZipInfo, shape: tuple[int, ...] | None
+) -> np.ndarray:
     """One ``.npy`` member, its header checked against ``shape`` and the member's size first."""
-    name = info.filename[:-len(".npy")]
+    name = info.filename[: -len(".npy")]
     # ZipFile.open's stub says IO[bytes]; reading a member gives a ZipExtFile (readinto).
     with cast(zipfile.ZipExtFile, archive.open(info)) as member:
         if member.read(len(_NPY_MAGIC)) != _NPY_MAGIC:
@@ -573,21 +649,29 @@ def _read_npy(path: Path, archive: zipfile.ZipFile, info: zipfile.ZipInfo,
         elif version == (2, 0):
             found, fortran, dtype = np.lib.format.read_array_header_2_0(member)
         else:
-            raise ModelFileError(f"{path}: member {name!r} is a .npy file of version "
-                                 f"{version}, which rnnpb does not read")
+            raise ModelFileError(
+                f"{path}: member {name!r} is a .npy file of version "
+                f"{version}, which rnnpb does not read"
+            )
         header_size = member.tell()
         found = tuple(int(n) for n in found)
         if dtype.hasobject:
-            raise ModelFileError(f"{path}: array {name!r} holds Python objects ({dtype}); "
-                                 "rnnpb files hold numbers only and are never unpickled")
+            raise ModelFileError(
+                f"{path}: array {name!r} holds Python objects ({dtype}); "
+                "rnnpb files hold numbers only and are never unpickled"
+            )
         if shape is not None and found != tuple(shape):
-            raise ModelFileError(f"{path}: array {name!r} has shape {found}, expected "
-                                 f"{tuple(shape)} for the network config in the file")
+            raise ModelFileError(
+                f"{path}: array {name!r} has shape {found}, expected "
+                f"{tuple(shape)} for the network config in the file"
+            )
         # The header alone decides what NumPy would allocate: hold it to the member's size.
         n_bytes = math.prod(found) * dtype.itemsize
         if n_bytes != info.file_size - header_size:
-            raise ModelFileError(f"{path}: array {name!r} claims {n_bytes:,} bytes but its "
-                                 f"member holds {info.file_size - header_size:,}")
+            raise ModelFileError(
+                f"{path}: array {name!r} claims {n_bytes:,} bytes but its "
+                f"member holds {info.file_size - header_size:,}"
+            )
         buffer = bytearray(n_bytes)
         view, done = memoryview(buffer), 0
         while done < n_bytes:
@@ -609,21 +693,25 @@ def _shown(value: object) -> str:
     return text if len(text) <= 60 else text[:60] + "…"
 
 
-def check_numeric(path: Path, name: str, array: np.ndarray,
-                  dtype: type[np.floating] = NETWORK_DTYPE) -> None:
+def check_numeric(
+    path: Path, name: str, array: np.ndarray, dtype: type[np.floating] = NETWORK_DTYPE
+) -> None:
     """Raise :class:`ModelFileError` unless ``array`` holds real numbers finite in ``dtype``.
 
     A value stored as float64 beyond float32's range (about 3.4e38) would become infinite in
     the network and is refused like NaN.
     """
     if array.dtype.kind not in "fiu":
-        raise ModelFileError(f"{path}: array {name!r} has dtype {array.dtype}, expected real "
-                             "numbers")
+        raise ModelFileError(
+            f"{path}: array {name!r} has dtype {array.dtype}, expected real numbers"
+        )
     if not np.all(np.isfinite(array)):
         raise ModelFileError(f"{path}: array {name!r} contains NaN or infinite values")
     with np.errstate(over="ignore", invalid="ignore"):
         cast = array.astype(dtype)
     if not np.all(np.isfinite(cast)):
-        raise ModelFileError(f"{path}: array {name!r} has values beyond the range of "
-                             f"{np.dtype(dtype).name} (the network's dtype, max "
-                             f"{np.finfo(dtype).max:.3g})")
+        raise ModelFileError(
+            f"{path}: array {name!r} has values beyond the range of "
+            f"{np.dtype(dtype).name} (the network's dtype, max "
+            f"{np.finfo(dtype).max:.3g})"
+        )

@@ -47,8 +47,11 @@ class TrainConfig:
     optimizer: Literal["momentum", "adam"] = "momentum"
     learning_rate: float = 1.0
     momentum: float = 0.9
-    pb: PBUpdateConfig = field(default_factory=lambda: PBUpdateConfig(
-        learning_rate=2.0, momentum=0.9, k_bp=1.0, k_nb=0.05, integration_length=20))
+    pb: PBUpdateConfig = field(
+        default_factory=lambda: PBUpdateConfig(
+            learning_rate=2.0, momentum=0.9, k_bp=1.0, k_nb=0.05, integration_length=20
+        )
+    )
     input_noise: float = 0.0
     learn_initial_context: bool = True
     seed: int = 0
@@ -156,9 +159,10 @@ def prepare_data(sequences: SequenceABC[Sequence], joint_limits: np.ndarray) -> 
                 f"{seq.source or 'sequence'}: step {bad[0]}, {column} = "
                 f"{raw[bad[0], bad[1]]:.4g} is outside its range [{lower[bad[1]]:.4g}, "
                 f"{upper[bad[1]]:.4g}] ({kind}: hands in [0, 1], joints within the robot's "
-                "limits, radians)")
-        inputs[i, :seq.n_steps] = x
-        valid[i, :seq.n_steps - 1] = True
+                "limits, radians)"
+            )
+        inputs[i, : seq.n_steps] = x
+        valid[i, : seq.n_steps - 1] = True
     return TrainingData(inputs, valid, tuple(s.pattern for s in sequences), lower, upper)
 
 
@@ -169,31 +173,40 @@ def optimizer_for(config: TrainConfig) -> optax.GradientTransformation:
     return optax.sgd(config.learning_rate, momentum=config.momentum)
 
 
-def squared_error(trainable: tuple[Params, jax.Array], rho: jax.Array, inputs: jax.Array,
-                  valid: jax.Array, noise: jax.Array) -> jax.Array:
+def squared_error(
+    trainable: tuple[Params, jax.Array],
+    rho: jax.Array,
+    inputs: jax.Array,
+    valid: jax.Array,
+    noise: jax.Array,
+) -> jax.Array:
     """0.5 · Σ over sequences, valid steps and outputs of the squared prediction error."""
     params, context_logit = trainable
     pbs = jax.nn.sigmoid(rho)  # (S, T-1, P)
     teacher = inputs[:, :-1] + noise
-    predictions, _ = open_loop(params, jax.nn.sigmoid(context_logit),
-                               jnp.swapaxes(teacher, 0, 1), jnp.swapaxes(pbs, 0, 1))
+    predictions, _ = open_loop(
+        params, jax.nn.sigmoid(context_logit), jnp.swapaxes(teacher, 0, 1), jnp.swapaxes(pbs, 0, 1)
+    )
     error = (jnp.swapaxes(predictions, 0, 1) - inputs[:, 1:]) * valid[..., None]
-    return 0.5 * jnp.sum(error ** 2)
+    return 0.5 * jnp.sum(error**2)
 
 
-def chunk_runner(config: TrainConfig
-                 ) -> Callable[[TrainState, jax.Array, jax.Array, jax.Array], TrainState]:
+def chunk_runner(
+    config: TrainConfig,
+) -> Callable[[TrainState, jax.Array, jax.Array, jax.Array], TrainState]:
     """The compiled function ``run_chunk(state, inputs, valid, n_iterations) -> state`` that
     runs ``n_iterations`` learning iterations (``inputs`` (S, T, I), ``valid`` (S, T-1))."""
     # Settings that do not enter the compiled update are normalized away so that runs that
     # differ only in them share one compiled function.
-    return _compiled_chunk(replace(config, iterations=0, seed=0, chunk_iterations=1,
-                                   checkpoint_every=1))
+    return _compiled_chunk(
+        replace(config, iterations=0, seed=0, chunk_iterations=1, checkpoint_every=1)
+    )
 
 
 @functools.lru_cache(maxsize=16)
-def _compiled_chunk(config: TrainConfig
-                    ) -> Callable[[TrainState, jax.Array, jax.Array, jax.Array], TrainState]:
+def _compiled_chunk(
+    config: TrainConfig,
+) -> Callable[[TrainState, jax.Array, jax.Array, jax.Array], TrainState]:
     optimizer = optimizer_for(config)
     grad_fn = jax.grad(squared_error, argnums=(0, 1))
 
@@ -210,30 +223,39 @@ def _compiled_chunk(config: TrainConfig
             grad_trainable = (grad_trainable[0], jnp.zeros_like(grad_trainable[1]))
         updates, opt_state = optimizer.update(grad_trainable, state.opt_state, trainable)
         # optax types its result as any tree; it has the structure of ``trainable``.
-        params, context_logit = cast("tuple[Params, jax.Array]",
-                                     optax.apply_updates(trainable, updates))
+        params, context_logit = cast(
+            "tuple[Params, jax.Array]", optax.apply_updates(trainable, updates)
+        )
         rho, rho_velocity = jax.vmap(lambda r, v, g, m: pb_update(r, v, g, config.pb, m))(
-            state.rho, state.rho_velocity, grad_rho, valid)
-        return TrainState(params, context_logit, opt_state, rho, rho_velocity, key,
-                          state.iteration + 1)
+            state.rho, state.rho_velocity, grad_rho, valid
+        )
+        return TrainState(
+            params, context_logit, opt_state, rho, rho_velocity, key, state.iteration + 1
+        )
 
     @jax.jit
-    def run_chunk(state: TrainState, inputs: jax.Array, valid: jax.Array,
-                  n_iterations: jax.Array) -> TrainState:
-        return jax.lax.fori_loop(0, n_iterations,
-                                 lambda _, s: one_iteration(s, inputs, valid), state)
+    def run_chunk(
+        state: TrainState, inputs: jax.Array, valid: jax.Array, n_iterations: jax.Array
+    ) -> TrainState:
+        return jax.lax.fori_loop(
+            0, n_iterations, lambda _, s: one_iteration(s, inputs, valid), state
+        )
 
     return run_chunk
 
 
 @jax.jit
-def per_output_mse(trainable: tuple[Params, jax.Array], rho: jax.Array, inputs: jax.Array,
-                   valid: jax.Array) -> jax.Array:
+def per_output_mse(
+    trainable: tuple[Params, jax.Array], rho: jax.Array, inputs: jax.Array, valid: jax.Array
+) -> jax.Array:
     """The mean squared prediction error of each output over all valid steps, shape (I,)."""
     params, context_logit = trainable
-    predictions, _ = open_loop(params, jax.nn.sigmoid(context_logit),
-                               jnp.swapaxes(inputs[:, :-1], 0, 1),
-                               jnp.swapaxes(jax.nn.sigmoid(rho), 0, 1))
+    predictions, _ = open_loop(
+        params,
+        jax.nn.sigmoid(context_logit),
+        jnp.swapaxes(inputs[:, :-1], 0, 1),
+        jnp.swapaxes(jax.nn.sigmoid(rho), 0, 1),
+    )
     error = (jnp.swapaxes(predictions, 0, 1) - inputs[:, 1:]) ** 2 * valid[..., None]
     return jnp.sum(error, axis=(0, 1)) / jnp.sum(valid)
 
@@ -262,8 +284,12 @@ class WarmStart:
     fingerprint: str
 
 
-def init_state(data: TrainingData, network: NetworkConfig, config: TrainConfig,
-               warm_start: WarmStart | None = None) -> TrainState:
+def init_state(
+    data: TrainingData,
+    network: NetworkConfig,
+    config: TrainConfig,
+    warm_start: WarmStart | None = None,
+) -> TrainState:
     """The state before the first iteration: random weights from ``config.seed``, initial
     contexts at 0.5 and every PB profile at 0.5; or, with ``warm_start``, its weights,
     initial contexts and PBs (the optimizer's state starts afresh either way)."""
@@ -274,15 +300,21 @@ def init_state(data: TrainingData, network: NetworkConfig, config: TrainConfig,
     context_logit = jnp.zeros((n_seq, network.context_size), jnp.float32)
     rho = jnp.zeros((n_seq, n_pred, network.pb_size), jnp.float32)
     if warm_start is not None:
-        if np.shape(warm_start.initial_context) != (n_seq, network.context_size) or \
-                np.shape(warm_start.pb) != (n_seq, network.pb_size):
-            raise ConfigError("the warm start's initial contexts or PBs do not match the "
-                              f"{n_seq} training sequences and the network's sizes")
+        if np.shape(warm_start.initial_context) != (n_seq, network.context_size) or np.shape(
+            warm_start.pb
+        ) != (n_seq, network.pb_size):
+            raise ConfigError(
+                "the warm start's initial contexts or PBs do not match the "
+                f"{n_seq} training sequences and the network's sizes"
+            )
         params = Params(*(jnp.asarray(v, jnp.float32) for v in warm_start.params))
-        context_logit = jnp.asarray(logit_numpy(np.asarray(warm_start.initial_context)),
-                                    jnp.float32)
-        rho = jnp.broadcast_to(jnp.asarray(logit_numpy(np.asarray(warm_start.pb)),
-                                           jnp.float32)[:, None, :], rho.shape)
+        context_logit = jnp.asarray(
+            logit_numpy(np.asarray(warm_start.initial_context)), jnp.float32
+        )
+        rho = jnp.broadcast_to(
+            jnp.asarray(logit_numpy(np.asarray(warm_start.pb)), jnp.float32)[:, None, :], rho.shape
+        )
     opt_state = optimizer_for(config).init((params, context_logit))
-    return TrainState(params, context_logit, opt_state, rho, jnp.zeros_like(rho), key,
-                      jnp.asarray(0, jnp.int32))
+    return TrainState(
+        params, context_logit, opt_state, rho, jnp.zeros_like(rho), key, jnp.asarray(0, jnp.int32)
+    )

@@ -59,8 +59,9 @@ def barrier_energy(params: MetaParams, rho: jax.Array, level: float) -> jax.Arra
     return jnp.sum(jax.nn.softplus(excess))
 
 
-def project_out(params: MetaParams, rho: jax.Array, level: float, steps: int,
-                rate: float) -> jax.Array:
+def project_out(
+    params: MetaParams, rho: jax.Array, level: float, steps: int, rate: float
+) -> jax.Array:
     """Move each PB of ``rho`` (..., P) down the risk gradient until its risk is below
     ``level`` (at most ``steps`` gradient steps of size ``rate`` in ρ), the projection
     alternative to the barrier."""
@@ -68,9 +69,8 @@ def project_out(params: MetaParams, rho: jax.Array, level: float, steps: int,
 
     def one(r: jax.Array) -> jax.Array:
         def body(_, r):
-            value, grad = jax.value_and_grad(
-                lambda x: risk_logit(params, jax.nn.sigmoid(x)))(r)
-            norm = jnp.sqrt(jnp.sum(grad ** 2)) + 1e-6
+            value, grad = jax.value_and_grad(lambda x: risk_logit(params, jax.nn.sigmoid(x)))(r)
+            norm = jnp.sqrt(jnp.sum(grad**2)) + 1e-6
             return jnp.where(value > threshold, r - rate * grad / norm, r)
 
         return jax.lax.fori_loop(0, steps, body, r)

@@ -108,9 +108,15 @@ class PackedLayout(NamedTuple):
     @classmethod
     def for_network(cls, network: NetworkConfig, patterns: int = 0) -> PackedLayout:
         """The layout for a network's sizes and ``patterns`` learned patterns (K)."""
-        sizes = {"motor": network.motor_size, "predicted_sensory": network.sensory_size,
-                 "pb": network.pb_size, "window_error": 1, "held": 1,
-                 "context": network.context_size, "pattern_errors": patterns}
+        sizes = {
+            "motor": network.motor_size,
+            "predicted_sensory": network.sensory_size,
+            "pb": network.pb_size,
+            "window_error": 1,
+            "held": 1,
+            "context": network.context_size,
+            "pattern_errors": patterns,
+        }
         parts, start = {}, 0
         for name in cls._fields:
             parts[name] = slice(start, start + sizes[name])
@@ -128,15 +134,32 @@ def pack(outputs: StepOutputs[jax.Array]) -> jax.Array:
 
 
 @partial(jax.jit, static_argnames=("config", "recognition_steps"))
-def _online_step_packed(params: Params, state: OnlineState, u: jax.Array, seen: jax.Array,
-                        config: OnlineConfig, candidates: jax.Array | None = None,
-                        phase_candidates: jax.Array | None = None,
-                        meta: MetaParams | None = None, pattern_rho: jax.Array | None = None,
-                        recognition_steps: int = 12) -> tuple[OnlineState, jax.Array]:
+def _online_step_packed(
+    params: Params,
+    state: OnlineState,
+    u: jax.Array,
+    seen: jax.Array,
+    config: OnlineConfig,
+    candidates: jax.Array | None = None,
+    phase_candidates: jax.Array | None = None,
+    meta: MetaParams | None = None,
+    pattern_rho: jax.Array | None = None,
+    recognition_steps: int = 12,
+) -> tuple[OnlineState, jax.Array]:
     """:func:`online_step` with its outputs packed into one vector, so that they come back in
     one transfer."""
-    state, outputs = online_step(params, state, u, seen, config, candidates, phase_candidates,
-                                 meta, pattern_rho, recognition_steps)
+    state, outputs = online_step(
+        params,
+        state,
+        u,
+        seen,
+        config,
+        candidates,
+        phase_candidates,
+        meta,
+        pattern_rho,
+        recognition_steps,
+    )
     return state, pack(outputs)
 
 
@@ -147,18 +170,22 @@ def normalized_hands(values: object, sensory_size: int) -> tuple[np.ndarray, np.
         u = np.asarray(values, dtype=np.float64).reshape(-1)
     except (TypeError, ValueError, OverflowError):
         # OverflowError: a Python integer beyond float64's range (10**309).
-        raise ConfigError(f"observed hands must be {sensory_size} numbers (lhy lhz rhy rhz), "
-                          f"got {values!r:.80}") from None
+        raise ConfigError(
+            f"observed hands must be {sensory_size} numbers (lhy lhz rhy rhz), got {values!r:.80}"
+        ) from None
     if u.shape != (sensory_size,):
         # np.asarray took ``values`` above: it is array-like.
-        raise ConfigError(f"observed hands must have {sensory_size} values "
-                          f"(lhy lhz rhy rhz), got {np.shape(cast(ArrayLike, values))}")
+        raise ConfigError(
+            f"observed hands must have {sensory_size} values "
+            f"(lhy lhz rhy rhz), got {np.shape(cast(ArrayLike, values))}"
+        )
     seen = np.isfinite(u)
     return np.where(seen, np.clip(u, 0.0, 1.0), 0.0), seen
 
 
-def one_step_prediction_error(predicted: np.ndarray | None, u: np.ndarray,
-                              seen: np.ndarray) -> float:
+def one_step_prediction_error(
+    predicted: np.ndarray | None, u: np.ndarray, seen: np.ndarray
+) -> float:
     """Mean squared error of the previous step's prediction of the seen hands (NaN if there
     was none or nothing was seen)."""
     if predicted is None or not seen.any():
@@ -203,9 +230,13 @@ class MirrorSystem:
     >>> result.motor, result.pb, result.predicted_hands    # doctest: +SKIP
     """
 
-    def __init__(self, model: TrainedModel, config: OnlineConfig | None = None,
-                 meta: MetaParams | None = None,
-                 recognition: RecognitionConfig | None = None) -> None:
+    def __init__(
+        self,
+        model: TrainedModel,
+        config: OnlineConfig | None = None,
+        meta: MetaParams | None = None,
+        recognition: RecognitionConfig | None = None,
+    ) -> None:
         """``meta``: the risk network of a safety map (``rnnpb.safety.SafetyMap.meta``); the
         regression uses it as ``config.safety_guard`` says. Without it the guard is off.
         ``recognition``: the settings of what each step says it sees (the default
@@ -219,9 +250,9 @@ class MirrorSystem:
         self._layout = PackedLayout.for_network(model.network, len(self.patterns))
         self._pattern_rho = jnp.asarray(restart_candidates(model), jnp.float32)
         self._recognition = initial_recognition_state(
-            model.network.sensory_size, model.network.pb_size, self.recognition)
-        self._params = jax.tree_util.tree_map(lambda a: jnp.asarray(a, jnp.float32),
-                                              model.params)
+            model.network.sensory_size, model.network.pb_size, self.recognition
+        )
+        self._params = jax.tree_util.tree_map(lambda a: jnp.asarray(a, jnp.float32), model.params)
         self._state = initial_state(model, self.config)
         # The last prediction of the hands, kept on the host: the next step's prediction error
         # is measured against it without a transfer from the device.
@@ -232,8 +263,9 @@ class MirrorSystem:
         self._phase_candidates = None
         if self.config.phase_restarts > 0:
             self._phase_candidates = jnp.asarray(phase_candidates(model), jnp.float32)
-        self._meta = None if meta is None else MetaParams(
-            *(jnp.asarray(a, jnp.float32) for a in meta))
+        self._meta = (
+            None if meta is None else MetaParams(*(jnp.asarray(a, jnp.float32) for a in meta))
+        )
         self.steps = 0
 
     def reset(self, initial_pb: np.ndarray | None = None) -> None:
@@ -241,7 +273,8 @@ class MirrorSystem:
         self._state = initial_state(self.model, self.config, initial_pb)
         self._predicted = None
         self._recognition = initial_recognition_state(
-            self.model.network.sensory_size, self.model.network.pb_size, self.recognition)
+            self.model.network.sensory_size, self.model.network.pb_size, self.recognition
+        )
         self.steps = 0
 
     @property
@@ -270,16 +303,31 @@ class MirrorSystem:
         # NumPy inputs go to the compiled step as they are and all outputs come back in one
         # transfer: at a few milliseconds a step, per-array round trips are worth avoiding.
         self._state, packed = _online_step_packed(
-            self._params, self._state, u.astype(np.float32), seen, self.config,
-            self._candidates, self._phase_candidates, self._meta, self._pattern_rho,
-            self.recognition.recognition_steps)
+            self._params,
+            self._state,
+            u.astype(np.float32),
+            seen,
+            self.config,
+            self._candidates,
+            self._phase_candidates,
+            self._meta,
+            self._pattern_rho,
+            self.recognition.recognition_steps,
+        )
         outputs = self._layout.unpack(np.asarray(packed, dtype=np.float64))
         self.steps += 1
         prediction_error = one_step_prediction_error(self._predicted, u, seen)
         self._predicted = outputs.predicted_sensory
         self._recognition, seen_now = recognise(
-            self._recognition, u, seen, outputs.pattern_errors, outputs.pb, self._learned_pb,
-            self.patterns, self.recognition)
+            self._recognition,
+            u,
+            seen,
+            outputs.pattern_errors,
+            outputs.pb,
+            self._learned_pb,
+            self.patterns,
+            self.recognition,
+        )
         return StepResult(
             motor=motor_command(self.model, outputs.motor),
             predicted_hands=outputs.predicted_sensory,

@@ -89,8 +89,9 @@ def init_params(config: NetworkConfig, key: jax.Array) -> Params:
     )
 
 
-def step(params: Params, context: jax.Array, x: jax.Array,
-         pb: jax.Array) -> tuple[jax.Array, jax.Array]:
+def step(
+    params: Params, context: jax.Array, x: jax.Array, pb: jax.Array
+) -> tuple[jax.Array, jax.Array]:
     """One step of the network.
 
     Parameters
@@ -110,16 +111,16 @@ def step(params: Params, context: jax.Array, x: jax.Array,
     prediction : array, shape (..., I)
         ``x̂_{t+1}``, the predicted next sensory-motor values.
     """
-    hidden = jax.nn.sigmoid(jnp.concatenate([x, pb, context], axis=-1) @ params.w_in
-                            + params.b_h)
+    hidden = jax.nn.sigmoid(jnp.concatenate([x, pb, context], axis=-1) @ params.w_in + params.b_h)
     output = jax.nn.sigmoid(hidden @ params.w_out + params.b_out)
     io_size = x.shape[-1]
     prediction, context_next = output[..., :io_size], output[..., io_size:]
     return context_next, prediction
 
 
-def open_loop(params: Params, context: jax.Array, inputs: jax.Array,
-              pbs: jax.Array, unroll: int | bool = 2) -> tuple[jax.Array, jax.Array]:
+def open_loop(
+    params: Params, context: jax.Array, inputs: jax.Array, pbs: jax.Array, unroll: int | bool = 2
+) -> tuple[jax.Array, jax.Array]:
     """Teacher-forced run: every input is given.
 
     Parameters
@@ -148,8 +149,9 @@ def open_loop(params: Params, context: jax.Array, inputs: jax.Array,
     return predictions, contexts
 
 
-def closed_loop(params: Params, context: jax.Array, x0: jax.Array, pbs: jax.Array
-                ) -> tuple[jax.Array, jax.Array]:
+def closed_loop(
+    params: Params, context: jax.Array, x0: jax.Array, pbs: jax.Array
+) -> tuple[jax.Array, jax.Array]:
     """Generation without external input: each prediction is the next input.
 
     Parameters
@@ -178,10 +180,16 @@ def closed_loop(params: Params, context: jax.Array, x0: jax.Array, pbs: jax.Arra
     return predictions, contexts
 
 
-def mixed_loop(params: Params, context: jax.Array, motor0: jax.Array, sensory: jax.Array,
-               pbs: jax.Array, sensory_seen: jax.Array | None = None,
-               motor_inputs: jax.Array | None = None, unroll: int | bool = 1
-               ) -> tuple[jax.Array, jax.Array]:
+def mixed_loop(
+    params: Params,
+    context: jax.Array,
+    motor0: jax.Array,
+    sensory: jax.Array,
+    pbs: jax.Array,
+    sensory_seen: jax.Array | None = None,
+    motor_inputs: jax.Array | None = None,
+    unroll: int | bool = 1,
+) -> tuple[jax.Array, jax.Array]:
     """The interaction phase's run: sensory input from outside, motor input from the network.
 
     Where ``sensory_seen`` is False (a hand not seen), the network's own sensory prediction is
@@ -226,8 +234,11 @@ def mixed_loop(params: Params, context: jax.Array, motor0: jax.Array, sensory: j
 
     first_sensory = jnp.where(sensory_seen[0], sensory[0], 0.5)
     _, (predictions, contexts) = jax.lax.scan(
-        body, (context, motor0, first_sensory), (sensory, sensory_seen, pbs, motor_inputs),
-        unroll=unroll)
+        body,
+        (context, motor0, first_sensory),
+        (sensory, sensory_seen, pbs, motor_inputs),
+        unroll=unroll,
+    )
     return predictions, contexts
 
 

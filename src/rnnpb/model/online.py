@@ -96,23 +96,34 @@ class StepOutputs(NamedTuple, Generic[_Values]):
     pattern_errors: _Values
 
 
-def initial_state(model: TrainedModel, config: OnlineConfig,
-                  initial_pb: np.ndarray | None = None) -> OnlineState:
+def initial_state(
+    model: TrainedModel, config: OnlineConfig, initial_pb: np.ndarray | None = None
+) -> OnlineState:
     """The state at the start of an interaction: empty window, PB at the centre of the learned
     PBs (or ``initial_pb``), onset context the mean learned initial context."""
     net = model.network
     length, s, m, p = config.window, net.sensory_size, net.motor_size, net.pb_size
-    pb0 = (np.mean(list(model.pattern_pb.values()), axis=0) if initial_pb is None
-           else np.asarray(initial_pb, dtype=np.float64))
+    pb0 = (
+        np.mean(list(model.pattern_pb.values()), axis=0)
+        if initial_pb is None
+        else np.asarray(initial_pb, dtype=np.float64)
+    )
     rho0 = np.broadcast_to(logit_numpy(pb0), (length, p))
     context = logit(jnp.asarray(model.mean_initial_context, jnp.float32))
     motor = jnp.zeros(m, jnp.float32)
     return OnlineState(
-        sensory=jnp.zeros((length, s), jnp.float32), seen=jnp.zeros((length, s), bool),
-        motor_sent=jnp.full((length, m), 0.5, jnp.float32), n=jnp.asarray(0, jnp.int32),
-        rho=jnp.asarray(rho0, jnp.float32), rho_velocity=jnp.zeros((length, p), jnp.float32),
-        onset_context=context, onset_motor=motor, next_onset_context=context,
-        next_onset_motor=motor, predicted_sensory=jnp.full(s, 0.5, jnp.float32))
+        sensory=jnp.zeros((length, s), jnp.float32),
+        seen=jnp.zeros((length, s), bool),
+        motor_sent=jnp.full((length, m), 0.5, jnp.float32),
+        n=jnp.asarray(0, jnp.int32),
+        rho=jnp.asarray(rho0, jnp.float32),
+        rho_velocity=jnp.zeros((length, p), jnp.float32),
+        onset_context=context,
+        onset_motor=motor,
+        next_onset_context=context,
+        next_onset_motor=motor,
+        predicted_sensory=jnp.full(s, 0.5, jnp.float32),
+    )
 
 
 def _shift_in(state: OnlineState, u: jax.Array, seen: jax.Array) -> OnlineState:
@@ -139,18 +150,20 @@ def _shift_in(state: OnlineState, u: jax.Array, seen: jax.Array) -> OnlineState:
     )
 
 
-def _recent_error(params: Params, state: OnlineState, config: OnlineConfig,
-                  steps: int) -> jax.Array:
+def _recent_error(
+    params: Params, state: OnlineState, config: OnlineConfig, steps: int
+) -> jax.Array:
     """Mean squared error of the window's last ``steps`` sensory predictions, with the profile
     and onset the regression starts from."""
-    predictions, _ = window.run(params, state, state.rho, state.onset_context,
-                                state.onset_motor, config)
-    return window.mean_squared(*window.prediction_errors(predictions, state,
-                                                         since=state.n - 1 - steps))
+    predictions, _ = window.run(
+        params, state, state.rho, state.onset_context, state.onset_motor, config
+    )
+    return window.mean_squared(
+        *window.prediction_errors(predictions, state, since=state.n - 1 - steps)
+    )
 
 
-def _surprise_gate(params: Params, state: OnlineState, config: OnlineConfig
-                   ) -> jax.Array | None:
+def _surprise_gate(params: Params, state: OnlineState, config: OnlineConfig) -> jax.Array | None:
     """The factor on the PB's error gradient (see ``OnlineConfig.surprise_gate``); None when
     the gate is off. Measured with the profile and onset the regression starts from."""
     if config.surprise_gate <= 0:
@@ -159,8 +172,9 @@ def _surprise_gate(params: Params, state: OnlineState, config: OnlineConfig
     return jnp.clip((rms / config.surprise_gate) ** config.gate_power, config.gate_floor, 1.0)
 
 
-def _phase_restart(params: Params, state: OnlineState, phase_candidates: jax.Array,
-                   config: OnlineConfig) -> OnlineState:
+def _phase_restart(
+    params: Params, state: OnlineState, phase_candidates: jax.Array, config: OnlineConfig
+) -> OnlineState:
     """Start the window over from a learned state where one predicts the recent steps much
     better than the window does (see ``OnlineConfig.phase_restarts``)."""
     length, n_p = state.rho.shape
@@ -172,34 +186,48 @@ def _phase_restart(params: Params, state: OnlineState, phase_candidates: jax.Arr
     def cut(buffer: jax.Array) -> jax.Array:
         return jax.lax.dynamic_slice_in_dim(buffer, start, span, axis=0)
 
-    short = state._replace(sensory=cut(state.sensory), seen=cut(state.seen),
-                           motor_sent=cut(state.motor_sent), n=jnp.asarray(span, jnp.int32),
-                           rho=cut(state.rho), rho_velocity=cut(state.rho_velocity))
+    short = state._replace(
+        sensory=cut(state.sensory),
+        seen=cut(state.seen),
+        motor_sent=cut(state.motor_sent),
+        n=jnp.asarray(span, jnp.int32),
+        rho=cut(state.rho),
+        rho_velocity=cut(state.rho_velocity),
+    )
 
     def candidate_error(candidate: jax.Array) -> jax.Array:
         rho = jnp.broadcast_to(candidate[:n_p], (span, n_p))
-        predictions, _ = window.run(params, short, rho, candidate[n_p + n_m:],
-                                    candidate[n_p:n_p + n_m], config)
+        predictions, _ = window.run(
+            params, short, rho, candidate[n_p + n_m :], candidate[n_p : n_p + n_m], config
+        )
         return window.mean_squared(*window.prediction_errors(predictions, short))
 
     errors = jax.lax.map(candidate_error, phase_candidates)
     best = jnp.argmin(errors)
     current = _recent_error(params, state, config, recent)
-    accept = ((state.n >= span) & (errors[best] < config.phase_restart_ratio * current)
-              & (current > config.phase_restart_level ** 2))
+    accept = (
+        (state.n >= span)
+        & (errors[best] < config.phase_restart_ratio * current)
+        & (current > config.phase_restart_level**2)
+    )
     chosen = phase_candidates[best]
     index = jnp.minimum(jnp.arange(length) + start, length - 1)
     restarted = state._replace(
-        sensory=state.sensory[index], seen=state.seen[index], motor_sent=state.motor_sent[index],
+        sensory=state.sensory[index],
+        seen=state.seen[index],
+        motor_sent=state.motor_sent[index],
         n=jnp.asarray(span, jnp.int32),
         rho=jnp.broadcast_to(chosen[:n_p], (length, n_p)),
         rho_velocity=jnp.zeros_like(state.rho_velocity),
-        onset_motor=chosen[n_p:n_p + n_m], onset_context=chosen[n_p + n_m:])
+        onset_motor=chosen[n_p : n_p + n_m],
+        onset_context=chosen[n_p + n_m :],
+    )
     return jax.tree_util.tree_map(lambda a, b: jnp.where(accept, a, b), restarted, state)
 
 
-def _barrier_gradient(meta: MetaParams, config: OnlineConfig, n: jax.Array,
-                      rho: jax.Array) -> jax.Array:
+def _barrier_gradient(
+    meta: MetaParams, config: OnlineConfig, n: jax.Array, rho: jax.Array
+) -> jax.Array:
     """The gradient of the barrier (:func:`rnnpb.model.meta.barrier_energy`) with respect to
     the profile ``rho`` (L, P), over its newest ``config.barrier_span`` steps (all for 0);
     zero elsewhere. Only those rows go through the risk network: its cost scales with them."""
@@ -213,9 +241,15 @@ def _barrier_gradient(meta: MetaParams, config: OnlineConfig, n: jax.Array,
     return jax.lax.dynamic_update_slice_in_dim(jnp.zeros_like(rho), grad, start, axis=0)
 
 
-def pattern_errors(params: Params, state: OnlineState, pattern_rho: jax.Array,
-                   onset_context: jax.Array, onset_motor: jax.Array, config: OnlineConfig,
-                   steps: int) -> jax.Array:
+def pattern_errors(
+    params: Params,
+    state: OnlineState,
+    pattern_rho: jax.Array,
+    onset_context: jax.Array,
+    onset_motor: jax.Array,
+    config: OnlineConfig,
+    steps: int,
+) -> jax.Array:
     """How well each learned pattern's own dynamics predict the recent window, shape (K,):
     the window run from the regressed onset with pattern ``k``'s PB at every step, its last
     ``steps`` steps not seen (the network generates them from its own predictions, as in
@@ -230,20 +264,34 @@ def pattern_errors(params: Params, state: OnlineState, pattern_rho: jax.Array,
     blind = state._replace(seen=state.seen & (jnp.arange(length) < state.n - steps)[:, None])
 
     def one(rho_k: jax.Array) -> jax.Array:
-        predictions, _ = window.run(params, blind, jnp.broadcast_to(rho_k, state.rho.shape),
-                                    onset_context, onset_motor, config)
-        return window.mean_squared(*window.prediction_errors(predictions, state,
-                                                             since=state.n - 1 - steps))
+        predictions, _ = window.run(
+            params,
+            blind,
+            jnp.broadcast_to(rho_k, state.rho.shape),
+            onset_context,
+            onset_motor,
+            config,
+        )
+        return window.mean_squared(
+            *window.prediction_errors(predictions, state, since=state.n - 1 - steps)
+        )
 
     return jax.lax.map(one, pattern_rho)
 
 
 @partial(jax.jit, static_argnames=("config", "recognition_steps"))
-def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Array,
-                config: OnlineConfig, candidates: jax.Array | None = None,
-                phase_candidates: jax.Array | None = None, meta: MetaParams | None = None,
-                pattern_rho: jax.Array | None = None, recognition_steps: int = 12
-                ) -> tuple[OnlineState, StepOutputs[jax.Array]]:
+def online_step(
+    params: Params,
+    state: OnlineState,
+    u: jax.Array,
+    seen: jax.Array,
+    config: OnlineConfig,
+    candidates: jax.Array | None = None,
+    phase_candidates: jax.Array | None = None,
+    meta: MetaParams | None = None,
+    pattern_rho: jax.Array | None = None,
+    recognition_steps: int = 12,
+) -> tuple[OnlineState, StepOutputs[jax.Array]]:
     """One step of the mirror system, compiled as one call.
 
     Parameters
@@ -277,15 +325,27 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
     valid = jnp.arange(length) < state.n
     if candidates is not None and config.restart_span > 0:
         recent = (jnp.arange(length) >= state.n - config.restart_span) & valid
-        profiles = jnp.concatenate([state.rho[None], jnp.where(
-            recent[None, :, None], candidates[:, None, :], state.rho[None])])
+        profiles = jnp.concatenate(
+            [
+                state.rho[None],
+                jnp.where(recent[None, :, None], candidates[:, None, :], state.rho[None]),
+            ]
+        )
         # One profile after the other (not vmapped): batched products would keep XLA from
         # compiling the loop as one function (rnnpb._xla).
-        errors = jax.lax.map(lambda r: window.squared_error(
-            params, state, r, state.onset_context, state.onset_motor, config), profiles)
+        errors = jax.lax.map(
+            lambda r: window.squared_error(
+                params, state, r, state.onset_context, state.onset_motor, config
+            ),
+            profiles,
+        )
         best = jnp.argmin(errors)
-        state = state._replace(rho=profiles[best], rho_velocity=jnp.where(
-            best > 0, jnp.zeros_like(state.rho_velocity), state.rho_velocity))
+        state = state._replace(
+            rho=profiles[best],
+            rho_velocity=jnp.where(
+                best > 0, jnp.zeros_like(state.rho_velocity), state.rho_velocity
+            ),
+        )
 
     gate = _surprise_gate(params, state, config)
     guard = config.safety_guard if meta is not None else "off"
@@ -296,8 +356,7 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
 
     def iteration(_, carry):
         rho, velocity, context, motor = carry
-        g_rho, g_context, g_motor = window.gradients(params, state, rho, context, motor,
-                                                     config)
+        g_rho, g_context, g_motor = window.gradients(params, state, rho, context, motor, config)
         if gate is not None:
             g_rho = gate * g_rho
         if barrier is not None:
@@ -309,48 +368,74 @@ def online_step(params: Params, state: OnlineState, u: jax.Array, seen: jax.Arra
         return rho, velocity, context, motor
 
     rho, velocity, context, motor = jax.lax.fori_loop(
-        0, config.iterations, iteration,
-        (state.rho, state.rho_velocity, state.onset_context, state.onset_motor))
+        0,
+        config.iterations,
+        iteration,
+        (state.rho, state.rho_velocity, state.onset_context, state.onset_motor),
+    )
     if guard == "projection":
         assert meta is not None  # the guard is "off" without it
-        rho = jnp.where(valid[:, None], project_out(meta, rho, config.risk_level,
-                                                    config.projection_steps,
-                                                    config.projection_rate), rho)
+        rho = jnp.where(
+            valid[:, None],
+            project_out(
+                meta, rho, config.risk_level, config.projection_steps, config.projection_rate
+            ),
+            rho,
+        )
     predictions, contexts = window.run(params, state, rho, context, motor, config)
     s = state.sensory.shape[1]
     n = state.n
-    motor_now = jnp.where(n >= 2, predictions[jnp.maximum(n - 2, 0), s:],
-                          jax.nn.sigmoid(motor))
+    motor_now = jnp.where(n >= 2, predictions[jnp.maximum(n - 2, 0), s:], jax.nn.sigmoid(motor))
     predicted_next = predictions[n - 1, :s]
     window_error = window.mean_squared(*window.prediction_errors(predictions, state))
-    evidence = (jnp.zeros((0,), jnp.float32) if pattern_rho is None else pattern_errors(
-        params, state, pattern_rho, context, motor, config, recognition_steps))
+    evidence = (
+        jnp.zeros((0,), jnp.float32)
+        if pattern_rho is None
+        else pattern_errors(params, state, pattern_rho, context, motor, config, recognition_steps)
+    )
     new_state = state._replace(
-        rho=rho, rho_velocity=velocity, onset_context=context, onset_motor=motor,
+        rho=rho,
+        rho_velocity=velocity,
+        onset_context=context,
+        onset_motor=motor,
         motor_sent=state.motor_sent.at[n - 1].set(motor_now),
-        next_onset_context=logit(contexts[0]), next_onset_motor=logit(predictions[0, s:]),
-        predicted_sensory=predicted_next)
-    outputs = StepOutputs(motor=motor_now, predicted_sensory=predicted_next,
-                          pb=jax.nn.sigmoid(rho[n - 1]), window_error=window_error,
-                          held=jnp.asarray(False), context=contexts[n - 1],
-                          pattern_errors=evidence)
+        next_onset_context=logit(contexts[0]),
+        next_onset_motor=logit(predictions[0, s:]),
+        predicted_sensory=predicted_next,
+    )
+    outputs = StepOutputs(
+        motor=motor_now,
+        predicted_sensory=predicted_next,
+        pb=jax.nn.sigmoid(rho[n - 1]),
+        window_error=window_error,
+        held=jnp.asarray(False),
+        context=contexts[n - 1],
+        pattern_errors=evidence,
+    )
     # Numerical safety: never hand out NaN. Keep the last good state and repeat its command.
-    finite = (jnp.all(jnp.isfinite(rho)) & jnp.all(jnp.isfinite(motor_now))
-              & jnp.all(jnp.isfinite(context)) & jnp.all(jnp.isfinite(predicted_next)))
+    finite = (
+        jnp.all(jnp.isfinite(rho))
+        & jnp.all(jnp.isfinite(motor_now))
+        & jnp.all(jnp.isfinite(context))
+        & jnp.all(jnp.isfinite(predicted_next))
+    )
     # The held state is the window after the shift (every value in it is an old, finite one):
     # the PB and the command of the step before, carried into the new slot.
     held_motor = previous.motor_sent[jnp.maximum(jnp.minimum(previous.n, length) - 1, 0)]
     held_state = state._replace(
         rho_velocity=jnp.zeros_like(state.rho_velocity),
         motor_sent=state.motor_sent.at[n - 1].set(held_motor),
-        predicted_sensory=previous.predicted_sensory)
+        predicted_sensory=previous.predicted_sensory,
+    )
     held_outputs = StepOutputs(
         motor=held_motor,
         predicted_sensory=previous.predicted_sensory,
         pb=jax.nn.sigmoid(state.rho[n - 1]),
-        window_error=jnp.asarray(jnp.nan, jnp.float32), held=jnp.asarray(True),
+        window_error=jnp.asarray(jnp.nan, jnp.float32),
+        held=jnp.asarray(True),
         context=jax.nn.sigmoid(previous.next_onset_context),
-        pattern_errors=jnp.full_like(evidence, jnp.nan))
+        pattern_errors=jnp.full_like(evidence, jnp.nan),
+    )
     pick = partial(jax.tree_util.tree_map, lambda a, b: jnp.where(finite, a, b))
     return pick(new_state, held_state), pick(outputs, held_outputs)
 
@@ -376,13 +461,22 @@ def phase_candidates(model: TrainedModel, skip: int = 6, steps: int = 24) -> np.
     # All patterns in one batched run, compiled once per shape (a mirror system is made for
     # every experiment run).
     predictions, contexts = _batched_closed_loop(
-        params, jnp.asarray(contexts0, jnp.float32),
+        params,
+        jnp.asarray(contexts0, jnp.float32),
         jnp.full((len(learned), net.io_size), 0.5, jnp.float32),
-        jnp.broadcast_to(jnp.asarray(learned, jnp.float32),
-                         (skip + steps, *learned.shape)))
+        jnp.broadcast_to(jnp.asarray(learned, jnp.float32), (skip + steps, *learned.shape)),
+    )
     predictions = np.asarray(predictions, dtype=np.float64)[skip:]  # (steps, K, I)
     contexts = np.asarray(contexts, dtype=np.float64)[skip:]  # (steps, K, C)
-    rows = [np.concatenate([np.broadcast_to(pb, (steps, net.pb_size)),
-                            predictions[:, k, net.sensory_size:], contexts[:, k]], axis=1)
-            for k, pb in enumerate(learned)]
+    rows = [
+        np.concatenate(
+            [
+                np.broadcast_to(pb, (steps, net.pb_size)),
+                predictions[:, k, net.sensory_size :],
+                contexts[:, k],
+            ],
+            axis=1,
+        )
+        for k, pb in enumerate(learned)
+    ]
     return logit_numpy(np.concatenate(rows))

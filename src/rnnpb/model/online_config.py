@@ -32,8 +32,11 @@ class OnlineConfig:
 
     window: int = 30  # L
     iterations: int = 100
-    pb: PBUpdateConfig = field(default_factory=lambda: PBUpdateConfig(
-        learning_rate=1.0, momentum=0.9, k_bp=1.0, k_nb=0.0, integration_length=4))
+    pb: PBUpdateConfig = field(
+        default_factory=lambda: PBUpdateConfig(
+            learning_rate=1.0, momentum=0.9, k_bp=1.0, k_nb=0.0, integration_length=4
+        )
+    )
     optimize_onset: bool = True
     onset_learning_rate: float = 0.5
     restart_span: int = 6
@@ -108,15 +111,15 @@ class OnlineConfig:
         if self.gate_steps < 1:
             raise ConfigError(f"gate_steps must be >= 1, got {self.gate_steps}")
         if not 0 <= self.phase_restarts < self.window:
-            raise ConfigError(f"phase_restarts must be in [0, window), got "
-                              f"{self.phase_restarts}")
+            raise ConfigError(f"phase_restarts must be in [0, window), got {self.phase_restarts}")
         if not 0 < self.phase_restart_ratio <= 1:
             raise ConfigError("phase_restart_ratio must be in (0, 1]")
         if self.phase_restart_level < 0:
             raise ConfigError("phase_restart_level must be >= 0")
         if self.safety_guard not in ("off", "barrier", "projection"):
-            raise ConfigError(f"safety_guard must be 'off', 'barrier' or 'projection', got "
-                              f"{self.safety_guard!r}")
+            raise ConfigError(
+                f"safety_guard must be 'off', 'barrier' or 'projection', got {self.safety_guard!r}"
+            )
         if not 0 <= self.barrier_span <= self.window:
             raise ConfigError(f"barrier_span must be in [0, window], got {self.barrier_span}")
         if self.barrier_weight < 0:
@@ -126,17 +129,24 @@ class OnlineConfig:
         if self.projection_steps < 0 or self.projection_rate < 0:
             raise ConfigError("projection_steps and projection_rate must be >= 0")
         if self.motor_input not in ("closed_loop", "recorded"):
-            raise ConfigError(f"motor_input must be 'closed_loop' or 'recorded', got "
-                              f"{self.motor_input!r}")
+            raise ConfigError(
+                f"motor_input must be 'closed_loop' or 'recorded', got {self.motor_input!r}"
+            )
 
     @classmethod
     def paper(cls, **changes: Any) -> OnlineConfig:
         """The paper's regression: L = 30, 100 iterations, l = 20, no onset optimisation, no
         safety guard (the paper proposes the meta-level, section 4.1, but did not run it)."""
-        base = cls(pb=PBUpdateConfig(learning_rate=0.5, momentum=0.9, k_bp=1.0, k_nb=0.2,
-                                     integration_length=20),
-                   optimize_onset=False, restart_span=0, surprise_gate=0.0, phase_restarts=0,
-                   safety_guard="off")
+        base = cls(
+            pb=PBUpdateConfig(
+                learning_rate=0.5, momentum=0.9, k_bp=1.0, k_nb=0.2, integration_length=20
+            ),
+            optimize_onset=False,
+            restart_span=0,
+            surprise_gate=0.0,
+            phase_restarts=0,
+            safety_guard="off",
+        )
         return replace(base, **changes)
 
     @classmethod
@@ -150,8 +160,9 @@ class OnlineConfig:
     def preset(cls, name: str) -> OnlineConfig:
         """The preset called ``name``: one of :data:`ONLINE_PRESETS`."""
         if name not in ONLINE_PRESETS:
-            raise ConfigError(f"unknown on-line regression {name!r}; choose one of "
-                              f"{', '.join(ONLINE_PRESETS)}")
+            raise ConfigError(
+                f"unknown on-line regression {name!r}; choose one of {', '.join(ONLINE_PRESETS)}"
+            )
         return {"default": cls, "paper": cls.paper, "ungated": cls.ungated}[name]()
 
     @classmethod
@@ -208,11 +219,16 @@ def suggested_online_config(model: Any) -> OnlineChoice:
     meta = getattr(model, "meta", None) or {}
     learned = meta.get("train_config") if isinstance(meta, dict) else None
     if not isinstance(learned, dict):
-        return OnlineChoice("default", OnlineConfig(),
-                            "the model does not record how it was learned")
+        return OnlineChoice(
+            "default", OnlineConfig(), "the model does not record how it was learned"
+        )
     optimizer = learned.get("optimizer")
     if optimizer == "adam":
-        return OnlineChoice("ungated", OnlineConfig.ungated(),
-                            "the model was learned with Adam, the fast preset")
-    return OnlineChoice("default", OnlineConfig(),
-                        f"the model was learned with {optimizer} descent, the paper's algorithm")
+        return OnlineChoice(
+            "ungated", OnlineConfig.ungated(), "the model was learned with Adam, the fast preset"
+        )
+    return OnlineChoice(
+        "default",
+        OnlineConfig(),
+        f"the model was learned with {optimizer} descent, the paper's algorithm",
+    )

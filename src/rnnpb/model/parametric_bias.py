@@ -42,11 +42,11 @@ class PBUpdateConfig:
         if self.k_bp < 0 or self.k_nb < 0:
             raise ConfigError("PB k_bp and k_nb must be >= 0")
         if self.k_nb * self.learning_rate > 0.5:
-            raise ConfigError("PB k_nb * learning_rate must be <= 0.5 for the low-pass term "
-                              "to stay stable")
+            raise ConfigError(
+                "PB k_nb * learning_rate must be <= 0.5 for the low-pass term to stay stable"
+            )
         if self.integration_length < 0:
-            raise ConfigError(f"PB integration_length must be >= 0, got "
-                              f"{self.integration_length}")
+            raise ConfigError(f"PB integration_length must be >= 0, got {self.integration_length}")
 
 
 def integrate(delta: jax.Array, length: int, valid: jax.Array | None = None) -> jax.Array:
@@ -84,8 +84,13 @@ def second_difference(rho: jax.Array, valid: jax.Array | None = None) -> jax.Arr
     return following - 2.0 * rho + previous
 
 
-def pb_update(rho: jax.Array, velocity: jax.Array, grad_rho: jax.Array, config: PBUpdateConfig,
-              valid: jax.Array | None = None) -> tuple[jax.Array, jax.Array]:
+def pb_update(
+    rho: jax.Array,
+    velocity: jax.Array,
+    grad_rho: jax.Array,
+    config: PBUpdateConfig,
+    valid: jax.Array | None = None,
+) -> tuple[jax.Array, jax.Array]:
     """One iteration of eqs. 1–2.
 
     Parameters

@@ -88,8 +88,7 @@ class RecognitionConfig:
         if self.pb_steps < 1 or self.pb_scale <= 0 or self.pb_level <= 0:
             raise ConfigError("pb_steps must be >= 1, pb_scale and pb_level > 0")
         if not 0 < self.confidence_level <= 1:
-            raise ConfigError(f"confidence_level must be in (0, 1], got "
-                              f"{self.confidence_level}")
+            raise ConfigError(f"confidence_level must be in (0, 1], got {self.confidence_level}")
         low, high = self.lags
         if not 1 <= low <= high:
             raise ConfigError(f"lags must be 1 <= smallest <= largest, got {self.lags}")
@@ -153,12 +152,20 @@ class RecognitionState(NamedTuple):
     novelty: str
 
 
-def initial_recognition_state(sensory_size: int, pb_size: int, config: RecognitionConfig
-                              ) -> RecognitionState:
+def initial_recognition_state(
+    sensory_size: int, pb_size: int, config: RecognitionConfig
+) -> RecognitionState:
     """Nothing seen yet."""
-    return RecognitionState(np.full((config.history, sensory_size), np.nan),
-                            np.full((config.pb_steps, pb_size), np.nan), None, 0.0, 0,
-                            None, 0, "")
+    return RecognitionState(
+        np.full((config.history, sensory_size), np.nan),
+        np.full((config.pb_steps, pb_size), np.nan),
+        None,
+        0.0,
+        0,
+        None,
+        0,
+        "",
+    )
 
 
 def _structure(history: np.ndarray, config: RecognitionConfig) -> tuple[float, bool]:
@@ -170,21 +177,27 @@ def _structure(history: np.ndarray, config: RecognitionConfig) -> tuple[float, b
     now = history[-recent:]
     best, variance, every = np.inf, np.nan, True
     for lag in range(low, high + 1):
-        before = history[-(recent + lag):-lag]
+        before = history[-(recent + lag) : -lag]
         if np.isnan(before).any() or np.isnan(now).any():
             every = False
             break
-        variance = float(np.var(history[-(recent + lag):], axis=0).mean())
+        variance = float(np.var(history[-(recent + lag) :], axis=0).mean())
         best = min(best, float(np.mean((now - before) ** 2)))
     if not np.isfinite(best) or not variance > 0:
         return float("nan"), False
     return best / (2.0 * variance), every
 
 
-def recognise(state: RecognitionState, u: np.ndarray, seen: np.ndarray,
-              pattern_errors: np.ndarray, pb: np.ndarray, learned_pb: np.ndarray,
-              names: tuple[str, ...], config: RecognitionConfig
-              ) -> tuple[RecognitionState, Recognition]:
+def recognise(
+    state: RecognitionState,
+    u: np.ndarray,
+    seen: np.ndarray,
+    pattern_errors: np.ndarray,
+    pb: np.ndarray,
+    learned_pb: np.ndarray,
+    names: tuple[str, ...],
+    config: RecognitionConfig,
+) -> tuple[RecognitionState, Recognition]:
     """One step of recognition and novelty detection.
 
     Parameters
@@ -222,11 +235,11 @@ def recognise(state: RecognitionState, u: np.ndarray, seen: np.ndarray,
     # evidence; the steps before the first seen one stay NaN.
     filled = _forward_fill(observed)
     errors = np.asarray(pattern_errors, dtype=np.float64)
-    if np.isnan(filled[-config.still_steps:]).any() or not np.all(np.isfinite(errors)):
+    if np.isnan(filled[-config.still_steps :]).any() or not np.all(np.isfinite(errors)):
         waiting = state._replace(observed=observed, novelty="")
         return waiting, Recognition(None, 0.0, "", none, no_distance, float("nan"))
 
-    recent = filled[-config.still_steps:]
+    recent = filled[-config.still_steps :]
     spread = float(np.sqrt(np.mean(np.var(recent, axis=0))))
     if spread < config.still_level:
         still_run = state.still_run + 1
@@ -240,8 +253,9 @@ def recognise(state: RecognitionState, u: np.ndarray, seen: np.ndarray,
     e = np.linalg.norm(np.asarray(learned_pb) - recent_pb.mean(axis=0)[None], axis=1)
     # Log-likelihoods, shifted by their largest so that the exponentials cannot underflow.
     log_l = -0.5 * ((d / config.match_scale) ** 2 + (e / config.pb_scale) ** 2)
-    log_unknown = -0.5 * ((config.match_level / config.match_scale) ** 2
-                          + (config.pb_level / config.pb_scale) ** 2)
+    log_unknown = -0.5 * (
+        (config.match_level / config.match_scale) ** 2 + (config.pb_level / config.pb_scale) ** 2
+    )
     top = max(log_l.max(), log_unknown)
     likelihood, unknown = np.exp(log_l - top), float(np.exp(log_unknown - top))
     total = likelihood.sum() + unknown
@@ -260,22 +274,27 @@ def recognise(state: RecognitionState, u: np.ndarray, seen: np.ndarray,
     candidate = answer
     candidate_run = state.candidate_run + 1 if candidate == state.candidate else 1
     # Settled: there was an answer (a pattern held through a pause counts).
-    settled = (state.novelty in ("familiar", "novel", "unstructured")
-               or state.recognised is not None)
-    needed = (config.release_steps if state.recognised is not None and answer is None
-              else config.switch_steps)
+    settled = state.novelty in ("familiar", "novel", "unstructured") or state.recognised is not None
+    needed = (
+        config.release_steps
+        if state.recognised is not None and answer is None
+        else config.switch_steps
+    )
     if settled and answer != state.recognised and candidate_run < needed:
         answer = state.recognised
         if answer is not None:
             confidence, novelty = float(shares[names.index(answer)]), "familiar"
         else:
             confidence, novelty = float(unknown / total), state.novelty
-    new = RecognitionState(observed, pbs, answer, confidence, 0, candidate, candidate_run,
-                           novelty)
-    return new, Recognition(answer, confidence, novelty,
-                            {name: float(c) for name, c in zip(names, shares, strict=True)},
-                            {name: float(x) for name, x in zip(names, d, strict=True)},
-                            float(structure))
+    new = RecognitionState(observed, pbs, answer, confidence, 0, candidate, candidate_run, novelty)
+    return new, Recognition(
+        answer,
+        confidence,
+        novelty,
+        {name: float(c) for name, c in zip(names, shares, strict=True)},
+        {name: float(x) for name, x in zip(names, d, strict=True)},
+        float(structure),
+    )
 
 
 def _forward_fill(observed: np.ndarray) -> np.ndarray:
@@ -295,8 +314,7 @@ def recognition_timeline(answers: list[tuple[str | None, str]]) -> list[dict[str
         if runs and runs[-1]["recognised"] == recognised and runs[-1]["novelty"] == novelty:
             runs[-1]["last"] = step
         else:
-            runs.append({"first": step, "last": step, "recognised": recognised,
-                         "novelty": novelty})
+            runs.append({"first": step, "last": step, "recognised": recognised, "novelty": novelty})
     return runs
 
 
@@ -305,6 +323,11 @@ def describe_answer(recognised: str | None, confidence: float, novelty: str) -> 
     ``not sure`` …"""
     if recognised is not None and novelty in ("familiar", "still"):
         return f"pattern {recognised} ({100 * confidence:.0f} %)" + (
-            ", hands still" if novelty == "still" else "")
-    return {"novel": "new movement", "unstructured": "no pattern (unstructured)",
-            "still": "hands still", "": "not sure yet"}.get(novelty, "not sure")
+            ", hands still" if novelty == "still" else ""
+        )
+    return {
+        "novel": "new movement",
+        "unstructured": "no pattern (unstructured)",
+        "still": "hands still",
+        "": "not sure yet",
+    }.get(novelty, "not sure")

@@ -44,8 +44,14 @@ def _layer(w: dict[str, np.ndarray], a: np.ndarray) -> tuple[np.ndarray, np.ndar
     return h, o
 
 
-def _layer_backward(w: dict[str, np.ndarray], a: np.ndarray, h: np.ndarray, o: np.ndarray,
-                    d_o: np.ndarray, grads: dict[str, np.ndarray] | None) -> np.ndarray:
+def _layer_backward(
+    w: dict[str, np.ndarray],
+    a: np.ndarray,
+    h: np.ndarray,
+    o: np.ndarray,
+    d_o: np.ndarray,
+    grads: dict[str, np.ndarray] | None,
+) -> np.ndarray:
     """Back through one step; accumulate weight gradients into ``grads``; return dE/da."""
     dz_o = d_o * o * (1.0 - o)
     dh = dz_o @ w["w_out"].T
@@ -60,9 +66,13 @@ def _layer_backward(w: dict[str, np.ndarray], a: np.ndarray, h: np.ndarray, o: n
     return dz_h @ w["w_in"].T
 
 
-def training_error_and_gradients(params: Params, rho: np.ndarray, context_logit: np.ndarray,
-                                 inputs: np.ndarray, valid: np.ndarray
-                                 ) -> tuple[float, dict[str, np.ndarray], np.ndarray, np.ndarray]:
+def training_error_and_gradients(
+    params: Params,
+    rho: np.ndarray,
+    context_logit: np.ndarray,
+    inputs: np.ndarray,
+    valid: np.ndarray,
+) -> tuple[float, dict[str, np.ndarray], np.ndarray, np.ndarray]:
     """The learning phase's error ``E = 0.5 Σ (x̂_{t+1} - x_{t+1})²`` and its gradients.
 
     Parameters
@@ -94,7 +104,7 @@ def training_error_and_gradients(params: Params, rho: np.ndarray, context_logit:
         os_.append(o)
         c = o[:, n_io:]
         e = (o[:, :n_io] - inputs[:, t + 1]) * valid[:, t, None]
-        error += 0.5 * float(np.sum(e ** 2))
+        error += 0.5 * float(np.sum(e**2))
     grads = {k: np.zeros_like(v) for k, v in w.items()}
     d_rho = np.zeros_like(rho)
     d_c_next = np.zeros_like(context)
@@ -103,16 +113,22 @@ def training_error_and_gradients(params: Params, rho: np.ndarray, context_logit:
         e = (o[:, :n_io] - inputs[:, t + 1]) * valid[:, t, None]
         d_o = np.concatenate([e, d_c_next], axis=-1)
         d_a = _layer_backward(w, acts[t], hs[t], o, d_o, grads)
-        d_rho[:, t] = d_a[:, n_io:n_io + n_pb] * pb[:, t] * (1.0 - pb[:, t])
-        d_c_next = d_a[:, n_io + n_pb:]
+        d_rho[:, t] = d_a[:, n_io : n_io + n_pb] * pb[:, t] * (1.0 - pb[:, t])
+        d_c_next = d_a[:, n_io + n_pb :]
     d_context_logit = d_c_next * context * (1.0 - context)
     return error, grads, d_rho, d_context_logit
 
 
-def window_error_and_gradients(params: Params, sensory: np.ndarray, seen: np.ndarray,
-                               n: int, rho: np.ndarray, onset_context_logit: np.ndarray,
-                               onset_motor_logit: np.ndarray,
-                               motor_inputs: np.ndarray | None = None):
+def window_error_and_gradients(
+    params: Params,
+    sensory: np.ndarray,
+    seen: np.ndarray,
+    n: int,
+    rho: np.ndarray,
+    onset_context_logit: np.ndarray,
+    onset_motor_logit: np.ndarray,
+    motor_inputs: np.ndarray | None = None,
+):
     """The interaction phase's window error and its gradients (mixed mode, hand-written BPTT).
 
     Parameters
@@ -159,7 +175,7 @@ def window_error_and_gradients(params: Params, sensory: np.ndarray, seen: np.nda
     has_target[:-1] = (np.arange(length - 1) < n - 1)[:, None] & seen[1:]
     errors = np.zeros((length, n_s))
     errors[:-1] = np.where(has_target[:-1], predictions[:-1, :n_s] - sensory[1:], 0.0)
-    error = 0.5 * float(np.sum(errors ** 2))
+    error = 0.5 * float(np.sum(errors**2))
     d_rho = np.zeros_like(rho)
     d_c_next = np.zeros(c.shape)
     d_u_in_next = np.zeros(n_s)  # dE/d(sensory input of step t+1)
@@ -175,17 +191,17 @@ def window_error_and_gradients(params: Params, sensory: np.ndarray, seen: np.nda
         d_a = _layer_backward(w, acts[t], hs[t], o, d_o, None)
         d_u_in_next = d_a[:n_s]
         d_m_in_next = d_a[n_s:n_io]
-        d_rho[t] = d_a[n_io:n_io + n_pb] * pb[t] * (1.0 - pb[t])
-        d_c_next = d_a[n_io + n_pb:]
+        d_rho[t] = d_a[n_io : n_io + n_pb] * pb[t] * (1.0 - pb[t])
+        d_c_next = d_a[n_io + n_pb :]
     onset_c = sigmoid(onset_context_logit)
     d_context = d_c_next * onset_c * (1.0 - onset_c)
-    d_motor = (d_m_in_next * motor0 * (1.0 - motor0) if motor_inputs is None
-               else np.zeros(n_m))
+    d_motor = d_m_in_next * motor0 * (1.0 - motor0) if motor_inputs is None else np.zeros(n_m)
     return error, d_rho, d_context, d_motor, predictions, contexts
 
 
-def pb_update(rho: np.ndarray, velocity: np.ndarray, grad: np.ndarray, config: PBUpdateConfig,
-              n_valid: int) -> tuple[np.ndarray, np.ndarray]:
+def pb_update(
+    rho: np.ndarray, velocity: np.ndarray, grad: np.ndarray, config: PBUpdateConfig, n_valid: int
+) -> tuple[np.ndarray, np.ndarray]:
     """Eqs. 1–2 on the first ``n_valid`` steps of a (T, P) profile, written out step by step."""
     length = rho.shape[0]
     half = config.integration_length // 2
@@ -202,21 +218,19 @@ def pb_update(rho: np.ndarray, velocity: np.ndarray, grad: np.ndarray, config: P
     return new_rho, new_velocity
 
 
-def risk_logit_and_gradient(meta: MetaParams, rho: np.ndarray
-                            ) -> tuple[np.ndarray, np.ndarray]:
+def risk_logit_and_gradient(meta: MetaParams, rho: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The risk network (:func:`rnnpb.model.meta.risk_logit`) at the PBs ``sigmoid(rho)``,
     rows (n, P): the logits (n,) and their gradients with respect to ``rho`` (n, P), by hand."""
     pb = sigmoid(rho)
     h1 = np.tanh(pb @ meta.w1 + meta.b1)
     h2 = np.tanh(h1 @ meta.w2 + meta.b2)
     logits = h2 @ meta.w3 + meta.b3
-    d_a2 = meta.w3 * (1.0 - h2 ** 2)
-    d_a1 = (d_a2 @ meta.w2.T) * (1.0 - h1 ** 2)
+    d_a2 = meta.w3 * (1.0 - h2**2)
+    d_a1 = (d_a2 @ meta.w2.T) * (1.0 - h1**2)
     return np.asarray(logits), np.asarray((d_a1 @ meta.w1.T) * pb * (1.0 - pb))
 
 
-def barrier_gradient(meta: MetaParams, rho: np.ndarray, n: int, config: OnlineConfig
-                     ) -> np.ndarray:
+def barrier_gradient(meta: MetaParams, rho: np.ndarray, n: int, config: OnlineConfig) -> np.ndarray:
     """The gradient of the barrier ``softplus(risk_logit - logit(risk_level))`` summed over
     the newest ``config.barrier_span`` rows of ``rho`` (L, P) (all for 0), zero elsewhere
     (as :func:`rnnpb.model.online._barrier_gradient`)."""
@@ -238,9 +252,10 @@ def project_out(meta: MetaParams, rho: np.ndarray, config: OnlineConfig) -> np.n
     rho = rho.copy()
     for _ in range(config.projection_steps):
         logits, grad = risk_logit_and_gradient(meta, rho)
-        norm = np.sqrt(np.sum(grad ** 2, axis=1, keepdims=True)) + 1e-6
-        rho = np.where((logits > threshold)[:, None],
-                       rho - config.projection_rate * grad / norm, rho)
+        norm = np.sqrt(np.sum(grad**2, axis=1, keepdims=True)) + 1e-6
+        rho = np.where(
+            (logits > threshold)[:, None], rho - config.projection_rate * grad / norm, rho
+        )
     return rho
 
 
@@ -253,9 +268,13 @@ class ReferenceMirrorSystem:
     :data:`MIRROR_SYSTEMS` names both.
     """
 
-    def __init__(self, model: TrainedModel, config: OnlineConfig | None = None,
-                 meta: MetaParams | None = None,
-                 recognition: RecognitionConfig | None = None) -> None:
+    def __init__(
+        self,
+        model: TrainedModel,
+        config: OnlineConfig | None = None,
+        meta: MetaParams | None = None,
+        recognition: RecognitionConfig | None = None,
+    ) -> None:
         self.model = model
         self.config = config or OnlineConfig()
         self.recognition = recognition or RecognitionConfig()
@@ -264,11 +283,11 @@ class ReferenceMirrorSystem:
         self.pattern_rho = restart_candidates(model)
         self.params = model.params
         # The safety guard's risk network, as the compiled step takes it (docs/safety.md).
-        self.meta = None if meta is None else MetaParams(
-            *(np.asarray(a, dtype=np.float64) for a in meta))
+        self.meta = (
+            None if meta is None else MetaParams(*(np.asarray(a, dtype=np.float64) for a in meta))
+        )
         # The same learned states as the compiled step's (they are its inputs, not its work).
-        self.phase_candidates = (phase_candidates(model) if self.config.phase_restarts > 0
-                                 else None)
+        self.phase_candidates = phase_candidates(model) if self.config.phase_restarts > 0 else None
         self.candidates = restart_candidates(model) if self.config.restart_span > 0 else None
         self.reset()
 
@@ -276,23 +295,28 @@ class ReferenceMirrorSystem:
         """Forget the window: the next step starts a new interaction."""
         net = self.model.network
         length = self.config.window
-        pb0 = (np.mean(list(self.model.pattern_pb.values()), axis=0) if initial_pb is None
-               else np.asarray(initial_pb, dtype=np.float64))
+        pb0 = (
+            np.mean(list(self.model.pattern_pb.values()), axis=0)
+            if initial_pb is None
+            else np.asarray(initial_pb, dtype=np.float64)
+        )
         self.sensory = np.zeros((length, net.sensory_size))
         self.seen = np.zeros((length, net.sensory_size), bool)
         self.motor_sent = np.full((length, net.motor_size), 0.5)
         self.n = 0
         self.rho = np.tile(logit_numpy(pb0), (length, 1))
         self.velocity = np.zeros_like(self.rho)
-        self.onset_context = logit_numpy(np.asarray(self.model.mean_initial_context,
-                                              dtype=np.float64))
+        self.onset_context = logit_numpy(
+            np.asarray(self.model.mean_initial_context, dtype=np.float64)
+        )
         self.onset_motor = np.zeros(net.motor_size)
         self.next_onset_context = self.onset_context.copy()
         self.next_onset_motor = self.onset_motor.copy()
         self.predicted_sensory = np.full(net.sensory_size, 0.5)
         self._predicted: np.ndarray | None = None
-        self.recognition_state = initial_recognition_state(net.sensory_size, net.pb_size,
-                                                           self.recognition)
+        self.recognition_state = initial_recognition_state(
+            net.sensory_size, net.pb_size, self.recognition
+        )
         self.steps = 0
 
     @property
@@ -303,7 +327,7 @@ class ReferenceMirrorSystem:
     @property
     def pb_profile(self) -> np.ndarray:
         """The PB over the filled part of the window, shape (n, P)."""
-        return sigmoid(self.rho[:self.n])
+        return sigmoid(self.rho[: self.n])
 
     def step(self, observed_hands: np.ndarray) -> StepResult:
         """Observe the user's hands for this step; regress the PB; return the motor command
@@ -314,21 +338,41 @@ class ReferenceMirrorSystem:
         prediction_error = one_step_prediction_error(self._predicted, u, seen)
         self._predicted = predicted
         self.recognition_state, seen_now = recognise(
-            self.recognition_state, u, seen, errors, pb, self.learned_pb, self.patterns,
-            self.recognition)
-        return StepResult(motor=motor_command(self.model, motor), predicted_hands=predicted,
-                          pb=pb, prediction_error=prediction_error, window_error=window_error,
-                          seen=seen, held=held, context=context,
-                          recognised=seen_now.recognised, confidence=seen_now.confidence,
-                          novelty=seen_now.novelty, pattern_confidence=seen_now.confidences,
-                          pattern_errors=errors)
+            self.recognition_state,
+            u,
+            seen,
+            errors,
+            pb,
+            self.learned_pb,
+            self.patterns,
+            self.recognition,
+        )
+        return StepResult(
+            motor=motor_command(self.model, motor),
+            predicted_hands=predicted,
+            pb=pb,
+            prediction_error=prediction_error,
+            window_error=window_error,
+            seen=seen,
+            held=held,
+            context=context,
+            recognised=seen_now.recognised,
+            confidence=seen_now.confidence,
+            novelty=seen_now.novelty,
+            pattern_confidence=seen_now.confidences,
+            pattern_errors=errors,
+        )
 
-    def _recent_mse(self, predictions: np.ndarray, sensory: np.ndarray, seen: np.ndarray,
-                    first: int, last: int) -> float:
+    def _recent_mse(
+        self, predictions: np.ndarray, sensory: np.ndarray, seen: np.ndarray, first: int, last: int
+    ) -> float:
         """Mean squared error of the predictions made at steps ``first`` … ``last - 1``."""
-        squared = [(predictions[t, j] - sensory[t + 1, j]) ** 2
-                   for t in range(first, last) for j in range(sensory.shape[1])
-                   if seen[t + 1, j]]
+        squared = [
+            (predictions[t, j] - sensory[t + 1, j]) ** 2
+            for t in range(first, last)
+            for j in range(sensory.shape[1])
+            if seen[t + 1, j]
+        ]
         return float(np.mean(squared)) if squared else 0.0
 
     def _phase_restart(self, motor_inputs: np.ndarray | None) -> None:
@@ -347,29 +391,44 @@ class ReferenceMirrorSystem:
         assert self.phase_candidates is not None  # the caller checks
         for candidate in self.phase_candidates:
             predictions = window_error_and_gradients(
-                self.params, sensory, seen, span, np.tile(candidate[:n_pb], (span, 1)),
-                candidate[n_pb + n_m:], candidate[n_pb:n_pb + n_m], inputs)[4]
+                self.params,
+                sensory,
+                seen,
+                span,
+                np.tile(candidate[:n_pb], (span, 1)),
+                candidate[n_pb + n_m :],
+                candidate[n_pb : n_pb + n_m],
+                inputs,
+            )[4]
             error = self._recent_mse(predictions, sensory, seen, 0, span - 1)
             if best_error is None or error < best_error:
                 best_error, best = error, candidate
         assert best_error is not None and best is not None  # one candidate per learned pattern
         predictions = window_error_and_gradients(
-            self.params, self.sensory, self.seen, self.n, self.rho, self.onset_context,
-            self.onset_motor, motor_inputs)[4]
+            self.params,
+            self.sensory,
+            self.seen,
+            self.n,
+            self.rho,
+            self.onset_context,
+            self.onset_motor,
+            motor_inputs,
+        )[4]
         current = self._recent_mse(predictions, self.sensory, self.seen, start, self.n - 1)
-        if not (best_error < cfg.phase_restart_ratio * current
-                and current > cfg.phase_restart_level ** 2):
+        if not (
+            best_error < cfg.phase_restart_ratio * current and current > cfg.phase_restart_level**2
+        ):
             return
         for name in ("sensory", "seen", "motor_sent"):
             buffer = getattr(self, name)
             moved = buffer[start:].copy()
-            buffer[:len(moved)] = moved
-            buffer[len(moved):] = moved[-1]
+            buffer[: len(moved)] = moved
+            buffer[len(moved) :] = moved[-1]
         self.n = span
         self.rho = np.tile(best[:n_pb], (length, 1))
         self.velocity = np.zeros_like(self.velocity)
-        self.onset_motor = best[n_pb:n_pb + n_m].copy()
-        self.onset_context = best[n_pb + n_m:].copy()
+        self.onset_motor = best[n_pb : n_pb + n_m].copy()
+        self.onset_context = best[n_pb + n_m :].copy()
 
     def _pattern_errors(self, motor_inputs: np.ndarray | None) -> np.ndarray:
         """Each learned pattern's PB in place of the profile, from the regressed onset, the
@@ -378,19 +437,28 @@ class ReferenceMirrorSystem:
         n = self.n
         first = max(n - 1 - self.recognition.recognition_steps, 0)
         # The last recognition_steps steps not seen: the network generates them.
-        blind = self.seen & (np.arange(len(self.seen)) < n - self.recognition.recognition_steps
-                             )[:, None]
+        blind = (
+            self.seen
+            & (np.arange(len(self.seen)) < n - self.recognition.recognition_steps)[:, None]
+        )
         errors = []
         for rho_k in self.pattern_rho:
             predictions = window_error_and_gradients(
-                self.params, self.sensory, blind, n, np.tile(rho_k, (len(self.rho), 1)),
-                self.onset_context, self.onset_motor, motor_inputs)[4]
+                self.params,
+                self.sensory,
+                blind,
+                n,
+                np.tile(rho_k, (len(self.rho), 1)),
+                self.onset_context,
+                self.onset_motor,
+                motor_inputs,
+            )[4]
             errors.append(self._recent_mse(predictions, self.sensory, self.seen, first, n - 1))
         return np.array(errors)
 
-    def _regress(self, u: np.ndarray, seen: np.ndarray
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, bool, np.ndarray,
-                            np.ndarray]:
+    def _regress(
+        self, u: np.ndarray, seen: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, bool, np.ndarray, np.ndarray]:
         """One on-line step on normalized hands ``u`` (S,) (0 where not ``seen``): the motor
         command (M,), the predicted hands (S,), the PB (P,), the window's error, whether the
         last good state was kept, the context after the step (C,) and each learned pattern's
@@ -430,8 +498,15 @@ class ReferenceMirrorSystem:
                 if candidate is not None:
                     profile[recent] = candidate
                 error = window_error_and_gradients(
-                    self.params, self.sensory, self.seen, self.n, profile, self.onset_context,
-                    self.onset_motor, motor_inputs)[0]
+                    self.params,
+                    self.sensory,
+                    self.seen,
+                    self.n,
+                    profile,
+                    self.onset_context,
+                    self.onset_motor,
+                    motor_inputs,
+                )[0]
                 if best_error is None or error < best_error:
                     best_error, best = error, (k, profile)
             assert best is not None  # the current profile is always a candidate
@@ -439,60 +514,105 @@ class ReferenceMirrorSystem:
                 self.rho = best[1]
                 self.velocity = np.zeros_like(self.velocity)
         # Where the regression would hand out a non-finite value, the step keeps this state.
-        start_rho, start_context, start_motor = (self.rho.copy(), self.onset_context,
-                                                 self.onset_motor)
+        start_rho, start_context, start_motor = (
+            self.rho.copy(),
+            self.onset_context,
+            self.onset_motor,
+        )
         gate = 1.0
         if cfg.surprise_gate > 0:
             # The surprise gate: RMS error of the last gate_steps predictions before regressing.
             predictions = window_error_and_gradients(
-                self.params, self.sensory, self.seen, self.n, self.rho, self.onset_context,
-                self.onset_motor, motor_inputs)[4]
-            rms = float(np.sqrt(self._recent_mse(predictions, self.sensory, self.seen,
-                                                 max(self.n - 1 - cfg.gate_steps, 0),
-                                                 self.n - 1)))
-            gate = float(np.clip((rms / cfg.surprise_gate) ** cfg.gate_power, cfg.gate_floor,
-                                 1.0))
+                self.params,
+                self.sensory,
+                self.seen,
+                self.n,
+                self.rho,
+                self.onset_context,
+                self.onset_motor,
+                motor_inputs,
+            )[4]
+            rms = float(
+                np.sqrt(
+                    self._recent_mse(
+                        predictions,
+                        self.sensory,
+                        self.seen,
+                        max(self.n - 1 - cfg.gate_steps, 0),
+                        self.n - 1,
+                    )
+                )
+            )
+            gate = float(np.clip((rms / cfg.surprise_gate) ** cfg.gate_power, cfg.gate_floor, 1.0))
         guard = cfg.safety_guard if self.meta is not None else "off"
         barrier = guard == "barrier" and cfg.barrier_weight > 0
         for _ in range(cfg.iterations):
             _, g_rho, g_c, g_m, _, _ = window_error_and_gradients(
-                self.params, self.sensory, self.seen, self.n, self.rho, self.onset_context,
-                self.onset_motor, motor_inputs)
+                self.params,
+                self.sensory,
+                self.seen,
+                self.n,
+                self.rho,
+                self.onset_context,
+                self.onset_motor,
+                motor_inputs,
+            )
             g_rho = gate * g_rho
             if barrier:
                 assert self.meta is not None  # the guard is "off" without it
-                g_rho = g_rho + cfg.barrier_weight * barrier_gradient(self.meta, self.rho,
-                                                                      self.n, cfg)
-            self.rho, self.velocity = pb_update(self.rho, self.velocity, g_rho, cfg.pb,
-                                                self.n)
+                g_rho = g_rho + cfg.barrier_weight * barrier_gradient(
+                    self.meta, self.rho, self.n, cfg
+                )
+            self.rho, self.velocity = pb_update(self.rho, self.velocity, g_rho, cfg.pb, self.n)
             if cfg.optimize_onset:
                 self.onset_context = self.onset_context - cfg.onset_learning_rate * g_c
                 self.onset_motor = self.onset_motor - cfg.onset_learning_rate * g_m
         if guard == "projection":
             assert self.meta is not None
-            self.rho[:self.n] = project_out(self.meta, self.rho[:self.n], cfg)
+            self.rho[: self.n] = project_out(self.meta, self.rho[: self.n], cfg)
         _, _, _, _, predictions, contexts = window_error_and_gradients(
-            self.params, self.sensory, self.seen, self.n, self.rho, self.onset_context,
-            self.onset_motor, motor_inputs)
+            self.params,
+            self.sensory,
+            self.seen,
+            self.n,
+            self.rho,
+            self.onset_context,
+            self.onset_motor,
+            motor_inputs,
+        )
         s = self.sensory.shape[1]
         n = self.n
         motor = predictions[n - 2, s:] if n >= 2 else sigmoid(self.onset_motor)
         predicted = predictions[n - 1, :s]
-        if not all(np.all(np.isfinite(a)) for a in (self.rho, motor, self.onset_context,
-                                                     predicted)):
+        if not all(
+            np.all(np.isfinite(a)) for a in (self.rho, motor, self.onset_context, predicted)
+        ):
             self.rho, self.velocity = start_rho, np.zeros_like(self.velocity)
             self.onset_context, self.onset_motor = start_context, start_motor
             self.motor_sent[n - 1] = held_motor
-            return (held_motor, self.predicted_sensory.copy(), sigmoid(self.rho[n - 1]),
-                    math.nan, True, sigmoid(self.next_onset_context),
-                    np.full(len(self.patterns), np.nan))
+            return (
+                held_motor,
+                self.predicted_sensory.copy(),
+                sigmoid(self.rho[n - 1]),
+                math.nan,
+                True,
+                sigmoid(self.next_onset_context),
+                np.full(len(self.patterns), np.nan),
+            )
         self.motor_sent[n - 1] = motor
         self.next_onset_context = logit_numpy(contexts[0])
         self.next_onset_motor = logit_numpy(predictions[0, s:])
         self.predicted_sensory = predicted
         window_error = self._recent_mse(predictions, self.sensory, self.seen, 0, n - 1)
-        return (motor, predicted, sigmoid(self.rho[n - 1]), window_error, False,
-                contexts[n - 1], self._pattern_errors(motor_inputs))
+        return (
+            motor,
+            predicted,
+            sigmoid(self.rho[n - 1]),
+            window_error,
+            False,
+            contexts[n - 1],
+            self._pattern_errors(motor_inputs),
+        )
 
 
 #: The mirror system's twins by name, so that a test or the bench swaps one for the other.

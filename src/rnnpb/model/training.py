@@ -53,11 +53,17 @@ class TrainingProgress:
     elapsed_s: float
 
 
-def train(sequences: SequenceABC[Sequence], joint_limits: np.ndarray,
-          network: NetworkConfig | None = None, config: TrainConfig | None = None, *,
-          progress: bool | Callable[[TrainingProgress], None] = False,
-          checkpoint_path: str | os.PathLike[str] | None = None,
-          resume: bool = False, warm_start: WarmStart | None = None) -> TrainedModel:
+def train(
+    sequences: SequenceABC[Sequence],
+    joint_limits: np.ndarray,
+    network: NetworkConfig | None = None,
+    config: TrainConfig | None = None,
+    *,
+    progress: bool | Callable[[TrainingProgress], None] = False,
+    checkpoint_path: str | os.PathLike[str] | None = None,
+    resume: bool = False,
+    warm_start: WarmStart | None = None,
+) -> TrainedModel:
     """Learn the sequences; return the trained model.
 
     Parameters
@@ -81,8 +87,10 @@ def train(sequences: SequenceABC[Sequence], joint_limits: np.ndarray,
     config = config or TrainConfig()
     data = prepare_data(sequences, joint_limits)
     if data.inputs.shape[-1] != network.io_size:
-        raise ConfigError(f"sequences have {data.inputs.shape[-1]} values per step but the "
-                          f"network expects {network.io_size}")
+        raise ConfigError(
+            f"sequences have {data.inputs.shape[-1]} values per step but the "
+            f"network expects {network.io_size}"
+        )
     state = init_state(data, network, config, warm_start)
     start_name = warm_start.fingerprint if warm_start is not None else None
     if resume and checkpoint_path is not None and os.path.exists(checkpoint_path):
@@ -95,14 +103,29 @@ def train(sequences: SequenceABC[Sequence], joint_limits: np.ndarray,
     if progress is True:
         from tqdm.auto import tqdm
 
-        bar = tqdm(total=config.iterations, initial=int(state.iteration), unit="it",
-                   desc="training", dynamic_ncols=True)
+        bar = tqdm(
+            total=config.iterations,
+            initial=int(state.iteration),
+            unit="it",
+            desc="training",
+            dynamic_ncols=True,
+        )
     start = time.perf_counter()
     done = int(state.iteration)
     history: list[tuple[int, float]] = []
     if done == 0:
-        history.append((0, float(jnp.mean(per_output_mse(
-            (state.params, state.initial_context_logit), state.rho, inputs, valid)))))
+        history.append(
+            (
+                0,
+                float(
+                    jnp.mean(
+                        per_output_mse(
+                            (state.params, state.initial_context_logit), state.rho, inputs, valid
+                        )
+                    )
+                ),
+            )
+        )
     try:
         while done < config.iterations:
             n = min(config.chunk_iterations, config.iterations - done)
@@ -110,23 +133,32 @@ def train(sequences: SequenceABC[Sequence], joint_limits: np.ndarray,
             n = min(n, next_checkpoint - done)
             state = run_chunk(state, inputs, valid, jnp.asarray(n, jnp.int32))
             done += n
-            mse = float(jnp.mean(per_output_mse((state.params, state.initial_context_logit),
-                                                 state.rho, inputs, valid)))
+            mse = float(
+                jnp.mean(
+                    per_output_mse(
+                        (state.params, state.initial_context_logit), state.rho, inputs, valid
+                    )
+                )
+            )
             if not math.isfinite(mse):
-                raise ConfigError(f"training diverged at iteration {done} (error is {mse}); "
-                                  "lower the learning rate")
+                raise ConfigError(
+                    f"training diverged at iteration {done} (error is {mse}); "
+                    "lower the learning rate"
+                )
             history.append((done, mse))
             # The checkpoint first: a progress callback may end the run (a Ctrl-C taken at
             # this safe point), and the chunk just learned is then kept.
-            if checkpoint_path is not None and (done % config.checkpoint_every == 0
-                                                or done == config.iterations):
+            if checkpoint_path is not None and (
+                done % config.checkpoint_every == 0 or done == config.iterations
+            ):
                 save_checkpoint(checkpoint_path, state, data, network, config, start_name)
             if bar is not None:
                 bar.update(n)
                 bar.set_postfix(mse=f"{mse:.2e}")
             elif callable(progress):
-                progress(TrainingProgress(done, config.iterations, mse,
-                                          time.perf_counter() - start))
+                progress(
+                    TrainingProgress(done, config.iterations, mse, time.perf_counter() - start)
+                )
     finally:
         if bar is not None:
             bar.close()
@@ -134,12 +166,20 @@ def train(sequences: SequenceABC[Sequence], joint_limits: np.ndarray,
     return _finish(state, data, network, config, history, elapsed)
 
 
-def _finish(state: TrainState, data: TrainingData, network: NetworkConfig, config: TrainConfig,
-            history: list[tuple[int, float]], elapsed: float) -> TrainedModel:
+def _finish(
+    state: TrainState,
+    data: TrainingData,
+    network: NetworkConfig,
+    config: TrainConfig,
+    history: list[tuple[int, float]],
+    elapsed: float,
+) -> TrainedModel:
     inputs = jnp.asarray(data.inputs, jnp.float32)
     valid = jnp.asarray(data.valid)
-    per_output = np.asarray(per_output_mse((state.params, state.initial_context_logit),
-                                            state.rho, inputs, valid), dtype=np.float64)
+    per_output = np.asarray(
+        per_output_mse((state.params, state.initial_context_logit), state.rho, inputs, valid),
+        dtype=np.float64,
+    )
     pbs = np.asarray(jax.nn.sigmoid(state.rho), dtype=np.float64)
     weights = data.valid[..., None].astype(np.float64)
     sequence_pb = (pbs * weights).sum(axis=1) / weights.sum(axis=1)
@@ -158,40 +198,60 @@ def _finish(state: TrainState, data: TrainingData, network: NetworkConfig, confi
         "rnnpb_version": __version__,
         "jax_version": jax.__version__,
     }
-    return TrainedModel(network=network, params=state.params, lower=data.lower, upper=data.upper,
-                        sequence_pb=sequence_pb, sequence_patterns=data.patterns,
-                        initial_context=np.asarray(jax.nn.sigmoid(state.initial_context_logit),
-                                                   dtype=np.float64),
-                        meta=meta)
+    return TrainedModel(
+        network=network,
+        params=state.params,
+        lower=data.lower,
+        upper=data.upper,
+        sequence_pb=sequence_pb,
+        sequence_patterns=data.patterns,
+        initial_context=np.asarray(jax.nn.sigmoid(state.initial_context_logit), dtype=np.float64),
+        meta=meta,
+    )
 
 
-def save_checkpoint(path: str | os.PathLike[str], state: TrainState, data: TrainingData,
-                    network: NetworkConfig, config: TrainConfig,
-                    warm_start: str | None = None) -> None:
+def save_checkpoint(
+    path: str | os.PathLike[str],
+    state: TrainState,
+    data: TrainingData,
+    network: NetworkConfig,
+    config: TrainConfig,
+    warm_start: str | None = None,
+) -> None:
     """Write the whole training state atomically, to continue with ``resume=True``;
     ``warm_start`` names the start it continued from (:attr:`WarmStart.fingerprint`)."""
     leaves = jax.tree_util.tree_leaves(state)
     arrays = {f"state/{i:04d}": np.asarray(leaf) for i, leaf in enumerate(leaves)}
-    meta = {"format": CHECKPOINT_FORMAT, "format_version": CHECKPOINT_FORMAT_VERSION,
-            "rnnpb_version": __version__, "network": asdict(network),
-            "train_config": config.to_dict(), "data_fingerprint": data.fingerprint,
-            "iteration": int(state.iteration), "n_leaves": len(leaves)}
+    meta = {
+        "format": CHECKPOINT_FORMAT,
+        "format_version": CHECKPOINT_FORMAT_VERSION,
+        "rnnpb_version": __version__,
+        "network": asdict(network),
+        "train_config": config.to_dict(),
+        "data_fingerprint": data.fingerprint,
+        "iteration": int(state.iteration),
+        "n_leaves": len(leaves),
+    }
     if warm_start is not None:
         meta["warm_start"] = warm_start
     save_archive(path, meta, arrays)
 
 
-def load_checkpoint(path: str | os.PathLike[str], template: TrainState, data: TrainingData,
-                    network: NetworkConfig, config: TrainConfig,
-                    warm_start: str | None = None) -> TrainState:
+def load_checkpoint(
+    path: str | os.PathLike[str],
+    template: TrainState,
+    data: TrainingData,
+    network: NetworkConfig,
+    config: TrainConfig,
+    warm_start: str | None = None,
+) -> TrainState:
     """Read a checkpoint into the structure of ``template``; it must match data, config and
     warm start."""
     meta, arrays = load_archive(path, CHECKPOINT_FORMAT, CHECKPOINT_FORMAT_VERSION)
     if meta.get("data_fingerprint") != data.fingerprint:
         raise ModelFileError(f"{path}: checkpoint was made with other training data")
     if meta.get("warm_start") != warm_start:
-        raise ModelFileError(f"{path}: checkpoint was made from another starting model or "
-                             "method")
+        raise ModelFileError(f"{path}: checkpoint was made from another starting model or method")
     if meta.get("network") != asdict(network):
         raise ModelFileError(f"{path}: checkpoint was made with another network config")
     saved = meta.get("train_config")

@@ -65,8 +65,9 @@ def _small_matmul(a: jax.Array, b: jax.Array) -> jax.Array:
     return total
 
 
-def _window_terms(params: Params, state: WindowObservations, rho: jax.Array,
-                  config: OnlineConfig) -> tuple[jax.Array, jax.Array, jax.Array, jax.Array]:
+def _window_terms(
+    params: Params, state: WindowObservations, rho: jax.Array, config: OnlineConfig
+) -> tuple[jax.Array, jax.Array, jax.Array, jax.Array]:
     """What the window's forward pass needs besides the recurrence (see :func:`run`)."""
     length, n_s = state.sensory.shape
     n_m = state.motor_sent.shape[1]
@@ -76,26 +77,46 @@ def _window_terms(params: Params, state: WindowObservations, rho: jax.Array,
     seen = state.seen & valid[:, None]
     w_in = params.w_in
     w_u, w_m = w_in[:n_s], w_in[n_s:n_io]
-    w_p, w_c = w_in[n_io:n_io + n_pb], w_in[n_io + n_pb:]
+    w_p, w_c = w_in[n_io : n_io + n_pb], w_in[n_io + n_pb :]
     recorded = config.motor_input == "recorded"
-    pre = (_small_matmul(jnp.where(seen, state.sensory, 0.0), w_u)
-           + _small_matmul(jax.nn.sigmoid(rho), w_p) + params.b_h)
+    pre = (
+        _small_matmul(jnp.where(seen, state.sensory, 0.0), w_u)
+        + _small_matmul(jax.nn.sigmoid(rho), w_p)
+        + params.b_h
+    )
     if recorded:
         pre = pre + _small_matmul(state.motor_sent, w_m)
     w_loop = jnp.concatenate([w_u, w_m, w_c], axis=0)
     motor_mask = jnp.zeros if recorded else jnp.ones
-    mask = jnp.concatenate([(~seen).astype(pre.dtype), motor_mask((length, n_m), pre.dtype),
-                            jnp.ones((length, w_c.shape[0]), pre.dtype)], axis=1)
+    mask = jnp.concatenate(
+        [
+            (~seen).astype(pre.dtype),
+            motor_mask((length, n_m), pre.dtype),
+            jnp.ones((length, w_c.shape[0]), pre.dtype),
+        ],
+        axis=1,
+    )
     return pre, w_loop, mask, w_p
 
 
 def _first_input(onset_context: jax.Array, onset_motor: jax.Array, n_s: int) -> jax.Array:
-    return jnp.concatenate([jnp.full((n_s,), 0.5, onset_motor.dtype),
-                            jax.nn.sigmoid(onset_motor), jax.nn.sigmoid(onset_context)])
+    return jnp.concatenate(
+        [
+            jnp.full((n_s,), 0.5, onset_motor.dtype),
+            jax.nn.sigmoid(onset_motor),
+            jax.nn.sigmoid(onset_context),
+        ]
+    )
 
 
-def run(params: Params, state: WindowObservations, rho: jax.Array, onset_context: jax.Array,
-        onset_motor: jax.Array, config: OnlineConfig) -> tuple[jax.Array, jax.Array]:
+def run(
+    params: Params,
+    state: WindowObservations,
+    rho: jax.Array,
+    onset_context: jax.Array,
+    onset_motor: jax.Array,
+    config: OnlineConfig,
+) -> tuple[jax.Array, jax.Array]:
     """:func:`rnnpb.model.network.mixed_loop` over the window, rearranged for speed.
 
     Parameters
@@ -125,9 +146,14 @@ def run(params: Params, state: WindowObservations, rho: jax.Array, onset_context
     return outputs[:, :n_io], outputs[:, n_io:]
 
 
-def forward(params: Params, state: WindowObservations, rho: jax.Array,
-            onset_context: jax.Array, onset_motor: jax.Array, config: OnlineConfig
-            ) -> tuple[jax.Array, jax.Array]:
+def forward(
+    params: Params,
+    state: WindowObservations,
+    rho: jax.Array,
+    onset_context: jax.Array,
+    onset_motor: jax.Array,
+    config: OnlineConfig,
+) -> tuple[jax.Array, jax.Array]:
     """The window's forward pass: hidden (L, H) and outputs (L, I + C) of every step."""
     pre, w_loop, mask, _ = _window_terms(params, state, rho, config)
 
@@ -142,8 +168,9 @@ def forward(params: Params, state: WindowObservations, rho: jax.Array,
     return hidden, outputs
 
 
-def prediction_errors(predictions: jax.Array, state: WindowObservations,
-                      since: jax.Array | int | None = None) -> tuple[jax.Array, jax.Array]:
+def prediction_errors(
+    predictions: jax.Array, state: WindowObservations, since: jax.Array | int | None = None
+) -> tuple[jax.Array, jax.Array]:
     """Each window step's sensory prediction minus the next observation, where one was seen
     (from step ``since`` on, when given): errors (L - 1, S), 0 elsewhere, and the mask."""
     length, n_s = state.sensory.shape
@@ -157,12 +184,17 @@ def prediction_errors(predictions: jax.Array, state: WindowObservations,
 
 def mean_squared(error: jax.Array, target: jax.Array) -> jax.Array:
     """The mean of the squared ``error`` over the entries where ``target`` holds (0 if none)."""
-    return jnp.sum(error ** 2) / jnp.maximum(jnp.sum(target), 1)
+    return jnp.sum(error**2) / jnp.maximum(jnp.sum(target), 1)
 
 
-def gradients(params: Params, state: WindowObservations, rho: jax.Array,
-              onset_context: jax.Array, onset_motor: jax.Array, config: OnlineConfig
-              ) -> tuple[jax.Array, jax.Array, jax.Array]:
+def gradients(
+    params: Params,
+    state: WindowObservations,
+    rho: jax.Array,
+    onset_context: jax.Array,
+    onset_motor: jax.Array,
+    config: OnlineConfig,
+) -> tuple[jax.Array, jax.Array, jax.Array]:
     """The gradients of :func:`squared_error` with respect to ``rho`` (L, P), the onset
     context (C,) and the onset motor values (M,), by a hand-written back-propagation through
     the window.
@@ -187,24 +219,33 @@ def gradients(params: Params, state: WindowObservations, rho: jax.Array,
         d_hidden_in = ((d_output * o_t * (1.0 - o_t)) @ w_out_t) * h_t * (1.0 - h_t)
         return d_hidden_in @ w_loop_t, d_hidden_in
 
-    d_first, d_pre = jax.lax.scan(backward, jnp.zeros_like(first),
-                                  (hidden, outputs, d_output_direct, next_mask),
-                                  reverse=True, unroll=_UNROLL)
+    d_first, d_pre = jax.lax.scan(
+        backward,
+        jnp.zeros_like(first),
+        (hidden, outputs, d_output_direct, next_mask),
+        reverse=True,
+        unroll=_UNROLL,
+    )
     d_first = d_first * mask[0]
     pb = jax.nn.sigmoid(rho)
     d_rho = _small_matmul(d_pre, w_p.T) * pb * (1.0 - pb)
-    motor0 = first[n_s:n_s + n_m]
-    context0 = first[n_s + n_m:]
-    d_motor = d_first[n_s:n_s + n_m] * motor0 * (1.0 - motor0)
-    d_context = d_first[n_s + n_m:] * context0 * (1.0 - context0)
+    motor0 = first[n_s : n_s + n_m]
+    context0 = first[n_s + n_m :]
+    d_motor = d_first[n_s : n_s + n_m] * motor0 * (1.0 - motor0)
+    d_context = d_first[n_s + n_m :] * context0 * (1.0 - context0)
     return d_rho, d_context, d_motor
 
 
-def squared_error(params: Params, state: WindowObservations, rho: jax.Array,
-                  onset_context: jax.Array, onset_motor: jax.Array, config: OnlineConfig
-                  ) -> jax.Array:
+def squared_error(
+    params: Params,
+    state: WindowObservations,
+    rho: jax.Array,
+    onset_context: jax.Array,
+    onset_motor: jax.Array,
+    config: OnlineConfig,
+) -> jax.Array:
     """0.5 · Σ over the window of the squared error of the sensory predictions (arguments as
     for :func:`run`): what the regression descends."""
     predictions, _ = run(params, state, rho, onset_context, onset_motor, config)
     error, _ = prediction_errors(predictions, state)
-    return 0.5 * jnp.sum(error ** 2)
+    return 0.5 * jnp.sum(error**2)

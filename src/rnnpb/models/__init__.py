@@ -20,8 +20,11 @@ def default_model_locations(base: Path | None = None) -> list[Path]:
     """The model folders that exist under ``base`` (default: the working directory), in the
     order of :data:`SEARCHED_FOLDERS`, then the shipped model."""
     base = Path.cwd() if base is None else Path(base)
-    found = [base / name for name in SEARCHED_FOLDERS
-             if (base / name).is_dir() and any(_models_in(base / name))]
+    found = [
+        base / name
+        for name in SEARCHED_FOLDERS
+        if (base / name).is_dir() and any(_models_in(base / name))
+    ]
     return [*found, SHIPPED_MODEL]
 
 
@@ -45,5 +48,10 @@ def _models_in(folder: Path):
     return (p for p in folder.glob("*.npz") if not p.name.endswith(".checkpoint.npz"))
 
 
-__all__ = ["SEARCHED_FOLDERS", "SHIPPED_MODEL", "default_model", "default_model_locations",
-           "first_model_file"]
+__all__ = [
+    "SEARCHED_FOLDERS",
+    "SHIPPED_MODEL",
+    "default_model",
+    "default_model_locations",
+    "first_model_file",
+]

@@ -39,9 +39,14 @@ def center_errors(scene: SceneConfig, n_frames: int) -> dict[str, float]:
                 errors.append(d[i])
                 swapped += int(d[1 - i] < d[i])
     errors_arr = np.asarray(errors)
-    return {"mean_px": float(errors_arr.mean()), "p95_px": float(np.percentile(errors_arr, 95)),
-            "max_px": float(errors_arr.max()), "lost_visible": lost, "swapped": swapped,
-            "n": len(errors)}
+    return {
+        "mean_px": float(errors_arr.mean()),
+        "p95_px": float(np.percentile(errors_arr, 95)),
+        "max_px": float(errors_arr.max()),
+        "lost_visible": lost,
+        "swapped": swapped,
+        "n": len(errors),
+    }
 
 
 def tracking_benchmark(n_frames: int = 300, warmup: int = 20, seed: int = 0) -> dict[str, float]:
@@ -99,12 +104,26 @@ HARD_SCENE_KINDS: dict[str, dict[str, Any]] = {
     # Each on top of SceneConfig.hard (heavy clutter, noise, lighting change, frequent blur).
     "static": {"static_distractors": 4, "occlusion_probability": 0.0},
     "moving": {"moving_distractors": 4, "occlusion_probability": 0.0},
-    "flicker": {"flicker": 0.25, "blur_probability": 0.7, "blur_px": 15.0,
-                "static_distractors": 2, "occlusion_probability": 0.0},
-    "occlusion": {"static_distractors": 2, "moving_distractors": 2,
-                  "occlusion_probability": 0.03, "occlusion_frames": (3, 12)},
-    "all": {"static_distractors": 4, "moving_distractors": 4, "flicker": 0.2,
-            "occlusion_probability": 0.02, "occlusion_frames": (3, 12)},
+    "flicker": {
+        "flicker": 0.25,
+        "blur_probability": 0.7,
+        "blur_px": 15.0,
+        "static_distractors": 2,
+        "occlusion_probability": 0.0,
+    },
+    "occlusion": {
+        "static_distractors": 2,
+        "moving_distractors": 2,
+        "occlusion_probability": 0.03,
+        "occlusion_frames": (3, 12),
+    },
+    "all": {
+        "static_distractors": 4,
+        "moving_distractors": 4,
+        "flicker": 0.2,
+        "occlusion_probability": 0.02,
+        "occlusion_frames": (3, 12),
+    },
 }
 """The kinds of hard scene: the changes to :meth:`SceneConfig.hard` each makes."""
 
@@ -155,8 +174,9 @@ class SceneScore:
         return self.tracked / self.visible if self.visible else math.nan
 
 
-def score_scene(camera: SyntheticCamera, tracker: BallTracker | None = None,
-                wrong_px: float = 10.0) -> SceneScore:
+def score_scene(
+    camera: SyntheticCamera, tracker: BallTracker | None = None, wrong_px: float = 10.0
+) -> SceneScore:
     """Track every frame of a synthetic camera without calibration and score it."""
     tracker = tracker or BallTracker()
     errors, visible, hidden_reports = [], 0, 0
@@ -177,14 +197,27 @@ def score_scene(camera: SyntheticCamera, tracker: BallTracker | None = None,
                     errors.append(d)
                     wrong += int(d > wrong_px)
     extra = camera.extra_truth
-    return SceneScore(str(extra.get("kind", "")), camera.scene.seed, visible, len(errors),
-                      float(np.mean(errors)) if errors else math.nan, wrong, hidden_reports)
+    return SceneScore(
+        str(extra.get("kind", "")),
+        camera.scene.seed,
+        visible,
+        len(errors),
+        float(np.mean(errors)) if errors else math.nan,
+        wrong,
+        hidden_reports,
+    )
 
 
-def clutter_benchmark(seeds: Sequence[int], kinds: Sequence[str] | None = None,
-                      n_frames: int = 150,
-                      config: TrackerConfig | None = None) -> list[SceneScore]:
+def clutter_benchmark(
+    seeds: Sequence[int],
+    kinds: Sequence[str] | None = None,
+    n_frames: int = 150,
+    config: TrackerConfig | None = None,
+) -> list[SceneScore]:
     """Score the tracker (no calibration) on the hard scenes of ``kinds`` × ``seeds``."""
     kinds = list(kinds or HARD_SCENE_KINDS)
-    return [score_scene(hard_scene(kind, seed, n_frames), BallTracker(config))
-            for kind in kinds for seed in seeds]
+    return [
+        score_scene(hard_scene(kind, seed, n_frames), BallTracker(config))
+        for kind in kinds
+        for seed in seeds
+    ]

@@ -58,8 +58,16 @@ def _hue_stats(hue: np.ndarray) -> tuple[int, int]:
 
 def color_name(hue: int) -> str:
     """A colour's everyday name from its OpenCV hue (0…179)."""
-    for upper, name in ((8, "red"), (22, "orange"), (35, "yellow"), (85, "green"),
-                        (100, "cyan"), (130, "blue"), (160, "magenta"), (180, "red")):
+    for upper, name in (
+        (8, "red"),
+        (22, "orange"),
+        (35, "yellow"),
+        (85, "green"),
+        (100, "cyan"),
+        (130, "blue"),
+        (160, "magenta"),
+        (180, "red"),
+    ):
         if hue < upper:
             return name
     return "red"
@@ -69,8 +77,7 @@ def fit_color(hsv_pixels: np.ndarray, name: str | None = None) -> BallColor:
     """An HSV range that holds most of the given pixels, shape (n, 3), and little else."""
     hsv_pixels = np.asarray(hsv_pixels).reshape(-1, 3)
     if len(hsv_pixels) < 5:
-        raise RnnpbError(f"calibration ({name or 'a'} ball): too few pixels to fit a colour "
-                         "range")
+        raise RnnpbError(f"calibration ({name or 'a'} ball): too few pixels to fit a colour range")
     centre, spread = _hue_stats(hsv_pixels[:, 0])
     name = name or color_name(centre)
     half = int(np.clip(spread + HUE_MARGIN, 5, 30))
@@ -84,7 +91,7 @@ def _blob_at(mask: np.ndarray, xy: tuple[int, int]) -> np.ndarray | None:
     n, labels = cv2.connectedComponents(mask, connectivity=8)
     h, w = mask.shape
     x, y = xy
-    window = labels[max(0, y - 3):min(h, y + 4), max(0, x - 3):min(w, x + 4)]
+    window = labels[max(0, y - 3) : min(h, y + 4), max(0, x - 3) : min(w, x + 4)]
     ids = window[window > 0]
     if ids.size == 0:
         return None
@@ -95,12 +102,14 @@ def _calibration(frame_hsv: np.ndarray, blob: np.ndarray, name: str | None) -> B
     color = fit_color(frame_hsv[blob], name)
     ys, xs = np.nonzero(blob)
     n = int(blob.sum())
-    return BallCalibration(color, (float(xs.mean() + 0.5), float(ys.mean() + 0.5)),
-                           math.sqrt(n / math.pi), n)
+    return BallCalibration(
+        color, (float(xs.mean() + 0.5), float(ys.mean() + 0.5)), math.sqrt(n / math.pi), n
+    )
 
 
-def calibrate_from_pixel(frame: np.ndarray, xy: tuple[int, int], name: str | None = None,
-                         neighbourhood_px: int = 5) -> BallCalibration:
+def calibrate_from_pixel(
+    frame: np.ndarray, xy: tuple[int, int], name: str | None = None, neighbourhood_px: int = 5
+) -> BallCalibration:
     """Fit a ball's colour range from the ball at pixel ``xy`` = (column, row) of a BGR frame.
 
     ``name`` defaults to the everyday name of the fitted hue ("red", "blue", …).
@@ -109,33 +118,41 @@ def calibrate_from_pixel(frame: np.ndarray, xy: tuple[int, int], name: str | Non
     x, y = int(xy[0]), int(xy[1])
     ball = f"the {name} ball" if name else "the ball"
     if not (0 <= x < w and 0 <= y < h):
-        raise RnnpbError(f"calibration ({ball}): pixel {x},{y} is outside the "
-                         f"{w}x{h} frame")
+        raise RnnpbError(f"calibration ({ball}): pixel {x},{y} is outside the {w}x{h} frame")
     hsv = cv2.cvtColor(frame, cv2.COLOR_BGR2HSV)
     r = neighbourhood_px
-    ys, xs = np.mgrid[max(0, y - r):min(h, y + r + 1), max(0, x - r):min(w, x + r + 1)]
+    ys, xs = np.mgrid[max(0, y - r) : min(h, y + r + 1), max(0, x - r) : min(w, x + r + 1)]
     disk = (xs - x) ** 2 + (ys - y) ** 2 <= r * r
     samples = hsv[ys[disk], xs[disk]]
     if np.median(samples[:, 1]) < 60:
-        raise RnnpbError(f"calibration ({ball}): the pixels around {x},{y} are grey "
-                         f"(median saturation {int(np.median(samples[:, 1]))} of 255); point "
-                         "at the middle of a coloured ball")
+        raise RnnpbError(
+            f"calibration ({ball}): the pixels around {x},{y} are grey "
+            f"(median saturation {int(np.median(samples[:, 1]))} of 255); point "
+            "at the middle of a coloured ball"
+        )
     samples = samples[samples[:, 1] >= np.median(samples[:, 1]) * 0.6]
     first = fit_color(samples, name)
     name = first.name
     # The middle of the ball is its brightest, most saturated part; relax the first range so
     # that the blob reaches the ball's darker rim before fitting the final range to it.
-    mask = BallTracker(TrackerConfig(opening_px=0)).mask(hsv, BallColor(
-        name, ((first.hue[0] - 8) % 180, (first.hue[1] + 8) % 180),
-        (max(40, first.saturation[0] - 50), 255), (max(20, first.value[0] - 60), 255)))
+    mask = BallTracker(TrackerConfig(opening_px=0)).mask(
+        hsv,
+        BallColor(
+            name,
+            ((first.hue[0] - 8) % 180, (first.hue[1] + 8) % 180),
+            (max(40, first.saturation[0] - 50), 255),
+            (max(20, first.value[0] - 60), 255),
+        ),
+    )
     blob = _blob_at(mask, (x, y))
     if blob is None:
         raise RnnpbError(f"calibration ({ball}): found no ball-coloured blob at {x},{y}")
     return _calibration(hsv, blob, name)
 
 
-def locate_ball(frames: np.ndarray | Sequence[np.ndarray], color: BallColor
-                ) -> tuple[np.ndarray, float] | None:
+def locate_ball(
+    frames: np.ndarray | Sequence[np.ndarray], color: BallColor
+) -> tuple[np.ndarray, float] | None:
     """Where the ball of ``color`` is in the last of ``frames`` (BGR): its centre and area.
 
     The tracker runs over all the frames, so the ball is the blob of its colour that moves
@@ -149,7 +166,7 @@ def locate_ball(frames: np.ndarray | Sequence[np.ndarray], color: BallColor
         result = tracker.track(frame)
     if result is not None and result.balls[0].tracked:
         ball = result.balls[0]
-        return ball.center_px, math.pi * ball.radius_px ** 2
+        return ball.center_px, math.pi * ball.radius_px**2
     mask = tracker.mask(cv2.cvtColor(frames[-1], cv2.COLOR_BGR2HSV), color)
     contours, blobs = tracker._blobs(mask)
     if not len(blobs):
@@ -158,8 +175,9 @@ def locate_ball(frames: np.ndarray | Sequence[np.ndarray], color: BallColor
     return tracker._measure(mask, contours[best])
 
 
-def calibrate_automatically(frames: np.ndarray | Sequence[np.ndarray],
-                            broad: BallColor) -> BallCalibration:
+def calibrate_automatically(
+    frames: np.ndarray | Sequence[np.ndarray], broad: BallColor
+) -> BallCalibration:
     """Fit a ball's colour range to the ball within the ``broad`` range in the last frame.
 
     ``frames``: one BGR frame or several in order; with several the ball is the blob that
@@ -168,9 +186,11 @@ def calibrate_automatically(frames: np.ndarray | Sequence[np.ndarray],
     frames = [frames] if isinstance(frames, np.ndarray) and frames.ndim == 3 else list(frames)
     found = locate_ball(frames, broad)
     if found is None:
-        raise RnnpbError(f"calibration: no round {broad.name} blob in the frame; give the "
-                         f"ball's position with --{'left' if broad is BROAD_RED else 'right'}"
-                         "-pixel X,Y")
+        raise RnnpbError(
+            f"calibration: no round {broad.name} blob in the frame; give the "
+            f"ball's position with --{'left' if broad is BROAD_RED else 'right'}"
+            "-pixel X,Y"
+        )
     center, _ = found
     hsv = cv2.cvtColor(frames[-1], cv2.COLOR_BGR2HSV)
     mask = BallTracker(TrackerConfig(colors=BallColors(broad, broad))).mask(hsv, broad)
@@ -179,8 +199,9 @@ def calibrate_automatically(frames: np.ndarray | Sequence[np.ndarray],
     return _calibration(hsv, blob, broad.name)
 
 
-def calibration_preview(frame: np.ndarray, colors: BallColors,
-                        calibrations: tuple[BallCalibration, BallCalibration]) -> np.ndarray:
+def calibration_preview(
+    frame: np.ndarray, colors: BallColors, calibrations: tuple[BallCalibration, BallCalibration]
+) -> np.ndarray:
     """The frame with the found balls circled, next to the two masks of the fitted ranges."""
     tracker = BallTracker(TrackerConfig(colors=colors))
     masks = tracker.masks(frame)
@@ -193,8 +214,16 @@ def calibration_preview(frame: np.ndarray, colors: BallColors,
         panel = np.zeros_like(frame)
         panel[mask > 0] = tints[i]
         side = "left" if i == 0 else "right"
-        cv2.putText(panel, f"{side}: {cal.color.name} hue {cal.color.hue} sat "
-                    f"{cal.color.saturation} val {cal.color.value}", (8, 20),
-                    cv2.FONT_HERSHEY_SIMPLEX, 0.45, (255, 255, 255), 1, cv2.LINE_AA)
+        cv2.putText(
+            panel,
+            f"{side}: {cal.color.name} hue {cal.color.hue} sat "
+            f"{cal.color.saturation} val {cal.color.value}",
+            (8, 20),
+            cv2.FONT_HERSHEY_SIMPLEX,
+            0.45,
+            (255, 255, 255),
+            1,
+            cv2.LINE_AA,
+        )
         panels.append(panel)
     return np.hstack(panels)

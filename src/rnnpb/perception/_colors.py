@@ -39,11 +39,14 @@ MAX_COLOR_FILE_BYTES = 2**20
 
 
 def _check_pair(value: Any, name: str, upper: int, where: str, allow_wrap: bool) -> tuple[int, int]:
-    if (not isinstance(value, (list, tuple)) or len(value) != 2
-            or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool)
-                       for v in value)):
-        raise ConfigError(f"{where}field {name!r}: expected [low, high] with two integers, "
-                          f"got {value!r}")
+    if (
+        not isinstance(value, (list, tuple))
+        or len(value) != 2
+        or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) for v in value)
+    ):
+        raise ConfigError(
+            f"{where}field {name!r}: expected [low, high] with two integers, got {value!r}"
+        )
     low, high = int(value[0]), int(value[1])
     for v in (low, high):
         if not 0 <= v <= upper:
@@ -76,13 +79,18 @@ class BallColor:
     def __post_init__(self) -> None:
         prefix = f"{self.where}: " if self.where else ""
         if not isinstance(self.name, str) or not self.name:
-            raise ConfigError(f"{prefix}field 'name': expected a non-empty string, "
-                              f"got {self.name!r}")
+            raise ConfigError(
+                f"{prefix}field 'name': expected a non-empty string, got {self.name!r}"
+            )
         object.__setattr__(self, "hue", _check_pair(self.hue, "hue", HUE_MAX, prefix, True))
-        object.__setattr__(self, "saturation", _check_pair(
-            self.saturation, "saturation", CHANNEL_MAX, prefix, False))
-        object.__setattr__(self, "value", _check_pair(
-            self.value, "value", CHANNEL_MAX, prefix, False))
+        object.__setattr__(
+            self,
+            "saturation",
+            _check_pair(self.saturation, "saturation", CHANNEL_MAX, prefix, False),
+        )
+        object.__setattr__(
+            self, "value", _check_pair(self.value, "value", CHANNEL_MAX, prefix, False)
+        )
 
     @property
     def wraps(self) -> bool:
@@ -93,12 +101,19 @@ class BallColor:
         """``cv2.inRange`` lower/upper bounds: one pair, or two when the hue wraps."""
         s, v = self.saturation, self.value
         if not self.wraps:
-            return [(np.array([self.hue[0], s[0], v[0]], np.uint8),
-                     np.array([self.hue[1], s[1], v[1]], np.uint8))]
-        return [(np.array([self.hue[0], s[0], v[0]], np.uint8),
-                 np.array([HUE_MAX, s[1], v[1]], np.uint8)),
-                (np.array([0, s[0], v[0]], np.uint8),
-                 np.array([self.hue[1], s[1], v[1]], np.uint8))]
+            return [
+                (
+                    np.array([self.hue[0], s[0], v[0]], np.uint8),
+                    np.array([self.hue[1], s[1], v[1]], np.uint8),
+                )
+            ]
+        return [
+            (
+                np.array([self.hue[0], s[0], v[0]], np.uint8),
+                np.array([HUE_MAX, s[1], v[1]], np.uint8),
+            ),
+            (np.array([0, s[0], v[0]], np.uint8), np.array([self.hue[1], s[1], v[1]], np.uint8)),
+        ]
 
     def contains(self, hsv: np.ndarray) -> np.ndarray:
         """Whether HSV values, shape (..., 3), fall in this range (numpy, for checks)."""
@@ -108,12 +123,21 @@ class BallColor:
             in_hue = (h >= self.hue[0]) | (h <= self.hue[1])
         else:
             in_hue = (h >= self.hue[0]) & (h <= self.hue[1])
-        return (in_hue & (s >= self.saturation[0]) & (s <= self.saturation[1])
-                & (v >= self.value[0]) & (v <= self.value[1]))
+        return (
+            in_hue
+            & (s >= self.saturation[0])
+            & (s <= self.saturation[1])
+            & (v >= self.value[0])
+            & (v <= self.value[1])
+        )
 
     def to_json(self) -> dict[str, Any]:
-        return {"name": self.name, "hue": list(self.hue), "saturation": list(self.saturation),
-                "value": list(self.value)}
+        return {
+            "name": self.name,
+            "hue": list(self.hue),
+            "saturation": list(self.saturation),
+            "value": list(self.value),
+        }
 
 
 RED = BallColor("red", (170, 8), (120, CHANNEL_MAX), (60, CHANNEL_MAX))
@@ -138,22 +162,30 @@ class BallColors:
         return self.left, self.right
 
     def to_json(self) -> dict[str, Any]:
-        return {"format": COLOR_FILE_FORMAT, "version": COLOR_FILE_VERSION,
-                "left": self.left.to_json(), "right": self.right.to_json()}
+        return {
+            "format": COLOR_FILE_FORMAT,
+            "version": COLOR_FILE_VERSION,
+            "left": self.left.to_json(),
+            "right": self.right.to_json(),
+        }
 
 
 def ball_colors_from_json(data: Any, where: str = "colour config") -> BallColors:
     """Validate a parsed colour file; raises :class:`ConfigError` naming ``where`` and the field."""
     if not isinstance(data, dict):
-        raise ConfigError(f"{where}: expected a JSON object with 'left' and 'right', "
-                          f"got {type(data).__name__}")
+        raise ConfigError(
+            f"{where}: expected a JSON object with 'left' and 'right', got {type(data).__name__}"
+        )
     if data.get("format", COLOR_FILE_FORMAT) != COLOR_FILE_FORMAT:
-        raise ConfigError(f"{where}: field 'format': expected {COLOR_FILE_FORMAT!r}, "
-                          f"got {data.get('format')!r}")
+        raise ConfigError(
+            f"{where}: field 'format': expected {COLOR_FILE_FORMAT!r}, got {data.get('format')!r}"
+        )
     version = data.get("version", COLOR_FILE_VERSION)
     if version != COLOR_FILE_VERSION:
-        raise ConfigError(f"{where}: field 'version': this rnnpb reads version "
-                          f"{COLOR_FILE_VERSION}, got {version!r}")
+        raise ConfigError(
+            f"{where}: field 'version': this rnnpb reads version "
+            f"{COLOR_FILE_VERSION}, got {version!r}"
+        )
     unknown = set(data) - {"format", "version", "left", "right"}
     if unknown:
         raise ConfigError(f"{where}: unknown field(s) {', '.join(sorted(unknown))}")
@@ -161,12 +193,15 @@ def ball_colors_from_json(data: Any, where: str = "colour config") -> BallColors
     for side in ("left", "right"):
         entry = data.get(side)
         if not isinstance(entry, dict):
-            raise ConfigError(f"{where}: field {side!r}: expected an object with 'hue', "
-                              f"'saturation' and 'value', got {entry!r}")
+            raise ConfigError(
+                f"{where}: field {side!r}: expected an object with 'hue', "
+                f"'saturation' and 'value', got {entry!r}"
+            )
         unknown = set(entry) - {"name", "hue", "saturation", "value"}
         if unknown:
-            raise ConfigError(f"{where}: field {side!r}: unknown field(s) "
-                              f"{', '.join(sorted(unknown))}")
+            raise ConfigError(
+                f"{where}: field {side!r}: unknown field(s) {', '.join(sorted(unknown))}"
+            )
         if "hue" not in entry:
             raise ConfigError(f"{where}: field '{side}.hue' is missing")
         sides[side] = BallColor(
@@ -196,8 +231,9 @@ def load_ball_colors(path: str | os.PathLike[str]) -> BallColors:
         raise ConfigError(f"{path}: no such colour file")
     # A FIFO or a device is refused before it is opened, an endless or huge file before it is
     # read: a colour file is a few hundred bytes.
-    handle = open_regular_file(path, ConfigError, "a colour file (JSON)", MAX_COLOR_FILE_BYTES,
-                               encoding="utf-8-sig")
+    handle = open_regular_file(
+        path, ConfigError, "a colour file (JSON)", MAX_COLOR_FILE_BYTES, encoding="utf-8-sig"
+    )
     try:
         # utf-8-sig: editors on Windows may start the file with a byte-order mark.
         with handle:

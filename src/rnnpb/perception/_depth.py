@@ -58,14 +58,19 @@ class DepthConfig:
         if not self.ball_radius_m > 0:
             raise ConfigError(f"depth ball_radius_m must be > 0, got {self.ball_radius_m}")
         if self.median_steps < 1 or self.median_steps % 2 == 0:
-            raise ConfigError(f"depth median_steps must be an odd number >= 1, got "
-                              f"{self.median_steps}")
+            raise ConfigError(
+                f"depth median_steps must be an odd number >= 1, got {self.median_steps}"
+            )
         if self.max_gap_steps < 0:
             raise ConfigError(f"depth max_gap_steps must be >= 0, got {self.max_gap_steps}")
 
 
-def depth_from_size(radius_px: np.ndarray, camera: RobotCamera, ball_radius_m: float,
-                    image_height: int | None = None) -> np.ndarray:
+def depth_from_size(
+    radius_px: np.ndarray,
+    camera: RobotCamera,
+    ball_radius_m: float,
+    image_height: int | None = None,
+) -> np.ndarray:
     """Depth along the optical axis (metres) from apparent radii (pixels), same shape.
 
     ``image_height`` is the height of the frames the radii were measured in, when they are not
@@ -87,8 +92,13 @@ def running_median(values: np.ndarray, steps: int) -> np.ndarray:
     if steps <= 1 or len(values) == 0:
         return values.copy()
     half = steps // 2
-    padded = np.concatenate([np.full((half, *values.shape[1:]), np.nan), values,
-                             np.full((half, *values.shape[1:]), np.nan)])
+    padded = np.concatenate(
+        [
+            np.full((half, *values.shape[1:]), np.nan),
+            values,
+            np.full((half, *values.shape[1:]), np.nan),
+        ]
+    )
     windows = np.lib.stride_tricks.sliding_window_view(padded, steps, axis=0)
     out = np.full(values.shape, np.nan)
     seen = np.isfinite(values)
@@ -120,9 +130,13 @@ def fill_gaps(values: np.ndarray, max_gap: int) -> np.ndarray:
     return flat.reshape(values.shape)
 
 
-def hands_from_balls(center_px: np.ndarray, radius_px: np.ndarray,
-                     camera: RobotCamera | None = None, config: DepthConfig | None = None,
-                     image_size: tuple[int, int] | None = None) -> np.ndarray:
+def hands_from_balls(
+    center_px: np.ndarray,
+    radius_px: np.ndarray,
+    camera: RobotCamera | None = None,
+    config: DepthConfig | None = None,
+    image_size: tuple[int, int] | None = None,
+) -> np.ndarray:
     """A recording's 3-D hand positions from the balls' image centres and apparent radii.
 
     Parameters
@@ -148,8 +162,10 @@ def hands_from_balls(center_px: np.ndarray, radius_px: np.ndarray,
     center = np.asarray(center_px, dtype=np.float64)
     radius = np.asarray(radius_px, dtype=np.float64)
     if center.ndim != 3 or center.shape[1:] != (2, 2) or radius.shape != center.shape[:2]:
-        raise ConfigError(f"hands_from_balls: centres (n, 2, 2) and radii (n, 2) expected, got "
-                          f"{center.shape} and {radius.shape}")
+        raise ConfigError(
+            f"hands_from_balls: centres (n, 2, 2) and radii (n, 2) expected, got "
+            f"{center.shape} and {radius.shape}"
+        )
     if image_size is not None:
         width, height = image_size
         center = center * np.array([camera.width / width, camera.height / height])
@@ -163,8 +179,9 @@ def hands_from_balls(center_px: np.ndarray, radius_px: np.ndarray,
     return camera.back_project(center, depth)
 
 
-def hands_on_plane(sensory: np.ndarray, camera: RobotCamera | None = None,
-                   plane_x: float = MOUSE_PLANE_X) -> np.ndarray:
+def hands_on_plane(
+    sensory: np.ndarray, camera: RobotCamera | None = None, plane_x: float = MOUSE_PLANE_X
+) -> np.ndarray:
     """3-D hands of a source without depth: the image points' rays meet the plane ``x = plane_x``.
 
     Parameters
@@ -185,8 +202,10 @@ def hands_on_plane(sensory: np.ndarray, camera: RobotCamera | None = None,
     if sensory.shape[-1:] != (4,):
         raise ConfigError(f"hands_on_plane: sensory (..., 4) expected, got {sensory.shape}")
     if not plane_x > camera.position[0] + 0.05:
-        raise ConfigError(f"hands_on_plane: the plane x = {plane_x} m must lie in front of the "
-                          f"camera (x > {camera.position[0] + 0.05:.2f} m)")
+        raise ConfigError(
+            f"hands_on_plane: the plane x = {plane_x} m must lie in front of the "
+            f"camera (x > {camera.position[0] + 0.05:.2f} m)"
+        )
     pixels = camera.pixels_from_normalized(sensory.reshape(*sensory.shape[:-1], 2, 2))
     origin = np.asarray(camera.position)
     direction = camera.back_project(pixels, np.ones(pixels.shape[:-1])) - origin

@@ -122,8 +122,14 @@ class WebcamSource(FrameSource):
         Limits on opening the device and on each frame.
     """
 
-    def __init__(self, index: int = 0, width: int | None = 640, height: int | None = 480,
-                 open_timeout_s: float = 5.0, read_timeout_s: float = 2.0) -> None:
+    def __init__(
+        self,
+        index: int = 0,
+        width: int | None = 640,
+        height: int | None = 480,
+        open_timeout_s: float = 5.0,
+        read_timeout_s: float = 2.0,
+    ) -> None:
         super().__init__()
         if index < 0:
             raise RnnpbError(f"webcam index must be >= 0, got {index}")
@@ -137,8 +143,9 @@ class WebcamSource(FrameSource):
         if self._capture is not None:
             return
         if sys.platform.startswith("linux") and not Path(f"/dev/video{self.index}").exists():
-            raise RnnpbError(f"{self.description}: no such camera (/dev/video{self.index} does "
-                             "not exist)")
+            raise RnnpbError(
+                f"{self.description}: no such camera (/dev/video{self.index} does not exist)"
+            )
         _quiet_opencv()
 
         def open_device() -> cv2.VideoCapture:
@@ -150,20 +157,21 @@ class WebcamSource(FrameSource):
                     capture.set(cv2.CAP_PROP_FRAME_HEIGHT, self.height)
             return capture
 
-        capture = call_with_timeout(open_device, self.open_timeout_s,
-                                    f"opening {self.description}")
+        capture = call_with_timeout(open_device, self.open_timeout_s, f"opening {self.description}")
         if not capture.isOpened():
             capture.release()
-            raise RnnpbError(f"{self.description}: cannot open the camera (missing, busy or "
-                             "not permitted)")
+            raise RnnpbError(
+                f"{self.description}: cannot open the camera (missing, busy or not permitted)"
+            )
         self._capture = capture
 
     def read(self) -> np.ndarray | None:
         if self._capture is None:
             raise RnnpbError(f"{self.description}: read before connect")
         capture = self._capture
-        ok, frame = call_with_timeout(capture.read, self.read_timeout_s,
-                                      f"reading {self.description}")
+        ok, frame = call_with_timeout(
+            capture.read, self.read_timeout_s, f"reading {self.description}"
+        )
         if not ok or frame is None:
             raise RnnpbError(f"{self.description}: the camera stopped delivering frames")
         self.frame_index += 1
@@ -197,8 +205,10 @@ class VideoFileSource(FrameSource):
         ok, frame = capture.read() if capture.isOpened() else (False, None)
         if not ok or frame is None:
             capture.release()
-            raise DataFileError(f"{self.path}: cannot decode this file as a video (not a video, "
-                                "truncated, or a codec OpenCV lacks)")
+            raise DataFileError(
+                f"{self.path}: cannot decode this file as a video (not a video, "
+                "truncated, or a codec OpenCV lacks)"
+            )
         self._capture, self._first = capture, _as_bgr(frame)
 
     @property
@@ -227,8 +237,7 @@ class VideoFileSource(FrameSource):
 
 
 def _natural_key(path: Path) -> list:
-    return [int(part) if part.isdigit() else part.lower()
-            for part in re.split(r"(\d+)", path.name)]
+    return [int(part) if part.isdigit() else part.lower() for part in re.split(r"(\d+)", path.name)]
 
 
 class ImageFolderSource(FrameSource):
@@ -243,12 +252,16 @@ class ImageFolderSource(FrameSource):
     def connect(self) -> None:
         if not self.folder.is_dir():
             raise DataFileError(f"{self.folder}: no such folder of images")
-        self.files = sorted((p for p in self.folder.iterdir()
-                             if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES),
-                            key=_natural_key)
+        self.files = sorted(
+            (
+                p
+                for p in self.folder.iterdir()
+                if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES
+            ),
+            key=_natural_key,
+        )
         if not self.files:
-            raise DataFileError(f"{self.folder}: holds no images "
-                                f"({', '.join(IMAGE_SUFFIXES)})")
+            raise DataFileError(f"{self.folder}: holds no images ({', '.join(IMAGE_SUFFIXES)})")
 
     def read(self) -> np.ndarray | None:
         if self.frame_index + 1 >= len(self.files):
@@ -276,8 +289,10 @@ class ArraySource(FrameSource):
         super().__init__()
         self.frames = np.asarray(frames)
         if self.frames.ndim != 4 or self.frames.shape[3] != 3 or self.frames.dtype != np.uint8:
-            raise RnnpbError(f"{description}: expected uint8 frames of shape (n, height, width, "
-                             f"3), got {self.frames.dtype} {self.frames.shape}")
+            raise RnnpbError(
+                f"{description}: expected uint8 frames of shape (n, height, width, "
+                f"3), got {self.frames.dtype} {self.frames.shape}"
+            )
         self.description = description
 
     def read(self) -> np.ndarray | None:
@@ -341,8 +356,9 @@ class VideoWriter:
         if self._writer is None:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             height, width = frame.shape[:2]
-            self._writer = cv2.VideoWriter(str(self._tmp), cv2.VideoWriter_fourcc(*self.fourcc),
-                                           self.fps, (width, height))
+            self._writer = cv2.VideoWriter(
+                str(self._tmp), cv2.VideoWriter_fourcc(*self.fourcc), self.fps, (width, height)
+            )
             if not self._writer.isOpened():
                 self._writer = None
                 raise RnnpbError(f"{self.path}: cannot write a {self.fourcc} video here")

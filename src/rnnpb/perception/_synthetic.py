@@ -108,8 +108,9 @@ class SceneConfig:
                 raise ConfigError(f"scene {name} must be in [0, 1], got {getattr(self, name)}")
         low, high = self.occlusion_frames
         if not 1 <= low <= high:
-            raise ConfigError(f"scene occlusion_frames must be 1 <= low <= high, got "
-                              f"{self.occlusion_frames}")
+            raise ConfigError(
+                f"scene occlusion_frames must be 1 <= low <= high, got {self.occlusion_frames}"
+            )
         for item in self.occlusions:
             if len(item) != 3 or item[0] not in (0, 1) or not 0 <= item[1] <= item[2]:
                 raise ConfigError(f"scene occlusions: {item!r} is not (hand 0|1, start, stop)")
@@ -117,15 +118,27 @@ class SceneConfig:
     @classmethod
     def clean(cls, **changes: Any) -> SceneConfig:
         """The user on a plain wall: no clutter, noise, lighting change, blur or occlusion."""
-        base = cls(clutter=0, texture=0.0, lighting=0.0, noise_sigma=0.0, blur_probability=0.0,
-                   occlusion_probability=0.0)
+        base = cls(
+            clutter=0,
+            texture=0.0,
+            lighting=0.0,
+            noise_sigma=0.0,
+            blur_probability=0.0,
+            occlusion_probability=0.0,
+        )
         return replace(base, **changes)
 
     @classmethod
     def hard(cls, **changes: Any) -> SceneConfig:
         """Heavy clutter, noise, lighting change and frequent blur."""
-        base = cls(clutter=80, texture=25.0, lighting=0.15, noise_sigma=8.0,
-                   blur_probability=0.5, blur_px=12.0)
+        base = cls(
+            clutter=80,
+            texture=25.0,
+            lighting=0.15,
+            noise_sigma=8.0,
+            blur_probability=0.5,
+            blur_px=12.0,
+        )
         return replace(base, **changes)
 
 
@@ -164,13 +177,19 @@ class SyntheticCamera(FrameSource):
     ``radius_px`` (2,), ``visible_fraction`` (2,) and ``occluded`` (2,) for the frame.
     """
 
-    def __init__(self, hands: np.ndarray, camera: RobotCamera | None = None,
-                 scene: SceneConfig | None = None, truth: dict[str, Any] | None = None) -> None:
+    def __init__(
+        self,
+        hands: np.ndarray,
+        camera: RobotCamera | None = None,
+        scene: SceneConfig | None = None,
+        truth: dict[str, Any] | None = None,
+    ) -> None:
         super().__init__()
         hands = np.asarray(hands, dtype=np.float64)
         if hands.ndim != 3 or hands.shape[1:] != (2, 3) or len(hands) == 0:
-            raise ConfigError(f"synthetic camera: hands must have shape (n_steps, 2, 3), got "
-                              f"{hands.shape}")
+            raise ConfigError(
+                f"synthetic camera: hands must have shape (n_steps, 2, 3), got {hands.shape}"
+            )
         if not np.all(np.isfinite(hands)):
             raise ConfigError("synthetic camera: hands contain NaN or infinite values")
         self.hands = hands
@@ -246,10 +265,11 @@ class SyntheticCamera(FrameSource):
         rng = np.random.default_rng([scene.seed, 2])
         if scene.occlusion_probability > 0:
             starts = rng.random((n, 2)) < scene.occlusion_probability
-            lengths = rng.integers(scene.occlusion_frames[0], scene.occlusion_frames[1] + 1,
-                                   size=(n, 2))
+            lengths = rng.integers(
+                scene.occlusion_frames[0], scene.occlusion_frames[1] + 1, size=(n, 2)
+            )
             for t, i in zip(*np.nonzero(starts), strict=True):
-                occluded[t:t + lengths[t, i], i] = True
+                occluded[t : t + lengths[t, i], i] = True
         for hand, start, stop in scene.occlusions:
             occluded[start:stop, hand] = True
         return occluded
@@ -257,17 +277,20 @@ class SyntheticCamera(FrameSource):
     def _render_background(self) -> np.ndarray:
         cam, scene = self.camera, self.scene
         rng = np.random.default_rng([scene.seed, 0])
-        wall = np.array(_bgr_from_hsv(rng.integers(10, 40), rng.integers(10, 50),
-                                      rng.integers(150, 210)), dtype=np.float32)
+        wall = np.array(
+            _bgr_from_hsv(rng.integers(10, 40), rng.integers(10, 50), rng.integers(150, 210)),
+            dtype=np.float32,
+        )
         frame = np.empty((cam.height, cam.width, 3), np.float32)
         frame[:] = wall
         if scene.texture > 0:
             coarse = rng.standard_normal((cam.height // 40 + 2, cam.width // 40 + 2, 1))
             fine = rng.standard_normal((cam.height // 6 + 2, cam.width // 6 + 2, 1))
-            grain = (cv2.resize(coarse.astype(np.float32), (cam.width, cam.height),
-                                interpolation=cv2.INTER_CUBIC)
-                     + 0.4 * cv2.resize(fine.astype(np.float32), (cam.width, cam.height),
-                                        interpolation=cv2.INTER_LINEAR))
+            grain = cv2.resize(
+                coarse.astype(np.float32), (cam.width, cam.height), interpolation=cv2.INTER_CUBIC
+            ) + 0.4 * cv2.resize(
+                fine.astype(np.float32), (cam.width, cam.height), interpolation=cv2.INTER_LINEAR
+            )
             frame += scene.texture * grain[..., None]
         # the floor: the lower quarter, darker
         floor_row = int(cam.height * rng.uniform(0.72, 0.82))
@@ -280,13 +303,13 @@ class SyntheticCamera(FrameSource):
             x, y = rng.uniform(0, cam.width), rng.uniform(0, cam.height)
             w, h = rng.uniform(4, 12), rng.uniform(25, 60)
             box = ((float(x), float(y)), (float(w), float(h)), float(rng.uniform(0, 180)))
-            cv2.fillPoly(image, [np.round(cv2.boxPoints(box)).astype(np.int32)], color,
-                         cv2.LINE_AA)
+            cv2.fillPoly(image, [np.round(cv2.boxPoints(box)).astype(np.int32)], color, cv2.LINE_AA)
         self._draw_static_distractors(image, rng)
         return image
 
-    def _distractor_look(self, k: int, rng: np.random.Generator
-                         ) -> tuple[str, tuple[int, int, int], float]:
+    def _distractor_look(
+        self, k: int, rng: np.random.Generator
+    ) -> tuple[str, tuple[int, int, int], float]:
         """Kind ("book" or "round"), colour and size (radius, px) of distractor ``k``."""
         scene = self.scene
         kind = ("book", "round")[(k // 2) % 2]
@@ -309,8 +332,12 @@ class SyntheticCamera(FrameSource):
         for k in range(self.scene.static_distractors):
             kind, color, radius = self._distractor_look(k, rng)
             for _ in range(200):  # away from where the hands go: a look-alike, not an overlap
-                c = np.array([rng.uniform(radius, cam.width - radius),
-                              rng.uniform(radius, cam.height - radius)])
+                c = np.array(
+                    [
+                        rng.uniform(radius, cam.width - radius),
+                        rng.uniform(radius, cam.height - radius),
+                    ]
+                )
                 if np.min(np.linalg.norm(path - c, axis=1)) > 2.0 * (reach + radius):
                     break
             else:
@@ -326,12 +353,21 @@ class SyntheticCamera(FrameSource):
             kind, color, radius = self._distractor_look((2, 1, 3, 0)[k % 4], look_rng)
             start = int(rng.integers(0, max(1, n // 2)))
             y0, y1 = rng.uniform(0.1, 0.9, size=2) * cam.height
-            x0, x1 = (-2 * radius, cam.width + 2 * radius)[::(1 if rng.random() < 0.5 else -1)]
+            x0, x1 = (-2 * radius, cam.width + 2 * radius)[:: (1 if rng.random() < 0.5 else -1)]
             speed = rng.uniform(3.0, 9.0)
             steps = max(1, int(math.hypot(x1 - x0, y1 - y0) / speed))
-            movers.append({"kind": kind, "color": color, "radius": radius, "start": start,
-                           "steps": steps, "from": np.array([x0, y0]), "to": np.array([x1, y1]),
-                           "angle": float(rng.uniform(-20, 20))})
+            movers.append(
+                {
+                    "kind": kind,
+                    "color": color,
+                    "radius": radius,
+                    "start": start,
+                    "steps": steps,
+                    "from": np.array([x0, y0]),
+                    "to": np.array([x1, y1]),
+                    "angle": float(rng.uniform(-20, 20)),
+                }
+            )
         return movers
 
     def _draw_mover(self, frame: np.ndarray, mover: dict[str, Any], t: int) -> None:
@@ -339,8 +375,9 @@ class SyntheticCamera(FrameSource):
         if not 0.0 <= s <= 1.0:
             return
         center = (1 - s) * mover["from"] + s * mover["to"]
-        _draw_distractor(frame, mover["kind"], center, mover["radius"], mover["color"],
-                         mover["angle"])
+        _draw_distractor(
+            frame, mover["kind"], center, mover["radius"], mover["color"], mover["angle"]
+        )
 
     def _draw_clutter(self, image: np.ndarray, rng: np.random.Generator) -> None:
         h, w = image.shape[:2]
@@ -353,12 +390,26 @@ class SyntheticCamera(FrameSource):
         elif kind == 1:
             cv2.circle(image, (x, y), size // 2, color, -1, cv2.LINE_AA)
         elif kind == 2:
-            cv2.ellipse(image, (x, y), (size // 2, int(rng.integers(5, 40))),
-                        float(rng.uniform(0, 180)), 0, 360, color, -1, cv2.LINE_AA)
+            cv2.ellipse(
+                image,
+                (x, y),
+                (size // 2, int(rng.integers(5, 40))),
+                float(rng.uniform(0, 180)),
+                0,
+                360,
+                color,
+                -1,
+                cv2.LINE_AA,
+            )
         else:
-            cv2.line(image, (x, y), (x + int(rng.integers(-120, 120)),
-                                     y + int(rng.integers(-120, 120))),
-                     color, int(rng.integers(2, 8)), cv2.LINE_AA)
+            cv2.line(
+                image,
+                (x, y),
+                (x + int(rng.integers(-120, 120)), y + int(rng.integers(-120, 120))),
+                color,
+                int(rng.integers(2, 8)),
+                cv2.LINE_AA,
+            )
 
     def _body_geometry(self) -> dict[str, np.ndarray]:
         hands = self.hands
@@ -381,18 +432,45 @@ class SyntheticCamera(FrameSource):
         shoulders, _ = cam.project(body["shoulders"])
         hips, _ = cam.project(body["hips"])
         torso = np.array([shoulders[0], shoulders[1], hips[1], hips[0]])
-        cv2.fillPoly(frame, [np.round(torso * _ONE).astype(np.int32)], shirt, cv2.LINE_AA,
-                     shift=_SHIFT)
+        cv2.fillPoly(
+            frame, [np.round(torso * _ONE).astype(np.int32)], shirt, cv2.LINE_AA, shift=_SHIFT
+        )
         (head,), (head_depth,) = cam.project(body["head"][None])
         head_r = cam.focal_px * 0.095 / head_depth
         neck, _ = cam.project(body["neck"][None])
-        cv2.line(frame, _pt(neck[0]), _pt(head), skin, max(2, int(head_r * 0.8)), cv2.LINE_AA,
-                 shift=_SHIFT)
-        cv2.ellipse(frame, _pt(head), (int(head_r * 0.85 * _ONE), int(head_r * 1.1 * _ONE)), 0,
-                    0, 360, skin, -1, cv2.LINE_AA, shift=_SHIFT)
-        cv2.ellipse(frame, _pt(head - [0, head_r * 0.35]),
-                    (int(head_r * 0.9 * _ONE), int(head_r * 0.8 * _ONE)), 0, 180, 360, hair, -1,
-                    cv2.LINE_AA, shift=_SHIFT)
+        cv2.line(
+            frame,
+            _pt(neck[0]),
+            _pt(head),
+            skin,
+            max(2, int(head_r * 0.8)),
+            cv2.LINE_AA,
+            shift=_SHIFT,
+        )
+        cv2.ellipse(
+            frame,
+            _pt(head),
+            (int(head_r * 0.85 * _ONE), int(head_r * 1.1 * _ONE)),
+            0,
+            0,
+            360,
+            skin,
+            -1,
+            cv2.LINE_AA,
+            shift=_SHIFT,
+        )
+        cv2.ellipse(
+            frame,
+            _pt(head - [0, head_r * 0.35]),
+            (int(head_r * 0.9 * _ONE), int(head_r * 0.8 * _ONE)),
+            0,
+            180,
+            360,
+            hair,
+            -1,
+            cv2.LINE_AA,
+            shift=_SHIFT,
+        )
         for i in (0, 1):
             shoulder = body["shoulders"][i]
             hand = self.hands[t, i]
@@ -400,13 +478,28 @@ class SyntheticCamera(FrameSource):
             elbow = 0.5 * (shoulder + hand) + np.array([0.06, 0.06 * outward, -0.08])
             pts, depth = cam.project(np.stack([shoulder, elbow, hand]))
             width = cam.focal_px * 0.09 / depth
-            cv2.line(frame, _pt(pts[0]), _pt(pts[1]), shirt, max(2, int(width[0])), cv2.LINE_AA,
-                     shift=_SHIFT)
-            cv2.line(frame, _pt(pts[1]), _pt(pts[2]), skin, max(2, int(width[1] * 0.75)),
-                     cv2.LINE_AA, shift=_SHIFT)
+            cv2.line(
+                frame,
+                _pt(pts[0]),
+                _pt(pts[1]),
+                shirt,
+                max(2, int(width[0])),
+                cv2.LINE_AA,
+                shift=_SHIFT,
+            )
+            cv2.line(
+                frame,
+                _pt(pts[1]),
+                _pt(pts[2]),
+                skin,
+                max(2, int(width[1] * 0.75)),
+                cv2.LINE_AA,
+                shift=_SHIFT,
+            )
 
-    def _draw_occluder(self, frame: np.ndarray, center: np.ndarray, radius: float,
-                       rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    def _draw_occluder(
+        self, frame: np.ndarray, center: np.ndarray, radius: float, rng: np.random.Generator
+    ) -> tuple[np.ndarray, np.ndarray]:
         # a sheet of cardboard passing in front of the ball, covering it fully
         size = np.array([rng.uniform(2.6, 4.0), rng.uniform(2.6, 4.0)]) * max(radius, 4.0)
         offset = rng.uniform(-0.3, 0.3, size=2) * max(radius, 4.0)
@@ -415,19 +508,20 @@ class SyntheticCamera(FrameSource):
         cv2.rectangle(frame, _pt(low), _pt(high), color, -1, cv2.LINE_AA, shift=_SHIFT)
         return low, high
 
-    def _visible_fraction(self, t: int, order: np.ndarray,
-                          occluders: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+    def _visible_fraction(
+        self, t: int, order: np.ndarray, occluders: list[tuple[np.ndarray, np.ndarray]]
+    ) -> np.ndarray:
         cam = self.camera
         centers, radii = self._centers[t], self._radii[t]
         grid = np.linspace(-1.0, 1.0, 21)
         gx, gy = np.meshgrid(grid, grid)
-        inside = gx ** 2 + gy ** 2 <= 1.0
+        inside = gx**2 + gy**2 <= 1.0
         fractions = np.zeros(2)
         for rank, i in enumerate(order):
             px = centers[i, 0] + radii[i] * gx[inside]
             py = centers[i, 1] + radii[i] * gy[inside]
             seen = (px >= 0) & (px < cam.width) & (py >= 0) & (py < cam.height)
-            for j in order[rank + 1:]:  # nearer balls drawn over this one
+            for j in order[rank + 1 :]:  # nearer balls drawn over this one
                 seen &= (px - centers[j, 0]) ** 2 + (py - centers[j, 1]) ** 2 > radii[j] ** 2
             for low, high in occluders:
                 seen &= ~((px >= low[0]) & (px <= high[0]) & (py >= low[1]) & (py <= high[1]))
@@ -443,8 +537,15 @@ class SyntheticCamera(FrameSource):
             kernel = np.zeros((size, size), np.float32)
             c = size // 2
             d = 0.5 * (length - 1) * np.array([math.cos(angle), math.sin(angle)])
-            cv2.line(kernel, _pt(np.array([c, c]) - d), _pt(np.array([c, c]) + d), 1.0, 1,
-                     cv2.LINE_AA, shift=_SHIFT)
+            cv2.line(
+                kernel,
+                _pt(np.array([c, c]) - d),
+                _pt(np.array([c, c]) + d),
+                1.0,
+                1,
+                cv2.LINE_AA,
+                shift=_SHIFT,
+            )
             kernel /= kernel.sum()
             frame = cv2.filter2D(frame, -1, kernel, borderType=cv2.BORDER_REFLECT)
         if scene.lighting > 0 or scene.noise_sigma > 0 or scene.flicker > 0:
@@ -455,8 +556,11 @@ class SyntheticCamera(FrameSource):
                 h, w = frame.shape[:2]
                 gain = 1.0 + rng.uniform(-scene.lighting, scene.lighting)
                 gx, gy = rng.uniform(-scene.lighting, scene.lighting, size=2)
-                ramp = (gain + gx * np.linspace(-1, 1, w, dtype=np.float32)[None, :]
-                        + gy * np.linspace(-1, 1, h, dtype=np.float32)[:, None])
+                ramp = (
+                    gain
+                    + gx * np.linspace(-1, 1, w, dtype=np.float32)[None, :]
+                    + gy * np.linspace(-1, 1, h, dtype=np.float32)[:, None]
+                )
                 tint = 1.0 + rng.uniform(-0.3, 0.3, size=3).astype(np.float32) * scene.lighting
                 out *= ramp[..., None] * tint
             if scene.noise_sigma > 0:
@@ -465,8 +569,9 @@ class SyntheticCamera(FrameSource):
         return frame
 
 
-def _draw_ball(frame: np.ndarray, center: np.ndarray, radius: float,
-               color: tuple[int, int, int]) -> None:
+def _draw_ball(
+    frame: np.ndarray, center: np.ndarray, radius: float, color: tuple[int, int, int]
+) -> None:
     """A shaded, anti-aliased disk; pixel (i, j) is sampled at (i + 0.5, j + 0.5)."""
     h, w = frame.shape[:2]
     x0, x1 = int(math.floor(center[0] - radius - 1)), int(math.ceil(center[0] + radius + 1))
@@ -485,22 +590,32 @@ def _draw_ball(frame: np.ndarray, center: np.ndarray, radius: float,
     frame[y0c:y1c, x0c:x1c] = np.round(patch * (1 - coverage) + ball * coverage).astype(np.uint8)
 
 
-def _draw_distractor(frame: np.ndarray, kind: str, center: np.ndarray, radius: float,
-                     color: tuple[int, int, int], angle: float) -> None:
+def _draw_distractor(
+    frame: np.ndarray,
+    kind: str,
+    center: np.ndarray,
+    radius: float,
+    color: tuple[int, int, int],
+    angle: float,
+) -> None:
     """A look-alike of a ball: a book (rectangle of the ball's area or more) or a round object."""
     if kind == "round":
         _draw_ball(frame, center, radius, color)
         return
     side = radius * math.sqrt(math.pi)  # a square of the disk's area
     aspect = 0.75
-    box = ((float(center[0]), float(center[1])), (side / math.sqrt(aspect) * 1.2,
-                                                  side * math.sqrt(aspect) * 1.2), angle)
+    box = (
+        (float(center[0]), float(center[1])),
+        (side / math.sqrt(aspect) * 1.2, side * math.sqrt(aspect) * 1.2),
+        angle,
+    )
     corners = np.round(cv2.boxPoints(box) * _ONE).astype(np.int32)
     cv2.fillPoly(frame, [corners], color, cv2.LINE_AA, shift=_SHIFT)
 
 
-def oscillating_hands(n_steps: int, period: float = 12.0, seed: int = 0,
-                      amplitude: float = 0.15, noise: float = 0.0) -> np.ndarray:
+def oscillating_hands(
+    n_steps: int, period: float = 12.0, seed: int = 0, amplitude: float = 0.15, noise: float = 0.0
+) -> np.ndarray:
     """A simple test trajectory, shape (n_steps, 2, 3): both hands circle in front of the user.
 
     The left hand (index 0) at robot-frame y ≈ -0.2 (the robot's right), the right hand at

@@ -94,22 +94,23 @@ class TrackerConfig:
         if not self.min_radius_px >= 0:
             raise ConfigError(f"tracker min_radius_px must be >= 0, got {self.min_radius_px}")
         if not 0.0 <= self.min_circularity <= 1.0:
-            raise ConfigError(f"tracker min_circularity must be in [0, 1], got "
-                              f"{self.min_circularity}")
+            raise ConfigError(
+                f"tracker min_circularity must be in [0, 1], got {self.min_circularity}"
+            )
         if not (isinstance(self.opening_px, int) and 0 <= self.opening_px <= 31):
-            raise ConfigError(f"tracker opening_px must be an integer in [0, 31], got "
-                              f"{self.opening_px}")
+            raise ConfigError(
+                f"tracker opening_px must be an integer in [0, 31], got {self.opening_px}"
+            )
         if not self.search_radius_px > 0:
-            raise ConfigError(f"tracker search_radius_px must be > 0, got "
-                              f"{self.search_radius_px}")
+            raise ConfigError(f"tracker search_radius_px must be > 0, got {self.search_radius_px}")
         if self.lost_memory_frames < 0:
-            raise ConfigError(f"tracker lost_memory_frames must be >= 0, got "
-                              f"{self.lost_memory_frames}")
+            raise ConfigError(
+                f"tracker lost_memory_frames must be >= 0, got {self.lost_memory_frames}"
+            )
         if not 0.0 <= self.smoothing < 1.0:
             raise ConfigError(f"tracker smoothing must be in [0, 1), got {self.smoothing}")
         if not 0.0 <= self.min_roundness <= 1.0:
-            raise ConfigError(f"tracker min_roundness must be in [0, 1], got "
-                              f"{self.min_roundness}")
+            raise ConfigError(f"tracker min_roundness must be in [0, 1], got {self.min_roundness}")
         if not self.move_px > 0:
             raise ConfigError(f"tracker move_px must be > 0, got {self.move_px}")
         if self.static_frames < 1:
@@ -184,8 +185,9 @@ class _Track:
 
     def __init__(self, center: np.ndarray, area: float, roundness: float) -> None:
         kf = cv2.KalmanFilter(4, 2)
-        kf.transitionMatrix = np.array([[1, 0, 1, 0], [0, 1, 0, 1], [0, 0, 1, 0],
-                                        [0, 0, 0, 1]], np.float32)
+        kf.transitionMatrix = np.array(
+            [[1, 0, 1, 0], [0, 1, 0, 1], [0, 0, 1, 0], [0, 0, 0, 1]], np.float32
+        )
         kf.measurementMatrix = np.eye(2, 4, dtype=np.float32)
         # a hand circling at 30 px/frame accelerates by ~15 px/frame^2: velocity noise 10 px
         kf.processNoiseCov = np.diag([4.0, 4.0, 100.0, 100.0]).astype(np.float32)
@@ -254,8 +256,8 @@ class BallTracker:
     def __init__(self, config: TrackerConfig | None = None) -> None:
         self.config = config or TrackerConfig()
         k = self.config.opening_px
-        self._kernel = (cv2.getStructuringElement(cv2.MORPH_RECT, (k, k)) if k > 1 else None)
-        self._min_area = math.pi * self.config.min_radius_px ** 2
+        self._kernel = cv2.getStructuringElement(cv2.MORPH_RECT, (k, k)) if k > 1 else None
+        self._min_area = math.pi * self.config.min_radius_px**2
         self._states = (_BallState(), _BallState())
 
     def reset(self) -> None:
@@ -351,8 +353,9 @@ class BallTracker:
             if k in used_tracks or owners[j] is not None:
                 continue
             track = state.tracks[k]
-            track.update(blobs[j, :2].copy(), float(blobs[j, 2]), float(blobs[j, 3]),
-                         config.move_px)
+            track.update(
+                blobs[j, :2].copy(), float(blobs[j, 2]), float(blobs[j, 3]), config.move_px
+            )
             owners[j] = track
             used_tracks.add(k)
         survivors = []
@@ -392,16 +395,25 @@ class BallTracker:
                 # for a round mover (the ball, back)
                 if selected.mean_roundness >= config.min_roundness + 0.2:
                     return selected
-                movers = [t for t in seen if t.moved and t is not selected
-                          and t.mean_roundness >= selected.mean_roundness + 0.25]
+                movers = [
+                    t
+                    for t in seen
+                    if t.moved
+                    and t is not selected
+                    and t.mean_roundness >= selected.mean_roundness + 0.25
+                ]
             else:
                 movers = [t for t in seen if t.moved and t.roundness >= config.min_roundness]
             if not movers:
                 return selected
             return max(movers, key=lambda t: t.roundness)
         waiting = selected is not None  # the ball is unseen but remembered
-        candidates = [t for t in seen if t.roundness >= config.min_roundness
-                      and not (t.age >= config.static_frames and not t.moved)]
+        candidates = [
+            t
+            for t in seen
+            if t.roundness >= config.min_roundness
+            and not (t.age >= config.static_frames and not t.moved)
+        ]
         if waiting:
             assert selected is not None
             reach = config.search_radius_px + 20.0 * selected.frames_lost
@@ -413,12 +425,22 @@ class BallTracker:
                     continue  # it was there all the while the ball was not: not the ball
                 # the prediction drifts off while the ball is hidden; where it was last seen
                 # stays a good guess for a hand moving to and fro
-                d = float(min(np.linalg.norm(t.center - selected.prediction),
-                              np.linalg.norm(t.center - selected.center)))
+                d = float(
+                    min(
+                        np.linalg.norm(t.center - selected.prediction),
+                        np.linalg.norm(t.center - selected.center),
+                    )
+                )
                 ratio = t.area / selected.mean_area
                 if d < reach and 0.4 < ratio < 2.5:
-                    scored.append((d / config.search_radius_px - t.roundness
-                                   - 0.5 * (t.age <= selected.frames_lost + 1), t))
+                    scored.append(
+                        (
+                            d / config.search_radius_px
+                            - t.roundness
+                            - 0.5 * (t.age <= selected.frames_lost + 1),
+                            t,
+                        )
+                    )
             if not scored:
                 return None
             best = min(scored, key=lambda item: item[0])[1]
@@ -436,7 +458,7 @@ class BallTracker:
         x, y, bw, bh = cv2.boundingRect(contour)
         blob = np.zeros((bh, bw), np.uint8)
         cv2.drawContours(blob, [contour], 0, 255, cv2.FILLED, offset=(-x, -y))
-        blob = cv2.bitwise_and(blob, mask[y:y + bh, x:x + bw])
+        blob = cv2.bitwise_and(blob, mask[y : y + bh, x : x + bw])
         m = cv2.moments(blob, binaryImage=True)
         if m["m00"] <= 0:
             return None
@@ -455,8 +477,9 @@ class BallTracker:
         state.selected = chosen
         return self._measure(mask, contours[owners.index(chosen)])
 
-    def _track_ball(self, mask: np.ndarray, state: _BallState, width: int,
-                    height: int) -> BallMeasurement:
+    def _track_ball(
+        self, mask: np.ndarray, state: _BallState, width: int, height: int
+    ) -> BallMeasurement:
         found = self._choose(mask, state)
         if found is None:
             state.smoothed = None
@@ -472,20 +495,24 @@ class BallTracker:
         depth = float(camera.depth_from_radius(radius * scale, self.config.ball_radius_m))
         pixels = np.array([center[0] * camera.width / width, center[1] * scale])
         position = camera.back_project(pixels, np.asarray(depth))
-        return BallMeasurement(TRACKED, np.asarray(center, dtype=np.float64), radius, depth,
-                               position)
+        return BallMeasurement(
+            TRACKED, np.asarray(center, dtype=np.float64), radius, depth, position
+        )
 
 
 def _check_frame(frame: np.ndarray) -> np.ndarray:
     frame = np.asarray(frame)
     if frame.ndim != 3 or frame.shape[2] != 3 or frame.dtype != np.uint8:
-        raise ConfigError(f"tracker needs a BGR uint8 frame of shape (height, width, 3), got "
-                          f"{frame.dtype} {frame.shape}")
+        raise ConfigError(
+            f"tracker needs a BGR uint8 frame of shape (height, width, 3), got "
+            f"{frame.dtype} {frame.shape}"
+        )
     return frame
 
 
-def draw_tracking(frame: np.ndarray, result: TrackingResult,
-                  colors: BallColors | None = None) -> np.ndarray:
+def draw_tracking(
+    frame: np.ndarray, result: TrackingResult, colors: BallColors | None = None
+) -> np.ndarray:
     """A copy of ``frame`` with the tracked balls circled and labelled, lost ones listed."""
     out = np.ascontiguousarray(frame).copy()
     marker = ((0, 255, 255), (255, 255, 0))  # yellow for left, cyan for right: both stand out
@@ -497,10 +524,25 @@ def draw_tracking(frame: np.ndarray, result: TrackingResult,
             r = int(round(max(ball.radius_px, 2.0) * 4))
             cv2.circle(out, c, r + 12, marker[i], 2, cv2.LINE_AA, shift=2)
             cv2.drawMarker(out, (c[0] // 4, c[1] // 4), marker[i], cv2.MARKER_CROSS, 10, 1)
-            cv2.putText(out, f"{label} {ball.depth_m:.2f} m",
-                        (c[0] // 4 + r // 4 + 6, c[1] // 4 - r // 4 - 4),
-                        cv2.FONT_HERSHEY_SIMPLEX, 0.45, marker[i], 1, cv2.LINE_AA)
+            cv2.putText(
+                out,
+                f"{label} {ball.depth_m:.2f} m",
+                (c[0] // 4 + r // 4 + 6, c[1] // 4 - r // 4 - 4),
+                cv2.FONT_HERSHEY_SIMPLEX,
+                0.45,
+                marker[i],
+                1,
+                cv2.LINE_AA,
+            )
         else:
-            cv2.putText(out, f"{label}: lost", (8, 20 + 18 * i), cv2.FONT_HERSHEY_SIMPLEX, 0.5,
-                        marker[i], 1, cv2.LINE_AA)
+            cv2.putText(
+                out,
+                f"{label}: lost",
+                (8, 20 + 18 * i),
+                cv2.FONT_HERSHEY_SIMPLEX,
+                0.5,
+                marker[i],
+                1,
+                cv2.LINE_AA,
+            )
     return out

@@ -81,16 +81,23 @@ def synthetic_user_hands(pattern: str, steps: int, seed: int = 0) -> np.ndarray:
     try:
         from rnnpb.demonstrator import PatternConfig, perform
     except ImportError as error:
-        raise RnnpbError("synthetic camera: the synthetic user (rnnpb.demonstrator) is not "
-                         f"available: {error}") from None
+        raise RnnpbError(
+            f"synthetic camera: the synthetic user (rnnpb.demonstrator) is not available: {error}"
+        ) from None
     motion = perform([(pattern, steps)], PatternConfig(), np.random.default_rng(seed))
     return motion.hands
 
 
-def open_frame_source(kind: str, argument: str | int | os.PathLike[str], *,
-                      steps: int | None = None, seed: int = 0, scene: SceneConfig | None = None,
-                      camera: RobotCamera | None = None,
-                      hands: np.ndarray | None = None) -> FrameSource:
+def open_frame_source(
+    kind: str,
+    argument: str | int | os.PathLike[str],
+    *,
+    steps: int | None = None,
+    seed: int = 0,
+    scene: SceneConfig | None = None,
+    camera: RobotCamera | None = None,
+    hands: np.ndarray | None = None,
+) -> FrameSource:
     """The camera source of ``kind`` (not yet connected).
 
     Parameters
@@ -126,18 +133,24 @@ def open_frame_source(kind: str, argument: str | int | os.PathLike[str], *,
         if hands is None:
             hands = synthetic_user_hands(pattern, steps or DEFAULT_SYNTHETIC_STEPS, seed)
         scene = scene or SceneConfig(seed=seed)
-        return SyntheticCamera(hands[:steps] if steps else hands, camera, scene,
-                               truth={"pattern": pattern})
+        return SyntheticCamera(
+            hands[:steps] if steps else hands, camera, scene, truth={"pattern": pattern}
+        )
     else:
-        raise ConfigError(f"no camera source of kind {kind!r} (webcam, video, images, "
-                          "synthetic)")
+        raise ConfigError(f"no camera source of kind {kind!r} (webcam, video, images, synthetic)")
     return LimitedSource(source, steps) if steps else source
 
 
-def open_camera_source(kind: str, argument: str | int | os.PathLike[str], *,
-                       colors: BallColors | str | os.PathLike[str] | None = None,
-                       tracker_config: TrackerConfig | None = None, steps: int | None = None,
-                       seed: int = 0, **synthetic: Any) -> TrackedUserSource:
+def open_camera_source(
+    kind: str,
+    argument: str | int | os.PathLike[str],
+    *,
+    colors: BallColors | str | os.PathLike[str] | None = None,
+    tracker_config: TrackerConfig | None = None,
+    steps: int | None = None,
+    seed: int = 0,
+    **synthetic: Any,
+) -> TrackedUserSource:
     """A :class:`UserSource` that tracks the balls in the frames of a camera source.
 
     Parameters

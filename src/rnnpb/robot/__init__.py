@@ -68,4 +68,3 @@ __all__ = [
     "forward_kinematics",
     "inverse_kinematics",
 ]
-

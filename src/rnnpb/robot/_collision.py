@@ -38,10 +38,14 @@ SERVO_NO_LOAD_SPEED = 59.0 * 2.0 * math.pi / 60.0
 # Each arm's moving parts (left, right), and the body they must not pass through. The shoulder
 # ball sits in the chest's corner by design and the upper arm hangs along the chest's side, so
 # the upper arm counts against the head and the other arm only.
-_ARM_PARTS = {"left": ("lupper_arm_geom", "lelbow_geom", "lforearm_geom", "lhand_geom"),
-              "right": ("rupper_arm_geom", "relbow_geom", "rforearm_geom", "rhand_geom")}
-_DISTAL = {"left": ("lelbow_geom", "lforearm_geom", "lhand_geom"),
-           "right": ("relbow_geom", "rforearm_geom", "rhand_geom")}
+_ARM_PARTS = {
+    "left": ("lupper_arm_geom", "lelbow_geom", "lforearm_geom", "lhand_geom"),
+    "right": ("rupper_arm_geom", "relbow_geom", "rforearm_geom", "rhand_geom"),
+}
+_DISTAL = {
+    "left": ("lelbow_geom", "lforearm_geom", "lhand_geom"),
+    "right": ("relbow_geom", "rforearm_geom", "rhand_geom"),
+}
 _BODY = ("chest", "pelvis", "left_leg", "right_leg", "neck", "head_geom", "visor")
 _HEAD = ("neck", "head_geom", "visor")
 
@@ -111,8 +115,13 @@ class SelfCollision:
         found = []
         for i in range(self.data.ncon):
             c = self.data.contact[i]
-            found.append(Contact(self.model.geom(int(c.geom1)).name,
-                                 self.model.geom(int(c.geom2)).name, float(-c.dist)))
+            found.append(
+                Contact(
+                    self.model.geom(int(c.geom1)).name,
+                    self.model.geom(int(c.geom2)).name,
+                    float(-c.dist),
+                )
+            )
         return found
 
     def contacts(self, joints: np.ndarray) -> list[Contact]:

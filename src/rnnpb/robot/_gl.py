@@ -34,8 +34,9 @@ def _loadable(library: str) -> bool:
     return True
 
 
-def choose_gl(environ: MutableMapping[str, str] | None = None,
-              loadable: Callable[[str], bool] = _loadable) -> str:
+def choose_gl(
+    environ: MutableMapping[str, str] | None = None, loadable: Callable[[str], bool] = _loadable
+) -> str:
     """Set ``MUJOCO_GL`` to the first headless OpenGL whose library loads, unless it is set.
 
     Returns the value in effect. Raises :class:`~rnnpb.errors.ConfigError` when neither EGL nor
@@ -51,7 +52,8 @@ def choose_gl(environ: MutableMapping[str, str] | None = None,
     raise ConfigError(
         "MuJoCo needs OpenGL to render and found neither EGL (libEGL) nor OSMesa (libOSMesa): "
         "install one (e.g. apt install libegl1, or libosmesa6), or set MUJOCO_GL yourself "
-        "(glfw needs a display)")
+        "(glfw needs a display)"
+    )
 
 
 def import_mujoco() -> ModuleType:

@@ -68,8 +68,9 @@ class KinematicRobot(Robot):
     ``history_length`` of them, so that a long-running loop keeps a bounded footprint.
     """
 
-    def __init__(self, initial: np.ndarray | None = None, dt: float = 0.4,
-                 history_length: int = 10_000) -> None:
+    def __init__(
+        self, initial: np.ndarray | None = None, dt: float = 0.4, history_length: int = 10_000
+    ) -> None:
         if dt <= 0:
             raise ConfigError(f"dt must be > 0, got {dt}")
         if history_length < 0:

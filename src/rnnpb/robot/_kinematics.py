@@ -41,19 +41,22 @@ FOREARM_LENGTH = 0.11
 """Elbow axis to the hand centre (a ball in the fist), metres."""
 SHOULDER_HEIGHT = 0.40
 SHOULDER_HALF_WIDTH = 0.095
-SHOULDERS = np.array([[0.0, SHOULDER_HALF_WIDTH, SHOULDER_HEIGHT],
-                      [0.0, -SHOULDER_HALF_WIDTH, SHOULDER_HEIGHT]])
+SHOULDERS = np.array(
+    [[0.0, SHOULDER_HALF_WIDTH, SHOULDER_HEIGHT], [0.0, -SHOULDER_HALF_WIDTH, SHOULDER_HEIGHT]]
+)
 """Shoulder centres (left arm, right arm) in the robot frame, shape (2, 3)."""
 ARM_SIDES = ("left", "right")
 _MIRROR = np.array([1.0, -1.0])  # m in the module docstring, per arm
 
 # --- joint limits (radians), order of MOTOR_NAMES -------------------------------------------
-_ARM_LIMITS = np.array([
-    [-1.0, 3.0],    # shoulder pitch: 57 deg backwards to 172 deg forward/overhead
-    [-0.25, 1.65],  # shoulder roll: 14 deg across the body to 95 deg sideways
-    [-1.6, 1.6],    # shoulder yaw: +-92 deg about the upper arm
-    [0.0, 2.4],     # elbow pitch: straight to 138 deg bent
-])
+_ARM_LIMITS = np.array(
+    [
+        [-1.0, 3.0],  # shoulder pitch: 57 deg backwards to 172 deg forward/overhead
+        [-0.25, 1.65],  # shoulder roll: 14 deg across the body to 95 deg sideways
+        [-1.6, 1.6],  # shoulder yaw: +-92 deg about the upper arm
+        [0.0, 2.4],  # elbow pitch: straight to 138 deg bent
+    ]
+)
 JOINT_LIMITS = np.concatenate([_ARM_LIMITS, _ARM_LIMITS])
 """Joint limits, shape (8, 2): (lower, upper) radians per joint in MOTOR_NAMES order."""
 JOINT_LIMITS.setflags(write=False)
@@ -102,10 +105,16 @@ def _arm_points(arm_joints: np.ndarray, side: np.ndarray | int) -> tuple[np.ndar
     """Elbow and hand of one arm relative to its shoulder; arm_joints (..., 4) → (..., 3) each."""
     q = np.asarray(arm_joints, dtype=np.float64)
     m = _MIRROR[side]
-    shoulder = (_rot(1, -q[..., 0]) @ _rot(0, m * q[..., 1]) @ _rot(2, m * q[..., 2]))
+    shoulder = _rot(1, -q[..., 0]) @ _rot(0, m * q[..., 1]) @ _rot(2, m * q[..., 2])
     upper = np.array([0.0, 0.0, -UPPER_ARM_LENGTH])
-    fore = np.stack([FOREARM_LENGTH * np.sin(q[..., 3]), np.zeros_like(q[..., 3]),
-                     -FOREARM_LENGTH * np.cos(q[..., 3])], axis=-1)  # R_y(-elp) (0, 0, -L2)
+    fore = np.stack(
+        [
+            FOREARM_LENGTH * np.sin(q[..., 3]),
+            np.zeros_like(q[..., 3]),
+            -FOREARM_LENGTH * np.cos(q[..., 3]),
+        ],
+        axis=-1,
+    )  # R_y(-elp) (0, 0, -L2)
     elbow = shoulder @ upper
     hand = elbow + (shoulder @ fore[..., None])[..., 0]
     return elbow, hand
@@ -222,8 +231,9 @@ def _refine(q: np.ndarray, target: np.ndarray, side: int, iterations: int) -> np
     return np.concatenate([x, coupled_elbow(x[:, :1])], axis=-1)
 
 
-def inverse_kinematics(hands: np.ndarray, tolerance: float = 1e-4,
-                       iterations: int = 40) -> IKResult:
+def inverse_kinematics(
+    hands: np.ndarray, tolerance: float = 1e-4, iterations: int = 40
+) -> IKResult:
     """Joint angles that put both hands at 3-D targets, with the elbow coupled to the shoulder.
 
     Parameters
@@ -254,8 +264,9 @@ def inverse_kinematics(hands: np.ndarray, tolerance: float = 1e-4,
         best_err = None
         for cand in _closed_form(target, side):
             cand = np.nan_to_num(cand)
-            inside = np.all((cand >= _ARM_LIMITS[:, 0] - 1e-12)
-                            & (cand <= _ARM_LIMITS[:, 1] + 1e-12), axis=-1)
+            inside = np.all(
+                (cand >= _ARM_LIMITS[:, 0] - 1e-12) & (cand <= _ARM_LIMITS[:, 1] + 1e-12), axis=-1
+            )
             err = np.linalg.norm(_arm_points(cand, side)[1] - target, axis=-1)
             err = np.where(inside, err, np.inf)
             if best_q is None:
@@ -288,5 +299,8 @@ def inverse_kinematics(hands: np.ndarray, tolerance: float = 1e-4,
         joints[:, side] = best_q
         residual[:, side] = best_err
     joints = clip_to_limits(joints.reshape(-1, 8))
-    return IKResult(joints=joints.reshape(*lead, 8), residual=residual.reshape(*lead, 2),
-                    reachable=(residual < tolerance).reshape(*lead, 2))
+    return IKResult(
+        joints=joints.reshape(*lead, 8),
+        residual=residual.reshape(*lead, 2),
+        reachable=(residual < tolerance).reshape(*lead, 2),
+    )

@@ -35,8 +35,10 @@ def model_xml(camera: RobotCamera | None = None) -> str:
     root = ET.fromstring(text)
     head = root.find(".//body[@name='head']")
     if head is None or head.get("pos", "0 0 0").split() != ["0", "0", "0"]:
-        raise ConfigError("humanoid.xml: the head body must exist and sit at the robot-frame "
-                          "origin, so that the camera attributes are robot-frame coordinates")
+        raise ConfigError(
+            "humanoid.xml: the head body must exist and sit at the robot-frame "
+            "origin, so that the camera attributes are robot-frame coordinates"
+        )
     ET.SubElement(head, "camera", {"name": ROBOT_EYE, **camera.mjcf_attributes()})
     return ET.tostring(root, encoding="unicode")
 
@@ -55,8 +57,12 @@ def joint_addresses(model: mujoco.MjModel) -> np.ndarray:
     return np.array([model.jnt_qposadr[model.joint(name).id] for name in MOTOR_NAMES])
 
 
-def set_pose(model: mujoco.MjModel, data: mujoco.MjData, joints: np.ndarray,
-             user_hands: np.ndarray | None = None) -> None:
+def set_pose(
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    joints: np.ndarray,
+    user_hands: np.ndarray | None = None,
+) -> None:
     """Put the arms at ``joints`` (8,) radians and the user's hand balls at ``user_hands``
     (2, 3) (or keep them hidden), then update the kinematics (no physics)."""
     data.qpos[joint_addresses(model)] = clip_to_limits(joints)
@@ -65,8 +71,9 @@ def set_pose(model: mujoco.MjModel, data: mujoco.MjData, joints: np.ndarray,
     import_mujoco().mj_forward(model, data)
 
 
-def set_user_hands(model: mujoco.MjModel, data: mujoco.MjData,
-                   user_hands: np.ndarray | None) -> None:
+def set_user_hands(
+    model: mujoco.MjModel, data: mujoco.MjData, user_hands: np.ndarray | None
+) -> None:
     """Place the user's hand balls (2, 3) in the robot frame; None hides them under the floor."""
     for i, name in enumerate(USER_HAND_BODIES):
         mocap = model.body(name).mocapid[0]
@@ -99,9 +106,14 @@ class MujocoRobot(Robot):
         The head camera model placed in the scene.
     """
 
-    def __init__(self, dt: float = 0.4, n_substeps: int | None = None,
-                 initial: np.ndarray | None = None, ramp_fraction: float = 0.5,
-                 camera: RobotCamera | None = None) -> None:
+    def __init__(
+        self,
+        dt: float = 0.4,
+        n_substeps: int | None = None,
+        initial: np.ndarray | None = None,
+        ramp_fraction: float = 0.5,
+        camera: RobotCamera | None = None,
+    ) -> None:
         if dt <= 0:
             raise ConfigError(f"dt must be > 0, got {dt}")
         if n_substeps is None:

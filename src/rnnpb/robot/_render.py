@@ -41,14 +41,21 @@ class RobotRenderer:
     Use as a context manager, or call :meth:`close`, to free the GL context.
     """
 
-    def __init__(self, width: int = 640, height: int = 480, camera: RobotCamera | None = None,
-                 model: mujoco.MjModel | None = None) -> None:
+    def __init__(
+        self,
+        width: int = 640,
+        height: int = 480,
+        camera: RobotCamera | None = None,
+        model: mujoco.MjModel | None = None,
+    ) -> None:
         self.camera = camera or RobotCamera()
         self.model = model if model is not None else load_model(self.camera)
         if width > self.model.vis.global_.offwidth or height > self.model.vis.global_.offheight:
-            raise ConfigError(f"render size {width}x{height} exceeds the model's offscreen "
-                              f"buffer {self.model.vis.global_.offwidth}x"
-                              f"{self.model.vis.global_.offheight}")
+            raise ConfigError(
+                f"render size {width}x{height} exceeds the model's offscreen "
+                f"buffer {self.model.vis.global_.offwidth}x"
+                f"{self.model.vis.global_.offheight}"
+            )
         mj = import_mujoco()
         self.data = mj.MjData(self.model)
         self.width, self.height = int(width), int(height)
@@ -58,14 +65,16 @@ class RobotRenderer:
             raise ConfigError(
                 f"MuJoCo cannot render with MUJOCO_GL={os.environ.get('MUJOCO_GL', '')!r}: "
                 f"{error}; set MUJOCO_GL=osmesa (software rendering) before the first "
-                "simulation or renderer is made") from error
+                "simulation or renderer is made"
+            ) from error
 
     def _check_camera(self, camera: str) -> None:
         if camera not in CAMERAS:
             raise ConfigError(f"unknown camera {camera!r} (known: {', '.join(CAMERAS)})")
 
-    def render(self, joints: np.ndarray, camera: str = "front",
-               user_hands: np.ndarray | None = None) -> np.ndarray:
+    def render(
+        self, joints: np.ndarray, camera: str = "front", user_hands: np.ndarray | None = None
+    ) -> np.ndarray:
         """An RGB image, shape (height, width, 3) uint8, of the robot at ``joints`` (8,),
         with the user's hand balls at ``user_hands`` (2, 3) if given."""
         self._check_camera(camera)
@@ -73,8 +82,9 @@ class RobotRenderer:
         self._renderer.update_scene(self.data, camera=camera)
         return self._renderer.render().copy()
 
-    def segmentation(self, joints: np.ndarray, camera: str = "front",
-                     user_hands: np.ndarray | None = None) -> np.ndarray:
+    def segmentation(
+        self, joints: np.ndarray, camera: str = "front", user_hands: np.ndarray | None = None
+    ) -> np.ndarray:
         """Geom id per pixel, shape (height, width) int; -1 where nothing (the sky) is seen."""
         self._check_camera(camera)
         set_pose(self.model, self.data, joints, user_hands)
@@ -100,15 +110,21 @@ class RobotRenderer:
         self.close()
 
 
-def render_pose(joints: np.ndarray, camera: str = "front", width: int = 640, height: int = 480,
-                user_hands: np.ndarray | None = None) -> np.ndarray:
+def render_pose(
+    joints: np.ndarray,
+    camera: str = "front",
+    width: int = 640,
+    height: int = 480,
+    user_hands: np.ndarray | None = None,
+) -> np.ndarray:
     """One RGB image (height, width, 3) uint8 of the robot at ``joints`` (8,) radians."""
     with RobotRenderer(width, height) as renderer:
         return renderer.render(joints, camera, user_hands)
 
 
-def write_video(path: str | os.PathLike[str], frames: Iterable[np.ndarray],
-                fps: float = 2.5) -> Path:
+def write_video(
+    path: str | os.PathLike[str], frames: Iterable[np.ndarray], fps: float = 2.5
+) -> Path:
     """Write RGB frames (each (height, width, 3) uint8) as an mp4 video (OpenCV, ``mp4v``).
 
     The default frame rate plays a 0.4 s network step in real time.
@@ -125,12 +141,13 @@ def write_video(path: str | os.PathLike[str], frames: Iterable[np.ndarray],
         for frame in frames:
             frame = np.asarray(frame)
             if frame.ndim != 3 or frame.shape[2] != 3 or frame.dtype != np.uint8:
-                raise ConfigError(f"video frames must be (height, width, 3) uint8, got "
-                                  f"{frame.shape} {frame.dtype}")
+                raise ConfigError(
+                    f"video frames must be (height, width, 3) uint8, got "
+                    f"{frame.shape} {frame.dtype}"
+                )
             if writer is None:
                 size = (frame.shape[1], frame.shape[0])
-                writer = cv2.VideoWriter(str(partial), cv2.VideoWriter_fourcc(*"mp4v"), fps,
-                                         size)
+                writer = cv2.VideoWriter(str(partial), cv2.VideoWriter_fourcc(*"mp4v"), fps, size)
                 if not writer.isOpened():
                     raise ConfigError(f"{path}: cannot open a video writer")
             writer.write(np.ascontiguousarray(frame[..., ::-1]))

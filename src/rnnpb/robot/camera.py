@@ -43,8 +43,9 @@ class RobotCamera:
 
     def __post_init__(self) -> None:
         if self.width < 8 or self.height < 8:
-            raise ConfigError(f"camera image must be at least 8x8 pixels, got "
-                              f"{self.width}x{self.height}")
+            raise ConfigError(
+                f"camera image must be at least 8x8 pixels, got {self.width}x{self.height}"
+            )
         if not 1.0 < self.fovy_deg < 170.0:
             raise ConfigError(f"camera fovy_deg must be in (1, 170), got {self.fovy_deg}")
         if len(self.position) != 3:
@@ -98,8 +99,12 @@ class RobotCamera:
         x = (pixels[..., 0] - 0.5 * self.width) * depth / self.focal_px
         y = (0.5 * self.height - pixels[..., 1]) * depth / self.focal_px
         right, up, forward = self.axes
-        return (np.asarray(self.position) + x[..., None] * right + y[..., None] * up
-                + depth[..., None] * forward)
+        return (
+            np.asarray(self.position)
+            + x[..., None] * right
+            + y[..., None] * up
+            + depth[..., None] * forward
+        )
 
     def normalize_pixels(self, pixels: np.ndarray) -> np.ndarray:
         """Pixel (column, row) (..., 2) → normalized view-plane (Y, Z) (..., 2) in [0, 1]."""

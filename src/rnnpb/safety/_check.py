@@ -84,8 +84,9 @@ class SequenceSafety:
 class SafetyChecker:
     """Checks motor commands; holds the self-collision model (made once)."""
 
-    def __init__(self, limits: SafetyLimits | None = None,
-                 collision: SelfCollision | None = None) -> None:
+    def __init__(
+        self, limits: SafetyLimits | None = None, collision: SelfCollision | None = None
+    ) -> None:
         self.limits = limits or SafetyLimits()
         self.collision = collision or SelfCollision()
 
@@ -101,8 +102,7 @@ class SafetyChecker:
                 return hit
         return ""
 
-    def command_reasons(self, previous: np.ndarray | None, command: np.ndarray
-                        ) -> list[str]:
+    def command_reasons(self, previous: np.ndarray | None, command: np.ndarray) -> list[str]:
         """The physical reasons a command is unsafe after ``previous`` (None: the first)."""
         reasons = []
         hit = self.path_contact(previous, command)
@@ -112,19 +112,20 @@ class SafetyChecker:
             fast = np.abs(command - previous) > self.limits.step_limit
             reasons += [f"speed:{MOTOR_NAMES[j]}" for j in np.flatnonzero(fast)]
         margin = self.limits.limit_margin
-        pressed = ((command <= JOINT_LIMITS[:, 0] + margin)
-                   | (command >= JOINT_LIMITS[:, 1] - margin))
+        pressed = (command <= JOINT_LIMITS[:, 0] + margin) | (
+            command >= JOINT_LIMITS[:, 1] - margin
+        )
         reasons += [f"limit:{MOTOR_NAMES[j]}" for j in np.flatnonzero(pressed)]
         return reasons
 
-    def check(self, motor: np.ndarray, previous: np.ndarray | None = None
-              ) -> SequenceSafety:
+    def check(self, motor: np.ndarray, previous: np.ndarray | None = None) -> SequenceSafety:
         """Which steps of ``motor`` (T, 8) radians are unsafe and why; ``previous`` (8,) is
         the pose before the first step (None: the first step has no speed or path check)."""
         motor = np.asarray(motor, dtype=np.float64)
         if motor.ndim != 2 or motor.shape[1] != MOTOR_SIZE:
-            raise ConfigError(f"motor sequence must have shape (T, {MOTOR_SIZE}), got "
-                              f"{motor.shape}")
+            raise ConfigError(
+                f"motor sequence must have shape (T, {MOTOR_SIZE}), got {motor.shape}"
+            )
         if not np.all(np.isfinite(motor)):
             raise ConfigError("motor sequence must be finite")
         kinds = np.zeros((len(motor), 4), bool)
@@ -156,8 +157,8 @@ def unsettled_steps(motor: np.ndarray, limits: SafetyLimits) -> np.ndarray:
     half = w // 2
     best = np.full(len(windows), np.inf)
     for lag in range(1, half + 1):
-        late = windows[:, w - half:]
-        early = windows[:, w - half - lag:w - lag]
+        late = windows[:, w - half :]
+        early = windows[:, w - half - lag : w - lag]
         best = np.minimum(best, np.sqrt(np.mean((late - early) ** 2, axis=(1, 2))))
-    out[w - 1:] = best > limits.settle_tolerance
+    out[w - 1 :] = best > limits.settle_tolerance
     return out

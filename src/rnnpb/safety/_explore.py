@@ -55,12 +55,16 @@ class Experience:
     counts: dict[str, int]
 
     def joined(self, other: Experience) -> Experience:
-        return Experience(np.concatenate([self.pb, other.pb]),
-                          np.concatenate([self.unsafe, other.unsafe]),
-                          np.concatenate([self.unsettled, other.unsettled]),
-                          np.concatenate([self.source, other.source]),
-                          {k: self.counts.get(k, 0) + other.counts.get(k, 0)
-                           for k in {*self.counts, *other.counts}})
+        return Experience(
+            np.concatenate([self.pb, other.pb]),
+            np.concatenate([self.unsafe, other.unsafe]),
+            np.concatenate([self.unsettled, other.unsettled]),
+            np.concatenate([self.source, other.source]),
+            {
+                k: self.counts.get(k, 0) + other.counts.get(k, 0)
+                for k in {*self.counts, *other.counts}
+            },
+        )
 
 
 _closed_loop = jax.jit(closed_loop)
@@ -78,9 +82,12 @@ def sample_pbs(model: TrainedModel, config: ExplorationConfig) -> np.ndarray:
     return np.concatenate([uniform, near])
 
 
-def explore(model: TrainedModel, config: ExplorationConfig | None = None,
-            checker: SafetyChecker | None = None,
-            progress: Callable[[int, int], None] | None = None) -> Experience:
+def explore(
+    model: TrainedModel,
+    config: ExplorationConfig | None = None,
+    checker: SafetyChecker | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> Experience:
     """Generate from many PBs and label each by the safety of its behaviour.
 
     ``progress(done, total)`` is called after each PB is checked.
@@ -95,14 +102,19 @@ def explore(model: TrainedModel, config: ExplorationConfig | None = None,
     counts = dict.fromkeys(("collision", "speed", "limit", "unsettled"), 0)
     done = 0
     for start in range(0, len(pbs), config.batch):
-        chunk = pbs[start:start + config.batch]
+        chunk = pbs[start : start + config.batch]
         n = len(chunk)
         predictions, _ = _closed_loop(
-            params, jnp.broadcast_to(jnp.asarray(model.mean_initial_context, jnp.float32),
-                                     (n, net.context_size)),
+            params,
+            jnp.broadcast_to(
+                jnp.asarray(model.mean_initial_context, jnp.float32), (n, net.context_size)
+            ),
             jnp.full((n, net.io_size), 0.5, jnp.float32),
-            jnp.broadcast_to(jnp.asarray(chunk, jnp.float32), (config.steps, n, net.pb_size)))
-        motor = model.denormalize(np.asarray(predictions, dtype=np.float64))[..., net.sensory_size:]
+            jnp.broadcast_to(jnp.asarray(chunk, jnp.float32), (config.steps, n, net.pb_size)),
+        )
+        motor = model.denormalize(np.asarray(predictions, dtype=np.float64))[
+            ..., net.sensory_size :
+        ]
         for i in range(n):
             report = checker.check(motor[:, i])
             unsafe[start + i] = bool(report.unsafe.any())
@@ -115,14 +127,21 @@ def explore(model: TrainedModel, config: ExplorationConfig | None = None,
     return Experience(pbs, unsafe, unsettled, np.array(["explored"] * len(pbs)), counts)
 
 
-def visited(pbs: Sequence[np.ndarray] | np.ndarray, unsafe: Sequence[bool] | np.ndarray
-            ) -> Experience:
+def visited(
+    pbs: Sequence[np.ndarray] | np.ndarray, unsafe: Sequence[bool] | np.ndarray
+) -> Experience:
     """PBs visited in an interaction, (n, P), each labelled by whether the command sent at
     that step was unsafe (n,)."""
     pbs = np.asarray(pbs, dtype=np.float64)
     unsafe = np.asarray(unsafe, bool)
     if pbs.ndim != 2 or len(pbs) != len(unsafe):
-        raise ConfigError(f"visited PBs (n, P) and labels (n,) disagree: {pbs.shape}, "
-                          f"{unsafe.shape}")
-    return Experience(pbs, unsafe, np.zeros(len(pbs), bool), np.array(["visited"] * len(pbs)),
-                      {"visited_unsafe": int(unsafe.sum())})
+        raise ConfigError(
+            f"visited PBs (n, P) and labels (n,) disagree: {pbs.shape}, {unsafe.shape}"
+        )
+    return Experience(
+        pbs,
+        unsafe,
+        np.zeros(len(pbs), bool),
+        np.array(["visited"] * len(pbs)),
+        {"visited_unsafe": int(unsafe.sum())},
+    )

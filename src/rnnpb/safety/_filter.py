@@ -40,8 +40,9 @@ class CommandFilter:
         target only).
     """
 
-    def __init__(self, checker: SafetyChecker | None = None,
-                 initial: np.ndarray | None = None) -> None:
+    def __init__(
+        self, checker: SafetyChecker | None = None, initial: np.ndarray | None = None
+    ) -> None:
         self.checker = checker or SafetyChecker()
         self.previous = None if initial is None else clip_to_limits(np.asarray(initial, float))
         self.prevented = 0

@@ -12,10 +12,14 @@ from rnnpb.safety._map import SafetyMap, new_map
 from rnnpb.safety._meta import MetaConfig, fit_meta
 
 
-def learn_safety_map(model: TrainedModel, exploration: ExplorationConfig | None = None,
-                     meta: MetaConfig | None = None, limits: SafetyLimits | None = None,
-                     also: Experience | None = None,
-                     progress: Callable[[int, int], None] | None = None) -> SafetyMap:
+def learn_safety_map(
+    model: TrainedModel,
+    exploration: ExplorationConfig | None = None,
+    meta: MetaConfig | None = None,
+    limits: SafetyLimits | None = None,
+    also: Experience | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> SafetyMap:
     """Explore the model's PB space, join ``also`` (PBs visited in interactions), fit the
     risk network; the map to save beside the model."""
     exploration = exploration or ExplorationConfig()
@@ -25,8 +29,12 @@ def learn_safety_map(model: TrainedModel, exploration: ExplorationConfig | None 
     if also is not None:
         experience = experience.joined(also)
     params = fit_meta(experience, meta)
-    info = {"exploration": asdict(exploration), "meta": asdict(meta), "limits": asdict(limits),
-            "step_limit_rad": limits.step_limit, "counts": experience.counts,
-            "visited": int((experience.source == "visited").sum())}
-    return new_map(model, params, experience.pb, experience.unsafe, meta.familiarity_width,
-                   info)
+    info = {
+        "exploration": asdict(exploration),
+        "meta": asdict(meta),
+        "limits": asdict(limits),
+        "step_limit_rad": limits.step_limit,
+        "counts": experience.counts,
+        "visited": int((experience.source == "visited").sum()),
+    }
+    return new_map(model, params, experience.pb, experience.unsafe, meta.familiarity_width, info)

@@ -75,23 +75,30 @@ class SafetyMap:
         """Refuse a map that was learned for another model."""
         found = model_fingerprint(model)
         if found != self.fingerprint:
-            raise ModelFileError(f"{path}: this safety map was learned for another model "
-                                 f"(fingerprint {self.fingerprint}, the model's is {found}); "
-                                 "run `rnnpb safety learn` for it")
+            raise ModelFileError(
+                f"{path}: this safety map was learned for another model "
+                f"(fingerprint {self.fingerprint}, the model's is {found}); "
+                "run `rnnpb safety learn` for it"
+            )
 
     def save(self, path: str | os.PathLike[str]) -> None:
-        meta = {"format": SAFETY_FORMAT, "format_version": SAFETY_FORMAT_VERSION,
-                "fingerprint": self.fingerprint, "familiarity_width": self.familiarity_width,
-                "info": self.info}
-        arrays = {f"meta_{name}": np.asarray(value, np.float64)
-                  for name, value in self.meta._asdict().items()}
+        meta = {
+            "format": SAFETY_FORMAT,
+            "format_version": SAFETY_FORMAT_VERSION,
+            "fingerprint": self.fingerprint,
+            "familiarity_width": self.familiarity_width,
+            "info": self.info,
+        }
+        arrays = {
+            f"meta_{name}": np.asarray(value, np.float64)
+            for name, value in self.meta._asdict().items()
+        }
         arrays["experienced"] = np.asarray(self.experienced, np.float64)
         arrays["unsafe"] = np.asarray(self.unsafe, np.uint8)
         save_archive(path, meta, arrays)
 
 
-def load_safety_map(path: str | os.PathLike[str], model: TrainedModel | None = None
-                    ) -> SafetyMap:
+def load_safety_map(path: str | os.PathLike[str], model: TrainedModel | None = None) -> SafetyMap:
     """Read a safety map; with ``model``, also check it belongs to that model. Raises
     :class:`ModelFileError` naming the file for a missing, damaged, foreign or newer map."""
     path = Path(path)
@@ -106,32 +113,47 @@ def load_safety_map(path: str | os.PathLike[str], model: TrainedModel | None = N
     experienced = arrays["experienced"].astype(np.float64)
     p = params.w1.shape[0] if params.w1.ndim == 2 else -1
     h = params.w1.shape[1] if params.w1.ndim == 2 else -1
-    shapes_ok = (params.b1.shape == (h,) and params.w2.shape == (h, h)
-                 and params.b2.shape == (h,) and params.w3.shape == (h,)
-                 and params.b3.shape == () and experienced.ndim == 2
-                 and experienced.shape[1] == p and arrays["unsafe"].shape == (len(experienced),))
+    shapes_ok = (
+        params.b1.shape == (h,)
+        and params.w2.shape == (h, h)
+        and params.b2.shape == (h,)
+        and params.w3.shape == (h,)
+        and params.b3.shape == ()
+        and experienced.ndim == 2
+        and experienced.shape[1] == p
+        and arrays["unsafe"].shape == (len(experienced),)
+    )
     if not shapes_ok:
         raise ModelFileError(f"{path}: safety map arrays have inconsistent shapes")
     try:
         width = float(meta["familiarity_width"])
         fingerprint = str(meta["fingerprint"])
     except (KeyError, TypeError, ValueError):
-        raise ModelFileError(f"{path}: safety map meta.json lacks familiarity_width or "
-                             "fingerprint") from None
+        raise ModelFileError(
+            f"{path}: safety map meta.json lacks familiarity_width or fingerprint"
+        ) from None
     if not width > 0:
         raise ModelFileError(f"{path}: familiarity_width must be > 0, got {width}")
-    result = SafetyMap(params, experienced, arrays["unsafe"].astype(bool), width, fingerprint,
-                       meta.get("info") if isinstance(meta.get("info"), dict) else {})
+    result = SafetyMap(
+        params,
+        experienced,
+        arrays["unsafe"].astype(bool),
+        width,
+        fingerprint,
+        meta.get("info") if isinstance(meta.get("info"), dict) else {},
+    )
     if model is not None:
         if p != model.network.pb_size:
-            raise ModelFileError(f"{path}: safety map is for {p} PB units, the model has "
-                                 f"{model.network.pb_size}")
+            raise ModelFileError(
+                f"{path}: safety map is for {p} PB units, the model has {model.network.pb_size}"
+            )
         result.check_model(model, path)
     return result
 
 
-def find_safety_map(model_path: str | os.PathLike[str], model: TrainedModel | None = None
-                    ) -> SafetyMap | None:
+def find_safety_map(
+    model_path: str | os.PathLike[str], model: TrainedModel | None = None
+) -> SafetyMap | None:
     """The map beside the model at ``model_path``, or None when there is none (the fallback:
     the filter alone guards the robot). A map that is there but damaged or foreign raises."""
     path = safety_map_path(model_path)
@@ -151,14 +173,21 @@ def describe_safety_map(path: str | os.PathLike[str]) -> str:
     n = len(stored.experienced)
     unsafe = int(stored.unsafe.sum())
     info = stored.info
-    return (f"safety map: {n} experienced PBs, {unsafe} unsafe ({100 * unsafe / max(n, 1):.0f} "
-            f"%), learned {info.get('created', '?')}\n"
-            f"  risk network {stored.meta.w1.shape[1]} hidden units; servo limit "
-            f"{info.get('step_limit_rad', float('nan')):.2f} rad/step; model {stored.fingerprint}")
+    return (
+        f"safety map: {n} experienced PBs, {unsafe} unsafe ({100 * unsafe / max(n, 1):.0f} "
+        f"%), learned {info.get('created', '?')}\n"
+        f"  risk network {stored.meta.w1.shape[1]} hidden units; servo limit "
+        f"{info.get('step_limit_rad', float('nan')):.2f} rad/step; model {stored.fingerprint}"
+    )
 
 
-def new_map(model: TrainedModel, meta: MetaParams, experienced: np.ndarray,
-            unsafe: np.ndarray, width: float, info: dict[str, Any]) -> SafetyMap:
-    info = {"created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
-            **info}
+def new_map(
+    model: TrainedModel,
+    meta: MetaParams,
+    experienced: np.ndarray,
+    unsafe: np.ndarray,
+    width: float,
+    info: dict[str, Any],
+) -> SafetyMap:
+    info = {"created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"), **info}
     return SafetyMap(meta, experienced, unsafe, width, model_fingerprint(model), info)

@@ -38,9 +38,13 @@ class MetaConfig:
 def init_meta(pb_size: int, hidden: int, seed: int) -> MetaParams:
     k1, k2, k3 = jax.random.split(jax.random.PRNGKey(seed), 3)
     return MetaParams(
-        w1=jax.random.normal(k1, (pb_size, hidden)) * 2.0, b1=jnp.zeros(hidden),
-        w2=jax.random.normal(k2, (hidden, hidden)) / np.sqrt(hidden), b2=jnp.zeros(hidden),
-        w3=jax.random.normal(k3, (hidden,)) / np.sqrt(hidden), b3=jnp.asarray(0.0))
+        w1=jax.random.normal(k1, (pb_size, hidden)) * 2.0,
+        b1=jnp.zeros(hidden),
+        w2=jax.random.normal(k2, (hidden, hidden)) / np.sqrt(hidden),
+        b2=jnp.zeros(hidden),
+        w3=jax.random.normal(k3, (hidden,)) / np.sqrt(hidden),
+        b3=jnp.asarray(0.0),
+    )
 
 
 def fit_meta(experience: Experience, config: MetaConfig | None = None) -> MetaParams:
@@ -74,8 +78,9 @@ def fit_meta(experience: Experience, config: MetaConfig | None = None) -> MetaPa
 def risk(meta: MetaParams, pb: np.ndarray) -> np.ndarray:
     """The learned risk (probability that the PB's behaviour is unsafe), shape (...)."""
     params = MetaParams(*(jnp.asarray(a, jnp.float32) for a in meta))
-    return np.asarray(jax.nn.sigmoid(risk_logit(params, jnp.asarray(pb, jnp.float32))),
-                      dtype=np.float64)
+    return np.asarray(
+        jax.nn.sigmoid(risk_logit(params, jnp.asarray(pb, jnp.float32))), dtype=np.float64
+    )
 
 
 def familiarity(experienced: np.ndarray, pb: np.ndarray, width: float) -> np.ndarray:
@@ -85,6 +90,6 @@ def familiarity(experienced: np.ndarray, pb: np.ndarray, width: float) -> np.nda
     flat = pb.reshape(-1, pb.shape[-1])
     nearest = np.empty(len(flat))
     for start in range(0, len(flat), 4096):
-        d2 = ((flat[start:start + 4096, None, :] - experienced[None]) ** 2).sum(-1)
-        nearest[start:start + 4096] = d2.min(axis=1)
-    return np.exp(-nearest / (2 * width ** 2)).reshape(pb.shape[:-1])
+        d2 = ((flat[start : start + 4096, None, :] - experienced[None]) ** 2).sum(-1)
+        nearest[start : start + 4096] = d2.min(axis=1)
+    return np.exp(-nearest / (2 * width**2)).reshape(pb.shape[:-1])

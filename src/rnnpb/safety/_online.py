@@ -28,8 +28,12 @@ class OnlineSafety:
     note: str
 
     def to_dict(self) -> dict[str, object]:
-        return {"map": self.safety_map is not None, "guard": self.guard,
-                "filter": self.command_filter is not None, "note": self.note}
+        return {
+            "map": self.safety_map is not None,
+            "guard": self.guard,
+            "filter": self.command_filter is not None,
+            "note": self.note,
+        }
 
     @property
     def guard(self) -> str:
@@ -37,8 +41,12 @@ class OnlineSafety:
         return self.config.safety_guard if self.meta is not None else "off"
 
 
-def online_safety(model_path: str | os.PathLike[str], model: TrainedModel,
-                  online: OnlineConfig, enabled: bool = True) -> OnlineSafety:
+def online_safety(
+    model_path: str | os.PathLike[str],
+    model: TrainedModel,
+    online: OnlineConfig,
+    enabled: bool = True,
+) -> OnlineSafety:
     """The safety of an on-line run with the model at ``model_path``.
 
     With ``enabled``: the map beside the model (:func:`find_safety_map`; a damaged or
@@ -47,25 +55,44 @@ def online_safety(model_path: str | os.PathLike[str], model: TrainedModel,
     the filter alone guards (the documented fallback). Without ``enabled`` neither runs.
     """
     if not enabled:
-        return OnlineSafety(replace(online, safety_guard="off"), None, None, None,
-                            "safety: off (no PB guard, no command filter)")
+        return OnlineSafety(
+            replace(online, safety_guard="off"),
+            None,
+            None,
+            None,
+            "safety: off (no PB guard, no command filter)",
+        )
     safety_map = find_safety_map(model_path, model)
     command_filter = CommandFilter()
     if safety_map is None:
-        return OnlineSafety(online, None, command_filter, None,
-                            f"safety: no map beside the model ({safety_map_path(model_path).name}"
-                            "; `rnnpb safety learn` makes one): the command filter alone "
-                            "guards the robot")
+        return OnlineSafety(
+            online,
+            None,
+            command_filter,
+            None,
+            f"safety: no map beside the model ({safety_map_path(model_path).name}"
+            "; `rnnpb safety learn` makes one): the command filter alone "
+            "guards the robot",
+        )
     guard = online.safety_guard
-    return OnlineSafety(online, safety_map.meta, command_filter, safety_map,
-                        f"safety: map {safety_map_path(model_path).name}, PB guard {guard}"
-                        + (" (OnlineConfig.safety_guard)" if guard == "off" else "")
-                        + ", command filter on")
+    return OnlineSafety(
+        online,
+        safety_map.meta,
+        command_filter,
+        safety_map,
+        f"safety: map {safety_map_path(model_path).name}, PB guard {guard}"
+        + (" (OnlineConfig.safety_guard)" if guard == "off" else "")
+        + ", command filter on",
+    )
 
 
-def risk_plane(safety_map: SafetyMap, origin: np.ndarray, axes: np.ndarray,
-               extent: tuple[float, float, float, float], grid: int = 24
-               ) -> dict[str, object]:
+def risk_plane(
+    safety_map: SafetyMap,
+    origin: np.ndarray,
+    axes: np.ndarray,
+    extent: tuple[float, float, float, float],
+    grid: int = 24,
+) -> dict[str, object]:
     """The learned risk on a plane of PB space, for a plot: the PBs ``origin + a·axes[0] +
     b·axes[1]`` for ``a`` in ``extent[0:2]`` and ``b`` in ``extent[2:4]`` on a ``grid`` ×
     ``grid`` lattice of cell centres (clipped to [0, 1]). Returns the plane (``origin``,
@@ -77,13 +104,18 @@ def risk_plane(safety_map: SafetyMap, origin: np.ndarray, axes: np.ndarray,
     b = extent[2] + (np.arange(grid) + 0.5) * (extent[3] - extent[2]) / grid
     points = origin + a[None, :, None] * axes[0] + b[:, None, None] * axes[1]
     values = safety_map.risk(np.clip(points, 0.0, 1.0))
-    return {"origin": np.round(origin, 5).tolist(), "axes": np.round(axes, 5).tolist(),
-            "extent": [float(v) for v in extent], "grid": grid,
-            "risk": np.round(values, 3).tolist()}
+    return {
+        "origin": np.round(origin, 5).tolist(),
+        "axes": np.round(axes, 5).tolist(),
+        "extent": [float(v) for v in extent],
+        "grid": grid,
+        "risk": np.round(values, 3).tolist(),
+    }
 
 
-def risk_views(safety_map: SafetyMap, learned: dict[str, np.ndarray], grid: int = 24
-               ) -> dict[str, dict[str, object]]:
+def risk_views(
+    safety_map: SafetyMap, learned: dict[str, np.ndarray], grid: int = 24
+) -> dict[str, dict[str, object]]:
     """The risk on the dashboard's PB views: ``"01"`` (PB0 × PB1) and ``"23"`` (PB2 × PB3),
     the other two PB values at the learned PBs' mean, each over [0, 1]²; and ``"plane"``, the
     plane through the learned PBs (their mean and two main directions), 0.8 either way."""
@@ -101,6 +133,5 @@ def risk_views(safety_map: SafetyMap, learned: dict[str, np.ndarray], grid: int 
         views[name] = risk_plane(safety_map, origin, axes, (0.0, 1.0, 0.0, 1.0), grid)
     if len(pbs) >= 2:
         _, _, directions = np.linalg.svd(pbs - mean, full_matrices=False)
-        views["plane"] = risk_plane(safety_map, mean, directions[:2], (-0.8, 0.8, -0.8, 0.8),
-                                    grid)
+        views["plane"] = risk_plane(safety_map, mean, directions[:2], (-0.8, 0.8, -0.8, 0.8), grid)
     return views

@@ -68,13 +68,19 @@ def ray_cluster(address: str | None = None, workers: int | None = None) -> Itera
     # Ray's worker processes inherit the environment: they find rnnpb where this process does.
     try:
         if address is None:
-            ray.init(num_cpus=workers or os.cpu_count() or 1, include_dashboard=False,
-                     log_to_driver=False, configure_logging=False)
+            ray.init(
+                num_cpus=workers or os.cpu_count() or 1,
+                include_dashboard=False,
+                log_to_driver=False,
+                configure_logging=False,
+            )
         else:
             ray.init(address=address, log_to_driver=False, configure_logging=False)
     except (ConnectionError, RuntimeError, ValueError) as error:
-        raise ClusterError(f"cannot {'start' if address is None else 'join'} Ray: "
-                           f"{str(error).splitlines()[0] if str(error) else error}") from None
+        raise ClusterError(
+            f"cannot {'start' if address is None else 'join'} Ray: "
+            f"{str(error).splitlines()[0] if str(error) else error}"
+        ) from None
     try:
         yield _capacity(workers)
     finally:
@@ -91,8 +97,9 @@ def _capacity(workers: int | None) -> int:
 Job = tuple[Any, Callable[..., Any], tuple[Any, ...]]
 
 
-def run_tasks(jobs: deque[Job], capacity: int, retries: int = 2
-              ) -> Iterator[tuple[Any, Any, BaseException | None]]:
+def run_tasks(
+    jobs: deque[Job], capacity: int, retries: int = 2
+) -> Iterator[tuple[Any, Any, BaseException | None]]:
     """Run ``(key, function, args)`` jobs as Ray tasks, in order, at most ``capacity`` at
     once; yield ``(key, result, None)`` as each ends, or ``(key, None, error)`` when its worker
     died more than ``retries`` times (or the task could not run). Jobs the caller appends to
@@ -115,10 +122,12 @@ def run_tasks(jobs: deque[Job], capacity: int, retries: int = 2
                 yield key, None, error
 
 
-def ray_runner(address: str | None = None, workers: int | None = None, retries: int = 2
-               ) -> Callable[[Sequence[Job]], Iterator[tuple[Any, Any]]]:
+def ray_runner(
+    address: str | None = None, workers: int | None = None, retries: int = 2
+) -> Callable[[Sequence[Job]], Iterator[tuple[Any, Any]]]:
     """A job runner for :func:`rnnpb.experiments.report.run_demo`: the demo's jobs as Ray
     tasks; a job that fails fails the demo."""
+
     def run(jobs: Sequence[Job]) -> Iterator[tuple[Any, Any]]:
         import ray
 
@@ -129,4 +138,5 @@ def ray_runner(address: str | None = None, workers: int | None = None, retries: 
                 if error is not None:
                     raise error
                 yield key, result
+
     return run

@@ -34,8 +34,14 @@ LIMITS: dict[str, float] = {
     "switch_steps": metrics.SWITCH_LIMIT,
     "steps_to_follow": metrics.SWITCH_LIMIT,
 }
-FIGURE_MEASURES = ("steps_to_lock", "pb_settle_steps", "pause_steps_to_relock", "switch_steps",
-                   "steps_to_follow", "train_mse_max")
+FIGURE_MEASURES = (
+    "steps_to_lock",
+    "pb_settle_steps",
+    "pause_steps_to_relock",
+    "switch_steps",
+    "steps_to_follow",
+    "train_mse_max",
+)
 FIGURE_FILE = "settings.png"
 
 
@@ -50,10 +56,15 @@ class MeasureSummary:
     within: Interval | None  # share at most LIMITS[measure]; None without a limit
 
     def to_json(self) -> dict[str, Any]:
-        return {"measure": self.measure, "setting": self.setting, "n": len(self.values),
-                "never": sum(v is None for v in self.values), "median": asdict(self.median),
-                "within_limit": asdict(self.within) if self.within else None,
-                "limit": LIMITS.get(self.measure)}
+        return {
+            "measure": self.measure,
+            "setting": self.setting,
+            "n": len(self.values),
+            "never": sum(v is None for v in self.values),
+            "median": asdict(self.median),
+            "within_limit": asdict(self.within) if self.within else None,
+            "limit": LIMITS.get(self.measure),
+        }
 
 
 def setting_name(row: dict[str, Any]) -> str:
@@ -68,11 +79,19 @@ def summaries(rows: Sequence[dict[str, Any]]) -> list[MeasureSummary]:
             values.setdefault((row["measure"], setting_name(row)), []).append(row["value"])
     order = list(MEASURES)
     out = []
-    for (measure, setting), sample in sorted(values.items(),
-                                             key=lambda kv: (order.index(kv[0][0]), kv[0][1])):
+    for (measure, setting), sample in sorted(
+        values.items(), key=lambda kv: (order.index(kv[0][0]), kv[0][1])
+    ):
         limit = LIMITS.get(measure)
-        out.append(MeasureSummary(measure, setting, sample, median_interval(sample),
-                                  share_within(sample, limit) if limit is not None else None))
+        out.append(
+            MeasureSummary(
+                measure,
+                setting,
+                sample,
+                median_interval(sample),
+                share_within(sample, limit) if limit is not None else None,
+            )
+        )
     return out
 
 
@@ -90,16 +109,24 @@ def _cell(summary: MeasureSummary) -> tuple[str, ...]:
     digits = 2 if summary.measure in ("phase_lag_steps", "pause_relative_motion") else 1
     if summary.measure.startswith("train_"):
         median = summary.median
-        text = (f"{sci_like(median.value)} [{sci_like(median.low)}, {sci_like(median.high)}]"
-                if median.n else "–")
+        text = (
+            f"{sci_like(median.value)} [{sci_like(median.low)}, {sci_like(median.high)}]"
+            if median.n
+            else "–"
+        )
     else:
         text = summary.median.describe(digits)
     within = summary.within
-    share = "–" if within is None else (f"{within.value:.0%} [{within.low:.0%}, "
-                                        f"{within.high:.0%}]")
+    share = "–" if within is None else (f"{within.value:.0%} [{within.low:.0%}, {within.high:.0%}]")
     never = sum(v is None for v in summary.values)
-    return (MEASURES[summary.measure], summary.setting, str(len(summary.values)), text,
-            str(never), share)
+    return (
+        MEASURES[summary.measure],
+        summary.setting,
+        str(len(summary.values)),
+        text,
+        str(never),
+        share,
+    )
 
 
 def sci_like(value: float) -> str:
@@ -121,18 +148,23 @@ def _follows_by_seed(rows: Sequence[dict[str, Any]]) -> list[str]:
     lines = []
     for setting, by_seed in seeds.items():
         every = sum(all(v) for v in by_seed.values())
-        below = sum(e is not None and e < metrics.TRAIN_ERROR_TARGET
-                    for e in errors.get(setting, {}).values())
-        lines.append(f"- {setting}: {every} of {len(by_seed)} seeds follow all four patterns "
-                     f"in every draw (the paper: {metrics.LARGER_SET_FOLLOWS} of "
-                     f"{metrics.LARGER_SET_RUNS}); {below} of {len(errors.get(setting, {}))} "
-                     f"reach the paper's final error (MSE < "
-                     f"{sci(metrics.TRAIN_ERROR_TARGET)}).")
+        below = sum(
+            e is not None and e < metrics.TRAIN_ERROR_TARGET
+            for e in errors.get(setting, {}).values()
+        )
+        lines.append(
+            f"- {setting}: {every} of {len(by_seed)} seeds follow all four patterns "
+            f"in every draw (the paper: {metrics.LARGER_SET_FOLLOWS} of "
+            f"{metrics.LARGER_SET_RUNS}); {below} of {len(errors.get(setting, {}))} "
+            f"reach the paper's final error (MSE < "
+            f"{sci(metrics.TRAIN_ERROR_TARGET)})."
+        )
     return lines
 
 
-def write_report(out: Path, spec: SweepSpec, rows: Sequence[dict[str, Any]],
-                 runtime_s: float) -> None:
+def write_report(
+    out: Path, spec: SweepSpec, rows: Sequence[dict[str, Any]], runtime_s: float
+) -> None:
     """``out/report.md``, ``out/results.json`` (the summaries, spec and versions) and
     ``out/figures/settings.png``."""
     from rnnpb.analysis import figures
@@ -144,40 +176,77 @@ def write_report(out: Path, spec: SweepSpec, rows: Sequence[dict[str, Any]],
     for s in found:
         if s.measure in FIGURE_MEASURES:
             panels.setdefault(s.measure, {})[s.setting] = (
-                [v for v in s.values if v is not None], s.median)
+                [v for v in s.values if v is not None],
+                s.median,
+            )
     figure_dir = out / FIGURES_DIR
     figure_dir.mkdir(parents=True, exist_ok=True)
-    figures.plot_distributions(panels, figure_dir / FIGURE_FILE,
-                               {m: v for m, v in LIMITS.items() if m != "train_mse_max"})
+    figures.plot_distributions(
+        panels, figure_dir / FIGURE_FILE, {m: v for m, v in LIMITS.items() if m != "train_mse_max"}
+    )
     cases = novel_cases(rows)
-    lines = [f"# Sweep {spec.name}", "",
-             f"{len(runs)} runs ({len(runs) - len(failed)} ok, {len(failed)} failed) over "
-             f"learning sets {', '.join(spec.learning_sets)}, seeds "
-             f"{', '.join(map(str, spec.seeds))}, user draws "
-             f"{', '.join(map(str, spec.user_draws))}; settings (training / on-line): "
-             f"{', '.join(sorted({setting_name(r) for r in rows}))}. This command's part took "
-             f"{runtime_s:.0f} s. Every row is in `results.parquet`.", "",
-             "Medians are over the runs where the event happened (\"never\" counts those "
-             "where it did not); the share counts values within the paper's limit, never "
-             "counting as outside. Brackets: 95 % percentile bootstrap intervals.", "",
-             *table(("measure", "setting", "n", "median [95 % CI]", "never",
-                     "within the paper's limit [95 % CI]"), [_cell(s) for s in found]),
-             "", embed("settings", FIGURE_FILE)]
+    lines = [
+        f"# Sweep {spec.name}",
+        "",
+        f"{len(runs)} runs ({len(runs) - len(failed)} ok, {len(failed)} failed) over "
+        f"learning sets {', '.join(spec.learning_sets)}, seeds "
+        f"{', '.join(map(str, spec.seeds))}, user draws "
+        f"{', '.join(map(str, spec.user_draws))}; settings (training / on-line): "
+        f"{', '.join(sorted({setting_name(r) for r in rows}))}. This command's part took "
+        f"{runtime_s:.0f} s. Every row is in `results.parquet`.",
+        "",
+        'Medians are over the runs where the event happened ("never" counts those '
+        "where it did not); the share counts values within the paper's limit, never "
+        "counting as outside. Brackets: 95 % percentile bootstrap intervals.",
+        "",
+        *table(
+            (
+                "measure",
+                "setting",
+                "n",
+                "median [95 % CI]",
+                "never",
+                "within the paper's limit [95 % CI]",
+            ),
+            [_cell(s) for s in found],
+        ),
+        "",
+        embed("settings", FIGURE_FILE),
+    ]
     if cases:
-        lines += ["", "## Novel-pattern responses", "",
-                  *table(("setting", "input", "case 1", "case 2", "case 3"),
-                         [(setting, kind, counts[1], counts[2], counts[3])
-                          for (setting, kind), counts in sorted(cases.items())])]
+        lines += [
+            "",
+            "## Novel-pattern responses",
+            "",
+            *table(
+                ("setting", "input", "case 1", "case 2", "case 3"),
+                [
+                    (setting, kind, counts[1], counts[2], counts[3])
+                    for (setting, kind), counts in sorted(cases.items())
+                ],
+            ),
+        ]
     follows = _follows_by_seed(rows)
     if follows:
         lines += ["", "## The larger set", "", *follows]
     if failed:
-        lines += ["", "## Failed runs", "",
-                  *table(("run", "error"), [(r["run"], r["error"]) for r in failed])]
-    write_outputs(out, lines, {"spec": asdict(spec), "versions": versions(),
-                               "summaries": [s.to_json() for s in found],
-                               "novel_cases": [{"setting": k[0], "input": k[1],
-                                                "counts": dict(v)} for k, v in cases.items()],
-                               "failed": [{"run": r["run"], "error": r["error"]}
-                                          for r in failed],
-                               "runtime_s": runtime_s})
+        lines += [
+            "",
+            "## Failed runs",
+            "",
+            *table(("run", "error"), [(r["run"], r["error"]) for r in failed]),
+        ]
+    write_outputs(
+        out,
+        lines,
+        {
+            "spec": asdict(spec),
+            "versions": versions(),
+            "summaries": [s.to_json() for s in found],
+            "novel_cases": [
+                {"setting": k[0], "input": k[1], "counts": dict(v)} for k, v in cases.items()
+            ],
+            "failed": [{"run": r["run"], "error": r["error"]} for r in failed],
+            "runtime_s": runtime_s,
+        },
+    )

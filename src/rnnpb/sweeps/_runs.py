@@ -54,17 +54,27 @@ class RunRecord:
     rnnpb_version: str = __version__
 
     def to_json(self) -> dict[str, Any]:
-        return {"run_id": self.run_id, "status": self.status,
-                "measures": [list(m) for m in self.measures], "error": self.error,
-                "model": self.model, "seconds": self.seconds,
-                "rnnpb_version": self.rnnpb_version}
+        return {
+            "run_id": self.run_id,
+            "status": self.status,
+            "measures": [list(m) for m in self.measures],
+            "error": self.error,
+            "model": self.model,
+            "seconds": self.seconds,
+            "rnnpb_version": self.rnnpb_version,
+        }
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> RunRecord:
-        return cls(run_id=data["run_id"], status=data["status"],
-                   measures=[(m[0], m[1], m[2]) for m in data["measures"]],
-                   error=data["error"], model=data["model"], seconds=data["seconds"],
-                   rnnpb_version=data["rnnpb_version"])
+        return cls(
+            run_id=data["run_id"],
+            status=data["status"],
+            measures=[(m[0], m[1], m[2]) for m in data["measures"]],
+            error=data["error"],
+            model=data["model"],
+            seconds=data["seconds"],
+            rnnpb_version=data["rnnpb_version"],
+        )
 
 
 def failed(run: RunSpec, error: str, seconds: float = 0.0) -> RunRecord:
@@ -88,8 +98,9 @@ def cached_model(run: RunSpec, out: Path):
     path = out / MODELS_DIR / f"{run.model_key}.npz"
     if path.exists():
         return TrainedModel.load(path), path
-    sequences = learning_set(run.learning_set, seed=run.data_seed,
-                             samples_per_pattern=run.samples_per_pattern)
+    sequences = learning_set(
+        run.learning_set, seed=run.data_seed, samples_per_pattern=run.samples_per_pattern
+    )
     model = train(sequences, JOINT_LIMITS, config=run.train_config)
     path.parent.mkdir(parents=True, exist_ok=True)
     model.save(path)
@@ -103,17 +114,21 @@ def measure(run: RunSpec, model) -> list[Measure]:
 
     online = run.online.config
     info = model.meta["training"]
-    rows: list[Measure] = [("train_mse_max", "", _value(info["mse_max"])),
-                           ("train_rms_max", "", _value(math.sqrt(info["mse_max"])))]
+    rows: list[Measure] = [
+        ("train_mse_max", "", _value(info["mse_max"])),
+        ("train_rms_max", "", _value(math.sqrt(info["mse_max"]))),
+    ]
     if "synchronization" in run.experiments:
         for pattern in model.patterns:
             sync = paper.synchronization(model, pattern, online, JOINT_LIMITS, seed=run.user_draw)
-            rows += [("steps_to_lock", pattern, _value(sync.steps_to_lock)),
-                     ("pb_settle_steps", pattern, _value(sync.pb_settle_steps)),
-                     ("phase_lag_steps", pattern, _value(sync.phase_lag_steps)),
-                     ("recognised", pattern, float(sync.recognized_pattern == pattern)),
-                     ("pause_relative_motion", pattern, _value(sync.pause_relative_motion)),
-                     ("pause_steps_to_relock", pattern, _value(sync.pause_steps_to_relock))]
+            rows += [
+                ("steps_to_lock", pattern, _value(sync.steps_to_lock)),
+                ("pb_settle_steps", pattern, _value(sync.pb_settle_steps)),
+                ("phase_lag_steps", pattern, _value(sync.phase_lag_steps)),
+                ("recognised", pattern, float(sync.recognized_pattern == pattern)),
+                ("pause_relative_motion", pattern, _value(sync.pause_relative_motion)),
+                ("pause_steps_to_relock", pattern, _value(sync.pause_steps_to_relock)),
+            ]
     if "switching" in run.experiments:
         pairs = paper.switching(model, online, JOINT_LIMITS, seed=run.user_draw).pairs
         rows += [("switch_steps", pair, _value(steps)) for pair, steps in pairs.items()]
@@ -123,15 +138,41 @@ def measure(run: RunSpec, model) -> list[Measure]:
     if "attractors" in run.experiments:
         rows += [("closed_loop_period", name, _value(a.period)) for name, a in attractors.items()]
     if "novel" in run.experiments:
-        responses = [(f"cycle x{a:g}", paper.novel_response(
-            model, run.learning_set, online, JOINT_LIMITS, attractors, run.attractor_steps,
-            run.attractor_transient, a)) for a in run.novel_amplitudes]
-        responses.append(("by hand", paper.novel_by_hand(
-            model, run.learning_set, online, attractors, run.attractor_steps,
-            run.attractor_transient, seed=run.user_draw)))
+        responses = [
+            (
+                f"cycle x{a:g}",
+                paper.novel_response(
+                    model,
+                    run.learning_set,
+                    online,
+                    JOINT_LIMITS,
+                    attractors,
+                    run.attractor_steps,
+                    run.attractor_transient,
+                    a,
+                ),
+            )
+            for a in run.novel_amplitudes
+        ]
+        responses.append(
+            (
+                "by hand",
+                paper.novel_by_hand(
+                    model,
+                    run.learning_set,
+                    online,
+                    attractors,
+                    run.attractor_steps,
+                    run.attractor_transient,
+                    seed=run.user_draw,
+                ),
+            )
+        )
         for key, response in responses:
-            rows += [("novel_case", key, float(response.case)),
-                     ("novel_period", key, _value(response.period))]
+            rows += [
+                ("novel_case", key, float(response.case)),
+                ("novel_period", key, _value(response.period)),
+            ]
     if "follows" in run.experiments:
         follows = paper.follows_every_pattern(model, online, JOINT_LIMITS, seed=run.user_draw)
         rows += [("steps_to_follow", p, _value(v)) for p, v in follows.steps_to_follow.items()]
@@ -150,7 +191,7 @@ def execute_run(run: RunSpec, out: str) -> RunRecord:
     except Exception as error:  # noqa: BLE001 - a failed run is recorded, the sweep goes on
         last = traceback.extract_tb(error.__traceback__)[-1]
         where = f" ({os.path.basename(last.filename)}:{last.lineno})"
-        return failed(run, f"{type(error).__name__}: {error}{where}",
-                      time.perf_counter() - start)
-    return RunRecord(run.run_id, "ok", rows, "", str(path.relative_to(folder)),
-                     time.perf_counter() - start)
+        return failed(run, f"{type(error).__name__}: {error}{where}", time.perf_counter() - start)
+    return RunRecord(
+        run.run_id, "ok", rows, "", str(path.relative_to(folder)), time.perf_counter() - start
+    )

@@ -37,11 +37,26 @@ SET_EXPERIMENTS = ("synchronization", "switching", "attractors", "novel")
 FULL_EXPERIMENTS = ("follows",)
 EXPERIMENTS = (*SET_EXPERIMENTS, *FULL_EXPERIMENTS)
 TRAIN_PRESETS = {"paper": TrainConfig.paper, "fast": TrainConfig.fast}
-ONLINE_PRESETS = {"default": OnlineConfig, "paper": OnlineConfig.paper,
-                  "ungated": OnlineConfig.ungated}
-TOP_KEYS = ("name", "learning_sets", "seeds", "user_draws", "experiments", "training", "online",
-            "data_seed", "samples_per_pattern", "attractor_steps", "attractor_transient",
-            "novel_amplitudes", "retries")
+ONLINE_PRESETS = {
+    "default": OnlineConfig,
+    "paper": OnlineConfig.paper,
+    "ungated": OnlineConfig.ungated,
+}
+TOP_KEYS = (
+    "name",
+    "learning_sets",
+    "seeds",
+    "user_draws",
+    "experiments",
+    "training",
+    "online",
+    "data_seed",
+    "samples_per_pattern",
+    "attractor_steps",
+    "attractor_transient",
+    "novel_amplitudes",
+    "retries",
+)
 
 
 @dataclass(frozen=True)
@@ -72,8 +87,10 @@ class RunSpec:
     @property
     def run_id(self) -> str:
         """A file-safe name, unique within the sweep."""
-        return (f"set{self.learning_set}-{self.training.name}-seed{self.seed}-"
-                f"{self.online.name}-draw{self.user_draw}")
+        return (
+            f"set{self.learning_set}-{self.training.name}-seed{self.seed}-"
+            f"{self.online.name}-draw{self.user_draw}"
+        )
 
     @property
     def train_config(self) -> TrainConfig:
@@ -83,23 +100,35 @@ class RunSpec:
     @property
     def model_key(self) -> str:
         """The model cache's key: the learning data, the training config and the seed."""
-        data = {"learning_set": self.learning_set, "data_seed": self.data_seed,
-                "samples_per_pattern": self.samples_per_pattern,
-                "train": asdict(self.train_config)}
+        data = {
+            "learning_set": self.learning_set,
+            "data_seed": self.data_seed,
+            "samples_per_pattern": self.samples_per_pattern,
+            "train": asdict(self.train_config),
+        }
         digest = hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()
         return f"set{self.learning_set}-{digest[:16]}"
 
     def config_json(self) -> str:
         """Everything that made this run's numbers, as one JSON string."""
-        return json.dumps({
-            "learning_set": self.learning_set, "training": self.training.name,
-            "train": asdict(self.train_config), "online_setting": self.online.name,
-            "online": asdict(self.online.config), "seed": self.seed,
-            "user_draw": self.user_draw, "experiments": list(self.experiments),
-            "data_seed": self.data_seed, "samples_per_pattern": self.samples_per_pattern,
-            "attractor_steps": self.attractor_steps,
-            "attractor_transient": self.attractor_transient,
-            "novel_amplitudes": list(self.novel_amplitudes)}, sort_keys=True)
+        return json.dumps(
+            {
+                "learning_set": self.learning_set,
+                "training": self.training.name,
+                "train": asdict(self.train_config),
+                "online_setting": self.online.name,
+                "online": asdict(self.online.config),
+                "seed": self.seed,
+                "user_draw": self.user_draw,
+                "experiments": list(self.experiments),
+                "data_seed": self.data_seed,
+                "samples_per_pattern": self.samples_per_pattern,
+                "attractor_steps": self.attractor_steps,
+                "attractor_transient": self.attractor_transient,
+                "novel_amplitudes": list(self.novel_amplitudes),
+            },
+            sort_keys=True,
+        )
 
 
 @dataclass(frozen=True)
@@ -126,12 +155,12 @@ class SweepSpec:
                 raise ConfigError(f"the grid is empty: {key!r} has no values")
         for name in self.learning_sets:
             if name not in LEARNING_SETS:
-                raise ConfigError(f"learning set {name!r} is not one of "
-                                  f"{', '.join(LEARNING_SETS)}")
+                raise ConfigError(f"learning set {name!r} is not one of {', '.join(LEARNING_SETS)}")
         for experiment in self.experiments:
             if experiment not in EXPERIMENTS:
-                raise ConfigError(f"experiment {experiment!r} is not one of "
-                                  f"{', '.join(EXPERIMENTS)}")
+                raise ConfigError(
+                    f"experiment {experiment!r} is not one of {', '.join(EXPERIMENTS)}"
+                )
         for key in ("seeds", "user_draws", "learning_sets"):
             values = getattr(self, key)
             if len(set(values)) != len(values):
@@ -157,12 +186,27 @@ class SweepSpec:
 
     def runs(self) -> list[RunSpec]:
         """Every point of the grid, in a fixed order."""
-        return [RunSpec(self.name, learning_set, training, seed, online, draw,
-                        self.experiments_for(learning_set), self.data_seed,
-                        self.samples_per_pattern, self.attractor_steps,
-                        self.attractor_transient, self.novel_amplitudes)
-                for learning_set in self.learning_sets for training in self.training
-                for seed in self.seeds for online in self.online for draw in self.user_draws]
+        return [
+            RunSpec(
+                self.name,
+                learning_set,
+                training,
+                seed,
+                online,
+                draw,
+                self.experiments_for(learning_set),
+                self.data_seed,
+                self.samples_per_pattern,
+                self.attractor_steps,
+                self.attractor_transient,
+                self.novel_amplitudes,
+            )
+            for learning_set in self.learning_sets
+            for training in self.training
+            for seed in self.seeds
+            for online in self.online
+            for draw in self.user_draws
+        ]
 
 
 def _with_changes(config: Any, changes: dict[str, Any], where: str) -> Any:
@@ -197,8 +241,9 @@ def _settings(table: Any, key: str, presets: dict[str, Any], default: str) -> tu
         body = dict(body)
         preset = body.pop("preset", default)
         if preset not in presets:
-            raise ConfigError(f"[{key}.{name}] preset {preset!r} is not one of "
-                              f"{', '.join(presets)}")
+            raise ConfigError(
+                f"[{key}.{name}] preset {preset!r} is not one of {', '.join(presets)}"
+            )
         out.append(Setting(str(name), _with_changes(presets[preset](), body, f"[{key}.{name}]")))
     return tuple(out)
 
@@ -206,8 +251,9 @@ def _settings(table: Any, key: str, presets: dict[str, Any], default: str) -> tu
 def _ints(value: Any, key: str) -> tuple[int, ...]:
     if isinstance(value, int) and not isinstance(value, bool):
         return tuple(range(value))
-    if isinstance(value, list) and all(isinstance(v, int) and not isinstance(v, bool)
-                                       for v in value):
+    if isinstance(value, list) and all(
+        isinstance(v, int) and not isinstance(v, bool) for v in value
+    ):
         return tuple(value)
     raise ConfigError(f"{key!r} must be a count or a list of whole numbers, got {value!r}")
 
@@ -224,23 +270,33 @@ def parse_spec(data: dict[str, Any], default_name: str = "sweep") -> SweepSpec:
     if not isinstance(experiments, list):
         raise ConfigError("'experiments' must be a list")
     amplitudes = data.get("novel_amplitudes", [1.0])
-    if not isinstance(amplitudes, list) or not all(isinstance(a, (int, float))
-                                                   for a in amplitudes):
+    if not isinstance(amplitudes, list) or not all(isinstance(a, (int, float)) for a in amplitudes):
         raise ConfigError("'novel_amplitudes' must be a list of numbers")
-    options = {k: data[k] for k in ("data_seed", "samples_per_pattern", "attractor_steps",
-                                     "attractor_transient", "retries") if k in data}
+    options = {
+        k: data[k]
+        for k in (
+            "data_seed",
+            "samples_per_pattern",
+            "attractor_steps",
+            "attractor_transient",
+            "retries",
+        )
+        if k in data
+    }
     for key, value in options.items():
         if not isinstance(value, int) or isinstance(value, bool):
             raise ConfigError(f"{key!r} must be a whole number, got {value!r}")
     return SweepSpec(
-        name=str(data.get("name", default_name)), learning_sets=tuple(str(s) for s in sets),
+        name=str(data.get("name", default_name)),
+        learning_sets=tuple(str(s) for s in sets),
         seeds=_ints(data.get("seeds", []), "seeds"),
         user_draws=_ints(data.get("user_draws", [100]), "user_draws"),
         training=_settings(data.get("training", {}), "training", TRAIN_PRESETS, "paper"),
-        online=_settings(data.get("online", {"default": {}}), "online", ONLINE_PRESETS,
-                         "default"),
+        online=_settings(data.get("online", {"default": {}}), "online", ONLINE_PRESETS, "default"),
         experiments=tuple(str(e) for e in experiments),
-        novel_amplitudes=tuple(float(a) for a in amplitudes), **options)
+        novel_amplitudes=tuple(float(a) for a in amplitudes),
+        **options,
+    )
 
 
 def load_spec(path: str | Path) -> SweepSpec:

@@ -36,8 +36,10 @@ class Progress:
 
     def describe(self) -> str:
         left = "–" if self.left_s is None else _duration(self.left_s)
-        return (f"runs: {self.done}/{self.total} done, {self.running} running, "
-                f"{self.failed} failed; {_duration(self.elapsed_s)} elapsed, about {left} left")
+        return (
+            f"runs: {self.done}/{self.total} done, {self.running} running, "
+            f"{self.failed} failed; {_duration(self.elapsed_s)} elapsed, about {left} left"
+        )
 
 
 @dataclass(frozen=True)
@@ -67,10 +69,15 @@ def _clear_leftovers(out: Path) -> None:
                 leftover.unlink()
 
 
-def run_sweep(spec: SweepSpec, out: str | Path, address: str | None = None,
-              workers: int | None = None, log: Callable[[str], None] = print,
-              run_function: RunFunction = execute_run,
-              on_progress: Callable[[Progress], None] | None = None) -> SweepOutcome:
+def run_sweep(
+    spec: SweepSpec,
+    out: str | Path,
+    address: str | None = None,
+    workers: int | None = None,
+    log: Callable[[str], None] = print,
+    run_function: RunFunction = execute_run,
+    on_progress: Callable[[Progress], None] | None = None,
+) -> SweepOutcome:
     """Run every unfinished run of ``spec`` on Ray (local, or the cluster at ``address``),
     keep each run's record, then assemble ``out/results.parquet`` and write ``out/report.md``,
     ``out/results.json`` and ``out/figures/``.
@@ -94,8 +101,10 @@ def run_sweep(spec: SweepSpec, out: str | Path, address: str | None = None,
         else:
             pending.append(run)
     finished_before = len(records)
-    log(f"sweep {spec.name}: {len(runs)} runs, {finished_before} finished before, "
-        f"{len(pending)} to run")
+    log(
+        f"sweep {spec.name}: {len(runs)} runs, {finished_before} finished before, "
+        f"{len(pending)} to run"
+    )
     # Runs that share a model wait for the first of them, which trains it.
     groups: dict[str, list[RunSpec]] = {}
     for run in pending:
@@ -105,8 +114,10 @@ def run_sweep(spec: SweepSpec, out: str | Path, address: str | None = None,
         if pending:
             with ray_cluster(address, workers) as capacity:
                 log(f"on Ray, {capacity} at once")
-                jobs: deque[Job] = deque((group[0].run_id, run_function, (group[0], str(out)))
-                                         for group in groups.values())
+                jobs: deque[Job] = deque(
+                    (group[0].run_id, run_function, (group[0], str(out)))
+                    for group in groups.values()
+                )
                 failures = done = 0
                 for run_id, result, error in run_tasks(jobs, capacity, spec.retries):
                     run = by_id[run_id]
@@ -122,15 +133,19 @@ def run_sweep(spec: SweepSpec, out: str | Path, address: str | None = None,
                         # The model is cached now: its other runs go first, so that every
                         # model's runs finish together and an interrupted sweep keeps whole
                         # models' results.
-                        jobs.extendleft((r.run_id, run_function, (r, str(out)))
-                                        for r in reversed(group[1:]))
+                        jobs.extendleft(
+                            (r.run_id, run_function, (r, str(out))) for r in reversed(group[1:])
+                        )
                         group.clear()
                     elapsed = time.perf_counter() - start
                     progress = Progress(
-                        total=len(runs), done=finished_before + done,
-                        running=min(capacity, len(pending) - done), failed=failures,
+                        total=len(runs),
+                        done=finished_before + done,
+                        running=min(capacity, len(pending) - done),
+                        failed=failures,
                         elapsed_s=elapsed,
-                        left_s=elapsed / done * (len(pending) - done))
+                        left_s=elapsed / done * (len(pending) - done),
+                    )
                     log(progress.describe())
                     if on_progress is not None:
                         on_progress(progress)
@@ -143,8 +158,9 @@ def run_sweep(spec: SweepSpec, out: str | Path, address: str | None = None,
     return SweepOutcome(records=records, table=table, ran=len(pending), runtime_s=runtime)
 
 
-def _write_outputs(out: Path, spec: SweepSpec, runs: list[RunSpec],
-                   records: dict[str, RunRecord], runtime: float) -> Path:
+def _write_outputs(
+    out: Path, spec: SweepSpec, runs: list[RunSpec], records: dict[str, RunRecord], runtime: float
+) -> Path:
     table = write_table(out, runs, records)
     write_report(out, spec, read_table(table).to_pylist(), runtime)
     return table

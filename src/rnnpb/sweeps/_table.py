@@ -38,11 +38,23 @@ from rnnpb.sweeps._spec import RunSpec
 
 RUNS_DIR = "runs"
 TABLE_FILE = "results.parquet"
-COLUMNS = (("sweep", "string"), ("run", "string"), ("learning_set", "string"),
-           ("training", "string"), ("seed", "int64"), ("online", "string"),
-           ("user_draw", "int64"), ("status", "string"), ("measure", "string"),
-           ("key", "string"), ("value", "float64"), ("error", "string"), ("model", "string"),
-           ("config", "string"), ("rnnpb_version", "string"))
+COLUMNS = (
+    ("sweep", "string"),
+    ("run", "string"),
+    ("learning_set", "string"),
+    ("training", "string"),
+    ("seed", "int64"),
+    ("online", "string"),
+    ("user_draw", "int64"),
+    ("status", "string"),
+    ("measure", "string"),
+    ("key", "string"),
+    ("value", "float64"),
+    ("error", "string"),
+    ("model", "string"),
+    ("config", "string"),
+    ("rnnpb_version", "string"),
+)
 
 
 def schema():
@@ -75,11 +87,20 @@ def read_record(out: Path, run: RunSpec) -> RunRecord | None:
 
 
 def rows(run: RunSpec, record: RunRecord) -> list[dict]:
-    base = {"sweep": run.sweep, "run": run.run_id, "learning_set": run.learning_set,
-            "training": run.training.name, "seed": run.seed, "online": run.online.name,
-            "user_draw": run.user_draw, "status": record.status, "error": record.error,
-            "model": record.model, "config": run.config_json(),
-            "rnnpb_version": record.rnnpb_version}
+    base = {
+        "sweep": run.sweep,
+        "run": run.run_id,
+        "learning_set": run.learning_set,
+        "training": run.training.name,
+        "seed": run.seed,
+        "online": run.online.name,
+        "user_draw": run.user_draw,
+        "status": record.status,
+        "error": record.error,
+        "model": record.model,
+        "config": run.config_json(),
+        "rnnpb_version": record.rnnpb_version,
+    }
     if record.status != "ok":
         return [{**base, "measure": "", "key": "", "value": None}]
     return [{**base, "measure": m, "key": k, "value": v} for m, k, v in record.measures]
@@ -91,8 +112,9 @@ def write_table(out: Path, runs: list[RunSpec], records: dict[str, RunRecord]) -
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    table_rows = [r for run in runs if run.run_id in records
-                  for r in rows(run, records[run.run_id])]
+    table_rows = [
+        r for run in runs if run.run_id in records for r in rows(run, records[run.run_id])
+    ]
     columns = {name: [r[name] for r in table_rows] for name, _ in COLUMNS}
     table = pa.Table.from_pydict(columns, schema=schema())
     path = out / TABLE_FILE

@@ -25,16 +25,18 @@ ANY_ADDRESS = ("", "0.0.0.0", "[::]")
 """Listening addresses that mean every interface: they name no host a browser would use."""
 DEFAULT_PORTS = {"http": 80, "https": 443}
 
-CONTENT_SECURITY_POLICY = "; ".join((
-    "default-src 'none'",
-    "script-src 'self'",       # the page's own module files, no inline script, no eval
-    "style-src 'self'",
-    "img-src 'self' data:",    # the webcam frame and the empty favicon are data: URLs
-    "connect-src 'self'",      # the WebSocket back to the server
-    "base-uri 'none'",
-    "form-action 'none'",
-    "frame-ancestors 'none'",  # no other site may frame the controls (clickjacking)
-))
+CONTENT_SECURITY_POLICY = "; ".join(
+    (
+        "default-src 'none'",
+        "script-src 'self'",  # the page's own module files, no inline script, no eval
+        "style-src 'self'",
+        "img-src 'self' data:",  # the webcam frame and the empty favicon are data: URLs
+        "connect-src 'self'",  # the WebSocket back to the server
+        "base-uri 'none'",
+        "form-action 'none'",
+        "frame-ancestors 'none'",  # no other site may frame the controls (clickjacking)
+    )
+)
 SECURITY_HEADERS = (
     ("content-security-policy", CONTENT_SECURITY_POLICY),
     ("x-content-type-options", "nosniff"),
@@ -60,8 +62,10 @@ def normalize_host(name: str) -> str:
     if address is not None:
         return f"[{address.compressed}]" if address.version == 6 else address.compressed
     if len(text) > 253 or not _NAME.fullmatch(text):
-        raise ConfigError(f"{name!r:.80} is not a host name or IP address (give the name "
-                          "alone, e.g. robot.lab or 192.168.1.20: no scheme, port or '*')")
+        raise ConfigError(
+            f"{name!r:.80} is not a host name or IP address (give the name "
+            "alone, e.g. robot.lab or 192.168.1.20: no scheme, port or '*')"
+        )
     return text
 
 
@@ -74,11 +78,19 @@ def normalize_origin(origin: str) -> str:
         port = parts.port
     except ValueError:
         parts, port = None, None
-    if (parts is None or parts.scheme not in DEFAULT_PORTS or not parts.hostname
-            or parts.username is not None or parts.password is not None
-            or parts.path not in ("", "/") or parts.query or parts.fragment):
-        raise ConfigError(f"{origin!r:.80} is not a web origin (scheme://host[:port], e.g. "
-                          "http://robot.lab:8765)")
+    if (
+        parts is None
+        or parts.scheme not in DEFAULT_PORTS
+        or not parts.hostname
+        or parts.username is not None
+        or parts.password is not None
+        or parts.path not in ("", "/")
+        or parts.query
+        or parts.fragment
+    ):
+        raise ConfigError(
+            f"{origin!r:.80} is not a web origin (scheme://host[:port], e.g. http://robot.lab:8765)"
+        )
     host = normalize_host(parts.hostname)
     return f"{parts.scheme}://{host}:{port or DEFAULT_PORTS[parts.scheme]}"
 
@@ -106,12 +118,14 @@ class AccessPolicy:
             raise ConfigError("hosts and origins must be sequences of strings, not one string")
         hosts = tuple(dict.fromkeys(normalize_host(h) for h in self.hosts))
         object.__setattr__(self, "hosts", tuple(h for h in hosts if h not in LOOPBACK_HOSTS))
-        object.__setattr__(self, "origins",
-                           tuple(dict.fromkeys(normalize_origin(o) for o in self.origins)))
+        object.__setattr__(
+            self, "origins", tuple(dict.fromkeys(normalize_origin(o) for o in self.origins))
+        )
 
     @classmethod
-    def for_address(cls, host: str, allow_hosts: Iterable[str] = (),
-                    allow_origins: Iterable[str] = ()) -> AccessPolicy:
+    def for_address(
+        cls, host: str, allow_hosts: Iterable[str] = (), allow_origins: Iterable[str] = ()
+    ) -> AccessPolicy:
         """The policy of a server listening on ``host``: that name is answered too, unless
         it means every interface (``0.0.0.0``, ``::``), which names no host."""
         named = normalize_host(host) if host.strip() else ""
@@ -142,8 +156,9 @@ class AccessPolicy:
             return True
         scheme, _, rest = wanted.partition("://")
         name, _, port = rest.rpartition(":")
-        return (scheme == "http" and name in self.allowed_hosts
-                and port == str(_port_of(host_header)))
+        return (
+            scheme == "http" and name in self.allowed_hosts and port == str(_port_of(host_header))
+        )
 
 
 def _port_of(host_header: str | None) -> int | None:
@@ -168,8 +183,11 @@ class SecurityHeadersMiddleware:
             if message["type"] == "http.response.start":
                 present = {k.lower() for k, _ in message.get("headers", [])}
                 headers = list(message.get("headers", []))
-                headers += [(k.encode(), v.encode()) for k, v in SECURITY_HEADERS
-                            if k.encode() not in present]
+                headers += [
+                    (k.encode(), v.encode())
+                    for k, v in SECURITY_HEADERS
+                    if k.encode() not in present
+                ]
                 message = {**message, "headers": headers}
             await send(message)
 

@@ -94,8 +94,9 @@ class GameSession:
         name = model if model in self.models else next(iter(self.models))
         self.mode, self.model_name = mode, name
         self._stop.clear()
-        self._thread = threading.Thread(target=self._run, args=(mode, name), daemon=True,
-                                        name="rnnpb-game")
+        self._thread = threading.Thread(
+            target=self._run, args=(mode, name), daemon=True, name="rnnpb-game"
+        )
         self._thread.start()
 
     def stop(self) -> None:
@@ -112,11 +113,17 @@ class GameSession:
         def unsubscribe() -> None:
             with self._lock, contextlib.suppress(ValueError):
                 self._subscribers.remove(callback)
+
         return unsubscribe
 
     def state(self) -> dict[str, Any]:
-        return {"type": "game_state", "status": self.status, "mode": self.mode,
-                "model": self.model_name, "models": list(self.models)}
+        return {
+            "type": "game_state",
+            "status": self.status,
+            "mode": self.mode,
+            "model": self.model_name,
+            "models": list(self.models),
+        }
 
     def _publish(self, message: dict[str, Any]) -> None:
         text = json.dumps(message, allow_nan=False)
@@ -133,19 +140,29 @@ class GameSession:
             model = TrainedModel.load(self.models[name])
             robot = AgentConfig(persistence=PERSISTENCE, patience=None)
             if mode == "robots":
-                dyad = robot_pair(model, model, robot, AgentConfig(persistence=PERSISTENCE,
-                                                                     patience=6),
-                                  seed=int(time.time()))
+                dyad = robot_pair(
+                    model,
+                    model,
+                    robot,
+                    AgentConfig(persistence=PERSISTENCE, patience=6),
+                    seed=int(time.time()),
+                )
             else:
                 dyad = _PersonDyad(RobotAgent(model, robot, name="robot"), self.person)
             tracker = _Tracker(model.patterns, mode)
             self.status = "running"
             self._publish(self.state())
             started = time.perf_counter()
-            dyad.run(10**9, dt=self.dt, paced=True, should_stop=self._stop.is_set,
-                     between_steps=lambda wait: self._stop.wait(min(wait, 0.05)),
-                     on_step=lambda record: self._publish(
-                         tracker.update(record, time.perf_counter() - started)))
+            dyad.run(
+                10**9,
+                dt=self.dt,
+                paced=True,
+                should_stop=self._stop.is_set,
+                between_steps=lambda wait: self._stop.wait(min(wait, 0.05)),
+                on_step=lambda record: self._publish(
+                    tracker.update(record, time.perf_counter() - started)
+                ),
+            )
         except Exception as error:  # the page says what went wrong; the server stays up
             log.exception("the game stopped")
             self._publish({"type": "game_error", "message": str(error)[:300]})
@@ -182,11 +199,16 @@ class _Tracker:
         meter = 0.0 if not math.isfinite(sync) else float(np.clip(1 - sync / METER_SCALE, 0, 1))
         coherent = bool(measured.coherent[-1])
         return {
-            "type": "game_step", "step": int(record.step), "time_s": round(elapsed, 1),
-            "synchrony": round(meter, 3), "coherent": coherent,
+            "type": "game_step",
+            "step": int(record.step),
+            "time_s": round(elapsed, 1),
+            "synchrony": round(meter, 3),
+            "coherent": coherent,
             "pattern": str(measured.class_a[-1]) if coherent else "",
-            "found": list(self.found), "learned": len(self.learned),
-            "last_leader": self.last_leader, "names": list(self.names),
+            "found": list(self.found),
+            "learned": len(self.learned),
+            "last_leader": self.last_leader,
+            "names": list(self.names),
             "robot_initiative": bool(record.a.initiative),
             "a": _finite(record.shown_a),
             "b": _finite(record.shown_b),

@@ -58,16 +58,17 @@ def _number(value: Any, name: str, low: float, high: float) -> float:
 
 def _integer(value: Any, name: str, low: int, high: int) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
-        raise ProtocolError(f"{name} must be an integer in [{low}, {high}], got "
-                            f"{_shown(value)}")
+        raise ProtocolError(f"{name} must be an integer in [{low}, {high}], got {_shown(value)}")
     return value
 
 
 def _keys(message: dict[str, Any], allowed: tuple[str, ...]) -> None:
     extra = sorted(set(message) - {"type", *allowed})
     if extra:
-        raise ProtocolError(f"message {message['type']!r} has unknown field(s) "
-                            f"{', '.join(_shown(k) for k in extra[:5])}")
+        raise ProtocolError(
+            f"message {message['type']!r} has unknown field(s) "
+            f"{', '.join(_shown(k) for k in extra[:5])}"
+        )
     missing = [k for k in allowed if k not in message]
     if missing:
         raise ProtocolError(f"message {message['type']!r} needs field(s) {', '.join(missing)}")
@@ -121,47 +122,60 @@ def parse_client_message(text: str | bytes | None) -> dict[str, Any]:
         return {"type": "hands", "hands": values}
     if kind == "game_hands":
         _keys(message, ("hands",))
-        return {**parse_client_message(json.dumps({"type": "hands",
-                                                   "hands": message["hands"]})),
-                "type": "game_hands"}
+        return {
+            **parse_client_message(json.dumps({"type": "hands", "hands": message["hands"]})),
+            "type": "game_hands",
+        }
     if kind == "game":
         _keys(message, ("action", "mode", "model"))
         if not isinstance(message["action"], str) or message["action"] not in GAME_ACTIONS:
-            raise ProtocolError(f"game action must be one of {', '.join(GAME_ACTIONS)}, got "
-                                f"{_shown(message['action'])}")
+            raise ProtocolError(
+                f"game action must be one of {', '.join(GAME_ACTIONS)}, got "
+                f"{_shown(message['action'])}"
+            )
         if not isinstance(message["mode"], str) or message["mode"] not in GAME_MODES:
-            raise ProtocolError(f"game mode must be one of {', '.join(GAME_MODES)}, got "
-                                f"{_shown(message['mode'])}")
+            raise ProtocolError(
+                f"game mode must be one of {', '.join(GAME_MODES)}, got {_shown(message['mode'])}"
+            )
         model = message["model"]
         if model is not None and (not isinstance(model, str) or len(model) > MAX_NAME_LENGTH):
-            raise ProtocolError(f"game model must be a model name or null, got "
-                                f"{_shown(model)}")
-        return {"type": "game", "action": message["action"], "mode": message["mode"],
-                "model": model}
+            raise ProtocolError(f"game model must be a model name or null, got {_shown(model)}")
+        return {
+            "type": "game",
+            "action": message["action"],
+            "mode": message["mode"],
+            "model": model,
+        }
     if kind == "mode":
         _keys(message, ("mode",))
         if not isinstance(message["mode"], str) or message["mode"] not in MODES:
-            raise ProtocolError(f"mode must be one of {', '.join(MODES)}, got "
-                                f"{_shown(message['mode'])}")
+            raise ProtocolError(
+                f"mode must be one of {', '.join(MODES)}, got {_shown(message['mode'])}"
+            )
         return {"type": "mode", "mode": message["mode"]}
     if kind == "camera":
         _keys(message, ("index",))
-        return {"type": "camera",
-                "index": _integer(message["index"], "camera index", 0, MAX_CAMERA_INDEX)}
+        return {
+            "type": "camera",
+            "index": _integer(message["index"], "camera index", 0, MAX_CAMERA_INDEX),
+        }
     if kind == "pattern":
         _keys(message, ("pattern",))
         pattern = message["pattern"]
         if isinstance(pattern, int) and not isinstance(pattern, bool) and 0 <= pattern <= 9:
             pattern = str(pattern)
         if not isinstance(pattern, str) or pattern not in PATTERN_CHOICES:
-            raise ProtocolError(f"pattern must be one of {', '.join(PATTERN_CHOICES)}, got "
-                                f"{_shown(message['pattern'])}")
+            raise ProtocolError(
+                f"pattern must be one of {', '.join(PATTERN_CHOICES)}, got "
+                f"{_shown(message['pattern'])}"
+            )
         return {"type": "pattern", "pattern": pattern}
     if kind == "control":
         _keys(message, ("action",))
         if not isinstance(message["action"], str) or message["action"] not in ACTIONS:
-            raise ProtocolError(f"action must be one of {', '.join(ACTIONS)}, got "
-                                f"{_shown(message['action'])}")
+            raise ProtocolError(
+                f"action must be one of {', '.join(ACTIONS)}, got {_shown(message['action'])}"
+            )
         return {"type": "control", "action": message["action"]}
     if kind == "dt":
         _keys(message, ("dt",))

@@ -83,8 +83,9 @@ class _TokenBucket:
         return True
 
 
-def create_app(session: Session, access: AccessPolicy | None = None,
-               limits: CommandLimits | None = None) -> Starlette:
+def create_app(
+    session: Session, access: AccessPolicy | None = None, limits: CommandLimits | None = None
+) -> Starlette:
     """The ASGI app serving ``session`` (already started) to the hosts and origins
     ``access`` allows (default: this computer's loopback names only), each connection within
     ``limits`` (default :class:`CommandLimits`)."""
@@ -100,8 +101,9 @@ def create_app(session: Session, access: AccessPolicy | None = None,
     async def recording(request: Request) -> Response:
         path = session.recording_path
         if path is None or not path.exists():
-            return PlainTextResponse("no session recorded yet: start the robot first",
-                                     status_code=404)
+            return PlainTextResponse(
+                "no session recorded yet: start the robot first", status_code=404
+            )
         name = f"rnnpb-{(session.model_name or 'session').replace('/', '_')}-{path.name}"
         return FileResponse(path, media_type="text/csv", filename=name)
 
@@ -111,11 +113,19 @@ def create_app(session: Session, access: AccessPolicy | None = None,
         if not access.origin_allowed(origin, ws.headers.get("host")):
             # A page from another site, run by a browser here, must not drive the robot nor
             # receive the camera's frames.
-            log.warning("%s: refused a WebSocket from origin %.200r (allowed: this server's "
-                        "own page; more with --allow-origin)", client, origin)
-            await ws.send_denial_response(PlainTextResponse(
-                f"origin {origin!r:.200} may not use this dashboard (start rnnpb serve with "
-                "--allow-origin to allow it)\n", status_code=403))
+            log.warning(
+                "%s: refused a WebSocket from origin %.200r (allowed: this server's "
+                "own page; more with --allow-origin)",
+                client,
+                origin,
+            )
+            await ws.send_denial_response(
+                PlainTextResponse(
+                    f"origin {origin!r:.200} may not use this dashboard (start rnnpb serve with "
+                    "--allow-origin to allow it)\n",
+                    status_code=403,
+                )
+            )
             return
         await ws.accept()
         loop = asyncio.get_running_loop()
@@ -153,23 +163,45 @@ def create_app(session: Session, access: AccessPolicy | None = None,
                     continue
                 except Exception:  # a gap in the checks: still an answer, never a dropped tab
                     log.exception("%s: message not checked", client)
-                    put(json.dumps({"type": "error", "message": "rejected: the server could "
-                                    "not check this message"}))
+                    put(
+                        json.dumps(
+                            {
+                                "type": "error",
+                                "message": "rejected: the server could not check this message",
+                            }
+                        )
+                    )
                     continue
                 kind = message["type"]
                 if not (light if kind in ("hands", "ping") else commands).take():
-                    what = (f"at most {limits.hands_per_s:g} hands or ping messages"
-                            if kind in ("hands", "ping")
-                            else f"at most {limits.commands_per_s:g} commands")
-                    put(json.dumps({"type": "error", "message": f"rejected: too many "
-                                    f"messages ({what} a second); {kind} dropped"}))
+                    what = (
+                        f"at most {limits.hands_per_s:g} hands or ping messages"
+                        if kind in ("hands", "ping")
+                        else f"at most {limits.commands_per_s:g} commands"
+                    )
+                    put(
+                        json.dumps(
+                            {
+                                "type": "error",
+                                "message": f"rejected: too many "
+                                f"messages ({what} a second); {kind} dropped",
+                            }
+                        )
+                    )
                 elif kind == "hands":
                     session.pointer.set_hands(message["hands"])
                 elif kind == "ping":
                     put('{"type":"pong"}')
                 elif not session.submit(message):
-                    put(json.dumps({"type": "error", "message": "rejected: the session has "
-                                    f"too many commands waiting; {kind} dropped"}))
+                    put(
+                        json.dumps(
+                            {
+                                "type": "error",
+                                "message": "rejected: the session has "
+                                f"too many commands waiting; {kind} dropped",
+                            }
+                        )
+                    )
         except WebSocketDisconnect:
             pass
         finally:
@@ -187,8 +219,9 @@ def create_app(session: Session, access: AccessPolicy | None = None,
     async def game_socket(ws: WebSocket) -> None:
         """The mirror game's WebSocket: the same origin rule and message checks as ``/ws``."""
         if not access.origin_allowed(ws.headers.get("origin"), ws.headers.get("host")):
-            await ws.send_denial_response(PlainTextResponse(
-                "this origin may not use this dashboard\n", status_code=403))
+            await ws.send_denial_response(
+                PlainTextResponse("this origin may not use this dashboard\n", status_code=403)
+            )
             return
         await ws.accept()
         loop = asyncio.get_running_loop()
@@ -218,8 +251,9 @@ def create_app(session: Session, access: AccessPolicy | None = None,
                 try:
                     message = parse_client_message(event.get("text", event.get("bytes")))
                     if message["type"] not in ("game", "game_hands", "ping"):
-                        raise ProtocolError(f"the game page does not take {message['type']!r} "
-                                            "messages")
+                        raise ProtocolError(
+                            f"the game page does not take {message['type']!r} messages"
+                        )
                 except ProtocolError as error:
                     put(json.dumps({"type": "error", "message": f"rejected: {error}"}))
                     continue
@@ -251,8 +285,9 @@ def create_app(session: Session, access: AccessPolicy | None = None,
         Middleware(SecurityHeadersMiddleware),
         # Refuses DNS rebinding: a foreign name that resolves here reaches the server with
         # its own name in Host.
-        Middleware(TrustedHostMiddleware, allowed_hosts=list(access.allowed_hosts),
-                   www_redirect=False),
+        Middleware(
+            TrustedHostMiddleware, allowed_hosts=list(access.allowed_hosts), www_redirect=False
+        ),
     ]
     app = Starlette(routes=routes, middleware=middleware)
     app.state.game = game
@@ -270,21 +305,35 @@ class DashboardServer:
     ...     print(server.url)
     """
 
-    def __init__(self, models: dict[str, Path], host: str = "127.0.0.1", port: int = 8765,
-                 dt: float = 0.4, model: str | None = None, workdir: str | Path | None = None,
-                 log_level: str = "warning", allow_hosts: tuple[str, ...] = (),
-                 allow_origins: tuple[str, ...] = (), limits: CommandLimits | None = None,
-                 recording_limits: RecordingLimits | None = None) -> None:
+    def __init__(
+        self,
+        models: dict[str, Path],
+        host: str = "127.0.0.1",
+        port: int = 8765,
+        dt: float = 0.4,
+        model: str | None = None,
+        workdir: str | Path | None = None,
+        log_level: str = "warning",
+        allow_hosts: tuple[str, ...] = (),
+        allow_origins: tuple[str, ...] = (),
+        limits: CommandLimits | None = None,
+        recording_limits: RecordingLimits | None = None,
+    ) -> None:
         import uvicorn
 
         self.access = AccessPolicy.for_address(host, allow_hosts, allow_origins)
-        self.session = Session(models, dt=dt, workdir=workdir,
-                               recording_limits=recording_limits)
+        self.session = Session(models, dt=dt, workdir=workdir, recording_limits=recording_limits)
         self._first_model = model
         self.app = create_app(self.session, self.access, limits)
-        config = uvicorn.Config(self.app, host=host, port=port, log_level=log_level,
-                                ws="websockets-sansio", ws_max_size=WS_MAX_SIZE,
-                                lifespan="off")
+        config = uvicorn.Config(
+            self.app,
+            host=host,
+            port=port,
+            log_level=log_level,
+            ws="websockets-sansio",
+            ws_max_size=WS_MAX_SIZE,
+            lifespan="off",
+        )
         self.server = uvicorn.Server(config)
         self.host = host
         self._thread: threading.Thread | None = None
@@ -318,8 +367,9 @@ class DashboardServer:
             if not self._thread.is_alive() or time.monotonic() > deadline:
                 self.app.state.game.stop()
                 self.session.close()
-                raise RnnpbError(f"cannot serve on {self.host}:{self.server.config.port} "
-                                 "(is the port in use?)")
+                raise RnnpbError(
+                    f"cannot serve on {self.host}:{self.server.config.port} (is the port in use?)"
+                )
             time.sleep(0.02)
         return self
 

@@ -81,7 +81,8 @@ def offered_models(model_or_dir: str | Path) -> tuple[dict[str, Path], dict[str,
         name = str(found.relative_to(path))
         # A checkpoint, or a model's safety map (M.safety.npz, docs/safety.md): not models.
         if found.name.endswith((".checkpoint.npz", ".safety.npz")) or any(
-                part.startswith(".") for part in found.relative_to(path).parts):
+            part.startswith(".") for part in found.relative_to(path).parts
+        ):
             continue
         try:
             TrainedModel.load(found)
@@ -91,8 +92,10 @@ def offered_models(model_or_dir: str | Path) -> tuple[dict[str, Path], dict[str,
         models[name] = found
     if not models:
         reasons = "; ".join(f"{reason}" for reason in refused.values())
-        raise ConfigError(f"{path}: no usable model files (*.npz) in this folder"
-                          + (f" ({reasons})" if reasons else "; train one with `rnnpb train`"))
+        raise ConfigError(
+            f"{path}: no usable model files (*.npz) in this folder"
+            + (f" ({reasons})" if reasons else "; train one with `rnnpb train`")
+        )
     return models, refused
 
 
@@ -169,8 +172,9 @@ class _Recording:
             self.failed = f"recording stopped: {self.path.name}: {error.strerror or error}"
             with contextlib.suppress(OSError):  # already reported
                 self._close_part()
-            self.session._error(f"{self.failed}; the robot goes on without recording "
-                                "(Reset starts a new recording)")
+            self.session._error(
+                f"{self.failed}; the robot goes on without recording (Reset starts a new recording)"
+            )
 
     def _close_part(self) -> None:
         recorder, self._recorder = self._recorder, None
@@ -229,10 +233,14 @@ class Session:
         Commands waiting for the session thread; :meth:`submit` refuses more.
     """
 
-    def __init__(self, models: dict[str, Path], dt: float = 0.4,
-                 workdir: str | Path | None = None,
-                 recording_limits: RecordingLimits | None = None,
-                 max_queued_commands: int = MAX_QUEUED_COMMANDS) -> None:
+    def __init__(
+        self,
+        models: dict[str, Path],
+        dt: float = 0.4,
+        workdir: str | Path | None = None,
+        recording_limits: RecordingLimits | None = None,
+        max_queued_commands: int = MAX_QUEUED_COMMANDS,
+    ) -> None:
         if not models:
             raise ConfigError("the dashboard needs at least one model")
         import tempfile
@@ -308,8 +316,9 @@ class Session:
             return False
         return True
 
-    def subscribe(self, callback: Callable[[str], None], replay: bool = False
-                  ) -> Callable[[], None]:
+    def subscribe(
+        self, callback: Callable[[str], None], replay: bool = False
+    ) -> Callable[[], None]:
         """``callback(json_text)`` for every message the session publishes.
 
         With ``replay``, ``callback`` first gets the state and a ``history`` message with the
@@ -327,6 +336,7 @@ class Session:
             with self._subscribers_lock:
                 if callback in self._subscribers:
                     self._subscribers.remove(callback)
+
         return unsubscribe
 
     @property
@@ -373,13 +383,15 @@ class Session:
             "mode": self.mode,
             "dt": self.dt,
             "camera_index": self.camera_index,
-            "demonstrator_pattern": PAUSE if self.demonstrator.paused
+            "demonstrator_pattern": PAUSE
+            if self.demonstrator.paused
             else self.demonstrator.pattern,
             "patterns": learned,
             "demonstrator_patterns": list(self.demonstrator.patterns),
             "novel_patterns": [p for p in self.demonstrator.patterns if p not in learned],
             "pattern_pb": {k: _listed(v) for k, v in model.pattern_pb.items()}
-            if model is not None else {},
+            if model is not None
+            else {},
             "steps": self.loop.steps if self.loop is not None else 0,
             "recording": recording is not None and recording.exists(),
             "recording_error": self.recorder.failed if self.recorder is not None else None,
@@ -387,9 +399,13 @@ class Session:
             "model_error": self.model_error,
             "rest_hands": _listed(self._user_view.rest),
             "user_shoulders": UserBody().shoulders.tolist(),
-            "robot": {"shoulders": SHOULDERS.tolist(), "upper_arm": UPPER_ARM_LENGTH,
-                      "forearm": FOREARM_LENGTH, "joint_limits": JOINT_LIMITS.tolist(),
-                      "joint_names": list(MOTOR_NAMES)},
+            "robot": {
+                "shoulders": SHOULDERS.tolist(),
+                "upper_arm": UPPER_ARM_LENGTH,
+                "forearm": FOREARM_LENGTH,
+                "joint_limits": JOINT_LIMITS.tolist(),
+                "joint_names": list(MOTOR_NAMES),
+            },
             "safety": self._safety_state(),
         }
 
@@ -451,8 +467,9 @@ class Session:
         except Exception as error:  # an OSError, a bug, a failing camera driver...
             log.exception("session: step %d failed", loop.steps)
             self.running = False
-            self._error(f"step {loop.steps} failed, the robot is stopped: "
-                        f"{type(error).__name__}: {error}")
+            self._error(
+                f"step {loop.steps} failed, the robot is stopped: {type(error).__name__}: {error}"
+            )
             self._publish_state()
             return
         if self.running and self.loop is loop and not self._closed.is_set():
@@ -494,8 +511,9 @@ class Session:
             action = command["action"]
             if action == "start":
                 if self.mirror is None:
-                    raise ConfigError("no model is loaded"
-                                      + (f": {self.model_error}" if self.model_error else ""))
+                    raise ConfigError(
+                        "no model is loaded" + (f": {self.model_error}" if self.model_error else "")
+                    )
                 if self.loop is None:
                     self._new_run()
                 self.running = True
@@ -520,8 +538,7 @@ class Session:
         from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel
 
         if name not in self.models:
-            raise ConfigError(f"no model {name!r} (this server offers: "
-                              f"{', '.join(self.models)})")
+            raise ConfigError(f"no model {name!r} (this server offers: {', '.join(self.models)})")
         was_running = self.running
         self.running = False
         self.loading = True
@@ -539,8 +556,13 @@ class Session:
             started = time.perf_counter()
             mirror.step(np.full(model.network.sensory_size, 0.5))  # compiles the step
             mirror.reset()
-            log.info("model %s ready with the %s on-line regression (%s; step compiled in "
-                     "%.1f s)", name, choice.name, choice.reason, time.perf_counter() - started)
+            log.info(
+                "model %s ready with the %s on-line regression (%s; step compiled in %.1f s)",
+                name,
+                choice.name,
+                choice.reason,
+                time.perf_counter() - started,
+            )
         except Exception as error:
             kept = f"; still using {self.model_name}" if self.model_name else ""
             self.model_error = f"model {name} cannot be used: {error}{kept}"
@@ -582,9 +604,13 @@ class Session:
         command_filter = self.safety.command_filter if self.safety is not None else None
         if command_filter is not None:
             command_filter.reset()
-        self.loop = InteractionLoop(self.mirror, self._source, recorder=self.recorder,
-                                    config=LoopConfig(dt=self.dt, paced=True),
-                                    command_filter=command_filter)
+        self.loop = InteractionLoop(
+            self.mirror,
+            self._source,
+            recorder=self.recorder,
+            config=LoopConfig(dt=self.dt, paced=True),
+            command_filter=command_filter,
+        )
         # The loop calls subscribers once a step's timings are complete, so the step message
         # carries this step's sections.
         self.loop.subscribe(self._publish_step)
@@ -596,8 +622,7 @@ class Session:
 
         safety = online_safety(path, model, online, enabled=self.safety_enabled)
         log.info("%s", safety.note)
-        views = ({} if safety.safety_map is None
-                 else risk_views(safety.safety_map, model.pattern_pb))
+        views = {} if safety.safety_map is None else risk_views(safety.safety_map, model.pattern_pb)
         return safety, views
 
     def _safety_state(self) -> dict[str, Any]:
@@ -659,8 +684,9 @@ class Session:
             "recognised": record.recognised,
             "confidence": round(float(record.confidence), 4),
             "novelty": record.novelty,
-            "pattern_confidence": {k: round(float(v), 4)
-                                   for k, v in record.pattern_confidence.items()},
+            "pattern_confidence": {
+                k: round(float(v), 4) for k, v in record.pattern_confidence.items()
+            },
             "prediction_error": _listed([record.prediction_error])[0],
             "window_error": _listed([record.window_error])[0],
             "held": record.held,
@@ -679,8 +705,11 @@ class Session:
     def _step_safety(self, record) -> dict[str, Any]:
         """The step message's safety fields: why the generated command was unsafe (empty
         when safe), what the filter did, and how many commands it has changed this run."""
-        return {"unsafe": record.unsafe, "filtered": record.filtered,
-                "prevented": self.loop.prevented_commands if self.loop is not None else 0}
+        return {
+            "unsafe": record.unsafe,
+            "filtered": record.filtered,
+            "prevented": self.loop.prevented_commands if self.loop is not None else 0,
+        }
 
     def _publish_frame(self, frame: np.ndarray) -> None:
         import cv2
@@ -693,5 +722,6 @@ class Session:
         image = cv2.resize(image, (FRAME_WIDTH, height), interpolation=cv2.INTER_AREA)
         ok, jpeg = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, 70])
         if ok:
-            self._publish({"type": "frame",
-                           "jpeg": base64.b64encode(jpeg.tobytes()).decode("ascii")})
+            self._publish(
+                {"type": "frame", "jpeg": base64.b64encode(jpeg.tobytes()).decode("ascii")}
+            )

@@ -62,8 +62,9 @@ class DemonstratorSource(UserSource):
     seed : int
     """
 
-    def __init__(self, patterns: tuple[str, ...] = ("1", "2", "3", "4"), n_steps: int = 600,
-                 seed: int = 0) -> None:
+    def __init__(
+        self, patterns: tuple[str, ...] = ("1", "2", "3", "4"), n_steps: int = 600, seed: int = 0
+    ) -> None:
         from rnnpb.demonstrator import PatternConfig, perform
         from rnnpb.robot.camera import RobotCamera
 
@@ -98,11 +99,12 @@ class DemonstratorSource(UserSource):
                 self._paused = True
                 return
             if pattern not in self._sensory:
-                raise ConfigError(f"the demonstrator has no pattern {pattern!r} "
-                                  f"(known: {', '.join(self.patterns)})")
+                raise ConfigError(
+                    f"the demonstrator has no pattern {pattern!r} "
+                    f"(known: {', '.join(self.patterns)})"
+                )
             if pattern != self._pattern:
-                phase = self._phase[self._pattern][self._position % len(self._phase[
-                    self._pattern])]
+                phase = self._phase[self._pattern][self._position % len(self._phase[self._pattern])]
                 gap = np.abs(np.angle(np.exp(1j * (self._phase[pattern] - phase))))
                 # The nearest phase after the current position keeps the stream's slow
                 # drift of period and size going forward, not back to its start.

@@ -78,7 +78,8 @@ class IncrementalConfig:
     # patterns, as here) followed in 45 of 50 seed-runs; the first training's 50,000 take 2.5
     # times as long for an upper bound that is no higher (docs/experiments.md).
     scratch_train: TrainConfig | None = field(
-        default_factory=lambda: TrainConfig.paper(iterations=20_000))
+        default_factory=lambda: TrainConfig.paper(iterations=20_000)
+    )
     online: OnlineConfig = field(default_factory=OnlineConfig)
     chain_start: tuple[str, ...] = ("1", "2")
     chain_added: tuple[str, ...] = ("3", "4")
@@ -108,15 +109,27 @@ class IncrementalConfig:
     def quick_run(cls, seed: int = 0) -> IncrementalConfig:
         """Small fast-preset models of the study's own, one learning set, short runs."""
         fast = TrainConfig.fast(iterations=800, seed=seed)
-        return cls(quick=True, learning_sets=("1",), start_train=fast,
-                   consolidation_train=TrainConfig.fast(iterations=200, seed=seed),
-                   scratch_train=fast, online=OnlineConfig.ungated(),
-                   chain_start=("1",), chain_added=("2",), data_seed=seed,
-                   new_data_seed=seed, attractor_steps=200, attractor_transient=100,
-                   sync_before=24, switch_steps_each=20, workers=1)
+        return cls(
+            quick=True,
+            learning_sets=("1",),
+            start_train=fast,
+            consolidation_train=TrainConfig.fast(iterations=200, seed=seed),
+            scratch_train=fast,
+            online=OnlineConfig.ungated(),
+            chain_start=("1",),
+            chain_added=("2",),
+            data_seed=seed,
+            new_data_seed=seed,
+            attractor_steps=200,
+            attractor_transient=100,
+            sync_before=24,
+            switch_steps_each=20,
+            workers=1,
+        )
 
 
 # --- measures ------------------------------------------------------------------------------
+
 
 @dataclass(frozen=True)
 class PatternMeasures:
@@ -148,15 +161,21 @@ class ModelMeasures:
     def followed(self) -> bool:
         """Every pattern locked on within LOCK_LIMIT and recognised, every switch within
         SWITCH_LIMIT."""
-        locks = all(m.steps_to_lock is not None and m.steps_to_lock <= metrics.LOCK_LIMIT
-                    and m.recognized == m.pattern for m in self.pattern.values())
-        switches = all(v is not None and v <= metrics.SWITCH_LIMIT
-                       for v in self.switching.values())
+        locks = all(
+            m.steps_to_lock is not None
+            and m.steps_to_lock <= metrics.LOCK_LIMIT
+            and m.recognized == m.pattern
+            for m in self.pattern.values()
+        )
+        switches = all(v is not None and v <= metrics.SWITCH_LIMIT for v in self.switching.values())
         return locks and switches
 
     def old_generation(self) -> list[float]:
-        return [m.generation_vs_before for m in self.pattern.values()
-                if m.generation_vs_before is not None]
+        return [
+            m.generation_vs_before
+            for m in self.pattern.values()
+            if m.generation_vs_before is not None
+        ]
 
 
 @dataclass(frozen=True)
@@ -182,36 +201,77 @@ def _data_cycles(model: TrainedModel, sequences) -> dict[str, list[np.ndarray]]:
     return out
 
 
-def measure(model: TrainedModel, label: str, config: IncrementalConfig, data,
-            before: TrainedModel | None = None, pairs_with: str | None = None) -> ModelMeasures:
+def measure(
+    model: TrainedModel,
+    label: str,
+    config: IncrementalConfig,
+    data,
+    before: TrainedModel | None = None,
+    pairs_with: str | None = None,
+) -> ModelMeasures:
     """Every measure of one model (``data``: the demonstrations of its patterns)."""
     limits = model_joint_limits(model)
     attractors = learned_attractors(model, config.attractor_steps, config.attractor_transient)
-    start = (learned_attractors(before, config.attractor_steps, config.attractor_transient)
-             if before is not None else {})
+    start = (
+        learned_attractors(before, config.attractor_steps, config.attractor_transient)
+        if before is not None
+        else {}
+    )
     cycles = _data_cycles(model, data)
     per_pattern = {}
     for name in model.patterns:
-        sync = synchronization(model, name, config.online, limits, seed=config.scenario_seed,
-                               before=config.sync_before, after=config.sync_before // 2)
-        vs_before = (metrics.cycle_distance(attractors[name].cycle, start[name].cycle)
-                     if name in start else None)
-        vs_data = min(metrics.cycle_distance(attractors[name].cycle, c)
-                      for c in cycles.get(name, [])) if name in cycles else math.nan
-        per_pattern[name] = PatternMeasures(name, sync.steps_to_lock, sync.recognized_pattern,
-                                            attractors[name].period, vs_before, vs_data)
+        sync = synchronization(
+            model,
+            name,
+            config.online,
+            limits,
+            seed=config.scenario_seed,
+            before=config.sync_before,
+            after=config.sync_before // 2,
+        )
+        vs_before = (
+            metrics.cycle_distance(attractors[name].cycle, start[name].cycle)
+            if name in start
+            else None
+        )
+        vs_data = (
+            min(metrics.cycle_distance(attractors[name].cycle, c) for c in cycles.get(name, []))
+            if name in cycles
+            else math.nan
+        )
+        per_pattern[name] = PatternMeasures(
+            name,
+            sync.steps_to_lock,
+            sync.recognized_pattern,
+            attractors[name].period,
+            vs_before,
+            vs_data,
+        )
     if pairs_with is None:
-        switched = switching(model, config.online, limits, seed=config.scenario_seed,
-                             steps_each=config.switch_steps_each).pairs
+        switched = switching(
+            model,
+            config.online,
+            limits,
+            seed=config.scenario_seed,
+            steps_each=config.switch_steps_each,
+        ).pairs
     else:  # the quick form: the pairs with the new pattern only
         switched = _switching_with(model, pairs_with, config, limits)
     info = model.meta["training"]
-    return ModelMeasures(label, model.patterns, per_pattern, switched, info["mse_max"],
-                         float(info["seconds"]), int(info["iterations"]))
+    return ModelMeasures(
+        label,
+        model.patterns,
+        per_pattern,
+        switched,
+        info["mse_max"],
+        float(info["seconds"]),
+        int(info["iterations"]),
+    )
 
 
-def _switching_with(model: TrainedModel, pattern: str, config: IncrementalConfig,
-                    limits: np.ndarray) -> dict[str, int | None]:
+def _switching_with(
+    model: TrainedModel, pattern: str, config: IncrementalConfig, limits: np.ndarray
+) -> dict[str, int | None]:
     """:func:`rnnpb.experiments.paper.switching` for the ordered pairs with ``pattern``."""
     from rnnpb.demonstrator import switch_scenario
 
@@ -220,11 +280,13 @@ def _switching_with(model: TrainedModel, pattern: str, config: IncrementalConfig
         if other == pattern:
             continue
         for a, b in ((other, pattern), (pattern, other)):
-            scenario = switch_scenario((a, b), steps_each=config.switch_steps_each,
-                                       seed=config.scenario_seed)
+            scenario = switch_scenario(
+                (a, b), steps_each=config.switch_steps_each, seed=config.scenario_seed
+            )
             run = run_scenario(model, scenario, config.online, limits)
-            pairs[f"{a}->{b}"] = metrics.steps_to_lock(run.motor_error, run.sensory_error,
-                                                       config.switch_steps_each)
+            pairs[f"{a}->{b}"] = metrics.steps_to_lock(
+                run.motor_error, run.sensory_error, config.switch_steps_each
+            )
     return pairs
 
 
@@ -247,8 +309,11 @@ def _pool(workers: int) -> ProcessPoolExecutor | _InProcess:
     if workers == 1:
         return _InProcess()
     _worker_init()  # inherited by the workers this process starts
-    return ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context(
-        "spawn"), initializer=_worker_init)
+    return ProcessPoolExecutor(
+        max_workers=workers,
+        mp_context=multiprocessing.get_context("spawn"),
+        initializer=_worker_init,
+    )
 
 
 def _worker_init() -> None:
@@ -272,14 +337,17 @@ def _start_model(set_name: str, config: IncrementalConfig, out: Path) -> str:
     if config.models is not None:
         path = Path(config.models) / f"set{set_name}.npz"
         if not path.is_file():
-            raise ConfigError(f"{path}: no starting model for learning set {set_name} (run "
-                              "`rnnpb demo` first, or give another directory)")
+            raise ConfigError(
+                f"{path}: no starting model for learning set {set_name} (run "
+                "`rnnpb demo` first, or give another directory)"
+            )
         return str(path)
     path = out / "models" / f"set{set_name}.npz"
     from rnnpb.robot import JOINT_LIMITS
 
-    train(learning_set(set_name, seed=config.data_seed), JOINT_LIMITS,
-          config=config.start_train).save(path)
+    train(
+        learning_set(set_name, seed=config.data_seed), JOINT_LIMITS, config=config.start_train
+    ).save(path)
     return str(path)
 
 
@@ -288,8 +356,9 @@ def _method_config(method: str, config: IncrementalConfig) -> ConsolidationConfi
     return ConsolidationConfig(method=method, train=learning)  # type: ignore[arg-type]
 
 
-def set_job(set_name: str, method: str | None, start_path: str, config: IncrementalConfig,
-            out_path: str) -> tuple[str, str | None, ModelMeasures]:
+def set_job(
+    set_name: str, method: str | None, start_path: str, config: IncrementalConfig, out_path: str
+) -> tuple[str, str | None, ModelMeasures]:
     """Measure the starting model (``method`` None) or add the set's left-out pattern to it by
     ``method``, and measure the result."""
     from rnnpb.demonstrator import learning_set, novel_pattern
@@ -300,12 +369,16 @@ def set_job(set_name: str, method: str | None, start_path: str, config: Incremen
     new = _demonstrations((added,), config, config.new_data_seed)
     if method is None:
         return set_name, None, measure(start, "before", config, original)
-    model = consolidate(start, new, _method_config(method, config), replay_data=original,
-                        parent=start_path)
+    model = consolidate(
+        start, new, _method_config(method, config), replay_data=original, parent=start_path
+    )
     model.save(out_path)
     pairs = added if config.quick else None
-    return set_name, method, measure(model, method, config, [*original, *new], before=start,
-                                     pairs_with=pairs)
+    return (
+        set_name,
+        method,
+        measure(model, method, config, [*original, *new], before=start, pairs_with=pairs),
+    )
 
 
 def chain_job(config: IncrementalConfig, out: Path) -> list[ModelMeasures]:
@@ -318,17 +391,30 @@ def chain_job(config: IncrementalConfig, out: Path) -> list[ModelMeasures]:
     results = [measure(model, "+".join(config.chain_start), config, data)]
     for k, pattern in enumerate(config.chain_added, start=1):
         new = _demonstrations((pattern,), config, config.new_data_seed)
-        grown = consolidate(model, new, _method_config("rehearsal", config),
-                            parent=str(out / "models" / f"chain_{k - 1}.npz"))
+        grown = consolidate(
+            model,
+            new,
+            _method_config("rehearsal", config),
+            parent=str(out / "models" / f"chain_{k - 1}.npz"),
+        )
         grown.save(out / "models" / f"chain_{k}.npz")
         data = [*data, *new]
-        results.append(measure(grown, f"+{pattern}", config, data, before=model,
-                               pairs_with=pattern if config.quick else None))
+        results.append(
+            measure(
+                grown,
+                f"+{pattern}",
+                config,
+                data,
+                before=model,
+                pairs_with=pattern if config.quick else None,
+            )
+        )
         model = grown
     return results
 
 
 # --- the study -----------------------------------------------------------------------------
+
 
 def run_study(out: Path, config: IncrementalConfig, log=print) -> StudyOutcome:
     """Run the study and write ``out/report.md``, ``out/results.json`` and the figures."""
@@ -343,25 +429,46 @@ def run_study(out: Path, config: IncrementalConfig, log=print) -> StudyOutcome:
 
     def write(done: int, total: int) -> StudyOutcome:
         # After every job: a run stopped early keeps what it measured, marked partial.
-        forgetting = {m: {name: after[name][m].old_generation() for name in config.learning_sets
-                          if m in after.get(name, {})} for m in config.methods}
+        forgetting = {
+            m: {
+                name: after[name][m].old_generation()
+                for name in config.learning_sets
+                if m in after.get(name, {})
+            }
+            for m in config.methods
+        }
         plot_forgetting(forgetting, out / "figures" / "forgetting.png", GENERATION_LIMIT)
         targets = _targets(config, after, chained)
         runtime = time.perf_counter() - began
         progress = (done, total)
-        write_outputs(out, _report(config, before, after, chained, targets, runtime, progress),
-                      _results(config, before, after, chained, targets, runtime, progress))
+        write_outputs(
+            out,
+            _report(config, before, after, chained, targets, runtime, progress),
+            _results(config, before, after, chained, targets, runtime, progress),
+        )
         return StudyOutcome(runtime, targets)
 
     with _pool(config.workers) as pool:
         starts = {name: _start_model(name, config, out) for name in config.learning_sets}
-        jobs = {pool.submit(set_job, name, None, starts[name], config, ""): "set"
-                for name in config.learning_sets}
+        jobs = {
+            pool.submit(set_job, name, None, starts[name], config, ""): "set"
+            for name in config.learning_sets
+        }
         # Method by method, the chain after rehearsal: what the targets judge comes first.
         for k, method in enumerate(config.methods):
-            jobs.update({pool.submit(set_job, name, method, starts[name], config,
-                                     str(out / "models" / f"set{name}_{method}.npz")): "set"
-                         for name in config.learning_sets})
+            jobs.update(
+                {
+                    pool.submit(
+                        set_job,
+                        name,
+                        method,
+                        starts[name],
+                        config,
+                        str(out / "models" / f"set{name}_{method}.npz"),
+                    ): "set"
+                    for name in config.learning_sets
+                }
+            )
             if k == 0:
                 jobs[pool.submit(chain_job, config, out)] = "chain"
         for done, future in enumerate(as_completed(jobs), start=1):
@@ -385,102 +492,191 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
     if options.quick:
         config = IncrementalConfig.quick_run(options.seed)
     else:
-        config = IncrementalConfig(models=str(DEFAULT_MODELS), data_seed=options.seed,
-                                   new_data_seed=options.seed)
+        config = IncrementalConfig(
+            models=str(DEFAULT_MODELS), data_seed=options.seed, new_data_seed=options.seed
+        )
     return run_study(Path(out), replace(config, workers=options.workers))
 
 
-def _targets(config: IncrementalConfig, after: dict[str, dict[str, ModelMeasures]],
-             chained: list[ModelMeasures]) -> dict[str, Target]:
+def _targets(
+    config: IncrementalConfig,
+    after: dict[str, dict[str, ModelMeasures]],
+    chained: list[ModelMeasures],
+) -> dict[str, Target]:
     targets: dict[str, Target] = {}
-    rehearsal = {name: after[name]["rehearsal"] for name in config.learning_sets
-                 if "rehearsal" in after.get(name, {})}
+    rehearsal = {
+        name: after[name]["rehearsal"]
+        for name in config.learning_sets
+        if "rehearsal" in after.get(name, {})
+    }
     if rehearsal:
         followed = [name for name, m in rehearsal.items() if m.followed]
         targets["rehearsal_all_followed"] = Target(
             len(followed) == len(rehearsal),
             f"{len(followed)}/{len(rehearsal)} learning sets: every pattern locked on within "
-            f"{metrics.LOCK_LIMIT} and recognised, every switch within {metrics.SWITCH_LIMIT}")
+            f"{metrics.LOCK_LIMIT} and recognised, every switch within {metrics.SWITCH_LIMIT}",
+        )
         old = [d for m in rehearsal.values() for d in m.old_generation()]
         targets["rehearsal_old_generation"] = Target(
             bool(old) and max(old) <= GENERATION_LIMIT,
-            f"worst old pattern's cycle moved {fmt(max(old), 3)} RMS "
-            f"(limit {GENERATION_LIMIT})")
+            f"worst old pattern's cycle moved {fmt(max(old), 3)} RMS (limit {GENERATION_LIMIT})",
+        )
         seconds = [m.seconds for m in rehearsal.values()]
         targets["rehearsal_within_60s"] = Target(
-            max(seconds) <= 60, f"slowest {max(seconds):.1f} s (one core, shared machine: an "
-            "upper bound)")
+            max(seconds) <= 60,
+            f"slowest {max(seconds):.1f} s (one core, shared machine: an upper bound)",
+        )
     if not chained:
         return targets
     n = len(chained) - 1
     targets["chain_all_followed"] = Target(
-        chained[-1].followed, f"after {n} consolidation(s): "
-        + ", ".join(f"{p}: lock {fmt(m.steps_to_lock)}" for p, m in chained[-1].pattern.items()))
+        chained[-1].followed,
+        f"after {n} consolidation(s): "
+        + ", ".join(f"{p}: lock {fmt(m.steps_to_lock)}" for p, m in chained[-1].pattern.items()),
+    )
     return targets
 
 
 def _report(config, before, after, chained, targets, runtime, progress) -> list[str]:
-    lines = ["# Incremental learning: rehearsal and consolidation", "",
-             "Each learning set's left-out pattern is added to the set's model by each method "
-             "(rehearsal: the new pattern with the model's own closed-loop regeneration of "
-             "the old ones; finetune: the new pattern alone; replay: with the original data; "
-             "scratch: everything learned anew). Generation: RMS distance (normalized joints) "
-             "of each pattern's closed-loop cycle from the starting model's and from the "
-             "nearest demonstration's. Lock-on and switching in steps (targets "
-             f"{metrics.LOCK_LIMIT} and {metrics.SWITCH_LIMIT}).", "",
-             f"Starting models: {config.models or 'learned here'}; "
-             f"{'quick form' if config.quick else 'full form'}; runtime {runtime:.0f} s"
-             + ("." if progress[0] == progress[1] else
-                f"; **partial: {progress[0]} of {progress[1]} jobs done**."), "",
-             "## Targets", "",
-             *table(("target", "met", "detail"),
-                    [(k, "yes" if t.met else "**no**", t.detail) for k, t in targets.items()]),
-             "", "## Per learning set and method", ""]
+    lines = [
+        "# Incremental learning: rehearsal and consolidation",
+        "",
+        "Each learning set's left-out pattern is added to the set's model by each method "
+        "(rehearsal: the new pattern with the model's own closed-loop regeneration of "
+        "the old ones; finetune: the new pattern alone; replay: with the original data; "
+        "scratch: everything learned anew). Generation: RMS distance (normalized joints) "
+        "of each pattern's closed-loop cycle from the starting model's and from the "
+        "nearest demonstration's. Lock-on and switching in steps (targets "
+        f"{metrics.LOCK_LIMIT} and {metrics.SWITCH_LIMIT}).",
+        "",
+        f"Starting models: {config.models or 'learned here'}; "
+        f"{'quick form' if config.quick else 'full form'}; runtime {runtime:.0f} s"
+        + (
+            "."
+            if progress[0] == progress[1]
+            else f"; **partial: {progress[0]} of {progress[1]} jobs done**."
+        ),
+        "",
+        "## Targets",
+        "",
+        *table(
+            ("target", "met", "detail"),
+            [(k, "yes" if t.met else "**no**", t.detail) for k, t in targets.items()],
+        ),
+        "",
+        "## Per learning set and method",
+        "",
+    ]
     rows = []
+
     def measured(name):
-        return [*([("before", before[name])] if name in before else []),
-                *after.get(name, {}).items()]
+        return [
+            *([("before", before[name])] if name in before else []),
+            *after.get(name, {}).items(),
+        ]
 
     for name in config.learning_sets:
         for label, m in measured(name):
             old = m.old_generation()
             switches = [v for v in m.switching.values()]
             worst_switch = None if any(v is None for v in switches) else max(switches, default=0)
-            rows.append((name, label, ", ".join(m.patterns),
-                         fmt(max(old), 3) if old else "–",
-                         ", ".join(fmt(p.steps_to_lock) for p in m.pattern.values()),
-                         ", ".join(p.recognized for p in m.pattern.values()),
-                         fmt(worst_switch), f"{m.train_mse_max:.1e}",
-                         f"{m.seconds:.1f}" if label != "before" else "–",
-                         m.iterations if label != "before" else "–",
-                         "yes" if m.followed else "no"))
-    lines += table(("set", "method", "patterns", "old generation vs before (worst)",
-                    "lock-on per pattern", "recognised as", "worst switch",
-                    "training MSE (max)", "seconds", "iterations", "all followed"), rows)
+            rows.append(
+                (
+                    name,
+                    label,
+                    ", ".join(m.patterns),
+                    fmt(max(old), 3) if old else "–",
+                    ", ".join(fmt(p.steps_to_lock) for p in m.pattern.values()),
+                    ", ".join(p.recognized for p in m.pattern.values()),
+                    fmt(worst_switch),
+                    f"{m.train_mse_max:.1e}",
+                    f"{m.seconds:.1f}" if label != "before" else "–",
+                    m.iterations if label != "before" else "–",
+                    "yes" if m.followed else "no",
+                )
+            )
+    lines += table(
+        (
+            "set",
+            "method",
+            "patterns",
+            "old generation vs before (worst)",
+            "lock-on per pattern",
+            "recognised as",
+            "worst switch",
+            "training MSE (max)",
+            "seconds",
+            "iterations",
+            "all followed",
+        ),
+        rows,
+    )
     lines += ["", "Generation against the data (RMS, per pattern):", ""]
-    lines += table(("set", "method", *PAPER_PATTERNS),
-                   [(name, label, *(fmt(m.pattern[p].generation_vs_data, 3)
-                                    if p in m.pattern else "–" for p in PAPER_PATTERNS))
-                    for name in config.learning_sets for label, m in measured(name)])
-    lines += ["", embed("forgetting per method", "forgetting.png"), "",
-              "## The chain", "",
-              f"Learned {', '.join(config.chain_start)}, then added "
-              f"{', '.join(config.chain_added)} one at a time by rehearsal.", ""]
-    lines += table(("step", "patterns", "lock-on", "old generation vs before (worst)",
-                    "worst switch", "seconds", "all followed"),
-                   [(m.label, ", ".join(m.patterns),
-                     ", ".join(fmt(p.steps_to_lock) for p in m.pattern.values()),
-                     fmt(max(m.old_generation()), 3) if m.old_generation() else "–",
-                     fmt(None if any(v is None for v in m.switching.values())
-                         else max(m.switching.values(), default=0)),
-                     f"{m.seconds:.1f}", "yes" if m.followed else "no") for m in chained])
+    lines += table(
+        ("set", "method", *PAPER_PATTERNS),
+        [
+            (
+                name,
+                label,
+                *(
+                    fmt(m.pattern[p].generation_vs_data, 3) if p in m.pattern else "–"
+                    for p in PAPER_PATTERNS
+                ),
+            )
+            for name in config.learning_sets
+            for label, m in measured(name)
+        ],
+    )
+    lines += [
+        "",
+        embed("forgetting per method", "forgetting.png"),
+        "",
+        "## The chain",
+        "",
+        f"Learned {', '.join(config.chain_start)}, then added "
+        f"{', '.join(config.chain_added)} one at a time by rehearsal.",
+        "",
+    ]
+    lines += table(
+        (
+            "step",
+            "patterns",
+            "lock-on",
+            "old generation vs before (worst)",
+            "worst switch",
+            "seconds",
+            "all followed",
+        ),
+        [
+            (
+                m.label,
+                ", ".join(m.patterns),
+                ", ".join(fmt(p.steps_to_lock) for p in m.pattern.values()),
+                fmt(max(m.old_generation()), 3) if m.old_generation() else "–",
+                fmt(
+                    None
+                    if any(v is None for v in m.switching.values())
+                    else max(m.switching.values(), default=0)
+                ),
+                f"{m.seconds:.1f}",
+                "yes" if m.followed else "no",
+            )
+            for m in chained
+        ],
+    )
     return lines
 
 
 def _results(config, before, after, chained, targets, runtime, progress) -> dict[str, Any]:
-    return {"study": NAME, "config": asdict(config), "versions": versions(),
-            "runtime_s": runtime, "jobs_done": progress[0], "jobs": progress[1],
-            "targets": {k: t.to_json() for k, t in targets.items()},
-            "before": {k: asdict(v) for k, v in before.items()},
-            "after": {k: {m: asdict(v) for m, v in d.items()} for k, d in after.items()},
-            "chain": [asdict(m) for m in chained]}
+    return {
+        "study": NAME,
+        "config": asdict(config),
+        "versions": versions(),
+        "runtime_s": runtime,
+        "jobs_done": progress[0],
+        "jobs": progress[1],
+        "targets": {k: t.to_json() for k, t in targets.items()},
+        "before": {k: asdict(v) for k, v in before.items()},
+        "after": {k: {m: asdict(v) for m, v in d.items()} for k, d in after.items()},
+        "chain": [asdict(m) for m in chained],
+    }

@@ -57,8 +57,9 @@ class StreamRun:
     pb: np.ndarray  # (T, P)
 
 
-def _streams(patterns: tuple[str, ...], novel: tuple[str, ...], seed: int, steps: int
-             ) -> list[tuple[str, str, int, list[tuple[str, int]]]]:
+def _streams(
+    patterns: tuple[str, ...], novel: tuple[str, ...], seed: int, steps: int
+) -> list[tuple[str, str, int, list[tuple[str, int]]]]:
     from rnnpb.demonstrator import PAUSE, UNSTRUCTURED
 
     out = [("learned", p, 0, [(p, steps)]) for p in patterns]
@@ -70,8 +71,15 @@ def _streams(patterns: tuple[str, ...], novel: tuple[str, ...], seed: int, steps
     return out
 
 
-def run_stream(mirror: Any, model_name: str, kind: str, movement: str, seed: int, start: int,
-               segments: list[tuple[str, int]]) -> StreamRun:
+def run_stream(
+    mirror: Any,
+    model_name: str,
+    kind: str,
+    movement: str,
+    seed: int,
+    start: int,
+    segments: list[tuple[str, int]],
+) -> StreamRun:
     """Play one generated stream through ``mirror`` (reset first)."""
     from rnnpb.demonstrator import make_scenario
 
@@ -86,11 +94,21 @@ def run_stream(mirror: Any, model_name: str, kind: str, movement: str, seed: int
         recognised.append(result.recognised)
         nearest.append(mirror.model.nearest_pattern(result.pb)[0])
         errors = result.pattern_errors
-        score.append(float(np.sqrt(np.min(errors))) if np.all(np.isfinite(errors))
-                     else np.nan)
-    return StreamRun(model_name, kind, movement, seed, start, tuple(novelty), tuple(recognised),
-                     tuple(nearest), np.array(score), scenario.sensory.copy(),
-                     np.array(evidence), np.array(pbs))
+        score.append(float(np.sqrt(np.min(errors))) if np.all(np.isfinite(errors)) else np.nan)
+    return StreamRun(
+        model_name,
+        kind,
+        movement,
+        seed,
+        start,
+        tuple(novelty),
+        tuple(recognised),
+        tuple(nearest),
+        np.array(score),
+        scenario.sensory.copy(),
+        np.array(evidence),
+        np.array(pbs),
+    )
 
 
 def replay(run: StreamRun, model: Any, config: Any) -> StreamRun:
@@ -149,12 +167,18 @@ def _delay(run: StreamRun) -> int | None:
 
 def measure(runs: list[StreamRun]) -> dict[str, Any]:
     """Every measure of the study from its runs."""
-    by_kind = {k: [r for r in runs if r.kind == k] for k in ("learned", "novel", "unstructured",
-                                                             "still")}
-    confusion = {kind: {state or "undecided": int(sum(run.novelty[t] == state for run in rs
-                                                       for t in _judged(run)))
-                        for state in STATES}
-                 for kind, rs in by_kind.items()}
+    by_kind = {
+        k: [r for r in runs if r.kind == k] for k in ("learned", "novel", "unstructured", "still")
+    }
+    confusion = {
+        kind: {
+            state or "undecided": int(
+                sum(run.novelty[t] == state for run in rs for t in _judged(run))
+            )
+            for state in STATES
+        }
+        for kind, rs in by_kind.items()
+    }
     learned = by_kind["learned"]
     delays = [_delay(r) for r in by_kind["novel"]]
     after = [r for r in by_kind["novel"]]
@@ -163,31 +187,43 @@ def measure(runs: list[StreamRun]) -> dict[str, Any]:
         d = _delay(run)
         if d is None:
             return 0.0
-        tail = run.novelty[run.start + d:]
+        tail = run.novelty[run.start + d :]
         return float(np.mean([s == "novel" for s in tail]))
 
     positives = np.concatenate([r.score[list(_judged(r))] for r in by_kind["novel"]] or [[]])
     negatives = np.concatenate([r.score[list(_judged(r))] for r in learned] or [[]])
     positives, negatives = positives[np.isfinite(positives)], negatives[np.isfinite(negatives)]
     thresholds = np.unique(np.concatenate([positives, negatives, [np.inf]]))
-    roc = [(float(np.mean(negatives >= t)) if len(negatives) else 0.0,
-            float(np.mean(positives >= t)) if len(positives) else 0.0) for t in thresholds]
-    auc = float(np.mean([[float(p > n) + 0.5 * float(p == n) for n in negatives]
-                         for p in positives])) if len(positives) and len(negatives) else 0.0
+    roc = [
+        (
+            float(np.mean(negatives >= t)) if len(negatives) else 0.0,
+            float(np.mean(positives >= t)) if len(positives) else 0.0,
+        )
+        for t in thresholds
+    ]
+    auc = (
+        float(np.mean([[float(p > n) + 0.5 * float(p == n) for n in negatives] for p in positives]))
+        if len(positives) and len(negatives)
+        else 0.0
+    )
     return {
         "confusion": confusion,
         "learned_recognised": _share(learned, lambda r, t: r.recognised[t] == r.movement),
         "learned_nearest_pb": _share(learned, lambda r, t: r.nearest_pb[t] == r.movement),
         "learned_called_novel": _share(learned, lambda r, t: r.novelty[t] == "novel"),
         "novel_delay_steps": delays,
-        "novel_within_3_cycles": float(np.mean([d is not None and d <= 3 * PERIOD
-                                                for d in delays])) if delays else float("nan"),
+        "novel_within_3_cycles": float(np.mean([d is not None and d <= 3 * PERIOD for d in delays]))
+        if delays
+        else float("nan"),
         "novel_after_detection": float(np.mean([novel_after(r) for r in after]))
-        if after else float("nan"),
-        "novel_recognised_as_learned": _share(by_kind["novel"],
-                                              lambda r, t: r.recognised[t] is not None),
-        "unstructured_called_novel": _share(by_kind["unstructured"],
-                                            lambda r, t: r.novelty[t] == "novel"),
+        if after
+        else float("nan"),
+        "novel_recognised_as_learned": _share(
+            by_kind["novel"], lambda r, t: r.recognised[t] is not None
+        ),
+        "unstructured_called_novel": _share(
+            by_kind["unstructured"], lambda r, t: r.novelty[t] == "novel"
+        ),
         "still_called_still": _share(by_kind["still"], lambda r, t: r.novelty[t] == "still"),
         "roc": roc,
         "roc_auc": auc,
@@ -241,52 +277,103 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
     per_set = {name: measure([r for r in runs if r.model == name]) for name in models}
     overall = measure(runs)
     targets = judge(overall)
-    plot_confusion({n: m["confusion"] for n, m in per_set.items()},
-                   out / "figures" / "confusion.png")
-    plot_delays({n: [d for d in m["novel_delay_steps"]] for n, m in per_set.items()},
-                out / "figures" / "delays.png", period=PERIOD)
+    plot_confusion(
+        {n: m["confusion"] for n, m in per_set.items()}, out / "figures" / "confusion.png"
+    )
+    plot_delays(
+        {n: [d for d in m["novel_delay_steps"]] for n, m in per_set.items()},
+        out / "figures" / "delays.png",
+        period=PERIOD,
+    )
     plot_roc({n: m["roc"] for n, m in per_set.items()}, out / "figures" / "roc.png")
     report = _report(per_set, overall, targets, options, seeds)
-    results = {"study": NAME, "quick": options.quick, "seeds": seeds,
-               "config": {"recognition": recognition.to_dict(),
-                          "online": OnlineConfig().to_dict(), "steps": steps,
-                          "settle_steps": SETTLE_STEPS, "lead_steps": LEAD_STEPS},
-               "models": {n: str(out / "models" / (f"set{n}.npz" if n != "full" else
-                                                   "full.npz")) for n in models},
-               "per_set": per_set, "overall": overall,
-               "targets": {k: t.to_json() for k, t in targets.items()},
-               "versions": versions()}
+    results = {
+        "study": NAME,
+        "quick": options.quick,
+        "seeds": seeds,
+        "config": {
+            "recognition": recognition.to_dict(),
+            "online": OnlineConfig().to_dict(),
+            "steps": steps,
+            "settle_steps": SETTLE_STEPS,
+            "lead_steps": LEAD_STEPS,
+        },
+        "models": {
+            n: str(out / "models" / (f"set{n}.npz" if n != "full" else "full.npz")) for n in models
+        },
+        "per_set": per_set,
+        "overall": overall,
+        "targets": {k: t.to_json() for k, t in targets.items()},
+        "versions": versions(),
+    }
     write_outputs(out, report, results)
     return StudyOutcome(runtime_s=time.perf_counter() - started, targets=targets)
 
 
-def _report(per_set: dict[str, dict[str, Any]], overall: dict[str, Any],
-            targets: dict[str, Target], options: StudyOptions, seeds: list[int]) -> list[str]:
-    lines = ["# Study: novelty — does the robot know what it sees?", "",
-             f"{'Quick form' if options.quick else 'Full form'}; draws of the user (scenario "
-             f"seeds) {seeds}, none of them the draws the detector's settings were chosen on. "
-             f"Steps judged: from {SETTLE_STEPS} steps after a movement starts.", "",
-             "## Targets", ""]
-    lines += table(["target", "met", "measured"],
-                   [[k, "yes" if t.met else "NO", t.detail] for k, t in targets.items()])
+def _report(
+    per_set: dict[str, dict[str, Any]],
+    overall: dict[str, Any],
+    targets: dict[str, Target],
+    options: StudyOptions,
+    seeds: list[int],
+) -> list[str]:
+    lines = [
+        "# Study: novelty — does the robot know what it sees?",
+        "",
+        f"{'Quick form' if options.quick else 'Full form'}; draws of the user (scenario "
+        f"seeds) {seeds}, none of them the draws the detector's settings were chosen on. "
+        f"Steps judged: from {SETTLE_STEPS} steps after a movement starts.",
+        "",
+        "## Targets",
+        "",
+    ]
+    lines += table(
+        ["target", "met", "measured"],
+        [[k, "yes" if t.met else "NO", t.detail] for k, t in targets.items()],
+    )
     lines += ["", "## Per learning set", ""]
     rows = []
     for name, m in per_set.items():
         delays = [d for d in m["novel_delay_steps"] if d is not None]
-        rows.append([name, fmt(100 * m["learned_recognised"]),
-                     fmt(100 * m["learned_nearest_pb"]), fmt(100 * m["learned_called_novel"]),
-                     fmt(100 * m["novel_within_3_cycles"]),
-                     fmt(float(np.median(delays))) if delays else "never",
-                     fmt(100 * m["novel_after_detection"]),
-                     fmt(100 * m["unstructured_called_novel"]),
-                     fmt(100 * m["still_called_still"]), f"{m['roc_auc']:.3f}"])
-    lines += table(["set", "learned recognised %", "nearest PB right %", "learned novel %",
-                    "novel within 3 cycles %", "median delay (steps)",
-                    "novel after detection %", "unstructured novel %", "still %", "ROC AUC"],
-                   rows)
+        rows.append(
+            [
+                name,
+                fmt(100 * m["learned_recognised"]),
+                fmt(100 * m["learned_nearest_pb"]),
+                fmt(100 * m["learned_called_novel"]),
+                fmt(100 * m["novel_within_3_cycles"]),
+                fmt(float(np.median(delays))) if delays else "never",
+                fmt(100 * m["novel_after_detection"]),
+                fmt(100 * m["unstructured_called_novel"]),
+                fmt(100 * m["still_called_still"]),
+                f"{m['roc_auc']:.3f}",
+            ]
+        )
+    lines += table(
+        [
+            "set",
+            "learned recognised %",
+            "nearest PB right %",
+            "learned novel %",
+            "novel within 3 cycles %",
+            "median delay (steps)",
+            "novel after detection %",
+            "unstructured novel %",
+            "still %",
+            "ROC AUC",
+        ],
+        rows,
+    )
     lines += ["", "## Confusion of the four states (all sets)", ""]
-    lines += table(["truth \\ said", *[s or "undecided" for s in STATES]],
-                   [[kind, *row.values()] for kind, row in overall["confusion"].items()])
-    lines += ["", embed("confusion matrices", "confusion.png"),
-              embed("detection delays", "delays.png"), embed("ROC", "roc.png"), ""]
+    lines += table(
+        ["truth \\ said", *[s or "undecided" for s in STATES]],
+        [[kind, *row.values()] for kind, row in overall["confusion"].items()],
+    )
+    lines += [
+        "",
+        embed("confusion matrices", "confusion.png"),
+        embed("detection delays", "delays.png"),
+        embed("ROC", "roc.png"),
+        "",
+    ]
     return lines

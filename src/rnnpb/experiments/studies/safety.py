@@ -78,7 +78,7 @@ def adversarial_stream(kind: str, n_steps: int, seed: int, learning_set: str) ->
         out, t = np.empty((n_steps, 4)), 0
         while t < n_steps:
             hold = int(rng.integers(1, 5))
-            out[t:t + hold] = rng.uniform(0.05, 0.95, 4)
+            out[t : t + hold] = rng.uniform(0.05, 0.95, 4)
             t += hold
         return out
     if kind == "fast_scribbles":
@@ -113,10 +113,15 @@ def _models(config: SafetyStudyConfig, seed: int) -> dict[str, Any]:
         if path is not None and path.exists():
             models[name] = (TrainedModel.load(path), str(path))
         else:
-            train_config = (TrainConfig.fast(iterations=1500, seed=seed) if config.quick
-                            else TrainConfig.paper(seed=seed))
-            models[name] = (train(learning_set(name, seed=seed), JOINT_LIMITS,
-                                  config=train_config), f"learned here ({train_config.optimizer})")
+            train_config = (
+                TrainConfig.fast(iterations=1500, seed=seed)
+                if config.quick
+                else TrainConfig.paper(seed=seed)
+            )
+            models[name] = (
+                train(learning_set(name, seed=seed), JOINT_LIMITS, config=train_config),
+                f"learned here ({train_config.optimizer})",
+            )
     return models
 
 
@@ -131,15 +136,18 @@ def _interact(model, online, meta, sensory, truth=None) -> dict[str, np.ndarray]
     command_filter = CommandFilter(initial=rest)
     records = []
     with ArraySensorySource(sensory, truth=truth) as source:
-        InteractionLoop(MirrorSystem(model, online, meta=meta), source,
-                        command_filter=command_filter).run(on_step=records.append)
-    return {"motor": np.array([r.motor for r in records]),
-            "pb": np.array([r.pb for r in records]),
-            "observed": np.array([r.observed for r in records]),
-            "predicted": np.array([r.predicted for r in records]),
-            "unsafe": np.array([r.unsafe for r in records], dtype=object),
-            "filtered": np.array([r.filtered for r in records], dtype=object),
-            "rest": rest}
+        InteractionLoop(
+            MirrorSystem(model, online, meta=meta), source, command_filter=command_filter
+        ).run(on_step=records.append)
+    return {
+        "motor": np.array([r.motor for r in records]),
+        "pb": np.array([r.pb for r in records]),
+        "observed": np.array([r.observed for r in records]),
+        "predicted": np.array([r.predicted for r in records]),
+        "unsafe": np.array([r.unsafe for r in records], dtype=object),
+        "filtered": np.array([r.filtered for r in records], dtype=object),
+        "rest": rest,
+    }
 
 
 def _physical(reasons: np.ndarray, kind: str) -> int:
@@ -162,13 +170,15 @@ def _visit_job(model_path: str, online, user: str, steps: int, seed: int, set_na
 
     model = TrainedModel.load(model_path)
     run = _interact(model, online, None, adversarial_stream(user, steps, seed, set_name))
-    unsafe = [any(w.split(":")[0] in ("collision", "speed") for w in r.split())
-              for r in run["unsafe"]]
+    unsafe = [
+        any(w.split(":")[0] in ("collision", "speed") for w in r.split()) for r in run["unsafe"]
+    ]
     return visited(run["pb"], unsafe)
 
 
-def _adversarial_job(model_path: str, meta, online, guard: str, user: str, steps: int,
-                     seed: int, set_name: str) -> dict[str, Any]:
+def _adversarial_job(
+    model_path: str, meta, online, guard: str, user: str, steps: int, seed: int, set_name: str
+) -> dict[str, Any]:
     """One adversarial user with one guard, the command filter in the loop: what the network
     generated (what reaches the robot without the filter) and what was sent (with it)."""
     from rnnpb.model import TrainedModel
@@ -177,15 +187,23 @@ def _adversarial_job(model_path: str, meta, online, guard: str, user: str, steps
     model = TrainedModel.load(model_path)
     sensory = adversarial_stream(user, steps, seed, set_name)
     t0 = time.perf_counter()
-    run = _interact(model, replace(online, safety_guard=guard),
-                    None if guard == "off" else meta, sensory)
+    run = _interact(
+        model, replace(online, safety_guard=guard), None if guard == "off" else meta, sensory
+    )
     seconds = time.perf_counter() - t0
     sent = SafetyChecker().check(run["motor"], previous=run["rest"])
     pb_risk = risk(meta, run["pb"])
     return {
-        "user": user, "guard": guard, "steps": len(run["motor"]), "seed": seed,
-        "unsafe_generated": int(sum(any(w.split(":")[0] in ("collision", "speed")
-                                        for w in r.split()) for r in run["unsafe"])),
+        "user": user,
+        "guard": guard,
+        "steps": len(run["motor"]),
+        "seed": seed,
+        "unsafe_generated": int(
+            sum(
+                any(w.split(":")[0] in ("collision", "speed") for w in r.split())
+                for r in run["unsafe"]
+            )
+        ),
         "collision_generated": _physical(run["unsafe"], "collision"),
         "speed_generated": _physical(run["unsafe"], "speed"),
         "limit_generated": _physical(run["unsafe"], "limit"),
@@ -197,9 +215,14 @@ def _adversarial_job(model_path: str, meta, online, guard: str, user: str, steps
         "mean_risk": float(pb_risk.mean()),
         "ms_per_step": 1e3 * seconds / max(len(run["motor"]), 1),
         # Which parts collided in the generated commands (what drives the robot into them).
-        "collision_parts": dict(Counter(
-            w.split(":", 1)[1] for r in run["unsafe"] for w in r.split()
-            if w.startswith("collision:")).most_common(3)),
+        "collision_parts": dict(
+            Counter(
+                w.split(":", 1)[1]
+                for r in run["unsafe"]
+                for w in r.split()
+                if w.startswith("collision:")
+            ).most_common(3)
+        ),
     }
 
 
@@ -225,8 +248,12 @@ def _learned_job(model_path: str, meta, online, guard: str) -> dict[str, Any]:
         command_filter = CommandFilter(initial=sync.run.motor[0])
         prevented += sum(bool(command_filter(c).filtered) for c in sync.run.motor)
     switch = switching(model, cfg, JOINT_LIMITS, seed=7, meta=meta).pairs
-    return {"lock": lock, "recognised": recognised, "switch": switch,
-            "filter_prevented_on_learned": int(prevented)}
+    return {
+        "lock": lock,
+        "recognised": recognised,
+        "switch": switch,
+        "filter_prevented_on_learned": int(prevented),
+    }
 
 
 def _map_slices(maps, model, grid: int = 41):
@@ -237,8 +264,13 @@ def _map_slices(maps, model, grid: int = 41):
     for name, pb in learned.items():
         points = np.broadcast_to(pb, (grid, grid, len(pb))).copy()
         points[..., 0], points[..., 1] = xx, yy
-        slices.append((f"pb2={pb[2]:.2f}, pb3={pb[3]:.2f} (pattern {name})",
-                       maps.risk(points), maps.familiarity(points)))
+        slices.append(
+            (
+                f"pb2={pb[2]:.2f}, pb3={pb[3]:.2f} (pattern {name})",
+                maps.risk(points),
+                maps.familiarity(points),
+            )
+        )
     return slices
 
 
@@ -253,15 +285,20 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
     config = SafetyStudyConfig.for_options(options)
     online = OnlineConfig()
     checker = SafetyChecker()
-    results: dict[str, Any] = {"config": {**config.__dict__, "online": online.to_dict()},
-                               "seed": options.seed, "versions": versions(), "sets": {}}
+    results: dict[str, Any] = {
+        "config": {**config.__dict__, "online": online.to_dict()},
+        "seed": options.seed,
+        "versions": versions(),
+        "sets": {},
+    }
     report = ["# Safety by experience (paper section 4.1)", ""]
     totals = {"sent": 0, "generated_off": 0, "generated_barrier": 0, "generated_projection": 0}
     cost_ok = {"barrier": True, "projection": True}
     context = multiprocessing.get_context("spawn")
     _worker_init()
-    pool = ProcessPoolExecutor(max_workers=options.workers, mp_context=context,
-                               initializer=_worker_init)
+    pool = ProcessPoolExecutor(
+        max_workers=options.workers, mp_context=context, initializer=_worker_init
+    )
     with pool:
         for set_name, (model, source) in _models(config, options.seed).items():
             model_path = out / "models" / f"set{set_name}.npz"
@@ -269,94 +306,192 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
             model.save(model_path)  # a copy the workers load (the original is not touched)
             # Experience from PBs visited by adversarial users of training seeds (not the
             # ones measured below).
-            visits = list(pool.map(_visit_job, *zip(*[
-                (str(model_path), online, user, config.visited_steps, options.seed + k,
-                 set_name) for k, user in enumerate(USERS)], strict=True)))
+            visits = list(
+                pool.map(
+                    _visit_job,
+                    *zip(
+                        *[
+                            (
+                                str(model_path),
+                                online,
+                                user,
+                                config.visited_steps,
+                                options.seed + k,
+                                set_name,
+                            )
+                            for k, user in enumerate(USERS)
+                        ],
+                        strict=True,
+                    ),
+                )
+            )
             also = visits[0]
             for more in visits[1:]:
                 also = also.joined(more)
-            maps = learn_safety_map(model, ExplorationConfig(samples=config.samples,
-                                                             seed=options.seed), also=also)
+            maps = learn_safety_map(
+                model, ExplorationConfig(samples=config.samples, seed=options.seed), also=also
+            )
             maps.save(safety_map_path(model_path))
-            plot_pb_safety_map(_map_slices(maps, model), model.pattern_pb, (0, 1),
-                               out / "figures" / f"safety_map_set{set_name}.png")
-            jobs = {pool.submit(_adversarial_job, str(model_path), maps.meta, online, guard,
-                                user, config.steps, options.seed + 1000 + k, set_name):
-                    f"{user}/{guard}"
-                    for k, user in enumerate(USERS) for guard in GUARDS}
-            learned_jobs = {guard: pool.submit(_learned_job, str(model_path), maps.meta,
-                                               online, guard) for guard in GUARDS}
+            plot_pb_safety_map(
+                _map_slices(maps, model),
+                model.pattern_pb,
+                (0, 1),
+                out / "figures" / f"safety_map_set{set_name}.png",
+            )
+            jobs = {
+                pool.submit(
+                    _adversarial_job,
+                    str(model_path),
+                    maps.meta,
+                    online,
+                    guard,
+                    user,
+                    config.steps,
+                    options.seed + 1000 + k,
+                    set_name,
+                ): f"{user}/{guard}"
+                for k, user in enumerate(USERS)
+                for guard in GUARDS
+            }
+            learned_jobs = {
+                guard: pool.submit(_learned_job, str(model_path), maps.meta, online, guard)
+                for guard in GUARDS
+            }
             adversarial = {}
             for future in as_completed(jobs):
                 adversarial[jobs[future]] = future.result()
                 # Each run as it comes (a long study interrupted keeps what it measured).
                 with open(out / "runs.jsonl", "a", encoding="utf-8") as handle:
-                    handle.write(json.dumps({"set": set_name, **adversarial[jobs[future]]})
-                                 + "\n")
-                print(f"  set {set_name}: {jobs[future]} done ({len(adversarial)}/"
-                      f"{len(jobs)})", file=sys.stderr, flush=True)
+                    handle.write(json.dumps({"set": set_name, **adversarial[jobs[future]]}) + "\n")
+                print(
+                    f"  set {set_name}: {jobs[future]} done ({len(adversarial)}/{len(jobs)})",
+                    file=sys.stderr,
+                    flush=True,
+                )
             adversarial = {key: adversarial[key] for key in jobs.values()}
             cost = {guard: future.result() for guard, future in learned_jobs.items()}
             for row in adversarial.values():
                 totals["sent"] += row["collision_sent"] + row["speed_sent"]
                 totals[f"generated_{row['guard']}"] += row["unsafe_generated"]
-            learned_safe = {name: not checker.check(generate(model, pb, 120).motor).unsafe.any()
-                            for name, pb in model.pattern_pb.items()}
+            learned_safe = {
+                name: not checker.check(generate(model, pb, 120).motor).unsafe.any()
+                for name, pb in model.pattern_pb.items()
+            }
             for guard in ("barrier", "projection"):
                 locks = [v for v in cost[guard]["lock"].values()]
                 switches = [v for v in cost[guard]["switch"].values()]
                 cost[guard]["within_limits"] = (
                     all(v is not None and v <= metrics.LOCK_LIMIT for v in locks)
                     and all(v is not None and v <= metrics.SWITCH_LIMIT for v in switches)
-                    and cost[guard]["recognised"] == cost["off"]["recognised"])
+                    and cost[guard]["recognised"] == cost["off"]["recognised"]
+                )
             for guard in ("barrier", "projection"):
                 cost_ok[guard] = cost_ok[guard] and cost[guard]["within_limits"]
             results["sets"][set_name] = {
-                "model": source, "map": maps.info, "adversarial": adversarial, "learned": cost,
-                "learned_safe_check": learned_safe}
-            report += [f"## Learning set {set_name}", "", f"Model: {source}. Map: "
-                       f"{len(maps.experienced)} experienced PBs, {int(maps.unsafe.sum())} unsafe "
-                       f"(explored: {maps.info['counts']}).", "",
-                       embed(f"risk and familiarity, set {set_name}",
-                             f"safety_map_set{set_name}.png"), "",
-                       "### Adversarial users", ""]
+                "model": source,
+                "map": maps.info,
+                "adversarial": adversarial,
+                "learned": cost,
+                "learned_safe_check": learned_safe,
+            }
+            report += [
+                f"## Learning set {set_name}",
+                "",
+                f"Model: {source}. Map: "
+                f"{len(maps.experienced)} experienced PBs, {int(maps.unsafe.sum())} unsafe "
+                f"(explored: {maps.info['counts']}).",
+                "",
+                embed(f"risk and familiarity, set {set_name}", f"safety_map_set{set_name}.png"),
+                "",
+                "### Adversarial users",
+                "",
+            ]
             report += table(
-                ("user", "guard", "steps", "unsafe generated (collision/speed)", "limit",
-                 "prevented by filter", "collision sent", "speed sent", "unsettled sent",
-                 "unsafe-PB steps", "parts colliding (generated)"),
-                [(r["user"], r["guard"], r["steps"], f"{r['collision_generated']}/"
-                  f"{r['speed_generated']}", r["limit_generated"], r["prevented"],
-                  r["collision_sent"], r["speed_sent"], r["unsettled_sent"], r["unsafe_pb_steps"],
-                  ", ".join(f"{k} {v}" for k, v in r["collision_parts"].items()) or "—")
-                 for r in adversarial.values()])
+                (
+                    "user",
+                    "guard",
+                    "steps",
+                    "unsafe generated (collision/speed)",
+                    "limit",
+                    "prevented by filter",
+                    "collision sent",
+                    "speed sent",
+                    "unsettled sent",
+                    "unsafe-PB steps",
+                    "parts colliding (generated)",
+                ),
+                [
+                    (
+                        r["user"],
+                        r["guard"],
+                        r["steps"],
+                        f"{r['collision_generated']}/{r['speed_generated']}",
+                        r["limit_generated"],
+                        r["prevented"],
+                        r["collision_sent"],
+                        r["speed_sent"],
+                        r["unsettled_sent"],
+                        r["unsafe_pb_steps"],
+                        ", ".join(f"{k} {v}" for k, v in r["collision_parts"].items()) or "—",
+                    )
+                    for r in adversarial.values()
+                ],
+            )
             report += ["", "### Cost on learned patterns", ""]
-            report += table(("guard", "lock-on per pattern", "switching per pair", "recognised",
-                             "filter acted"),
-                            [(g, cost[g]["lock"], cost[g]["switch"], cost[g]["recognised"],
-                              cost[g]["filter_prevented_on_learned"]) for g in GUARDS])
+            report += table(
+                (
+                    "guard",
+                    "lock-on per pattern",
+                    "switching per pair",
+                    "recognised",
+                    "filter acted",
+                ),
+                [
+                    (
+                        g,
+                        cost[g]["lock"],
+                        cost[g]["switch"],
+                        cost[g]["recognised"],
+                        cost[g]["filter_prevented_on_learned"],
+                    )
+                    for g in GUARDS
+                ],
+            )
             report.append("")
     base = totals["generated_off"]
     targets = {
         "filter: zero collisions and speed violations reach the robot": Target(
-            totals["sent"] == 0, f"{totals['sent']} reached the robot over all runs")}
+            totals["sent"] == 0, f"{totals['sent']} reached the robot over all runs"
+        )
+    }
     for guard in ("barrier", "projection"):
         left = totals[f"generated_{guard}"]
         targets[f"meta-level alone ({guard}) removes >= 90 % of unsafe commands"] = Target(
             base > 0 and left <= 0.1 * base,
             f"unguarded {base}, {guard} {left}"
-            + (f" ({100 * (1 - left / base):.1f} % removed)" if base else " (none to remove)"))
+            + (f" ({100 * (1 - left / base):.1f} % removed)" if base else " (none to remove)"),
+        )
     for guard in ("barrier", "projection"):
         targets[f"no cost on learned patterns ({guard})"] = Target(
-            cost_ok[guard], f"lock-on <= {metrics.LOCK_LIMIT}, switching <= "
-            f"{metrics.SWITCH_LIMIT}, recognition as with the guard off")
+            cost_ok[guard],
+            f"lock-on <= {metrics.LOCK_LIMIT}, switching <= "
+            f"{metrics.SWITCH_LIMIT}, recognition as with the guard off",
+        )
     results["totals"] = totals
     results["targets"] = {k: v.to_json() for k, v in targets.items()}
-    report[2:2] = ["## Targets", "", *table(("target", "met", "detail"), [
-        (k, "yes" if v.met else "no", v.detail) for k, v in targets.items()]), "",
+    report[2:2] = [
+        "## Targets",
+        "",
+        *table(
+            ("target", "met", "detail"),
+            [(k, "yes" if v.met else "no", v.detail) for k, v in targets.items()],
+        ),
+        "",
         f"Users are generated in the study (seeded: {options.seed} + 1000 + k); "
         f"{config.steps} steps per user and guard; a PB step is unsafe where its learned "
         f"risk exceeds OnlineConfig.risk_level = {fmt(online.risk_level, 2)}.",
-        ""]
+        "",
+    ]
     runtime = time.perf_counter() - start
     results["runtime_s"] = runtime
     write_outputs(out, report, results)
