@@ -20,4 +20,4 @@ bench: setup
 lint: setup
 	.venv/bin/ruff check src tests benchmarks
 	.venv/bin/ruff format --check src tests benchmarks
-	.venv/bin/basedpyright --pythonpath .venv/bin/python
+	.venv/bin/basedpyright --project pyproject.toml --pythonpath .venv/bin/python
