@@ -4,7 +4,7 @@ import io
 import sys
 
 from rnnpb.commands import demo
-from rnnpb.commands._progress import progress_bar
+from rnnpb.commands.progress import progress_bar
 from rnnpb.experiments import ExperimentConfig
 
 

@@ -24,8 +24,7 @@ from rnnpb.interaction import SessionRecorder, read_session
 from rnnpb.interaction.loop import StepRecord
 from rnnpb.model import TrainedModel
 from rnnpb.model.io import MAX_ARCHIVE_BYTES, check_joint_limits
-from rnnpb.perception import load_ball_colors
-from rnnpb.perception._sources import ImageFolderSource
+from rnnpb.perception import ImageFolderSource, load_ball_colors
 from rnnpb.robot import JOINT_LIMITS
 from rnnpb.sequences import (
     Sequence,

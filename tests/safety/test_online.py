@@ -16,11 +16,11 @@ from rnnpb.safety import (
     Experience,
     MetaConfig,
     fit_meta,
+    new_map,
     online_safety,
     risk_views,
     safety_map_path,
 )
-from rnnpb.safety._map import new_map
 
 
 @pytest.fixture(scope="module")

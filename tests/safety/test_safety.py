@@ -21,9 +21,9 @@ from rnnpb.safety import (
     find_safety_map,
     fit_meta,
     load_safety_map,
+    new_map,
     safety_map_path,
 )
-from rnnpb.safety._map import new_map
 from rnnpb.sources import ArraySensorySource
 
 REST = np.array([0.0, 0.0, 0.0, ELBOW_AT_ZERO_PITCH] * 2)

@@ -8,8 +8,7 @@ import pytest
 from rnnpb import cli
 from rnnpb.errors import ConfigError
 from rnnpb.model import OnlineConfig, TrainConfig
-from rnnpb.sweeps import ClusterError, check_address, execute_run, load_spec
-from rnnpb.sweeps._spec import RunSpec, Setting
+from rnnpb.sweeps import ClusterError, RunSpec, Setting, check_address, execute_run, load_spec
 
 GOOD = """
 name = "grid"

@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from rnnpb.web._protocol import ProtocolError, parse_client_message
+from rnnpb.web import ProtocolError, parse_client_message
 
 from .test_browser import WATCH_CSP, _until, browser  # noqa: F401 — the browser fixture
 

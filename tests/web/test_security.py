@@ -60,7 +60,7 @@ def _serving(app):
     install, so the tests use real connections.)"""
     import uvicorn
 
-    from rnnpb.web._server import WS_MAX_SIZE
+    from rnnpb.web import WS_MAX_SIZE
 
     server = uvicorn.Server(
         uvicorn.Config(

@@ -16,8 +16,7 @@ from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
 from rnnpb.errors import ConfigError
-from rnnpb.web import MAX_MESSAGE_BYTES, DemonstratorSource, PointerSource, find_models
-from rnnpb.web._server import WS_MAX_SIZE
+from rnnpb.web import MAX_MESSAGE_BYTES, WS_MAX_SIZE, DemonstratorSource, PointerSource, find_models
 
 
 def _ws(server):

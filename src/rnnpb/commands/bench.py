@@ -84,7 +84,7 @@ def run(args: argparse.Namespace) -> int:
 
     from rnnpb import __version__
     from rnnpb._atomic import atomic_write
-    from rnnpb.commands._progress import progress_bar
+    from rnnpb.commands.progress import progress_bar
     from rnnpb.demonstrator import learning_set
     from rnnpb.model import (
         MIRROR_SYSTEMS,

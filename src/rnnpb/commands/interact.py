@@ -136,7 +136,7 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb._atomic import atomic_write
     from rnnpb.analysis.figures import plot_session
     from rnnpb.commands._checks import finite_seconds, step_count
-    from rnnpb.commands._progress import progress_bar
+    from rnnpb.commands.progress import progress_bar
     from rnnpb.interaction import (
         InteractionLoop,
         LoopConfig,

@@ -71,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from rnnpb.commands._checks import step_count
-    from rnnpb.commands._progress import progress_bar
+    from rnnpb.commands.progress import progress_bar
     from rnnpb.errors import ConfigError
     from rnnpb.interaction import CAMERA_KINDS, parse_source_spec
     from rnnpb.perception import (

@@ -102,7 +102,7 @@ def run(args: argparse.Namespace) -> int:
 
     from rnnpb import _interrupt
     from rnnpb.commands._checks import step_count
-    from rnnpb.commands._progress import progress_bar
+    from rnnpb.commands.progress import progress_bar
     from rnnpb.model import NetworkConfig, TrainConfig, train
     from rnnpb.robot import JOINT_LIMITS
     from rnnpb.sequences import read_sequence_files

@@ -29,10 +29,16 @@ from pathlib import Path
 import numpy as np
 
 from rnnpb.errors import DataFileError
-from rnnpb.vectors import MOTOR_NAMES, PREDICTED_PREFIX, SENSORY_NAMES, STEP_COLUMN
+from rnnpb.vectors import (
+    MOTOR_NAMES,
+    PREDICTED_PREFIX,
+    SENSORY_NAMES,
+    STEP_COLUMN,
+    TRUTH_PATTERN_COLUMN,
+    pb_column,
+)
 
-PB_COLUMNS_PREFIX = "pb"
-TEXT_COLUMNS = ("recognised", "novelty", "truth_pattern", "unsafe", "filtered")
+TEXT_COLUMNS = ("recognised", "novelty", TRUTH_PATTERN_COLUMN, "unsafe", "filtered")
 """The columns that hold words, not numbers."""
 DYAD_PREFIXES = ("a_", "b_")
 """Each agent's columns in a two-agent recording (:func:`dyad_columns`)."""
@@ -53,7 +59,7 @@ def session_columns(pb_size: int) -> list[str]:
         *SENSORY_NAMES,
         *(PREDICTED_PREFIX + name for name in SENSORY_NAMES),
         *MOTOR_NAMES,
-        *(f"{PB_COLUMNS_PREFIX}{i}" for i in range(pb_size)),
+        *(pb_column(i) for i in range(pb_size)),
         "prediction_error",
         "window_error",
         "lost_left",
@@ -62,7 +68,7 @@ def session_columns(pb_size: int) -> list[str]:
         "recognised",
         "confidence",
         "novelty",
-        "truth_pattern",
+        TRUTH_PATTERN_COLUMN,
         "unsafe",
         "filtered",
     ]
@@ -250,7 +256,7 @@ def dyad_columns(pb_size: int) -> list[str]:
         *SENSORY_NAMES,
         *(f"shown_{name}" for name in SENSORY_NAMES),
         *MOTOR_NAMES,
-        *(f"{PB_COLUMNS_PREFIX}{i}" for i in range(pb_size)),
+        *(pb_column(i) for i in range(pb_size)),
         "prediction_error",
         "window_error",
         *DYAD_AGENT_COLUMNS,

@@ -32,12 +32,14 @@ from rnnpb.safety._map import (
     find_safety_map,
     load_safety_map,
     model_fingerprint,
+    new_map,
     safety_map_path,
 )
 from rnnpb.safety._meta import MetaConfig, familiarity, fit_meta, init_meta, risk
 from rnnpb.safety._online import OnlineSafety, online_safety, risk_plane, risk_views
 
 __all__ = [
+    "new_map",
     "PHYSICAL",
     "SAFETY_FORMAT",
     "SAFETY_FORMAT_VERSION",

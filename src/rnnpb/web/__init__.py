@@ -10,7 +10,13 @@ from rnnpb.web._protocol import (
     ProtocolError,
     parse_client_message,
 )
-from rnnpb.web._server import STATIC_DIR, CommandLimits, DashboardServer, create_app
+from rnnpb.web._server import (
+    STATIC_DIR,
+    WS_MAX_SIZE,
+    CommandLimits,
+    DashboardServer,
+    create_app,
+)
 from rnnpb.web._session import (
     MAX_QUEUED_COMMANDS,
     RECENT_STEPS,
@@ -30,6 +36,7 @@ __all__ = [
     "MIN_DT",
     "RECENT_STEPS",
     "STATIC_DIR",
+    "WS_MAX_SIZE",
     "AccessPolicy",
     "CommandLimits",
     "DashboardServer",
