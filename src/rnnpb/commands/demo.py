@@ -12,11 +12,12 @@ section 3 (synchronization and pause, switching, novel patterns and attractors, 
 set) and write OUT/report.md (measure | paper | ours, figures embedded), OUT/results.json
 (every measure, the config and versions), OUT/figures/, OUT/models/ and OUT/data/.
 
-Every learning set is learned with three training seeds (--quick: two), and every measure is
-also reported over all networks and draws of the user, with 95 % bootstrap intervals; the
-figures show the first seed's networks. The jobs run on a local Ray instance with --workers
-workers. The full run learns with the paper's algorithm and also runs the paper's own on-line
-regression on the same models for comparison. --quick learns with the fast preset, keeps the
+Every measure is also reported over all networks and draws of the user, with 95 % bootstrap
+intervals: one network per learning set by default (--quick: two), --training-seeds N for N
+(each more network costs about as much as the first); the figures show the first seed's.
+The jobs run on a local Ray instance with --workers workers. The full run learns with
+the paper's algorithm and also runs the paper's own on-line regression on the same models
+for comparison. --quick learns with the fast preset, keeps the
 lock-on and switching experiments whole and shortens the rest; its models go with
 the ungated on-line regression, which `rnnpb interact` picks for them by itself.
 
@@ -43,6 +44,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=2,
         metavar="N",
         help="demonstrations of each pattern in every learning set (default 2, as in the paper)",
+    )
+    parser.add_argument(
+        "--training-seeds",
+        type=int,
+        metavar="N",
+        help="networks learned per learning set, seeds 0..N-1 (default 1; --quick: 2)",
     )
 
 
@@ -79,6 +86,10 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(f"--workers must be >= 1, got {args.workers}")
     config = ExperimentConfig.quick_run() if args.quick else ExperimentConfig()
     config = replace(config, workers=args.workers, samples_per_pattern=args.samples_per_pattern)
+    if args.training_seeds is not None:
+        if args.training_seeds < 1:
+            raise ConfigError(f"--training-seeds must be >= 1, got {args.training_seeds}")
+        config = replace(config, training_seeds=tuple(range(args.training_seeds)))
     print(f"rnnpb demo ({'quick' if args.quick else 'full'} run): {_estimate(config)}", flush=True)
     started = time.monotonic()
 
