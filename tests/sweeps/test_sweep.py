@@ -29,10 +29,11 @@ iterations = 30
 
 @pytest.fixture(scope="module")
 def ray_instance():
-    ray = pytest.importorskip("ray")
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False, configure_logging=False)
-    yield
-    ray.shutdown()
+    pytest.importorskip("ray")
+    from rnnpb.sweeps import ray_cluster
+
+    with ray_cluster(workers=2):  # one local instance for the module, as rnnpb sweep starts it
+        yield
 
 
 def _spec(folder: Path, retries: int = 2):

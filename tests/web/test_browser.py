@@ -222,6 +222,10 @@ def _rewrite_names(route) -> None:
         elif message["type"] == "step":
             message["nearest"] = rename(message["nearest"])
             message["truth"] = rename(message["truth"])
+            message["recognised"] = rename(message.get("recognised"))
+            message["pattern_confidence"] = {
+                rename(k): v for k, v in (message.get("pattern_confidence") or {}).items()
+            }
         elif message["type"] == "error":
             message["message"] = f"{message['message']} {HOSTILE_NAME}"
         route.send(json.dumps(message))

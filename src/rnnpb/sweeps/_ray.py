@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import os
 import socket
+import warnings
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
@@ -67,15 +68,13 @@ def ray_cluster(address: str | None = None, workers: int | None = None) -> Itera
         check_address(address)
     # Ray's worker processes inherit the environment: they find rnnpb where this process does.
     try:
-        if address is None:
-            ray.init(
-                num_cpus=workers or os.cpu_count() or 1,
-                include_dashboard=False,
-                log_to_driver=False,
-                configure_logging=False,
+        with warnings.catch_warnings():
+            # Ray starts its own services with a pre-exec hook, which runs JAX's fork warning
+            # in this process; the children exec Ray's programs at once and never touch JAX.
+            warnings.filterwarnings(
+                "ignore", message=r"os\.fork\(\) was called", category=RuntimeWarning
             )
-        else:
-            ray.init(address=address, log_to_driver=False, configure_logging=False)
+            _init(ray, address, workers)
     except (ConnectionError, RuntimeError, ValueError) as error:
         raise ClusterError(
             f"cannot {'start' if address is None else 'join'} Ray: "
@@ -85,6 +84,18 @@ def ray_cluster(address: str | None = None, workers: int | None = None) -> Itera
         yield _capacity(workers)
     finally:
         ray.shutdown()
+
+
+def _init(ray, address: str | None, workers: int | None) -> None:
+    if address is None:
+        ray.init(
+            num_cpus=workers or os.cpu_count() or 1,
+            include_dashboard=False,
+            log_to_driver=False,
+            configure_logging=False,
+        )
+    else:
+        ray.init(address=address, log_to_driver=False, configure_logging=False)
 
 
 def _capacity(workers: int | None) -> int:

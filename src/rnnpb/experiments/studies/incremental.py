@@ -140,7 +140,7 @@ class PatternMeasures:
     pattern: str
     steps_to_lock: int | None
     recognized: str
-    period: int | None
+    period: float | None
     generation_vs_before: float | None
     generation_vs_data: float
 
@@ -197,7 +197,7 @@ def _data_cycles(model: TrainedModel, sequences) -> dict[str, list[np.ndarray]]:
         motor = (seq.motor - model.lower[s:]) / (model.upper[s:] - model.lower[s:])
         found = metrics.periodicity(motor)
         period = found.period or found.best_period
-        out.setdefault(seq.pattern, []).append(motor[-period:])
+        out.setdefault(seq.pattern, []).append(metrics.last_cycle(motor, period))
     return out
 
 
