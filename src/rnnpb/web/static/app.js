@@ -248,7 +248,9 @@ function drawConfidenceBars(step) {
   if (!box) return;
   const shares = step.pattern_confidence || {};
   const names = Object.keys(shares);
-  if (box.childElementCount !== names.length) {
+  // Rebuilt whenever the names change (another model may have as many patterns).
+  if (box.dataset.names !== JSON.stringify(names)) {
+    box.dataset.names = JSON.stringify(names);
     box.replaceChildren(...names.map((name) => {
       const row = el("div", { className: "confidence-row" });
       row.appendChild(el("span", { className: "confidence-name" }, name));
