@@ -363,6 +363,19 @@ class ReferenceMirrorSystem:
             pattern_errors=errors,
         )
 
+    def _window(self, motor_inputs: np.ndarray | None):
+        """:func:`window_error_and_gradients` over the window as it stands."""
+        return window_error_and_gradients(
+            self.params,
+            self.sensory,
+            self.seen,
+            self.n,
+            self.rho,
+            self.onset_context,
+            self.onset_motor,
+            motor_inputs,
+        )
+
     def _recent_mse(
         self, predictions: np.ndarray, sensory: np.ndarray, seen: np.ndarray, first: int, last: int
     ) -> float:
@@ -404,16 +417,7 @@ class ReferenceMirrorSystem:
             if best_error is None or error < best_error:
                 best_error, best = error, candidate
         assert best_error is not None and best is not None  # one candidate per learned pattern
-        predictions = window_error_and_gradients(
-            self.params,
-            self.sensory,
-            self.seen,
-            self.n,
-            self.rho,
-            self.onset_context,
-            self.onset_motor,
-            motor_inputs,
-        )[4]
+        predictions = self._window(motor_inputs)[4]
         current = self._recent_mse(predictions, self.sensory, self.seen, start, self.n - 1)
         if not (
             best_error < cfg.phase_restart_ratio * current and current > cfg.phase_restart_level**2
@@ -522,16 +526,7 @@ class ReferenceMirrorSystem:
         gate = 1.0
         if cfg.surprise_gate > 0:
             # The surprise gate: RMS error of the last gate_steps predictions before regressing.
-            predictions = window_error_and_gradients(
-                self.params,
-                self.sensory,
-                self.seen,
-                self.n,
-                self.rho,
-                self.onset_context,
-                self.onset_motor,
-                motor_inputs,
-            )[4]
+            predictions = self._window(motor_inputs)[4]
             rms = float(
                 np.sqrt(
                     self._recent_mse(
@@ -547,16 +542,7 @@ class ReferenceMirrorSystem:
         guard = cfg.safety_guard if self.meta is not None else "off"
         barrier = guard == "barrier" and cfg.barrier_weight > 0
         for _ in range(cfg.iterations):
-            _, g_rho, g_c, g_m, _, _ = window_error_and_gradients(
-                self.params,
-                self.sensory,
-                self.seen,
-                self.n,
-                self.rho,
-                self.onset_context,
-                self.onset_motor,
-                motor_inputs,
-            )
+            _, g_rho, g_c, g_m, _, _ = self._window(motor_inputs)
             g_rho = gate * g_rho
             if barrier:
                 assert self.meta is not None  # the guard is "off" without it
@@ -570,16 +556,7 @@ class ReferenceMirrorSystem:
         if guard == "projection":
             assert self.meta is not None
             self.rho[: self.n] = project_out(self.meta, self.rho[: self.n], cfg)
-        _, _, _, _, predictions, contexts = window_error_and_gradients(
-            self.params,
-            self.sensory,
-            self.seen,
-            self.n,
-            self.rho,
-            self.onset_context,
-            self.onset_motor,
-            motor_inputs,
-        )
+        _, _, _, _, predictions, contexts = self._window(motor_inputs)
         s = self.sensory.shape[1]
         n = self.n
         motor = predictions[n - 2, s:] if n >= 2 else sigmoid(self.onset_motor)
