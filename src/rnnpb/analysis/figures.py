@@ -127,7 +127,7 @@ def _runs(flags: np.ndarray, steps: np.ndarray, minimum: int = 1) -> list[tuple[
 
 def _caption(fig: Figure, text: str) -> None:
     """What the reader sees, under the figure (kept by the tight bounding box)."""
-    fig.text(0.01, 0.03, text, ha="left", va="top", fontsize=8, wrap=True, color="#333333")
+    fig.text(0.01, -0.01, text, ha="left", va="top", fontsize=8, wrap=True, color="#333333")
 
 
 def plot_session(
