@@ -5,8 +5,10 @@ import math
 import pickle
 
 import numpy as np
+import pytest
 
 from rnnpb.cli import main
+from rnnpb.errors import ConfigError
 from rnnpb.experiments import (
     ExperimentConfig,
     NovelResponse,
@@ -114,3 +116,29 @@ def test_the_missing_case_explanation_counts_the_closed_loop_cycles():
     text = " ".join(missing_cases_explanation(runs, {"1": {"1": 12, "2": None, "3": 37}}))
     assert "2 of 3 are limit cycles (periods 12.0, 37.0)" in text
     assert missing_cases_explanation(runs + [_novel(3, None, 0.4)], periodic) == []
+
+
+def test_the_papers_regression_runs_only_on_the_first_seeds_networks(tmp_path):
+    from rnnpb.experiments.report import run_jobs
+
+    seen = []
+
+    def runner(jobs):
+        # Record what each job was asked to run instead of running it.
+        for key, function, args in jobs:
+            seen.append((key, function.__name__, args))
+        return iter(())
+
+    config = ExperimentConfig(training_seeds=(0, 1, 2), compare_seeds=1, larger_set_seeds=1)
+    run_jobs(tmp_path, config, log=lambda _: None, runner=runner)
+    compared = {
+        (key[1], key[2]): args[8] is not None
+        for key, name, args in seen
+        if name == "learning_set_job"
+    }
+    assert compared == {(s, seed): seed == 0 for s in "1234" for seed in (0, 1, 2)}
+    assert sum(name == "larger_set_job" for _, name, _ in seen) == 1
+    # Every network is still measured in full (draws, attractors and novel patterns).
+    assert all(args[7] for _, name, args in seen if name == "learning_set_job")
+    with pytest.raises(ConfigError, match="compare_seeds must be >= 1"):
+        ExperimentConfig(compare_seeds=0)

@@ -13,13 +13,13 @@ set) and write OUT/report.md (measure | paper | ours, figures embedded), OUT/res
 (every measure, the config and versions), OUT/figures/, OUT/models/ and OUT/data/.
 
 Every measure is also reported over all networks and draws of the user, with 95 % bootstrap
-intervals: one network per learning set by default (--quick: two), --training-seeds N for N
-(each more network costs about as much as the first); the figures show the first seed's.
-The jobs run on a local Ray instance with --workers workers. The full run learns with
-the paper's algorithm and also runs the paper's own on-line regression on the same models
-for comparison. --quick learns with the fast preset, keeps the
-lock-on and switching experiments whole and shortens the rest; its models go with
-the ungated on-line regression, which `rnnpb interact` picks for them by itself.
+intervals: three networks per learning set by default (--quick: two), --training-seeds N
+for N; the figures show the first seed's. The jobs run on a local Ray instance with
+--workers workers. The full run learns with the paper's algorithm and also runs the
+paper's own on-line regression on the first seed's models for comparison. --quick
+learns with the fast preset, keeps the lock-on and switching experiments whole and
+shortens the rest; its models go with the ungated on-line regression, which
+`rnnpb interact` picks for them by itself.
 
 Example:
   rnnpb demo --out results/demo
@@ -49,7 +49,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--training-seeds",
         type=int,
         metavar="N",
-        help="networks learned per learning set, seeds 0..N-1 (default 1; --quick: 2)",
+        help="networks learned per learning set, seeds 0..N-1 (default 3; --quick: 2)",
     )
 
 
@@ -59,6 +59,8 @@ MEASURED_MINUTES = {"full": 7.0, "quick": 3.0}
 
 def _estimate(config) -> str:
     """What to expect: the measured time, scaled by the workers (the work is the same)."""
+    from rnnpb.experiments import ExperimentConfig
+
     base = MEASURED_MINUTES["quick" if config.quick else "full"]
     minutes = base * 2 / min(config.workers, 2)
     more = (
@@ -66,9 +68,16 @@ def _estimate(config) -> str:
         if config.samples_per_pattern > 2
         else ""
     )
+    default = (ExperimentConfig.quick_run() if config.quick else ExperimentConfig()).training_seeds
+    seeds = (
+        f", measured with {len(default)} networks per learning set (you asked for "
+        f"{len(config.training_seeds)})"
+        if len(config.training_seeds) != len(default)
+        else ""
+    )
     return (
         f"about {minutes:.0f} minutes on 2 cores with {config.workers} worker(s)"
-        f"{more} (longer while other programs use the cores)"
+        f"{more}{seeds} (longer while other programs use the cores)"
     )
 
 

@@ -124,12 +124,14 @@ def run_jobs(
     out: Path, config: ExperimentConfig, log: Callable[[str], None], runner: JobRunner | None = None
 ) -> DemoJobs:
     """Every job of the demo: per learning set and training seed, the default's results and
-    (with ``config.compare_paper``) the paper's regression's; the larger-set runs by seed."""
+    (with ``config.compare_paper``, for the first ``config.compare_seeds`` training seeds) the
+    paper's regression's; the larger-set runs by seed."""
     models, data = out / "models", out / "data"
     models.mkdir(parents=True, exist_ok=True)
     runner = runner or process_pool_runner(config.workers)
     compare = config.paper_online if config.compare_paper else None
     first = config.training_seeds[0]
+    compared_seeds = set(config.training_seeds[: config.compare_seeds])
     jobs: list[Job] = []
     for seed in config.training_seeds:
         for name in LEARNING_SETS:
@@ -151,7 +153,7 @@ def run_jobs(
                         None if data_dir is None else str(data_dir),
                         "default",
                         True,
-                        compare,
+                        compare if seed in compared_seeds else None,
                         seed != first,
                     ),
                 )
@@ -343,6 +345,7 @@ def run_demo(
                 {
                     s: {k: r.compared("paper") for k, r in results.items()}
                     for s, results in jobs.by_seed.items()
+                    if all(r.compare is not None for r in results.values())
                 },
                 [],
                 scenario_seeds,
@@ -824,7 +827,13 @@ def _distributions_section(results: DemoResults) -> list[str]:
         "are over the runs where the event happened (never: how many it did not); the "
         "share counts values within the paper's limit (never counts as outside). "
         "Brackets: 95 % percentile bootstrap intervals (`rnnpb.analysis.statistics`). The "
-        "sections above show the first seed's networks.",
+        "sections above show the first seed's networks."
+        + (
+            f" The paper's regression ran on the networks of training seed(s) "
+            f"{', '.join(map(str, theirs.training_seeds))} only (`compare_seeds`)."
+            if theirs is not None and len(theirs.training_seeds) < len(ours.training_seeds)
+            else ""
+        ),
         "",
         *table(
             (
