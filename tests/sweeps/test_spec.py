@@ -8,7 +8,17 @@ import pytest
 from rnnpb import cli
 from rnnpb.errors import ConfigError
 from rnnpb.model import OnlineConfig, TrainConfig
-from rnnpb.sweeps import ClusterError, RunSpec, Setting, check_address, execute_run, load_spec
+from rnnpb.sweeps import (
+    ClusterError,
+    RunRecord,
+    RunSpec,
+    Setting,
+    StudyRunSpec,
+    check_address,
+    execute_run,
+    load_spec,
+    read_table,
+)
 
 GOOD = """
 name = "grid"
@@ -56,7 +66,7 @@ def test_a_good_spec_is_the_whole_grid(tmp_path):
         (GOOD.replace("seeds = 3", "seeds = []"), "the grid is empty: 'seeds' has no values"),
         (
             GOOD.replace('learning_sets = ["1", "full"]', "learning_sets = []"),
-            "the grid is empty: 'learning_sets'",
+            "the grid is empty: give 'learning_sets' or 'studies'",
         ),
         ('learning_sets = ["1"]\nseeds = 1\n', "the grid is empty: 'training'"),
         (
@@ -134,5 +144,86 @@ def test_the_specs_shipped_in_the_repository_load():
     assert larger.learning_sets == ("full",) and len(larger.seeds) == 10
     assert larger.training[0].config.iterations == 100_000
     assert larger.training[0].config.optimizer == "momentum"
+    from rnnpb.experiments.studies import study_names
+
+    # The studies' spec sweeps every study there is.
+    assert set(specs["studies_quick"].studies) == set(study_names())
     scaling = specs["scaling"].runs()
     assert len(scaling) == 2 * 5 * 2 and len({r.model_key for r in scaling}) == 10
+
+
+STUDIES = """
+name = "studies"
+studies = ["novelty", "dyad"]
+seeds = [0, 1, 2]
+quick = true
+"""
+
+
+def test_a_study_sweep_runs_every_study_once_per_seed(tmp_path):
+    spec = load_spec(_spec(tmp_path, STUDIES))
+    runs = spec.runs()
+    assert [r.run_id for r in runs] == [
+        f"study-{name}-seed{seed}-quick" for name in ("novelty", "dyad") for seed in (0, 1, 2)
+    ]
+    assert all(isinstance(r, StudyRunSpec) and r.quick for r in runs)
+    # No two runs share a group: a study learns or loads its own models.
+    assert len({r.model_key for r in runs}) == 6
+    both = load_spec(_spec(tmp_path, 'studies = ["safety"]\n' + GOOD)).runs()
+    assert len(both) == 24 + 3 and both[-1].run_id == "study-safety-seed2"
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        (STUDIES.replace('"dyad"', '"tea"'), "study 'tea' is not one of novelty"),
+        (STUDIES.replace('"dyad"', '"novelty"'), "'studies' repeats a value"),
+        (STUDIES + "[training.fast]\n", "'training' applies to learning sets, and the spec"),
+        (STUDIES.replace("quick = true", 'quick = "yes"'), "'quick' must be true or false"),
+        (STUDIES.replace("seeds = [0, 1, 2]", "seeds = []"), "'seeds' has no values"),
+    ],
+)
+def test_bad_study_specs_get_one_line(tmp_path, text, message):
+    with pytest.raises(ConfigError, match=message):
+        load_spec(_spec(tmp_path, text))
+
+
+def test_a_study_that_fails_is_recorded_and_leaves_no_folder(tmp_path, monkeypatch):
+    # The dyad study refuses to start without its paper-learned models: the run is failed
+    # with that one line, and neither its output folder nor a half-written one is left.
+    monkeypatch.setenv("RNNPB_DYAD_MODELS", str(tmp_path / "none"))
+    record = execute_run(StudyRunSpec("s", "dyad", 0, True), str(tmp_path))
+    assert record.status == "failed" and record.measures == []
+    assert record.error.startswith("ConfigError: the dyad study needs")
+    assert not any((tmp_path / "studies").iterdir())
+
+
+def test_the_studies_section_counts_the_seeds_that_met_each_target(tmp_path):
+    from rnnpb.sweeps._sweep import _write_outputs
+
+    spec = load_spec(_spec(tmp_path, STUDIES.replace(', "dyad"', "")))
+    runs = spec.runs()
+    records = {
+        run.run_id: RunRecord(
+            run.run_id,
+            "ok",
+            [
+                ("study_target_met", "still", 1.0),
+                ("study_target_met", "novel_within_3_cycles", float(run.seed != 1)),
+                ("study_runtime_s", "", 10.0 + run.seed),
+            ],
+            "",
+            f"studies/{run.run_id}",
+            1.0,
+        )
+        for run in runs
+    }
+    table = read_table(_write_outputs(tmp_path, spec, runs, records, 3.0))
+    rows = table.to_pylist()
+    assert {r["study"] for r in rows} == {"novelty"} and {r["user_draw"] for r in rows} == {None}
+    report = (tmp_path / "report.md").read_text()
+    missed = next(line for line in report.splitlines() if "novel_within_3_cycles" in line)
+    assert missed.startswith("| novelty | novel_within_3_cycles | 2 of 3 | 67% [")
+    assert missed.endswith("| 1 |")
+    assert "| novelty | still | 3 of 3 | 100% [100%, 100%] | – |" in report
+    assert "`studies/study-novelty-seed1-quick/report.md`" in report

@@ -1,4 +1,5 @@
-"""Sweeps: grids of learning sets × seeds × settings × draws of the user, on Ray.
+"""Sweeps: grids of learning sets × seeds × settings × draws of the user, and of studies ×
+seeds, on Ray.
 
 ``rnnpb sweep SPEC --out DIR`` reads a TOML spec (:func:`load_spec`), runs every run of its grid
 as a Ray task (:func:`run_sweep`; a local instance, or a cluster at ``--address``), keeps each
@@ -9,8 +10,23 @@ measure, :func:`schema`), ``DIR/report.md`` and ``DIR/results.json`` (medians an
 """
 
 from rnnpb.sweeps._ray import ClusterError, check_address, ray_cluster, ray_runner, run_tasks
-from rnnpb.sweeps._report import LIMITS, MeasureSummary, summaries, write_report
-from rnnpb.sweeps._runs import MEASURES, RunRecord, cached_model, execute_run, measure
+from rnnpb.sweeps._report import (
+    LIMITS,
+    MeasureSummary,
+    StudyTargetSummary,
+    study_summaries,
+    summaries,
+    write_report,
+)
+from rnnpb.sweeps._runs import (
+    MEASURES,
+    STUDIES_DIR,
+    RunRecord,
+    cached_model,
+    execute_run,
+    measure,
+    run_study,
+)
 from rnnpb.sweeps._spec import (
     EXPERIMENTS,
     LEARNING_SETS,
@@ -18,6 +34,7 @@ from rnnpb.sweeps._spec import (
     TRAIN_PRESETS,
     RunSpec,
     Setting,
+    StudyRunSpec,
     SweepSpec,
     load_spec,
     parse_spec,
@@ -32,6 +49,7 @@ __all__ = [
     "LIMITS",
     "MEASURES",
     "ONLINE_PRESETS",
+    "STUDIES_DIR",
     "TABLE_FILE",
     "TRAIN_PRESETS",
     "ClusterError",
@@ -40,6 +58,8 @@ __all__ = [
     "RunRecord",
     "RunSpec",
     "Setting",
+    "StudyRunSpec",
+    "StudyTargetSummary",
     "SweepOutcome",
     "SweepSpec",
     "cached_model",
@@ -51,9 +71,11 @@ __all__ = [
     "ray_cluster",
     "ray_runner",
     "read_table",
+    "run_study",
     "run_sweep",
     "run_tasks",
     "schema",
+    "study_summaries",
     "summaries",
     "write_report",
 ]

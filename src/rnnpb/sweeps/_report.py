@@ -1,6 +1,7 @@
 """A sweep's report: per setting, every measure's median and share within the paper's limit,
 each with its 95 % bootstrap interval, over learning sets, seeds, draws and patterns; the
-novel-pattern cases; the figure that compares the settings."""
+novel-pattern cases; the figure that compares the settings; per study, how often each of its
+targets was met over the seeds."""
 
 from __future__ import annotations
 
@@ -12,7 +13,12 @@ from pathlib import Path
 from typing import Any
 
 from rnnpb.analysis import metrics
-from rnnpb.analysis.statistics import Interval, median_interval, share_within
+from rnnpb.analysis.statistics import (
+    Interval,
+    bootstrap_interval,
+    median_interval,
+    share_within,
+)
 from rnnpb.experiments.reporting import (
     FIGURES_DIR,
     embed,
@@ -75,7 +81,7 @@ def summaries(rows: Sequence[dict[str, Any]]) -> list[MeasureSummary]:
     """Every (measure, setting) of the table's ``ok`` rows."""
     values: dict[tuple[str, str], list[float | None]] = {}
     for row in rows:
-        if row["status"] == "ok" and row["measure"] not in ("novel_case",):
+        if row["status"] == "ok" and not row["study"] and row["measure"] != "novel_case":
             values.setdefault((row["measure"], setting_name(row)), []).append(row["value"])
     order = list(MEASURES)
     out = []
@@ -99,7 +105,7 @@ def novel_cases(rows: Sequence[dict[str, Any]]) -> dict[tuple[str, str], Counter
     """(setting, input) → how often each response case occurred."""
     out: dict[tuple[str, str], Counter] = {}
     for row in rows:
-        if row["status"] == "ok" and row["measure"] == "novel_case":
+        if row["status"] == "ok" and row["measure"] == "novel_case" and not row["study"]:
             kind = "by hand" if row["key"] == "by hand" else "repeated cycle"
             out.setdefault((setting_name(row), kind), Counter())[int(row["value"])] += 1
     return out
@@ -131,6 +137,81 @@ def _cell(summary: MeasureSummary) -> tuple[str, ...]:
 
 def sci_like(value: float) -> str:
     return "–" if math.isnan(value) else f"{value:.2e}"
+
+
+@dataclass(frozen=True)
+class StudyTargetSummary:
+    """One target of one study over the seeds it ran with: the share of seeds that met it."""
+
+    study: str
+    target: str
+    seeds: list[int]
+    met: list[bool]
+    share: Interval
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "study": self.study,
+            "target": self.target,
+            "seeds": self.seeds,
+            "met": self.met,
+            "share_met": asdict(self.share),
+        }
+
+
+def study_summaries(rows: Sequence[dict[str, Any]]) -> list[StudyTargetSummary]:
+    """Per (study, target): which seeds met it, and the share with its bootstrap interval."""
+    import numpy as np
+
+    found: dict[tuple[str, str], dict[int, bool]] = {}
+    for row in rows:
+        if row["status"] == "ok" and row["study"] and row["measure"] == "study_target_met":
+            found.setdefault((row["study"], row["key"]), {})[row["seed"]] = row["value"] == 1
+    return [
+        StudyTargetSummary(
+            study,
+            target,
+            sorted(by_seed),
+            [by_seed[s] for s in sorted(by_seed)],
+            bootstrap_interval([float(v) for v in by_seed.values()], np.mean),
+        )
+        for (study, target), by_seed in found.items()
+    ]
+
+
+def _studies_section(found: Sequence[StudyTargetSummary], rows) -> list[str]:
+    if not found:
+        return []
+    folders = {
+        (r["study"], r["seed"]): r["model"] for r in rows if r["study"] and r["status"] == "ok"
+    }
+    return [
+        "",
+        "## Studies",
+        "",
+        "Each study ran once per seed (`StudyOptions.seed`), its own report in the folder "
+        "named below; a target counts as met in a seed when that study's run met it.",
+        "",
+        *table(
+            ("study", "target", "met in", "share [95 % CI]", "seeds that missed it"),
+            [
+                (
+                    s.study,
+                    s.target,
+                    f"{sum(s.met)} of {len(s.met)}",
+                    f"{s.share.value:.0%} [{s.share.low:.0%}, {s.share.high:.0%}]",
+                    ", ".join(str(seed) for seed, m in zip(s.seeds, s.met, strict=True) if not m)
+                    or "–",
+                )
+                for s in found
+            ],
+        ),
+        "",
+        *(
+            f"- {study}, seed {seed}: `{folder}/report.md`"
+            for (study, seed), folder in sorted(folders.items())
+        ),
+    ]
 
 
 def _follows_by_seed(rows: Sequence[dict[str, Any]]) -> list[str]:
@@ -181,38 +262,52 @@ def write_report(
             )
     figure_dir = out / FIGURES_DIR
     figure_dir.mkdir(parents=True, exist_ok=True)
-    figures.plot_distributions(
-        panels, figure_dir / FIGURE_FILE, {m: v for m, v in LIMITS.items() if m != "train_mse_max"}
-    )
+    if panels:
+        figures.plot_distributions(
+            panels,
+            figure_dir / FIGURE_FILE,
+            {m: v for m, v in LIMITS.items() if m != "train_mse_max"},
+        )
     cases = novel_cases(rows)
+    studies = study_summaries(rows)
+    grid = []
+    if spec.learning_sets:
+        grid.append(
+            f"learning sets {', '.join(spec.learning_sets)}, user draws "
+            f"{', '.join(map(str, spec.user_draws))}, settings (training / on-line): "
+            f"{', '.join(sorted({setting_name(r) for r in rows if not r['study']}))}"
+        )
+    if spec.studies:
+        grid.append(f"studies {', '.join(spec.studies)}{' (quick)' if spec.quick else ''}")
     lines = [
         f"# Sweep {spec.name}",
         "",
         f"{len(runs)} runs ({len(runs) - len(failed)} ok, {len(failed)} failed) over "
-        f"learning sets {', '.join(spec.learning_sets)}, seeds "
-        f"{', '.join(map(str, spec.seeds))}, user draws "
-        f"{', '.join(map(str, spec.user_draws))}; settings (training / on-line): "
-        f"{', '.join(sorted({setting_name(r) for r in rows}))}. This command's part took "
-        f"{runtime_s:.0f} s. Every row is in `results.parquet`.",
-        "",
-        'Medians are over the runs where the event happened ("never" counts those '
-        "where it did not); the share counts values within the paper's limit, never "
-        "counting as outside. Brackets: 95 % percentile bootstrap intervals.",
-        "",
-        *table(
-            (
-                "measure",
-                "setting",
-                "n",
-                "median [95 % CI]",
-                "never",
-                "within the paper's limit [95 % CI]",
-            ),
-            [_cell(s) for s in found],
-        ),
-        "",
-        embed("settings", FIGURE_FILE),
+        f"seeds {', '.join(map(str, spec.seeds))}; {'; '.join(grid)}. This command's part "
+        f"took {runtime_s:.0f} s. Every row is in `results.parquet`.",
     ]
+    if found:
+        lines += [
+            "",
+            'Medians are over the runs where the event happened ("never" counts those '
+            "where it did not); the share counts values within the paper's limit, never "
+            "counting as outside. Brackets: 95 % percentile bootstrap intervals.",
+            "",
+            *table(
+                (
+                    "measure",
+                    "setting",
+                    "n",
+                    "median [95 % CI]",
+                    "never",
+                    "within the paper's limit [95 % CI]",
+                ),
+                [_cell(s) for s in found],
+            ),
+        ]
+    if panels:
+        lines += ["", embed("settings", FIGURE_FILE)]
+    lines += _studies_section(studies, rows)
     if cases:
         lines += [
             "",
@@ -243,6 +338,7 @@ def write_report(
             "spec": asdict(spec),
             "versions": versions(),
             "summaries": [s.to_json() for s in found],
+            "studies": [s.to_json() for s in studies],
             "novel_cases": [
                 {"setting": k[0], "input": k[1], "counts": dict(v)} for k, v in cases.items()
             ],

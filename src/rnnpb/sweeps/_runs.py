@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from rnnpb import __version__
-from rnnpb.sweeps._spec import RunSpec
+from rnnpb.sweeps._spec import AnyRun, RunSpec, StudyRunSpec
 
 MODELS_DIR = "models"
 # The measures, in the order a run's record holds them.
@@ -36,7 +36,10 @@ MEASURES = {
     "novel_period": "period of the novel-pattern response, steps (3.3)",
     "steps_to_follow": "larger set: steps until the robot follows a pattern (3.4)",
     "follows_all": "larger set: follows every pattern, 1 or 0 (3.4)",
+    "study_target_met": "a study's target (the key) met, 1 or 0",
+    "study_runtime_s": "a study's run time, seconds",
 }
+STUDIES_DIR = "studies"
 
 Measure = tuple[str, str, float | None]
 
@@ -77,7 +80,7 @@ class RunRecord:
         )
 
 
-def failed(run: RunSpec, error: str, seconds: float = 0.0) -> RunRecord:
+def failed(run: AnyRun, error: str, seconds: float = 0.0) -> RunRecord:
     return RunRecord(run.run_id, "failed", [], error, "", seconds)
 
 
@@ -180,14 +183,50 @@ def measure(run: RunSpec, model) -> list[Measure]:
     return rows
 
 
-def execute_run(run: RunSpec, out: str) -> RunRecord:
-    """Train or reuse the model, measure; an exception is the run's failure, recorded with
-    its error (a worker that dies is the runner's to retry)."""
+def study_folder(out: Path, run: StudyRunSpec) -> Path:
+    """Where a study run's own files go (its report.md, results.json, figures …)."""
+    return out / STUDIES_DIR / run.run_id
+
+
+def run_study(run: StudyRunSpec, out: Path) -> tuple[list[Measure], Path]:
+    """Run the study into a temporary folder and rename it into place when it has finished,
+    so that ``DIR/studies/RUN/`` is either a whole study's output or absent. Measures: each
+    of the study's targets, met (1) or not (0), and its run time."""
+    import shutil
+
+    from rnnpb.experiments.studies import StudyOptions, load_study
+
+    final = study_folder(out, run)
+    partial = final.with_name(f".{final.name}.tmp")
+    shutil.rmtree(partial, ignore_errors=True)  # a killed worker's leftover
+    partial.mkdir(parents=True)
+    try:
+        outcome = load_study(run.study).run(
+            partial, StudyOptions(quick=run.quick, workers=1, seed=run.seed)
+        )
+    except BaseException:
+        shutil.rmtree(partial, ignore_errors=True)  # the error is the record; no half a study
+        raise
+    shutil.rmtree(final, ignore_errors=True)  # a failed run's earlier try is replaced
+    partial.rename(final)
+    rows: list[Measure] = [
+        ("study_target_met", key, float(target.met)) for key, target in outcome.targets.items()
+    ]
+    rows.append(("study_runtime_s", "", _value(outcome.runtime_s)))
+    return rows, final
+
+
+def execute_run(run: AnyRun, out: str) -> RunRecord:
+    """Train or reuse the model, measure (or run the study); an exception is the run's
+    failure, recorded with its error (a worker that dies is the runner's to retry)."""
     start = time.perf_counter()
     folder = Path(out)
     try:
-        model, path = cached_model(run, folder)
-        rows = measure(run, model)
+        if isinstance(run, StudyRunSpec):
+            rows, path = run_study(run, folder)
+        else:
+            model, path = cached_model(run, folder)
+            rows = measure(run, model)
     except Exception as error:  # noqa: BLE001 - a failed run is recorded, the sweep goes on
         last = traceback.extract_tb(error.__traceback__)[-1]
         where = f" ({os.path.basename(last.filename)}:{last.lineno})"

@@ -15,8 +15,12 @@
     [online.default]                      # one table per on-line setting, by name
     preset = "default"                    # "default", "paper" or "ungated"; any OnlineConfig field
 
+    studies = ["novelty", "safety"]       # any study of `rnnpb study`, once per seed
+    quick = true                          # the studies' short form (default false)
+
 A run is one point of the grid: learning set × training setting × seed × on-line setting ×
-user draw. Every problem gets one line naming the file and the key.
+user draw, or study × seed (the seed is the study's ``StudyOptions.seed``). Every problem gets
+one line naming the file and the key.
 """
 
 from __future__ import annotations
@@ -56,6 +60,8 @@ TOP_KEYS = (
     "attractor_transient",
     "novel_amplitudes",
     "retries",
+    "studies",
+    "quick",
 )
 
 
@@ -109,6 +115,17 @@ class RunSpec:
         digest = hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()
         return f"set{self.learning_set}-{digest[:16]}"
 
+    def grid_columns(self) -> dict[str, Any]:
+        """The run's point of the grid, as the table's columns hold it."""
+        return {
+            "learning_set": self.learning_set,
+            "training": self.training.name,
+            "seed": self.seed,
+            "online": self.online.name,
+            "user_draw": self.user_draw,
+            "study": "",
+        }
+
     def config_json(self) -> str:
         """Everything that made this run's numbers, as one JSON string."""
         return json.dumps(
@@ -132,6 +149,45 @@ class RunSpec:
 
 
 @dataclass(frozen=True)
+class StudyRunSpec:
+    """One run of a study: ``rnnpb study STUDY [--quick]`` with ``StudyOptions.seed = seed``,
+    one worker (the sweep runs several studies at once instead)."""
+
+    sweep: str
+    study: str
+    seed: int
+    quick: bool
+
+    @property
+    def run_id(self) -> str:
+        return f"study-{self.study}-seed{self.seed}{'-quick' if self.quick else ''}"
+
+    @property
+    def model_key(self) -> str:
+        """A study learns or loads its own models: no run shares one with another."""
+        return self.run_id
+
+    def grid_columns(self) -> dict[str, Any]:
+        return {
+            "learning_set": "",
+            "training": "",
+            "seed": self.seed,
+            "online": "",
+            "user_draw": None,
+            "study": self.study,
+        }
+
+    def config_json(self) -> str:
+        return json.dumps(
+            {"study": self.study, "seed": self.seed, "quick": self.quick, "workers": 1},
+            sort_keys=True,
+        )
+
+
+AnyRun = RunSpec | StudyRunSpec
+
+
+@dataclass(frozen=True)
 class SweepSpec:
     """The grid of a sweep (see the module doc for the file)."""
 
@@ -148,11 +204,23 @@ class SweepSpec:
     attractor_transient: int = 300
     novel_amplitudes: tuple[float, ...] = (1.0,)
     retries: int = 2  # how often a run whose worker died is tried again
+    studies: tuple[str, ...] = ()  # studies of `rnnpb study`, each run once per seed
+    quick: bool = False  # the studies' short form
 
     def __post_init__(self) -> None:
-        for key in ("learning_sets", "seeds", "user_draws", "training", "online"):
+        from rnnpb.experiments.studies import STUDY_MODULES
+
+        if not self.learning_sets and not self.studies:
+            raise ConfigError("the grid is empty: give 'learning_sets' or 'studies'")
+        needs = ("seeds", "user_draws", "training", "online") if self.learning_sets else ("seeds",)
+        for key in needs:
             if not getattr(self, key):
                 raise ConfigError(f"the grid is empty: {key!r} has no values")
+        for study in self.studies:
+            if study not in STUDY_MODULES:
+                raise ConfigError(f"study {study!r} is not one of {', '.join(STUDY_MODULES)}")
+        if len(set(self.studies)) != len(self.studies):
+            raise ConfigError(f"'studies' repeats a value: {list(self.studies)}")
         for name in self.learning_sets:
             if name not in LEARNING_SETS:
                 raise ConfigError(f"learning set {name!r} is not one of {', '.join(LEARNING_SETS)}")
@@ -184,8 +252,14 @@ class SweepSpec:
             return applies
         return tuple(e for e in self.experiments if e in applies)
 
-    def runs(self) -> list[RunSpec]:
-        """Every point of the grid, in a fixed order."""
+    def runs(self) -> list[AnyRun]:
+        """Every point of the grid, in a fixed order: the learning sets' runs, then the
+        studies'."""
+        studies: list[AnyRun] = [
+            StudyRunSpec(self.name, study, seed, self.quick)
+            for study in self.studies
+            for seed in self.seeds
+        ]
         return [
             RunSpec(
                 self.name,
@@ -206,7 +280,7 @@ class SweepSpec:
             for seed in self.seeds
             for online in self.online
             for draw in self.user_draws
-        ]
+        ] + studies
 
 
 def _with_changes(config: Any, changes: dict[str, Any], where: str) -> Any:
@@ -266,6 +340,16 @@ def parse_spec(data: dict[str, Any], default_name: str = "sweep") -> SweepSpec:
     sets = data.get("learning_sets", [])
     if not isinstance(sets, list):
         raise ConfigError("'learning_sets' must be a list")
+    studies = data.get("studies", [])
+    if not isinstance(studies, list):
+        raise ConfigError("'studies' must be a list")
+    quick = data.get("quick", False)
+    if not isinstance(quick, bool):
+        raise ConfigError(f"'quick' must be true or false, got {quick!r}")
+    if studies and not sets:
+        for key in ("training", "online", "experiments", "user_draws", "novel_amplitudes"):
+            if key in data:
+                raise ConfigError(f"{key!r} applies to learning sets, and the spec has none")
     experiments = data.get("experiments", [])
     if not isinstance(experiments, list):
         raise ConfigError("'experiments' must be a list")
@@ -295,6 +379,8 @@ def parse_spec(data: dict[str, Any], default_name: str = "sweep") -> SweepSpec:
         online=_settings(data.get("online", {"default": {}}), "online", ONLINE_PRESETS, "default"),
         experiments=tuple(str(e) for e in experiments),
         novel_amplitudes=tuple(float(a) for a in amplitudes),
+        studies=tuple(str(s) for s in studies),
+        quick=quick,
         **options,
     )
 

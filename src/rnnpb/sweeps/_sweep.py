@@ -8,6 +8,7 @@ seed) wait for the first of them, which trains and caches it, so no model is lea
 from __future__ import annotations
 
 import contextlib
+import shutil
 import time
 from collections import deque
 from collections.abc import Callable
@@ -16,11 +17,11 @@ from pathlib import Path
 
 from rnnpb.sweeps._ray import Job, check_address, ray_cluster, run_tasks
 from rnnpb.sweeps._report import write_report
-from rnnpb.sweeps._runs import MODELS_DIR, RunRecord, execute_run, failed
-from rnnpb.sweeps._spec import RunSpec, SweepSpec
+from rnnpb.sweeps._runs import MODELS_DIR, STUDIES_DIR, RunRecord, execute_run, failed
+from rnnpb.sweeps._spec import AnyRun, SweepSpec
 from rnnpb.sweeps._table import RUNS_DIR, read_record, read_table, write_record, write_table
 
-RunFunction = Callable[[RunSpec, str], RunRecord]
+RunFunction = Callable[[AnyRun, str], RunRecord]
 
 
 @dataclass(frozen=True)
@@ -67,6 +68,8 @@ def _clear_leftovers(out: Path) -> None:
         for leftover in folder.glob(".*.tmp"):
             with contextlib.suppress(FileNotFoundError):
                 leftover.unlink()
+    for leftover in (out / STUDIES_DIR).glob(".*.tmp"):
+        shutil.rmtree(leftover, ignore_errors=True)  # a study a killed worker left unfinished
 
 
 def run_sweep(
@@ -93,7 +96,7 @@ def run_sweep(
     _clear_leftovers(out)
     runs = spec.runs()
     records: dict[str, RunRecord] = {}
-    pending: list[RunSpec] = []
+    pending: list[AnyRun] = []
     for run in runs:
         record = read_record(out, run)
         if record is not None and record.status == "ok":
@@ -106,7 +109,7 @@ def run_sweep(
         f"{len(pending)} to run"
     )
     # Runs that share a model wait for the first of them, which trains it.
-    groups: dict[str, list[RunSpec]] = {}
+    groups: dict[str, list[AnyRun]] = {}
     for run in pending:
         groups.setdefault(run.model_key, []).append(run)
     by_id = {run.run_id: run for run in pending}
@@ -159,7 +162,7 @@ def run_sweep(
 
 
 def _write_outputs(
-    out: Path, spec: SweepSpec, runs: list[RunSpec], records: dict[str, RunRecord], runtime: float
+    out: Path, spec: SweepSpec, runs: list[AnyRun], records: dict[str, RunRecord], runtime: float
 ) -> Path:
     table = write_table(out, runs, records)
     write_report(out, spec, read_table(table).to_pylist(), runtime)

@@ -11,15 +11,16 @@ sweep      string  the spec's ``name``
 run        string  the run's id (``setK-TRAINING-seedS-ONLINE-drawD``)
 learning_set string ``1`` … ``4`` or ``full``
 training   string  the training setting's name in the spec
-seed       int64   the training seed
+seed       int64   the training seed (a study's run: its StudyOptions.seed)
 online     string  the on-line setting's name in the spec
-user_draw  int64   the draw of the user's imperfection (scenario seed)
+user_draw  int64   the draw of the user's imperfection (scenario seed); null for a study
+study      string  the study's name (``rnnpb study``); empty for a learning set's run
 status     string  ``ok`` or ``failed``
 measure    string  a name of :data:`rnnpb.sweeps.MEASURES` (empty for a failed run's one row)
 key        string  pattern, ``a->b`` pair or novel-pattern input; empty when one per run
 value      float64 the measure; null when the event never happened (or the run failed)
 error      string  why the run failed; empty when ok
-model      string  the cached model file, relative to DIR
+model      string  the cached model file (a study's: its output folder), relative to DIR
 config     string  JSON of everything that made the run: train and on-line configs, seeds …
 rnnpb_version string the version that measured it
 ========== ======= ===========================================================================
@@ -34,7 +35,7 @@ from pathlib import Path
 from rnnpb._atomic import atomic_write
 from rnnpb.errors import DataFileError
 from rnnpb.sweeps._runs import RunRecord
-from rnnpb.sweeps._spec import RunSpec
+from rnnpb.sweeps._spec import AnyRun
 
 RUNS_DIR = "runs"
 TABLE_FILE = "results.parquet"
@@ -46,6 +47,7 @@ COLUMNS = (
     ("seed", "int64"),
     ("online", "string"),
     ("user_draw", "int64"),
+    ("study", "string"),
     ("status", "string"),
     ("measure", "string"),
     ("key", "string"),
@@ -64,11 +66,11 @@ def schema():
     return pa.schema([(name, getattr(pa, kind)()) for name, kind in COLUMNS])
 
 
-def record_path(out: Path, run: RunSpec) -> Path:
+def record_path(out: Path, run: AnyRun) -> Path:
     return out / RUNS_DIR / f"{run.run_id}.json"
 
 
-def write_record(out: Path, run: RunSpec, record: RunRecord) -> None:
+def write_record(out: Path, run: AnyRun, record: RunRecord) -> None:
     """Keep ``record`` as ``DIR/runs/RUN.json``, atomically."""
     path = record_path(out, run)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -76,7 +78,7 @@ def write_record(out: Path, run: RunSpec, record: RunRecord) -> None:
         json.dump(record.to_json(), handle)
 
 
-def read_record(out: Path, run: RunSpec) -> RunRecord | None:
+def read_record(out: Path, run: AnyRun) -> RunRecord | None:
     """The run's record, or None if it has none (a malformed one counts as none: it is
     rerun)."""
     path = record_path(out, run)
@@ -86,15 +88,11 @@ def read_record(out: Path, run: RunSpec) -> RunRecord | None:
         return None
 
 
-def rows(run: RunSpec, record: RunRecord) -> list[dict]:
+def rows(run: AnyRun, record: RunRecord) -> list[dict]:
     base = {
         "sweep": run.sweep,
         "run": run.run_id,
-        "learning_set": run.learning_set,
-        "training": run.training.name,
-        "seed": run.seed,
-        "online": run.online.name,
-        "user_draw": run.user_draw,
+        **run.grid_columns(),
         "status": record.status,
         "error": record.error,
         "model": record.model,
@@ -106,7 +104,7 @@ def rows(run: RunSpec, record: RunRecord) -> list[dict]:
     return [{**base, "measure": m, "key": k, "value": v} for m, k, v in record.measures]
 
 
-def write_table(out: Path, runs: list[RunSpec], records: dict[str, RunRecord]) -> Path:
+def write_table(out: Path, runs: list[AnyRun], records: dict[str, RunRecord]) -> Path:
     """Assemble ``DIR/results.parquet`` from the records of ``runs`` (in grid order),
     atomically."""
     import pyarrow as pa
