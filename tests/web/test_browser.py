@@ -465,12 +465,14 @@ def test_user_named_patterns_offer_only_what_the_demonstrator_performs(browser, 
         state["pattern_pb"] = dict(zip(state["patterns"], pbs, strict=False))
 
     with _strict_page(browser, server, _restyle(user_names)) as page:
-        _until(page, "document.querySelectorAll('#patterns button').length === 5")
+        _until(page, "document.querySelectorAll('#patterns button').length === 9")
         buttons = page.locator("#patterns button").all_text_contents()
         offered = page.eval_on_selector_all(
             "#patterns button", "(all) => all.map((b) => b.dataset.pattern)"
         )
-        assert offered == ["1", "2", "3", "4", "pause"]
+        assert offered == [
+            "1", "2", "3", "4", "one-arm", "asymmetric", "figure-eight", "diagonal", "pause"
+        ]
         assert "not learned" in buttons[0] and "not learned" not in buttons[1]
         assert not any("wave" in b or "clap" in b for b in buttons)
         note = page.text_content("#patterns-note")

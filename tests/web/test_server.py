@@ -65,7 +65,7 @@ def test_state_names_the_models_and_the_learned_pbs(server, model):
     state = json.loads(body)
     assert status == 200 and state["models"] == ["set1.npz"] and state["model"] == "set1.npz"
     assert state["patterns"] == list(model.patterns)
-    assert state["novel_patterns"] == ["4"]
+    assert state["novel_patterns"] == ["4", "one-arm", "asymmetric", "figure-eight", "diagonal"]
     np.testing.assert_allclose(state["pattern_pb"]["1"], model.pattern_pb["1"])
 
 

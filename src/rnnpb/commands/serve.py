@@ -82,6 +82,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "guards its PB)",
     )
     parser.add_argument(
+        "--teach",
+        choices=("confirm", "auto", "off"),
+        default="confirm",
+        help="teaching by showing (docs/dashboard.md): keep new movements and learn them "
+        "when you press Confirm (default), automatically, or keep nothing; the page can "
+        "change it",
+    )
+    parser.add_argument(
+        "--consolidation-iterations",
+        type=int,
+        metavar="N",
+        help="learning iterations of each consolidation (default: the consolidation's own)",
+    )
+    parser.add_argument(
+        "--teach-dir",
+        metavar="DIR",
+        help="where a shipped model is copied to learn from, with its memory and new "
+        "versions (default: a temporary folder deleted when the server stops)",
+    )
+    parser.add_argument(
         "--log-level",
         default="warning",
         choices=("debug", "info", "warning", "error"),
@@ -106,8 +126,18 @@ def run(args: argparse.Namespace) -> int:
     # Checked before anything starts, so a mistyped name is one clear error line.
     access = AccessPolicy.for_address(args.host, args.allow_host, args.allow_origin)
     logging.basicConfig(level=args.log_level.upper(), format="%(levelname)s %(name)s: %(message)s")
-    from rnnpb.models import default_model
+    from pathlib import Path
 
+    from rnnpb.commands._checks import step_count
+    from rnnpb.models import default_model
+    from rnnpb.web import TeachingSettings
+
+    step_count("--consolidation-iterations", args.consolidation_iterations)
+    teaching = TeachingSettings(
+        mode=args.teach,
+        iterations=args.consolidation_iterations,
+        folder=Path(args.teach_dir) if args.teach_dir else None,
+    )
     models = find_models(args.model if args.model is not None else default_model())
     server = DashboardServer(
         models,
@@ -117,6 +147,7 @@ def run(args: argparse.Namespace) -> int:
         log_level=args.log_level,
         allow_hosts=access.hosts,
         allow_origins=access.origins,
+        teaching=teaching,
     )
     server.session.safety_enabled = not args.no_safety  # read when a model loads
     server.start()

@@ -326,6 +326,46 @@ def version_path(model_path: str | os.PathLike[str], version: int) -> Path:
     return path.with_name(f"{stem}.v{int(version)}.npz")
 
 
+def rename_pattern(model, pattern: str, name: str):
+    """``model`` with its pattern ``pattern`` called ``name``: the sequences' names and the
+    history's last entry (its ``added`` and ``patterns``; ``details["renamed"]`` records
+    ``{"from", "to", "created"}``), so the model file says what the pattern was learned as.
+
+    Raises :class:`ConfigError` for a pattern the model does not hold, a name that is not a
+    pattern name, or one the model already holds.
+    """
+    import datetime
+    from dataclasses import replace
+
+    from rnnpb.sequences import pattern_name_problem
+
+    if pattern not in model.patterns:
+        raise ConfigError(f"the model has no pattern {pattern!r}")
+    problem = pattern_name_problem(name)
+    if problem:
+        raise ConfigError(f"pattern name {name!r} {problem}")
+    if name in model.patterns:
+        raise ConfigError(f"the model already has a pattern {name!r}")
+
+    def renamed(names):
+        return tuple(name if n == pattern else n for n in names)
+
+    *older, last = model.history
+    record = {
+        "from": pattern,
+        "to": name,
+        "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+    }
+    last = replace(
+        last,
+        added=renamed(last.added),
+        patterns=renamed(last.patterns),
+        details={**last.details, "renamed": [*last.details.get("renamed", []), record]},
+    )
+    meta = {**model.meta, "history": [e.to_json() for e in (*older, last)]}
+    return replace(model, sequence_patterns=renamed(model.sequence_patterns), meta=meta)
+
+
 def _consolidation_worker(
     model_path: str,
     memory_path: str,
@@ -545,7 +585,11 @@ class Teacher:
         """Start consolidating the pending episodes (the person said yes)."""
         if self.job is not None or not self.pending:
             return
-        out = version_path(self.model_path, len(self.versions) + 1)
+        number = len(self.versions) + 1
+        out = version_path(self.model_path, number)
+        while out.exists():  # a version an earlier run wrote: never overwritten
+            number += 1
+            out = version_path(self.model_path, number)
         ids, self.pending = self.pending, []
         self.job = BackgroundConsolidation(
             self.model_path, self.memory.path, ids, out, self.iterations
@@ -600,4 +644,36 @@ class Teacher:
         self.loop.mirror = self.make_mirror(TrainedModel.load(self.model_path))
         self.events.append(
             TeachingEvent(self.loop.steps, "undone", f"back to {Path(self.model_path).name}")
+        )
+
+    def rename(self, pattern: str, name: str) -> None:
+        """Call ``pattern`` ``name``: a pattern the teacher learned (in the running version,
+        not in the first one) is renamed in that version's file (:func:`rename_pattern`) and
+        the new model swapped in; the memory's episodes of that name are renamed too (a kept
+        episode not learned yet is then consolidated under its new name)."""
+        from rnnpb.model import TrainedModel
+        from rnnpb.sequences import pattern_name_problem
+
+        if self.job is not None:
+            raise ConfigError("a consolidation is running: rename once it has finished")
+        problem = pattern_name_problem(name)
+        if problem:
+            raise ConfigError(f"pattern name {name!r} {problem}")
+        model = TrainedModel.load(self.model_path)
+        episodes = [e for e in self.memory.episodes() if e.pattern == pattern]
+        taught = pattern in model.patterns and pattern not in TrainedModel.load(
+            self.versions[0]
+        ).patterns
+        if not taught and not episodes:
+            raise ConfigError(f"no pattern {pattern!r} was learned or kept by teaching")
+        if name in model.patterns or any(e.pattern == name for e in self.memory.episodes()):
+            raise ConfigError(f"the name {name!r} is taken")
+        if taught:
+            renamed = rename_pattern(model, pattern, name)
+            renamed.save(self.model_path)
+            self.loop.mirror = self.make_mirror(renamed)
+        for episode in episodes:
+            self.memory.rename(episode.id, name)
+        self.events.append(
+            TeachingEvent(self.loop.steps, "renamed", f"renamed pattern {pattern} to {name}")
         )

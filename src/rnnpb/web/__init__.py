@@ -26,6 +26,7 @@ from rnnpb.web._session import (
     offered_models,
 )
 from rnnpb.web._sources import DemonstratorSource, PointerSource
+from rnnpb.web._teaching import TEACH_MODES, TeachingSettings
 
 __all__ = [
     "CONTENT_SECURITY_POLICY",
@@ -36,6 +37,7 @@ __all__ = [
     "MIN_DT",
     "RECENT_STEPS",
     "STATIC_DIR",
+    "TEACH_MODES",
     "WS_MAX_SIZE",
     "AccessPolicy",
     "CommandLimits",
@@ -45,6 +47,7 @@ __all__ = [
     "ProtocolError",
     "RecordingLimits",
     "Session",
+    "TeachingSettings",
     "create_app",
     "find_models",
     "offered_models",

@@ -13,6 +13,7 @@ import json
 import math
 from typing import Any
 
+from rnnpb.demonstrator import NEW_SHAPES, PATTERNS
 from rnnpb.errors import RnnpbError
 
 MAX_MESSAGE_BYTES = 4096
@@ -21,7 +22,14 @@ MIN_DT, MAX_DT = 0.02, 5.0
 """Range of the loop's step, seconds."""
 MODES = ("demonstrator", "pointer", "webcam")
 ACTIONS = ("start", "stop", "reset")
-PATTERN_CHOICES = ("1", "2", "3", "4", "pause")
+PATTERN_CHOICES = (*PATTERNS, *NEW_SHAPES, "pause")
+"""What the demonstrator performs: the paper's four patterns, the new shapes, a pause."""
+TEACH_MODES = ("off", "confirm", "auto")
+"""Teaching in the dashboard: keep nothing; keep new movements and consolidate when the
+person confirms (the default); keep and consolidate automatically."""
+TEACH_ACTIONS = ("confirm", "undo")
+MAX_RENAME_LENGTH = 64
+"""Longest text a rename may carry (a pattern name is at most 32 characters)."""
 MAX_CAMERA_INDEX = 16
 GAME_MODES = ("person", "robots")
 GAME_ACTIONS = ("start", "stop")
@@ -83,11 +91,17 @@ def parse_client_message(text: str | bytes | None) -> dict[str, Any]:
     ``{"type": "mode", "mode": M}``                ``demonstrator``, ``pointer`` or ``webcam``
     ``{"type": "camera", "index": N}``             webcam index 0-16 (takes effect on the
                                                    next switch to ``webcam``)
-    ``{"type": "pattern", "pattern": P}``          demonstrator: ``"1"``-``"4"`` or ``"pause"``
+    ``{"type": "pattern", "pattern": P}``          demonstrator: ``"1"``-``"4"``, a new shape
+                                                   (``figure-eight`` ...) or ``"pause"``
     ``{"type": "control", "action": A}``           ``start``, ``stop`` or ``reset``
     ``{"type": "dt", "dt": S}``                    seconds per step in [0.02, 5]
     ``{"type": "model", "name": NAME}``            one of the models the server offers
     ``{"type": "ping"}``                           answered with ``pong``
+    ``{"type": "teach_mode", "mode": M}``          ``off``, ``confirm`` or ``auto``
+    ``{"type": "teach", "action": A}``             ``confirm`` (consolidate the kept
+                                                   episodes) or ``undo`` (previous version)
+    ``{"type": "rename", "pattern": P,``           call a pattern learned (or kept) by
+    ``"name": N}``                                 teaching ``N``
     ``{"type": "game", "action": A, "mode": M,``   the mirror game (``/game``): ``start`` or
     ``"model": NAME}``                             ``stop``; ``person`` or ``robots``; a model
                                                    name or ``null`` (the first)
@@ -186,6 +200,32 @@ def parse_client_message(text: str | bytes | None) -> dict[str, Any]:
         if not isinstance(name, str) or not 0 < len(name) <= 255:
             raise ProtocolError("model name must be a non-empty string")
         return {"type": "model", "name": name}
+    if kind == "teach_mode":
+        _keys(message, ("mode",))
+        if not isinstance(message["mode"], str) or message["mode"] not in TEACH_MODES:
+            raise ProtocolError(
+                f"teach_mode must be one of {', '.join(TEACH_MODES)}, got "
+                f"{_shown(message['mode'])}"
+            )
+        return {"type": "teach_mode", "mode": message["mode"]}
+    if kind == "teach":
+        _keys(message, ("action",))
+        if not isinstance(message["action"], str) or message["action"] not in TEACH_ACTIONS:
+            raise ProtocolError(
+                f"teach action must be one of {', '.join(TEACH_ACTIONS)}, got "
+                f"{_shown(message['action'])}"
+            )
+        return {"type": "teach", "action": message["action"]}
+    if kind == "rename":
+        _keys(message, ("pattern", "name"))
+        for key in ("pattern", "name"):
+            value = message[key]
+            if not isinstance(value, str) or not 0 < len(value) <= MAX_RENAME_LENGTH:
+                raise ProtocolError(
+                    f"rename {key} must be a string of 1 to {MAX_RENAME_LENGTH} characters, "
+                    f"got {_shown(value)}"
+                )
+        return {"type": "rename", "pattern": message["pattern"], "name": message["name"]}
     if kind == "ping":
         _keys(message, ())
         return {"type": "ping"}

@@ -32,6 +32,7 @@ from rnnpb.web._access import ANY_ADDRESS, AccessPolicy, SecurityHeadersMiddlewa
 from rnnpb.web._game import GameSession
 from rnnpb.web._protocol import ProtocolError, parse_client_message
 from rnnpb.web._session import RecordingLimits, Session
+from rnnpb.web._teaching import TeachingSettings
 
 log = logging.getLogger("rnnpb.web")
 
@@ -318,11 +319,18 @@ class DashboardServer:
         allow_origins: tuple[str, ...] = (),
         limits: CommandLimits | None = None,
         recording_limits: RecordingLimits | None = None,
+        teaching: TeachingSettings | None = None,
     ) -> None:
         import uvicorn
 
         self.access = AccessPolicy.for_address(host, allow_hosts, allow_origins)
-        self.session = Session(models, dt=dt, workdir=workdir, recording_limits=recording_limits)
+        self.session = Session(
+            models,
+            dt=dt,
+            workdir=workdir,
+            recording_limits=recording_limits,
+            teaching=teaching,
+        )
         self._first_model = model
         self.app = create_app(self.session, self.access, limits)
         config = uvicorn.Config(

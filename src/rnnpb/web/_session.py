@@ -42,6 +42,7 @@ import numpy as np
 from rnnpb.errors import ConfigError, RnnpbError
 from rnnpb.sources import UserSource
 from rnnpb.web._sources import PAUSE, DemonstratorSource, PointerSource, SwitchableSource
+from rnnpb.web._teaching import SessionTeaching, TeachingSettings
 
 log = logging.getLogger("rnnpb.web")
 
@@ -231,6 +232,9 @@ class Session:
     recording_limits : RecordingLimits, optional
     max_queued_commands : int
         Commands waiting for the session thread; :meth:`submit` refuses more.
+    teaching : TeachingSettings, optional
+        Teaching by showing (docs/dashboard.md, "Teaching"); by default new movements are
+        kept and consolidated when the person confirms.
     """
 
     def __init__(
@@ -240,6 +244,7 @@ class Session:
         workdir: str | Path | None = None,
         recording_limits: RecordingLimits | None = None,
         max_queued_commands: int = MAX_QUEUED_COMMANDS,
+        teaching: TeachingSettings | None = None,
     ) -> None:
         if not models:
             raise ConfigError("the dashboard needs at least one model")
@@ -283,6 +288,7 @@ class Session:
         self.safety_enabled = True
         self.safety = None  # rnnpb.safety.OnlineSafety of the loaded model
         self._risk_views: dict[str, Any] = {}
+        self.teaching = SessionTeaching(self, teaching or TeachingSettings())
 
     # --- life cycle -----------------------------------------------------------------------
     def start(self, model_name: str | None = None) -> None:
@@ -301,6 +307,7 @@ class Session:
             self._commands.put_nowait({"type": "_wake"})
         if self._thread is not None:
             self._thread.join(timeout=10)
+        self.teaching.close()
         self._close_run()
         self._close_webcam()
         if self._own_workdir:
@@ -365,7 +372,7 @@ class Session:
 
     def state(self) -> dict[str, Any]:
         """The session's state as the ``state`` message carries it."""
-        from rnnpb.demonstrator import UserBody
+        from rnnpb.demonstrator import MOVEMENT_DESCRIPTIONS, UserBody
         from rnnpb.robot import FOREARM_LENGTH, JOINT_LIMITS, SHOULDERS, UPPER_ARM_LENGTH
         from rnnpb.vectors import MOTOR_NAMES
 
@@ -407,6 +414,10 @@ class Session:
                 "joint_names": list(MOTOR_NAMES),
             },
             "safety": self._safety_state(),
+            "movement_descriptions": {
+                p: MOVEMENT_DESCRIPTIONS.get(p, "") for p in self.demonstrator.patterns
+            },
+            "teaching": self.teaching.state(),
         }
 
     # --- the session thread ---------------------------------------------------------------
@@ -437,7 +448,8 @@ class Session:
                 if self.running and loop is not None:
                     self._drive(loop)
                 else:
-                    self._apply_commands(timeout_s=0.5)
+                    self._teach_between_steps()
+                    self._apply_commands(timeout_s=0.1 if self.teaching.teacher else 0.5)
             except Exception as error:  # the thread must outlive anything a step raises
                 log.exception("session: unexpected failure")
                 self.running = False
@@ -453,7 +465,9 @@ class Session:
         goes on taking commands (Start tries again)."""
 
         def between_steps(wait_s: float) -> None:
-            self._apply_commands(timeout_s=wait_s)
+            started = time.perf_counter()
+            self._teach_between_steps()
+            self._apply_commands(timeout_s=max(0.0, wait_s - (time.perf_counter() - started)))
             if self._closed.is_set() or not self.running or self.loop is not loop:
                 loop.stop()
 
@@ -476,6 +490,16 @@ class Session:
             self.running = False
             self._error(f"the {self.mode} source has ended")
             self._publish_state()
+
+    def _teach_between_steps(self) -> None:
+        """Follow a consolidation and swap a new version in; a failure here is reported and
+        never stops the robot."""
+        try:
+            self.teaching.between_steps()
+        except Exception as error:  # noqa: BLE001 - the robot runs on
+            log.exception("session: teaching failed")
+            self.teaching.failure = f"teaching failed: {type(error).__name__}: {error}"
+            self._error(f"{self.teaching.failure}; the running model stays")
 
     def _apply_commands(self, timeout_s: float) -> None:
         """Apply every queued command, waiting up to ``timeout_s`` for the first."""
@@ -527,6 +551,15 @@ class Session:
             self.camera_index = command["index"]
         elif kind == "pattern":
             self.demonstrator.perform(command["pattern"])
+        elif kind == "teach_mode":
+            self.teaching.set_mode(command["mode"])
+        elif kind == "teach":
+            if command["action"] == "confirm":
+                self.teaching.confirm()
+            else:
+                self.teaching.undo()
+        elif kind == "rename":
+            self.teaching.rename(command["pattern"], command["name"])
         elif kind == "dt":
             self.dt = command["dt"]
             if self.loop is not None:
@@ -571,6 +604,8 @@ class Session:
         finally:
             self.loading = False
             self.loading_model = None
+        # Teaching first: whoever sees the new mirror sees its teaching too.
+        self.teaching.open(self.models[name], model, mirror, safety, risk)
         self.model, self.mirror, self.model_name = model, mirror, name
         self.safety, self._risk_views = safety, risk
         self.model_error = None
@@ -612,7 +647,8 @@ class Session:
             command_filter=command_filter,
         )
         # The loop calls subscribers once a step's timings are complete, so the step message
-        # carries this step's sections.
+        # carries this step's sections; teaching first, so that it carries its status too.
+        self.teaching.attach(self.loop)
         self.loop.subscribe(self._publish_step)
 
     def _load_safety(self, path: Path, model, online) -> tuple[Any, dict[str, Any]]:
@@ -696,6 +732,7 @@ class Session:
             "arms": {"elbows": np.round(elbows, 5).tolist(), "hands": np.round(hands, 5).tolist()},
             "timings_ms": {k: round(v * 1e3, 3) for k, v in record.timings.items()},
             "missed_deadlines": self.loop.missed_deadlines if self.loop is not None else 0,
+            "teaching": self.teaching.status(),
             **self._step_safety(record),
         }
         self._publish(message)

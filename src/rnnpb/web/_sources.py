@@ -46,7 +46,8 @@ class PointerSource(UserSource):
 
 
 class DemonstratorSource(UserSource):
-    """The synthetic demonstrator, steered while it runs: perform pattern 1-4 or pause.
+    """The synthetic demonstrator, steered while it runs: perform pattern 1-4, one of the new
+    shapes (:data:`rnnpb.demonstrator.NEW_SHAPES`: a movement to teach) or pause.
 
     Each pattern is pre-performed as one long stream (with the demonstrator's human
     imperfection) starting at the same phase; switching pattern continues the new stream at
@@ -55,22 +56,23 @@ class DemonstratorSource(UserSource):
 
     Parameters
     ----------
-    patterns : tuple of str
-        The patterns it can perform (default all four).
+    patterns : tuple of str, optional
+        The movements it can perform (default :data:`rnnpb.demonstrator.SHAPES`: the paper's
+        four patterns and the new shapes).
     n_steps : int
         Length of each pre-performed stream before it loops.
     seed : int
     """
 
     def __init__(
-        self, patterns: tuple[str, ...] = ("1", "2", "3", "4"), n_steps: int = 600, seed: int = 0
+        self, patterns: tuple[str, ...] | None = None, n_steps: int = 600, seed: int = 0
     ) -> None:
-        from rnnpb.demonstrator import PatternConfig, perform
+        from rnnpb.demonstrator import SHAPES, PatternConfig, perform
         from rnnpb.robot.camera import RobotCamera
 
         config = PatternConfig()
         camera = RobotCamera()
-        self.patterns = tuple(patterns)
+        self.patterns = tuple(SHAPES if patterns is None else patterns)
         self._sensory: dict[str, np.ndarray] = {}
         self._phase: dict[str, np.ndarray] = {}
         for index, pattern in enumerate(self.patterns):

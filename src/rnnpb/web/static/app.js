@@ -13,8 +13,13 @@ const PATTERN_NAMES = {
 const JOINT_COLORS = ["#7b3fb5", "#d98a00", "#1b9e77", "#555"];
 
 const $ = (id) => document.getElementById(id);
-// A learned pattern's description; any other name (even "__proto__") has none.
-const describe = (p) => (Object.hasOwn(PATTERN_NAMES, p) ? PATTERN_NAMES[p] : "");
+// A movement's description (the paper's patterns, the demonstrator's new shapes); any other
+// name (even "__proto__") has none.
+const describe = (p) => {
+  const more = (dash.state && dash.state.movement_descriptions) || {};
+  if (Object.hasOwn(PATTERN_NAMES, p)) return PATTERN_NAMES[p];
+  return Object.hasOwn(more, p) ? more[p] : "";
+};
 // An element with text children only: strings become text nodes, never markup.
 function el(tag, props = {}, ...children) {
   const node = document.createElement(tag);
@@ -66,7 +71,10 @@ dash.send = send;
 // Every control that sends a command; disabled while there is no connection.
 function setControlsEnabled(enabled) {
   document.querySelectorAll("#model, #start, #stop, #reset, #dt, .tab, #camera, "
-    + "#camera-open, #patterns button").forEach((node) => { node.disabled = !enabled; });
+    + "#camera-open, #patterns button, #teach-mode, #rename-apply").forEach((node) => {
+    node.disabled = !enabled;
+  });
+  if (!enabled) { $("teach-confirm").disabled = true; $("teach-undo").disabled = true; }
   document.body.classList.toggle("offline", !enabled);
 }
 
@@ -110,6 +118,8 @@ function onState(state) {
   if (state.mode === "webcam") $("camera-message").textContent = "";
   $("frame").hidden = state.mode !== "webcam";
   buildPatternButtons(state);
+  const pbKey = JSON.stringify(state.pattern_pb);
+  if (pbKey !== onState.pbKey) { onState.pbKey = pbKey; projection = null; }
   if (first || state.model !== previousModel) {
     projection = null;
     if (state.rest_hands && !dash.markers) {
@@ -124,6 +134,7 @@ function onState(state) {
   $("start").title = state.model ? "" : `no model loaded${state.model_error ? `: ${state.model_error}` : ""}`;
   $("stop").disabled = !state.running;
   showReadoutsState(state);
+  showTeaching(state);
   showProblems();
   updateStatus();
   drawPlots();
@@ -212,21 +223,26 @@ function buildPatternButtons(state) {
   box.replaceChildren();
   for (const p of [...state.demonstrator_patterns, "pause"]) {
     const learned = state.patterns.includes(p);
+    // The paper's patterns are numbered; the new shapes (figure-eight, ...) go by their name.
+    const title = Object.hasOwn(PATTERN_NAMES, p) ? `Pattern ${p}` : `New shape: ${p}`;
     const button = p === "pause"
       ? el("button", {}, "❚❚ Pause", el("small", {}, "hands held still"))
-      : el("button", {}, `Pattern ${p}${learned ? "" : " (novel)"}`,
+      : el("button", {}, `${title}${learned ? "" : " (novel)"}`,
         el("small", {}, `${describe(p)}${learned ? "" : " — not learned by this model"}`));
     button.dataset.pattern = p;
     button.classList.toggle("active", state.demonstrator_pattern === p);
     button.onclick = () => send({ type: "pattern", pattern: p });
     box.appendChild(button);
   }
-  const others = state.patterns.filter((p) => !state.demonstrator_patterns.includes(p));
-  $("patterns-note").textContent = others.length
+  const taught = (state.teaching && state.teaching.taught) || [];
+  const others = state.patterns.filter((p) => !state.demonstrator_patterns.includes(p)
+    && !taught.includes(p));
+  const shown = taught.length ? `Taught by showing (teaching panel): ${taught.join(", ")}. ` : "";
+  $("patterns-note").textContent = shown + (others.length
     ? `This model also learned ${others.join(", ")}: the demonstrator cannot perform `
       + `${others.length > 1 ? "them" : "it"}; trace ${others.length > 1 ? "them" : "it"} with `
       + "the mouse or in front of the webcam."
-    : "";
+    : "");
 }
 
 // ---------------------------------------------------------------- recognition
@@ -235,7 +251,8 @@ function buildPatternButtons(state) {
 function readout(step) {
   if (step.recognised && (step.novelty === "familiar" || step.novelty === "still")) {
     const still = step.novelty === "still" ? ", hands still" : "";
-    return `${step.recognised} — ${describe(step.recognised)} ` +
+    const about = describe(step.recognised);
+    return `${step.recognised}${about ? ` — ${about}` : ""} ` +
       `(${Math.round(100 * step.confidence)} %${still})`;
   }
   const words = { novel: "new movement", unstructured: "not sure (no repeating pattern)",
@@ -284,6 +301,103 @@ function onStep(step) {
   drawPlots();
   drawPointerPanel();
   showSafety(step);
+  showTeachingStatus(step.teaching, step);
+}
+
+// ---------------------------------------------------------------- teaching
+// The teaching panel: what the novelty detector says, "recording a new movement (cycle 2 of
+// 4)", the consolidation's progress, the result and its rename, the kept episodes and the
+// model versions, Confirm and Undo (docs/dashboard.md, "Teaching").
+const NOVELTY_WORDS = { familiar: "a learned pattern", novel: "a new movement",
+  unstructured: "no repeating pattern", still: "hands still", "": "not sure yet" };
+function showTeachingStatus(status, step) {
+  const teaching = dash.state && dash.state.teaching;
+  if (!status || !teaching) return;
+  const job = status.consolidation;
+  let phase = status.phase, badge, text = status.text || "", progress = null, note = "";
+  if (job && job.state === "running") {
+    phase = "consolidating";
+    badge = "consolidating";
+    text = "learning the kept movement in the background — the robot keeps moving";
+    progress = job.total ? job.iteration / job.total : null;
+    note = `${Math.round(job.seconds)} s${job.total ? ` · iteration ${job.iteration} of `
+      + `${job.total}` : ""}`;
+  } else if (phase === "recording") {
+    badge = "recording";
+    progress = Math.min(status.cycles, status.episode_cycles) / status.episode_cycles;
+    note = `${Math.min(status.cycles, status.episode_cycles)} of ${status.episode_cycles} whole `
+      + "cycles";
+  } else if (phase === "kept") {
+    badge = "kept";
+    text = "new movement kept in the short-term memory"
+      + (teaching.mode === "confirm" ? " — press Confirm to learn it" : "");
+  } else if (phase === "off") {
+    badge = "off";
+    text = teaching.available ? "learning is off: nothing is kept"
+      : (teaching.unavailable || status.text || "");
+  } else {
+    const novelty = step ? step.novelty : "";
+    phase = novelty === "novel" ? "novel" : novelty === "familiar" ? "familiar" : "watching";
+    badge = "watching";
+    text = step ? `the robot sees ${NOVELTY_WORDS[novelty] || "…"}`
+      + (novelty === "novel" ? " — keep performing it: whole cycles are counted" : "")
+      : "start the robot and perform a movement";
+  }
+  const box = $("teach-phase");
+  box.dataset.phase = phase;
+  $("teach-badge").textContent = badge;
+  $("teach-text").textContent = text;
+  const bar = $("teach-progress");
+  if (progress === null) bar.removeAttribute("value"); else bar.value = progress;
+  bar.hidden = !(phase === "recording" || phase === "consolidating");
+  $("teach-progress-text").textContent = note;
+  dash.teachPhase = phase;
+  const canConfirm = teaching.available && !job && (teaching.pending || 0) > 0;
+  $("teach-confirm").disabled = !dash.connected || !canConfirm;
+}
+
+function showTeaching(state) {
+  const teaching = state.teaching;
+  if (!teaching) return;
+  if (document.activeElement !== $("teach-mode")) $("teach-mode").value = teaching.mode;
+  const result = $("teach-result");
+  result.textContent = teaching.result || "";
+  result.hidden = !teaching.result;
+  const failure = $("teach-failure");
+  failure.textContent = teaching.failure ? `${teaching.failure} — the running model stays` : "";
+  failure.hidden = !teaching.failure;
+  $("teach-undo").disabled = !dash.connected || !teaching.can_undo;
+  $("teach-undo").title = teaching.can_undo
+    ? `go back to ${teaching.versions[teaching.versions.length - 2].name}`
+    : "nothing to undo: the robot runs its first version";
+  // Rename: the patterns teaching learned, and the kept movements not learned yet.
+  const names = [...(teaching.taught || []), ...(teaching.episodes || [])
+    .filter((e) => e.status === "kept").map((e) => e.pattern)];
+  const unique = [...new Set(names)];
+  const select = $("rename-pattern");
+  if (select.dataset.names !== JSON.stringify(unique)) {
+    select.dataset.names = JSON.stringify(unique);
+    select.replaceChildren(...unique.map((n) => new Option(n, n)));
+  }
+  $("rename").hidden = unique.length === 0;
+  const rows = (teaching.episodes || []).map((e) => el("tr", {},
+    el("td", {}, `#${e.id}`), el("td", {}, e.pattern),
+    el("td", { className: `status-${e.status}` }, e.status),
+    el("td", {}, `${e.n_cycles} cycles, ${e.n_steps} steps`), el("td", {}, e.source),
+    el("td", {}, e.when)));
+  $("teach-episodes").replaceChildren(rows.length
+    ? el("tr", {}, ...["", "pattern", "status", "movement", "from", "kept"].map((h) =>
+      el("th", {}, h)))
+    : el("tr", {}, el("td", {}, "nothing kept yet")), ...rows);
+  $("teach-versions").replaceChildren(...(teaching.versions || []).map((v) => {
+    const item = el("li", { className: v.running ? "running" : "" }, v.name,
+      el("small", {}, ` — ${v.patterns.join(", ")}${v.running ? " (running)" : ""}`));
+    return item;
+  }));
+  $("teach-folder").textContent = [teaching.folder,
+    teaching.memory ? `Short-term memory: ${teaching.memory}.` : ""].filter(Boolean).join(". ");
+  showTeachingStatus(teaching.status, dash.lastStep && dash.run === state.run
+    ? dash.lastStep : null);
 }
 
 // The readouts under the robot: the last step's, marked as such while stopped.
@@ -865,12 +979,23 @@ function drawPB() {
   g.font = "bold 11px system-ui, sans-serif";
   g.textAlign = "center";
   for (const mk of markers) {
-    const label = mk.name.length > 3 ? `${mk.name.slice(0, 2)}…` : mk.name;
+    // A short name fits in its square; a longer one (a pattern taught and renamed) is written
+    // beside it, whole.
+    const short = mk.name.length <= 3;
     g.fillStyle = mk.name === nearest ? "#127a5a" : "#8a93a3";
     g.strokeStyle = "#fff"; g.lineWidth = 2;
     g.beginPath(); g.rect(mk.lx - SIZE / 2, mk.ly - SIZE / 2, SIZE, SIZE); g.fill(); g.stroke();
-    g.fillStyle = "#fff";
-    g.fillText(label, mk.lx, mk.ly + 4);
+    if (short) {
+      g.fillStyle = "#fff";
+      g.fillText(mk.name, mk.lx, mk.ly + 4);
+    } else {
+      g.textAlign = "left";
+      g.strokeStyle = "rgba(255, 255, 255, 0.85)"; g.lineWidth = 3;
+      g.strokeText(mk.name, mk.lx + SIZE / 2 + 3, mk.ly + 4);
+      g.fillStyle = mk.name === nearest ? "#127a5a" : "#4a5260";
+      g.fillText(mk.name, mk.lx + SIZE / 2 + 3, mk.ly + 4);
+      g.textAlign = "center";
+    }
   }
   g.textAlign = "start";
   g.font = "11px system-ui, sans-serif";
@@ -1014,6 +1139,15 @@ $("dt").onchange = (e) => {
   if (dt >= 0.02 && dt <= 5) send({ type: "dt", dt }); else showError("dt must be 0.02–5 s");
 };
 $("pb-projection").onchange = () => drawPlots();
+$("teach-mode").onchange = (e) => send({ type: "teach_mode", mode: e.target.value });
+$("teach-confirm").onclick = () => send({ type: "teach", action: "confirm" });
+$("teach-undo").onclick = () => send({ type: "teach", action: "undo" });
+$("rename-apply").onclick = () => {
+  const name = $("rename-name").value.trim();
+  const pattern = $("rename-pattern").value;
+  if (!name || !pattern) { showError("rename: choose a pattern and type its new name"); return; }
+  if (send({ type: "rename", pattern, name })) $("rename-name").value = "";
+};
 document.querySelectorAll(".tab").forEach((tab) => {
   tab.onclick = () => {
     showMode(tab.dataset.mode);

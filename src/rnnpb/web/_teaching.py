@@ -1,0 +1,505 @@
+"""Teaching by showing in the dashboard: the session's :class:`~rnnpb.interaction.teaching.
+Teacher`, its short-term memory and its model versions (docs/dashboard.md, "Teaching").
+
+Everything here runs on the session thread, between two steps or in a step subscriber, and
+nothing blocks: the consolidation runs in the Teacher's spawned process, and a new version's
+on-line step (whose first call compiles for the new number of patterns: seconds, tens of
+seconds on a loaded machine) is built and compiled in a thread of its own before the version
+is swapped in, so the paced loop keeps its deadlines. The state sent to the pages is computed
+here too, from the memory read on this thread only (an SQLite connection belongs to the
+thread that opened it).
+"""
+
+from __future__ import annotations
+
+import datetime
+import logging
+import shutil
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rnnpb.errors import ConfigError, RnnpbError
+from rnnpb.interaction.teaching import TeachingConfig
+from rnnpb.web._protocol import TEACH_MODES
+
+log = logging.getLogger("rnnpb.web")
+
+SHOWN_EPISODES = 20
+"""Newest episodes of the memory listed in the panel."""
+SHOWN_EVENTS = 30
+
+
+@dataclass(frozen=True)
+class TeachingSettings:
+    """How the dashboard teaches (``rnnpb serve --teach``, ``--consolidation-iterations``,
+    ``--teach-dir``).
+
+    Attributes
+    ----------
+    mode : str
+        ``confirm`` (default): new movements are kept in the short-term memory and consolidated
+        when the person presses Confirm; ``auto``: consolidated as soon as one is kept;
+        ``off``: nothing is kept. The page can change it.
+    iterations : int, optional
+        Learning iterations of each consolidation (default: the consolidation's own).
+    folder : path, optional
+        Where a model shipped inside the package is copied to learn from (its memory and new
+        versions beside the copy). Default: the session's folder, ``WORKDIR/taught`` (a
+        temporary folder unless the server was given one).
+    config : TeachingConfig
+        When a novel movement is kept.
+    """
+
+    mode: str = "confirm"
+    iterations: int | None = None
+    folder: Path | None = None
+    config: TeachingConfig = field(default_factory=TeachingConfig)
+
+    def __post_init__(self) -> None:
+        if self.mode not in TEACH_MODES:
+            raise ConfigError(f"teaching mode must be one of {', '.join(TEACH_MODES)}")
+        if self.iterations is not None and self.iterations < 1:
+            raise ConfigError(f"consolidation iterations must be >= 1, got {self.iterations}")
+
+
+class _LoopView:
+    """The loop as the Teacher sees it: the session's current loop (a Reset makes a new one,
+    the Teacher and its versions stay), its step subscription held by the session (so that
+    teaching can be turned off), and its mirror swaps going through the session."""
+
+    def __init__(self, teaching: SessionTeaching) -> None:
+        self._teaching = teaching
+        self.on_step = None
+
+    @property
+    def config(self):
+        from rnnpb.interaction import LoopConfig
+
+        loop = self._teaching.session.loop
+        return loop.config if loop is not None else LoopConfig(paced=True)
+
+    @property
+    def steps(self) -> int:
+        loop = self._teaching.session.loop
+        return loop.steps if loop is not None else 0
+
+    def subscribe(self, callback):
+        self.on_step = callback
+        return lambda: None
+
+    @property
+    def mirror(self):
+        return self._teaching.session.mirror
+
+    @mirror.setter
+    def mirror(self, mirror) -> None:
+        self._teaching.use(mirror)
+
+
+class _Prepared:
+    """A model version made ready off the session thread: loaded, its safety, its mirror
+    system compiled (``error`` says why not)."""
+
+    def __init__(self, teaching: SessionTeaching, path: str) -> None:
+        self.path = path
+        self.result: tuple | None = None
+        self.error: str | None = None
+        self._session = teaching.session
+        self.thread = threading.Thread(target=self._run, name="rnnpb-prepare", daemon=True)
+        self.thread.start()
+
+    def _run(self) -> None:
+        try:
+            from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel
+            from rnnpb.robot import JOINT_LIMITS
+
+            model = TrainedModel.load(self.path, joint_limits=JOINT_LIMITS)
+            choice = OnlineConfig.for_model(model)
+            safety, risk = self._session._load_safety(Path(self.path), model, choice.config)
+            mirror = MirrorSystem(model, safety.config, meta=safety.meta)
+            started = time.perf_counter()
+            mirror.step(np.full(model.network.sensory_size, 0.5))  # compiles the step
+            mirror.reset()
+            log.info(
+                "teaching: %s ready (step compiled in %.1f s)",
+                Path(self.path).name,
+                time.perf_counter() - started,
+            )
+            self.result = (model, mirror, safety, risk)
+        except Exception as error:  # noqa: BLE001 - reported, the swap builds it instead
+            self.error = f"{type(error).__name__}: {error}"
+
+    @property
+    def done(self) -> bool:
+        return not self.thread.is_alive()
+
+
+class SessionTeaching:
+    """The dashboard session's teaching: one :class:`Teacher` per model chosen.
+
+    Parameters
+    ----------
+    session : rnnpb.web.Session
+    settings : TeachingSettings
+    """
+
+    def __init__(self, session, settings: TeachingSettings) -> None:
+        self.session = session
+        self.settings = settings
+        self.mode = settings.mode
+        self.teacher = None
+        self.memory = None
+        self.unavailable: str | None = None
+        self.failure: str | None = None
+        self.result = ""
+        self.events: list[dict[str, Any]] = []
+        self.folder_note = ""
+        self._view = _LoopView(self)
+        self._said = 0
+        self._mirrors: dict[str, tuple] = {}  # model fingerprint -> (model, mirror, safety, risk)
+        self._prepared: _Prepared | None = None
+        self._version_patterns: dict[str, list[str]] = {}
+        self._lists: dict[str, Any] = {"episodes": [], "pending": 0}
+        self._started_at = 0.0
+        self._pending_use: tuple | None = None
+
+    # --- life cycle -----------------------------------------------------------------------
+    def open(self, model_path: Path, model, mirror, safety, risk) -> None:
+        """Start teaching ``model`` (just loaded from ``model_path``): learn from a copy when
+        the file is the package's own, open its short-term memory. A memory that cannot be
+        opened turns teaching off for this model with the reason; the robot runs on."""
+        from rnnpb.interaction.teaching import Teacher
+        from rnnpb.memory import MemoryStore, memory_path_for
+
+        self.close()
+        self.unavailable = self.failure = None
+        self.result = ""
+        self.events = []
+        self._said = 0
+        self._mirrors = {model.fingerprint: (model, mirror, safety, risk)}
+        try:
+            path = self._learning_path(Path(model_path))
+            self.memory = MemoryStore(memory_path_for(path)).open()
+        except (RnnpbError, OSError) as error:
+            self.unavailable = f"teaching is off for this model: {error}"
+            log.warning("%s", self.unavailable)
+            return
+        self.teacher = Teacher(
+            self._view,
+            path,
+            self.memory,
+            make_mirror=self._mirror_for,
+            source=self.session.mode,
+            config=self.settings.config,
+            auto=self.mode == "auto",
+            wait=False,
+            hands_of=self._hands_of,
+            iterations=self.settings.iterations,
+        )
+        self._refresh()
+        log.info("teaching: short-term memory %s (%s)", self.memory.path, self.mode)
+
+    def close(self) -> None:
+        teacher, self.teacher = self.teacher, None
+        if teacher is not None and teacher.job is not None:
+            teacher.job.cancel()
+            log.info("teaching: the running consolidation was cancelled (model changed)")
+        if self.memory is not None:
+            self.memory.close()
+            self.memory = None
+        self._prepared = None
+
+    def _learning_path(self, path: Path) -> Path:
+        """The model file learning starts from: ``path``, or a copy of a shipped model (new
+        versions and the memory are written beside it: never into the installed package)."""
+        import rnnpb.models
+
+        shipped = Path(rnnpb.models.__file__).resolve().parent
+        if path.resolve().parent != shipped:
+            self.folder_note = f"new versions are written beside {path.name}"
+            return path
+        folder = Path(self.settings.folder or self.session.workdir / "taught")
+        folder.mkdir(parents=True, exist_ok=True)
+        copy = folder / path.name
+        if not copy.exists():
+            shutil.copyfile(path, copy)
+        temporary = self.settings.folder is None and self.session._own_workdir
+        self.folder_note = f"learning from a copy of the shipped model in {folder}" + (
+            " (a temporary folder, deleted when the server stops; rnnpb serve --teach-dir "
+            "keeps it)"
+            if temporary
+            else ""
+        )
+        log.info("teaching: %s", self.folder_note)
+        return copy
+
+    def attach(self, loop) -> None:
+        """Subscribe to a new loop (a Reset or a model change)."""
+        loop.subscribe(self.on_step)
+
+    # --- what the Teacher calls -----------------------------------------------------------
+    def _mirror_for(self, model):
+        """The Teacher's ``make_mirror``: a version made ready beforehand, a version seen
+        before (undo), else one built now (a rename: the same shapes, compiled already)."""
+        from rnnpb.model import MirrorSystem
+
+        known = self._mirrors.get(model.fingerprint)
+        if known is not None:
+            known[1].reset()
+            self._pending_use = known
+            return known[1]
+        online = self.session.safety.config if self.session.safety is not None else None
+        meta = self.session.safety.meta if self.session.safety is not None else None
+        mirror = MirrorSystem(model, online, meta=meta)
+        self._mirrors[model.fingerprint] = (model, mirror, self.session.safety, None)
+        self._pending_use = self._mirrors[model.fingerprint]
+        return mirror
+
+    def use(self, mirror) -> None:
+        """Swap ``mirror`` in (between two steps): the session's model, mirror and safety
+        map follow, the loop runs on with it."""
+        model, _, safety, risk = self._pending_use
+        session = self.session
+        session.model, session.mirror = model, mirror
+        if safety is not None:
+            session.safety = safety
+            if risk is not None:
+                session._risk_views = risk
+        if session.loop is not None:
+            session.loop.mirror = mirror
+
+    def _hands_of(self, record):
+        """3-D hands for the episode: the webcam's depth from the balls' size; the mouse and
+        the demonstrator give none (their hands lie on the fixed plane)."""
+        webcam = self.session._webcam
+        if self.session.mode != "webcam" or webcam is None:
+            return None
+        result = getattr(webcam, "last_result", None)
+        return None if result is None else result.hands_3d
+
+    # --- each step, between steps ---------------------------------------------------------
+    def on_step(self, record) -> None:
+        teacher = self.teacher
+        if teacher is None or self._view.on_step is None:
+            return
+        if self.mode == "off" or self._holding():
+            teacher.keeper.cutter.reset()
+        else:
+            teacher.keeper.source = self.session.mode
+            self._view.on_step(record)
+        self._take_events()
+
+    def _holding(self) -> bool:
+        """Nothing more is kept while a kept movement waits for Confirm or is being learned:
+        the same movement, performed on, would otherwise be kept again and again (its run
+        restarts whenever the detector hesitates) and learned as several patterns."""
+        teacher = self.teacher
+        waiting = self.mode == "confirm" and self._lists.get("pending", 0) > 0
+        return waiting or teacher.job is not None or self._prepared is not None
+
+    def between_steps(self) -> None:
+        """Follow the consolidation without waiting: when it is done, make the new version
+        ready in a thread, then let the Teacher swap it in."""
+        teacher = self.teacher
+        if teacher is None:
+            return
+        job = teacher.job
+        if job is not None:
+            state = job.poll()
+            if state.state == "running":
+                return
+            if state.state == "done":
+                prepared = self._prepared
+                if prepared is None or prepared.path != state.model_path:
+                    self._prepared = _Prepared(self, state.model_path)
+                    return
+                if not prepared.done:
+                    return
+                if prepared.result is not None:
+                    self._mirrors[prepared.result[0].fingerprint] = prepared.result
+                else:
+                    log.warning("teaching: %s made ready: %s", state.model_path, prepared.error)
+                self._prepared = None
+        teacher.between_steps(0.0)
+        self._take_events()
+
+    def _take_events(self) -> None:
+        teacher = self.teacher
+        if teacher is None or len(teacher.events) == self._said:
+            return
+        news = teacher.events[self._said :]
+        self._said = len(teacher.events)
+        for event in news:
+            if event.kind == "recording":
+                continue
+            entry = {
+                "step": event.step,
+                "kind": event.kind,
+                "text": event.text,
+                "time": datetime.datetime.now().strftime("%H:%M:%S"),
+            }
+            self.events = [*self.events, entry][-SHOWN_EVENTS:]
+            if event.kind in ("failed", "refused"):
+                self.failure = event.text
+                log.warning("teaching: step %d: %s", event.step, event.text)
+                self.session._error(f"teaching: {event.text}; the running model stays")
+            else:
+                log.info("teaching: step %d: %s", event.step, event.text)
+            if event.kind in ("learned", "undone"):
+                self.failure = None
+                self.result = event.text
+            elif event.kind == "renamed":
+                # "learned as pattern new-1 (…)" goes on naming what the robot learned.
+                old, new = event.text.removeprefix("renamed pattern ").split(" to ", 1)
+                learned = f"learned as pattern {old} "
+                self.result = (
+                    self.result.replace(learned, f"learned as pattern {new} (renamed from {old}) ")
+                    if self.result.startswith(learned)
+                    else event.text
+                )
+            if event.kind == "consolidating":
+                self._started_at = time.monotonic()
+        self._refresh()
+        self.session._publish_state()
+
+    # --- commands -------------------------------------------------------------------------
+    def _need(self):
+        if self.teacher is None:
+            raise ConfigError(self.unavailable or "no model is loaded")
+        return self.teacher
+
+    def set_mode(self, mode: str) -> None:
+        self.mode = mode
+        if self.teacher is not None:
+            self.teacher.auto = mode == "auto"
+            if mode == "auto" and self.teacher.job is None:
+                self.confirm(quiet=True)
+
+    def confirm(self, quiet: bool = False) -> None:
+        """Consolidate the memory's kept episodes (those not learned yet)."""
+        teacher = self._need()
+        if teacher.job is not None:
+            raise ConfigError("a consolidation is running already")
+        if not teacher.pending:
+            # Also what a failed consolidation left, and what an earlier session kept.
+            teacher.pending = [e.id for e in reversed(self.memory.episodes("kept"))]
+        if not teacher.pending:
+            if quiet:
+                return
+            raise ConfigError("no kept movement to learn: perform a new movement first")
+        teacher.confirm()
+        self._take_events()
+
+    def undo(self) -> None:
+        teacher = self._need()
+        if teacher.job is not None:
+            raise ConfigError("a consolidation is running: undo once it has finished")
+        if len(teacher.versions) < 2:
+            raise ConfigError("nothing to undo: the robot runs its first version")
+        teacher.undo()
+        self._take_events()
+
+    def rename(self, pattern: str, name: str) -> None:
+        teacher = self._need()
+        teacher.rename(pattern, name)
+        self._version_patterns.pop(teacher.model_path, None)
+        self._take_events()
+
+    # --- what the pages see ---------------------------------------------------------------
+    def _refresh(self) -> None:
+        """Re-read the memory's episodes (on the session thread)."""
+        if self.memory is None:
+            self._lists = {"episodes": [], "pending": 0}
+            return
+        try:
+            episodes = self.memory.episodes()
+        except RnnpbError as error:
+            self.failure = f"the short-term memory cannot be read: {error}"
+            return
+        shown = [
+            {
+                "id": e.id,
+                "pattern": e.pattern,
+                "status": e.status,
+                "n_cycles": e.n_cycles,
+                "n_steps": e.n_steps,
+                "source": e.source,
+                "when": datetime.datetime.fromtimestamp(e.created_at).strftime("%H:%M:%S"),
+                "note": e.note,
+            }
+            for e in reversed(episodes)
+        ][:SHOWN_EPISODES]
+        pending = sum(e.status == "kept" for e in episodes)
+        self._lists = {"episodes": shown, "pending": pending, "total": len(episodes)}
+
+    def _patterns_of(self, path: str) -> list[str]:
+        if path not in self._version_patterns:
+            from rnnpb.model import TrainedModel
+
+            try:
+                self._version_patterns[path] = list(TrainedModel.load(path).patterns)
+            except RnnpbError:
+                self._version_patterns[path] = []
+        return self._version_patterns[path]
+
+    def status(self) -> dict[str, Any]:
+        """What the teaching panel shows now (each step message carries it)."""
+        teacher = self.teacher
+        if teacher is None:
+            return {"phase": "off", "text": self.unavailable or ""}
+        cutter = teacher.keeper.cutter.status
+        job = teacher.job
+        out: dict[str, Any] = {
+            "phase": cutter.state if self.mode != "off" else "off",
+            "text": cutter.describe() if self.mode != "off" else "",
+            "cycles": cutter.cycles,
+            "episode_cycles": cutter.episode_cycles,
+        }
+        if job is not None:
+            state = job.state
+            out["consolidation"] = {
+                "state": state.state,
+                "iteration": state.iteration,
+                "total": state.total,
+                "seconds": round(time.monotonic() - self._started_at, 1),
+            }
+        return out
+
+    def state(self) -> dict[str, Any]:
+        """The ``teaching`` part of the state message."""
+        teacher = self.teacher
+        out: dict[str, Any] = {
+            "mode": self.mode,
+            "available": teacher is not None,
+            "unavailable": self.unavailable,
+            "failure": self.failure,
+            "result": self.result,
+            "events": self.events,
+            "status": self.status(),
+            **self._lists,
+        }
+        if teacher is None:
+            return {**out, "versions": [], "taught": [], "can_undo": False, "folder": ""}
+        first = set(self._patterns_of(teacher.versions[0]))
+        running = list(self.session.model.patterns) if self.session.model is not None else []
+        out.update(
+            memory=str(self.memory.path),
+            folder=self.folder_note,
+            versions=[
+                {
+                    "name": Path(v).name,
+                    "patterns": self._patterns_of(v),
+                    "running": i == len(teacher.versions) - 1,
+                }
+                for i, v in enumerate(teacher.versions)
+            ],
+            taught=[p for p in running if p not in first],
+            can_undo=len(teacher.versions) > 1 and teacher.job is None,
+            consolidating=teacher.job is not None,
+        )
+        return out
