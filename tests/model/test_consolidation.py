@@ -64,10 +64,16 @@ def test_rehearsal_adds_a_pattern_and_finetuning_forgets(two_patterns):
     assert not _keeps_and_follows(model, finetuned)  # the check can fail: interference
 
 
-def test_rehearsed_sequences_are_what_the_network_predicts(two_patterns):
+@pytest.mark.parametrize("source", ["patterns", "sequences"])
+def test_rehearsed_sequences_are_what_the_network_predicts(two_patterns, source):
     model, _ = two_patterns
-    rehearsed = rehearse(model, n_steps=20, transient=30)
+    rehearsed = rehearse(model, n_steps=20, transient=30, source=source)
     assert [s.pattern for s in rehearsed] == list(model.sequence_patterns)
+    if source == "patterns":
+        # from the pattern's PB, its sequences are consecutive stretches of one closed loop
+        first, second = rehearsed[0], rehearsed[1]
+        assert np.array_equal(first.meta["pb"], model.pattern_pb["1"])
+        assert not np.allclose(first.motor, second.motor)
     # From the recorded context and PB, the network predicts its rehearsal exactly: learning
     # starts with no error on the old patterns.
     from rnnpb.model.learning import per_output_mse
@@ -181,6 +187,8 @@ def test_bad_input_is_refused_clearly(two_patterns):
         )
     with pytest.raises(ConfigError, match="method must be one of"):
         ConsolidationConfig("forget")  # type: ignore[arg-type]
+    with pytest.raises(ConfigError, match="rehearsal_source must be one of"):
+        ConsolidationConfig(rehearsal_source="data")  # type: ignore[arg-type]
     # A model of another network size: its sensory-motor vector is not the data's.
     from dataclasses import replace
 

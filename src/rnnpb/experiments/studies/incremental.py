@@ -147,7 +147,10 @@ class PatternMeasures:
 
 @dataclass(frozen=True)
 class ModelMeasures:
-    """One model: its patterns' measures, switching per ordered pair, training error."""
+    """One model: its patterns' measures, switching per ordered pair, training error.
+    ``seconds``: the learning's wall-clock time as the model records it; ``cpu_seconds``: the
+    CPU time of the whole consolidation (rehearsal included) in its single-threaded worker,
+    which the load of a shared machine does not inflate (None: not measured here)."""
 
     label: str
     patterns: tuple[str, ...]
@@ -156,6 +159,7 @@ class ModelMeasures:
     train_mse_max: float
     seconds: float
     iterations: int
+    cpu_seconds: float | None = None
 
     @property
     def followed(self) -> bool:
@@ -369,16 +373,15 @@ def set_job(
     new = _demonstrations((added,), config, config.new_data_seed)
     if method is None:
         return set_name, None, measure(start, "before", config, original)
+    cpu = time.process_time()
     model = consolidate(
         start, new, _method_config(method, config), replay_data=original, parent=start_path
     )
+    cpu = time.process_time() - cpu
     model.save(out_path)
     pairs = added if config.quick else None
-    return (
-        set_name,
-        method,
-        measure(model, method, config, [*original, *new], before=start, pairs_with=pairs),
-    )
+    measured = measure(model, method, config, [*original, *new], before=start, pairs_with=pairs)
+    return set_name, method, replace(measured, cpu_seconds=cpu)
 
 
 def chain_job(config: IncrementalConfig, out: Path) -> list[ModelMeasures]:
@@ -391,24 +394,25 @@ def chain_job(config: IncrementalConfig, out: Path) -> list[ModelMeasures]:
     results = [measure(model, "+".join(config.chain_start), config, data)]
     for k, pattern in enumerate(config.chain_added, start=1):
         new = _demonstrations((pattern,), config, config.new_data_seed)
+        cpu = time.process_time()
         grown = consolidate(
             model,
             new,
             _method_config("rehearsal", config),
             parent=str(out / "models" / f"chain_{k - 1}.npz"),
         )
+        cpu = time.process_time() - cpu
         grown.save(out / "models" / f"chain_{k}.npz")
         data = [*data, *new]
-        results.append(
-            measure(
-                grown,
-                f"+{pattern}",
-                config,
-                data,
-                before=model,
-                pairs_with=pattern if config.quick else None,
-            )
+        measured = measure(
+            grown,
+            f"+{pattern}",
+            config,
+            data,
+            before=model,
+            pairs_with=pattern if config.quick else None,
         )
+        results.append(replace(measured, cpu_seconds=cpu))
         model = grown
     return results
 
@@ -521,10 +525,12 @@ def _targets(
             bool(old) and max(old) <= GENERATION_LIMIT,
             f"worst old pattern's cycle moved {fmt(max(old), 3)} RMS (limit {GENERATION_LIMIT})",
         )
-        seconds = [m.seconds for m in rehearsal.values()]
+        cpu = [m.cpu_seconds for m in rehearsal.values() if m.cpu_seconds is not None]
+        wall = [m.seconds for m in rehearsal.values()]
         targets["rehearsal_within_60s"] = Target(
-            max(seconds) <= 60,
-            f"slowest {max(seconds):.1f} s (one core, shared machine: an upper bound)",
+            bool(cpu) and max(cpu) <= 60,
+            f"slowest {max(cpu, default=math.nan):.1f} s of CPU time in a single-threaded "
+            f"process ({max(wall):.1f} s wall-clock of learning, inflated by other load)",
         )
     if not chained:
         return targets
@@ -591,6 +597,7 @@ def _report(config, before, after, chained, targets, runtime, progress) -> list[
                     fmt(worst_switch),
                     f"{m.train_mse_max:.1e}",
                     f"{m.seconds:.1f}" if label != "before" else "–",
+                    fmt(m.cpu_seconds, 1) if label != "before" else "–",
                     m.iterations if label != "before" else "–",
                     "yes" if m.followed else "no",
                 )
@@ -605,7 +612,8 @@ def _report(config, before, after, chained, targets, runtime, progress) -> list[
             "recognised as",
             "worst switch",
             "training MSE (max)",
-            "seconds",
+            "seconds (wall)",
+            "CPU seconds",
             "iterations",
             "all followed",
         ),
@@ -644,7 +652,8 @@ def _report(config, before, after, chained, targets, runtime, progress) -> list[
             "lock-on",
             "old generation vs before (worst)",
             "worst switch",
-            "seconds",
+            "seconds (wall)",
+            "CPU seconds",
             "all followed",
         ),
         [
@@ -659,6 +668,7 @@ def _report(config, before, after, chained, targets, runtime, progress) -> list[
                     else max(m.switching.values(), default=0)
                 ),
                 f"{m.seconds:.1f}",
+                fmt(m.cpu_seconds, 1) if m.cpu_seconds is not None else "–",
                 "yes" if m.followed else "no",
             )
             for m in chained
