@@ -48,6 +48,7 @@ ALLOWED: dict[str, set[str]] = {
         "analysis",
         "interaction",
         "model",
+        "models",
         "memory",
         "safety",
         "demonstrator",

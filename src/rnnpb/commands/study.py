@@ -30,6 +30,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--workers", type=int, default=2, help="parallel worker processes (default 2)"
     )
     parser.add_argument("--seed", type=int, default=0, help="the first seed (default 0)")
+    parser.add_argument(
+        "--models",
+        metavar="DIR",
+        help="learned models to start from, for the studies that take them (teach: set1.npz "
+        "... set4.npz and full.npz or full_seed0.npz; default results/demo/models)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -38,7 +44,9 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb.experiments.studies import StudyOptions, load_study
 
     study = load_study(args.name)
-    options = StudyOptions(quick=args.quick, workers=args.workers, seed=args.seed)
+    options = StudyOptions(
+        quick=args.quick, workers=args.workers, seed=args.seed, models=args.models
+    )
     outcome = study.run(Path(args.out), options)
     print(f"wrote {args.out}/report.md and {args.out}/results.json in {outcome.runtime_s:.0f} s")
     for key, target in outcome.targets.items():

@@ -29,17 +29,20 @@ STUDY_MODULES: dict[str, str] = {
     "incremental": "rnnpb.experiments.studies.incremental",
     "safety": "rnnpb.experiments.studies.safety",
     "dyad": "rnnpb.experiments.studies.dyad",
+    "teach": "rnnpb.experiments.studies.teach",
 }
 
 
 @dataclass(frozen=True)
 class StudyOptions:
     """What every study takes. ``quick``: the short form (the one the tests run); ``workers``:
-    parallel worker processes; ``seed``: the first seed of the study's draws."""
+    parallel worker processes; ``seed``: the first seed of the study's draws; ``models``: a
+    directory of learned models for a study that starts from them (None: its default)."""
 
     quick: bool = False
     workers: int = 2
     seed: int = 0
+    models: str | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.workers, int) or isinstance(self.workers, bool) or self.workers < 1:

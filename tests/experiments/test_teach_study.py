@@ -1,0 +1,63 @@
+"""``rnnpb study teach --quick``: a new shape is noticed, kept, consolidated and followed."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from rnnpb.analysis import metrics
+from rnnpb.experiments.studies import StudyOptions, load_study
+
+
+@pytest.fixture(scope="module")
+def study(tmp_path_factory):
+    out = tmp_path_factory.mktemp("teach")
+    outcome = load_study("teach").run(out, StudyOptions(quick=True))
+    return out, outcome, json.loads((out / "results.json").read_text())
+
+
+def test_the_new_shape_is_kept_learned_and_followed_and_nothing_unstructured_is_kept(study):
+    out, outcome, results = study
+    (run,) = results["runs"]
+    assert run["shape"] == "figure-eight"
+    episodes = run["episodes"]
+    # one episode of whole cycles of the new shape, none with the random walk or jerky
+    # movement of the timeline's unstructured part
+    assert episodes and all(set(e["movements"]) == {"figure-eight"} for e in episodes)
+    assert run["detection_delay"] is not None and run["detection_delay"] < 36
+    # consolidated in the background process, then swapped in between two steps
+    (consolidation, *_) = run["consolidations"]
+    assert consolidation["state"] == "done" and consolidation["cpu_s"] > 0
+    assert run["new_pattern"] == "new-1" and run["swaps"]
+    assert run["swaps"][0] > episodes[0]["kept_at"]
+    # the new shape's next performance: followed and recognised as the new pattern
+    assert run["lock_next"] is not None and run["lock_next"] <= metrics.LOCK_LIMIT
+    assert 0 <= run["recognised_next"] <= 1
+    assert run["follow_s"] == pytest.approx(sum(run["follow_steps"].values()) * 0.4)
+    assert outcome.targets["nothing_kept_from_unstructured"].met
+
+
+def test_the_paced_run_and_the_files(study):
+    out, outcome, results = study
+    paced = results["paced"]
+    assert paced["steps"] == 8 and paced["dt"] == 0.4
+    assert paced["missed_deadlines"] >= 0 and paced["max_lateness_ms"] >= 0
+    assert set(outcome.targets) == {
+        "follow_within_90s",
+        "no_missed_deadline",
+        "old_patterns_keep_paper_targets",
+        "nothing_kept_from_unstructured",
+    }
+    report = (out / "report.md").read_text()
+    assert "figures/timeline_set1_figure-eight.png" in report
+    assert (out / "figures" / "timeline_set1_figure-eight.png").stat().st_size > 10_000
+    assert results["jobs_done"] == results["jobs"]
+    assert results["config"]["consolidation_iterations"] is None  # the consolidation's own
+
+
+def test_the_full_form_names_a_missing_models_directory(tmp_path):
+    from rnnpb.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="no model set1.npz"):
+        load_study("teach").run(tmp_path, StudyOptions(models=str(tmp_path / "none")))
