@@ -59,6 +59,7 @@ ALLOWED: dict[str, set[str]] = {
     },
     "web": {
         "interaction",
+        "models",
         "model",
         "memory",
         "safety",

@@ -471,7 +471,15 @@ def test_user_named_patterns_offer_only_what_the_demonstrator_performs(browser, 
             "#patterns button", "(all) => all.map((b) => b.dataset.pattern)"
         )
         assert offered == [
-            "1", "2", "3", "4", "one-arm", "asymmetric", "figure-eight", "diagonal", "pause"
+            "1",
+            "2",
+            "3",
+            "4",
+            "one-arm",
+            "asymmetric",
+            "figure-eight",
+            "diagonal",
+            "pause",
         ]
         assert "not learned" in buttons[0] and "not learned" not in buttons[1]
         assert not any("wave" in b or "clap" in b for b in buttons)

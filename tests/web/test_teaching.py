@@ -245,7 +245,7 @@ def test_the_panel_records_consolidates_learns_renames_and_undoes(browser, model
         page.click("#teach-undo")
         _until(
             page,
-            "JSON.stringify(rnnpbDashboard.state.patterns) === '[\"1\",\"2\",\"3\"]'"
+            'JSON.stringify(rnnpbDashboard.state.patterns) === \'["1","2","3"]\''
             " && !document.querySelector('#confidence-bars').textContent.includes('eight')",
         )
         assert page.evaluate("rnnpbDashboard.state.running")

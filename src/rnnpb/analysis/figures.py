@@ -1050,18 +1050,39 @@ def plot_teaching_timeline(
             a.axvline(first - 0.5, color="#17becf", lw=0.8)
             a.axvline(last + 0.5, color="#17becf", lw=0.8)
         ax.axvspan(first - 0.5, last + 0.5, color="#17becf", alpha=0.15, lw=0)
-        ax.text(first, 0.98, "episode kept", transform=ax.get_xaxis_transform(), va="top",
-                fontsize=7, color="#0f7f8f")
+        ax.text(
+            first,
+            0.98,
+            "episode kept",
+            transform=ax.get_xaxis_transform(),
+            va="top",
+            fontsize=7,
+            color="#0f7f8f",
+        )
     for step, text in timeline["consolidations"]:
         for a in axes:
             a.axvline(step - 0.5, color="#1f77b4", lw=1.4)
-        ax.text(step + 1, 0.80, text, transform=ax.get_xaxis_transform(), va="top", fontsize=7,
-                color="#1f77b4")
+        ax.text(
+            step + 1,
+            0.80,
+            text,
+            transform=ax.get_xaxis_transform(),
+            va="top",
+            fontsize=7,
+            color="#1f77b4",
+        )
     for step in timeline["swaps"]:
         for a in axes:
             a.axvline(step - 0.5, color="#e377c2", lw=1.2, ls=":")
-        ax.text(step + 1, 0.62, "new model swapped in", transform=ax.get_xaxis_transform(),
-                va="top", fontsize=7, color="#b0409a")
+        ax.text(
+            step + 1,
+            0.62,
+            "new model swapped in",
+            transform=ax.get_xaxis_transform(),
+            va="top",
+            fontsize=7,
+            color="#b0409a",
+        )
     ax.legend(loc="lower right", fontsize=7)
     ax.set_xlabel(f"step (dt {dt:g} s)")
     ax.set_xlim(-0.5, len(movement) - 0.5)

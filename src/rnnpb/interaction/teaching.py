@@ -661,9 +661,10 @@ class Teacher:
             raise ConfigError(f"pattern name {name!r} {problem}")
         model = TrainedModel.load(self.model_path)
         episodes = [e for e in self.memory.episodes() if e.pattern == pattern]
-        taught = pattern in model.patterns and pattern not in TrainedModel.load(
-            self.versions[0]
-        ).patterns
+        taught = (
+            pattern in model.patterns
+            and pattern not in TrainedModel.load(self.versions[0]).patterns
+        )
         if not taught and not episodes:
             raise ConfigError(f"no pattern {pattern!r} was learned or kept by teaching")
         if name in model.patterns or any(e.pattern == name for e in self.memory.episodes()):

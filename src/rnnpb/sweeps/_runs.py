@@ -202,7 +202,8 @@ def run_study(run: StudyRunSpec, out: Path) -> tuple[list[Measure], Path]:
     partial.mkdir(parents=True)
     try:
         outcome = load_study(run.study).run(
-            partial, StudyOptions(quick=run.quick, workers=1, seed=run.seed)
+            partial,
+            StudyOptions(quick=run.quick, workers=1, seed=run.seed, models=run.models),
         )
     except BaseException:
         shutil.rmtree(partial, ignore_errors=True)  # the error is the record; no half a study

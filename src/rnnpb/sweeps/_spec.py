@@ -62,6 +62,7 @@ TOP_KEYS = (
     "retries",
     "studies",
     "quick",
+    "models",
 )
 
 
@@ -157,6 +158,7 @@ class StudyRunSpec:
     study: str
     seed: int
     quick: bool
+    models: str | None = None  # StudyOptions.models: the learned models a study starts from
 
     @property
     def run_id(self) -> str:
@@ -179,7 +181,13 @@ class StudyRunSpec:
 
     def config_json(self) -> str:
         return json.dumps(
-            {"study": self.study, "seed": self.seed, "quick": self.quick, "workers": 1},
+            {
+                "study": self.study,
+                "seed": self.seed,
+                "quick": self.quick,
+                "workers": 1,
+                "models": self.models,
+            },
             sort_keys=True,
         )
 
@@ -206,6 +214,7 @@ class SweepSpec:
     retries: int = 2  # how often a run whose worker died is tried again
     studies: tuple[str, ...] = ()  # studies of `rnnpb study`, each run once per seed
     quick: bool = False  # the studies' short form
+    models: str | None = None  # the studies' StudyOptions.models (`rnnpb study --models`)
 
     def __post_init__(self) -> None:
         from rnnpb.experiments.studies import STUDY_MODULES
@@ -256,7 +265,7 @@ class SweepSpec:
         """Every point of the grid, in a fixed order: the learning sets' runs, then the
         studies'."""
         studies: list[AnyRun] = [
-            StudyRunSpec(self.name, study, seed, self.quick)
+            StudyRunSpec(self.name, study, seed, self.quick, self.models)
             for study in self.studies
             for seed in self.seeds
         ]
@@ -346,6 +355,11 @@ def parse_spec(data: dict[str, Any], default_name: str = "sweep") -> SweepSpec:
     quick = data.get("quick", False)
     if not isinstance(quick, bool):
         raise ConfigError(f"'quick' must be true or false, got {quick!r}")
+    models = data.get("models")
+    if models is not None and not isinstance(models, str):
+        raise ConfigError(f"'models' must be a folder name, got {models!r}")
+    if models is not None and not studies:
+        raise ConfigError("'models' applies to studies, and the spec has none")
     if studies and not sets:
         for key in ("training", "online", "experiments", "user_draws", "novel_amplitudes"):
             if key in data:
@@ -381,6 +395,7 @@ def parse_spec(data: dict[str, Any], default_name: str = "sweep") -> SweepSpec:
         novel_amplitudes=tuple(float(a) for a in amplitudes),
         studies=tuple(str(s) for s in studies),
         quick=quick,
+        models=models,
         **options,
     )
 

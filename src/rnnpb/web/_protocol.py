@@ -204,8 +204,7 @@ def parse_client_message(text: str | bytes | None) -> dict[str, Any]:
         _keys(message, ("mode",))
         if not isinstance(message["mode"], str) or message["mode"] not in TEACH_MODES:
             raise ProtocolError(
-                f"teach_mode must be one of {', '.join(TEACH_MODES)}, got "
-                f"{_shown(message['mode'])}"
+                f"teach_mode must be one of {', '.join(TEACH_MODES)}, got {_shown(message['mode'])}"
             )
         return {"type": "teach_mode", "mode": message["mode"]}
     if kind == "teach":

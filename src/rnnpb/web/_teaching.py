@@ -230,8 +230,7 @@ class SessionTeaching:
             shutil.copyfile(path, copy)
         temporary = self.settings.folder is None and self.session._own_workdir
         self.folder_note = f"learning from a copy of the shipped model in {folder}" + (
-            " (a temporary folder, deleted when the server stops; rnnpb serve --teach-dir "
-            "keeps it)"
+            " (a temporary folder, deleted when the server stops; rnnpb serve --teach-dir keeps it)"
             if temporary
             else ""
         )

@@ -311,9 +311,7 @@ class _Watch:
             process = getattr(job, "_process", None)
             if process is not None:
                 process.join(120.0)
-            self.times.append(
-                (step, _children_cpu() - cpu, wall, job.state.seconds)
-            )
+            self.times.append((step, _children_cpu() - cpu, wall, job.state.seconds))
         if self.stop_after is not None and self.loop.steps >= self.stop_after:
             self.loop.stop()
         if self.step_limit is not None and self.loop.steps >= self.step_limit:
@@ -379,7 +377,10 @@ def paper_measures(model, config: TeachConfig, new_pattern: str = "") -> PaperMe
         # switching() names the demonstrator's movements by the model's pattern names.
         if all(_shape_of(model, p) == p for p in model.patterns):
             pairs = switching(
-                model, config.online, limits, seed=config.scenario_seed,
+                model,
+                config.online,
+                limits,
+                seed=config.scenario_seed,
                 steps_each=config.switch_steps_each,
             ).pairs
             return PaperMeasures(lock, recognised, pairs)
@@ -457,8 +458,11 @@ def teach_job(
     new_start = config.lead_steps
     novelty = [r.novelty for r in records]
     delay = next(
-        (t - new_start for t in range(new_start, new_start + config.new_steps)
-         if novelty[t] == "novel"),
+        (
+            t - new_start
+            for t in range(new_start, new_start + config.new_steps)
+            if novelty[t] == "novel"
+        ),
         None,
     )
     final = TrainedModel.load(teacher.model_path)
@@ -472,9 +476,11 @@ def teach_job(
         final = replace(final, meta={**final.meta, "taught": taught})
     again_start = len(labels) - config.again_steps
     lock_next = metrics.steps_to_lock(motor_error, sensory_error, again_start, len(labels))
-    recognised_next = float(
-        np.mean([r.recognised == new_pattern for r in records[again_start:]])
-    ) if new_pattern else 0.0
+    recognised_next = (
+        float(np.mean([r.recognised == new_pattern for r in records[again_start:]]))
+        if new_pattern
+        else 0.0
+    )
     consolidations = [
         ConsolidationTime(
             step, cpu, wall, worker, "done" if k < len(teacher.swapped_at) else "failed"
@@ -739,9 +745,7 @@ def run_study(out: Path, config: TeachConfig, log=print) -> StudyOutcome:
         for k, shape in enumerate(config.shapes):
             for name in config.learning_sets:
                 folder = str(out / "runs" / f"set{name}_{shape}")
-                jobs[pool.submit(teach_job, name, shape, k, starts[name], config, folder)] = (
-                    "teach"
-                )
+                jobs[pool.submit(teach_job, name, shape, k, starts[name], config, folder)] = "teach"
         for done, future in enumerate(as_completed(jobs), start=1):
             result = future.result()
             if jobs[future] == "before":
@@ -795,9 +799,7 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
 
 
 def _old_pairs(measures: PaperMeasures, old: tuple[str, ...]) -> dict[str, int | None]:
-    return {
-        k: v for k, v in measures.switching.items() if all(p in old for p in k.split("->"))
-    }
+    return {k: v for k, v in measures.switching.items() if all(p in old for p in k.split("->"))}
 
 
 def _worst(values) -> int | None:
@@ -1029,17 +1031,16 @@ def _report(config, runs, before, paced, targets, runtime, progress) -> list[str
         ]
     lines += ["", "## Timelines", ""]
     lines += [
-        embed(f"set {r.learning_set} taught {r.shape}",
-              f"timeline_set{r.learning_set}_{r.shape}.png")
+        embed(
+            f"set {r.learning_set} taught {r.shape}", f"timeline_set{r.learning_set}_{r.shape}.png"
+        )
         for r in runs
     ]
     lines.append("")
     return lines
 
 
-def _results(
-    config, runs, before, paced, targets, runtime, starts, progress
-) -> dict[str, Any]:
+def _results(config, runs, before, paced, targets, runtime, starts, progress) -> dict[str, Any]:
     def run_json(r: TeachRun) -> dict[str, Any]:
         out = asdict(r)
         out.pop("timeline")
