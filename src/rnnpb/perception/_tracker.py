@@ -365,8 +365,9 @@ class BallTracker:
         ball = state.selected
         pairs: list[tuple[float, int, int]] = []
         splits: dict[int, tuple[np.ndarray, float]] = {}  # merged blob -> the ball in it
+        predictions = [track.predict() for track in state.tracks]  # all, before any split
         for k, track in enumerate(state.tracks):
-            predicted = track.predict()
+            predicted = predictions[k]
             if not len(blobs):
                 continue
             d = np.linalg.norm(blobs[:, :2] - predicted, axis=1)
@@ -375,13 +376,17 @@ class BallTracker:
                 fits = (d < _gate(track)) & (ratio > 0.4) & (ratio < 2.5)
                 pairs.extend((float(d[j]), k, int(j)) for j in np.nonzero(fits)[0])
                 continue
+            if track.frames_lost:
+                # the prediction drifts off while the ball is hidden; where it was last seen
+                # stays a good guess for a hand moving to and fro
+                d = np.minimum(d, np.linalg.norm(blobs[:, :2] - track.center, axis=1))
             fits = (d < _gate(track)) & (ratio > 0.5) & (ratio < _MERGED_RATIO)
             pairs.extend((float(d[j]), k, int(j)) for j in np.nonzero(fits)[0])
             if track.frames_lost <= 2:
                 # A blob much bigger than the ball is the ball and a look-alike of its colour
                 # run together; its centroid is neither's. The ball is found inside it, and
                 # the look-alike's track coasts on its prediction until they part.
-                found = self._split_merged(track, blobs, contours, mask)
+                found = self._split_merged(track, state.tracks, blobs, contours, mask)
                 if found is not None:
                     j, center, area = found
                     splits[j] = (center, area)  # the track keeps its size: the fit is rougher
@@ -427,6 +432,7 @@ class BallTracker:
     def _split_merged(
         self,
         ball: _Track,
+        tracks: list[_Track],
         blobs: np.ndarray,
         contours: list[np.ndarray],
         mask: np.ndarray,
@@ -437,11 +443,14 @@ class BallTracker:
         radius = math.sqrt(ball.mean_area / math.pi)
         d = np.linalg.norm(blobs[:, :2] - ball.prediction, axis=1)
         ratio = blobs[:, 2] / ball.mean_area
+        others = np.array(
+            [t.prediction for t in tracks if t is not ball and t.frames_lost <= 2]
+        ).reshape(-1, 2)
         # much bigger than the ball, or bigger and not round (a sliver of a book behind an arm)
         merged = (ratio >= _SPLIT_RATIO) | ((ratio > 1.0) & (blobs[:, 3] < _SPLIT_ROUNDNESS))
         merged &= d < _gate(ball) + 2.0 * radius
         for j in np.nonzero(merged)[0][np.argsort(d[merged])]:
-            found = split_disk(mask, contours[j], ball.prediction, radius)
+            found = split_disk(mask, contours[j], ball.prediction, radius, others)
             if found is not None:
                 return int(j), found[0], found[1]
         return None
@@ -612,14 +621,19 @@ class BallTracker:
 
 
 def _gate(track: _Track) -> float:
-    """How far from its prediction a track's blob may be: a few radii, widening while the
-    track is unseen."""
+    """How far from its prediction a track's blob may be: a few radii, widening for the first
+    frames the track is unseen (not for ever: a look-alike's track long unseen would take up
+    whatever blob of its colour appears, the ball coming back among them)."""
     radius = math.sqrt(track.mean_area / math.pi)
-    return max(3.0 * radius, 40.0) + 15.0 * track.frames_lost
+    return max(3.0 * radius, 40.0) + 15.0 * min(track.frames_lost, 4)
 
 
 def split_disk(
-    mask: np.ndarray, contour: np.ndarray, near: np.ndarray, radius: float
+    mask: np.ndarray,
+    contour: np.ndarray,
+    near: np.ndarray,
+    radius: float,
+    others: np.ndarray | None = None,
 ) -> tuple[np.ndarray, float] | None:
     """Find a disk of about ``radius`` inside a blob that holds it and something else.
 
@@ -638,6 +652,9 @@ def split_disk(
         Where the disk is expected (continuous image coordinates, column, row).
     radius : float
         The disk's expected radius, pixels.
+    others : array, shape (k, 2), optional
+        Where other objects of the colour are expected (their tracks' predictions): a disk
+        nearer one of them than ``near``, and within half a radius of it, is that object.
 
     Returns
     -------
@@ -675,9 +692,16 @@ def split_disk(
         if fit is None:
             continue
         center, fitted_radius, coverage = fit
+        distance = float(np.linalg.norm(center - near))
+        if others is not None and len(others):
+            other = float(np.min(np.linalg.norm(others - center, axis=1)))
+            if other < distance and other < 0.5 * radius:
+                continue  # the look-alike, where its own track expects it
         # The ball is in front of what it merges with (look-alikes pass behind the hands), so
-        # its own outline is the one seen the most of; nearness to the prediction breaks ties.
-        score = coverage - 0.5 * float(np.linalg.norm(center - near)) / radius
+        # its own outline is the one seen the most of; then its size, then nearness to the
+        # prediction (which overshoots when the hand turns).
+        size = abs(fitted_radius + 0.5 - radius) / radius
+        score = coverage - 2.0 * size - 0.25 * distance / radius
         if score > best_score:
             best, best_score = (center, math.pi * (fitted_radius + 0.5) ** 2), score
     return best
