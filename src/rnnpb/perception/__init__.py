@@ -63,6 +63,7 @@ from rnnpb.perception._tracker import (
     TrackerConfig,
     TrackingResult,
     draw_tracking,
+    split_disk,
 )
 from rnnpb.perception._user_source import (
     TrackedUserSource,
@@ -121,6 +122,7 @@ __all__ = [
     "running_median",
     "save_ball_colors",
     "score_scene",
+    "split_disk",
     "synthetic_user_hands",
     "tracking_benchmark",
 ]

@@ -10,11 +10,14 @@ Per frame and per ball:
    structures) — ``cv2.morphologyEx``;
 3. find the blobs — ``cv2.findContours`` — and keep those at least ``min_radius_px`` in
    equivalent radius and round enough (``min_circularity``);
-4. pick the blob with the best score: large, round, and near where the ball was last seen
-   (a Gaussian gate of width ``search_radius_px`` around the previous centre, extrapolated by
-   the last velocity);
-5. centre = the centroid of the chosen blob's pixels (``cv2.moments``, sub-pixel),
-   radius = ``sqrt(area / pi)``, depth = ``focal_px * ball_radius_m / radius``.
+4. follow every blob of the colour as a track (a Kalman filter each) and choose which is the
+   ball: the ball keeps its track while it is seen, a still look-alike gives way to a round
+   blob that moves, a lost ball is taken up again only by a round blob that appears near
+   where it was and inside the range the hand moved over; a blob the ball has run into (a
+   look-alike of its colour touching or crossing it) is split by :func:`split_disk`;
+5. centre = the centroid of the chosen blob's pixels (``cv2.moments``, sub-pixel; the fitted
+   circle's centre in a split blob), radius = ``sqrt(area / pi)``,
+   depth = ``focal_px * ball_radius_m / radius``.
 
 Pixel convention: pixel ``(i, j)`` covers columns ``[i, i + 1)`` and rows ``[j, j + 1)``, so a
 centroid of pixel indices is shifted by +0.5 to continuous image coordinates, the coordinates
@@ -28,6 +31,7 @@ last position for a while to prefer blobs near it when the ball reappears.
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass, field
 
 import cv2
@@ -42,6 +46,10 @@ LOST = "lost"
 HAND_NAMES = ("left", "right")
 _DISK_FILL = math.pi / 4.0  # area of a disk over the area of its bounding square
 _MERGED_RATIO = 1.6  # a blob this much bigger than the ball holds the ball and something else
+_SPLIT_RATIO = 1.3  # a blob this much bigger than the ball may hold it: look for it inside
+_SPLIT_ROUNDNESS = 0.7  # ... and so may a bigger blob less round than this
+_COAST_DAMPING = 0.6  # an unseen track's velocity shrinks so: a hand turns, it does not fly off
+_PATH_FRAMES = 90  # the ball's last positions that say where the hand moves
 
 
 @dataclass(frozen=True)
@@ -237,6 +245,20 @@ class _BallState:
         self.tracks: list[_Track] = []
         self.selected: _Track | None = None
         self.smoothed: np.ndarray | None = None
+        # where the ball has been lately: a hand moves to and fro over a range, and a ball
+        # coming back from behind something comes back inside it
+        self.path: deque[np.ndarray] = deque(maxlen=_PATH_FRAMES)
+        # frames since the ball was taken up again outside that range (0: it was not)
+        self.provisional = 0
+
+    def within_path(self, center: np.ndarray, margin: float) -> bool:
+        """Whether ``center`` lies in the box of the ball's recent positions grown by
+        ``margin`` (True when there is no path yet)."""
+        if not self.path:
+            return True
+        points = np.asarray(self.path)
+        low, high = points.min(axis=0) - margin, points.max(axis=0) + margin
+        return bool(np.all(center >= low) and np.all(center <= high))
 
 
 class BallTracker:
@@ -325,37 +347,66 @@ class BallTracker:
             rows.append((center[0], center[1], area, roundness))
         return kept, np.array(rows, dtype=np.float64).reshape(-1, 4)
 
-    def _associate(self, state: _BallState, blobs: np.ndarray) -> list[_Track | None]:
+    def _associate(
+        self,
+        state: _BallState,
+        blobs: np.ndarray,
+        contours: list[np.ndarray],
+        mask: np.ndarray,
+    ) -> tuple[list[_Track | None], tuple[np.ndarray, float] | None]:
         """Match blobs to the colour's tracks (nearest to each track's prediction, within a
         gate of a few radii, widening while a track is unseen); unmatched blobs start tracks,
-        tracks unseen for more than ``lost_memory_frames`` are forgotten."""
+        tracks unseen for more than ``lost_memory_frames`` are forgotten.
+
+        Returns each blob's track and, when the ball has run into a look-alike of its colour
+        and was found inside the merged blob, the ball's centre and area there."""
         config = self.config
         owners: list[_Track | None] = [None] * len(blobs)
-        pairs = []
+        ball = state.selected
+        pairs: list[tuple[float, int, int]] = []
+        splits: dict[int, tuple[np.ndarray, float]] = {}  # merged blob -> the ball in it
+        predictions = [track.predict() for track in state.tracks]  # all, before any split
         for k, track in enumerate(state.tracks):
-            predicted = track.predict()
-            radius = math.sqrt(track.mean_area / math.pi)
-            gate = max(3.0 * radius, 40.0) + 15.0 * track.frames_lost
-            if len(blobs):
-                d = np.linalg.norm(blobs[:, :2] - predicted, axis=1)
-                ratio = blobs[:, 2] / track.mean_area
+            predicted = predictions[k]
+            if not len(blobs):
+                continue
+            d = np.linalg.norm(blobs[:, :2] - predicted, axis=1)
+            ratio = blobs[:, 2] / track.mean_area
+            if track is not ball:
+                fits = (d < _gate(track)) & (ratio > 0.4) & (ratio < 2.5)
+                pairs.extend((float(d[j]), k, int(j)) for j in np.nonzero(fits)[0])
+                continue
+            if track.frames_lost:
+                # the prediction drifts off while the ball is hidden; where it was last seen
+                # stays a good guess for a hand moving to and fro
+                d = np.minimum(d, np.linalg.norm(blobs[:, :2] - track.center, axis=1))
+            fits = (d < _gate(track)) & (ratio > 0.5) & (ratio < _MERGED_RATIO)
+            pairs.extend((float(d[j]), k, int(j)) for j in np.nonzero(fits)[0])
+            if track.frames_lost <= 2:
                 # A blob much bigger than the ball is the ball and a look-alike of its colour
-                # run together; its centroid is neither's. The ball coasts on its prediction
-                # until they part, rather than being dragged off by the look-alike.
-                if track is state.selected:
-                    fits = (ratio > 0.5) & (ratio < _MERGED_RATIO)
-                else:
-                    fits = (ratio > 0.4) & (ratio < 2.5)
-                for j in np.nonzero((d < gate) & fits)[0]:
-                    pairs.append((float(d[j]), k, int(j)))
+                # run together; its centroid is neither's. The ball is found inside it, and
+                # the look-alike's track coasts on its prediction until they part.
+                found = self._split_merged(track, state.tracks, blobs, contours, mask)
+                if found is not None:
+                    j, center, area = found
+                    splits[j] = (center, area)  # the track keeps its size: the fit is rougher
+                    pairs = [p for p in pairs if p[1:] != (k, j)]
+                    pairs.append((float(np.linalg.norm(center - predicted)), k, j))
         used_tracks: set[int] = set()
+        split = None
         for _, k, j in sorted(pairs):
             if k in used_tracks or owners[j] is not None:
                 continue
             track = state.tracks[k]
-            track.update(
-                blobs[j, :2].copy(), float(blobs[j, 2]), float(blobs[j, 3]), config.move_px
-            )
+            if j in splits:
+                if track is not ball:
+                    continue
+                split = splits[j]
+                track.update(split[0], track.mean_area, track.mean_roundness, config.move_px)
+            else:
+                track.update(
+                    blobs[j, :2].copy(), float(blobs[j, 2]), float(blobs[j, 3]), config.move_px
+                )
             owners[j] = track
             used_tracks.add(k)
         survivors = []
@@ -364,6 +415,8 @@ class BallTracker:
                 track.frames_lost += 1
                 # coast on the prediction: the state moves on, the last measurement stays
                 track.kalman.statePost = track.kalman.statePre.copy()
+                if track is ball:  # a hand turns; a look-alike carried past goes straight on
+                    track.kalman.statePost[2:] *= _COAST_DAMPING
                 track.kalman.errorCovPost = track.kalman.errorCovPre.copy()
             if track.frames_lost <= config.lost_memory_frames:
                 survivors.append(track)
@@ -374,7 +427,33 @@ class BallTracker:
         state.tracks = survivors
         if state.selected is not None and state.selected not in survivors:
             state.selected = None
-        return owners
+        return owners, split
+
+    def _split_merged(
+        self,
+        ball: _Track,
+        tracks: list[_Track],
+        blobs: np.ndarray,
+        contours: list[np.ndarray],
+        mask: np.ndarray,
+    ) -> tuple[int, np.ndarray, float] | None:
+        """The ball inside a blob it has merged with (a look-alike of its colour touching or
+        crossing it): the nearest such blob to the ball's prediction that holds a disk of the
+        ball's size there; the blob's index, the disk's centre and area."""
+        radius = math.sqrt(ball.mean_area / math.pi)
+        d = np.linalg.norm(blobs[:, :2] - ball.prediction, axis=1)
+        ratio = blobs[:, 2] / ball.mean_area
+        others = np.array(
+            [t.prediction for t in tracks if t is not ball and t.frames_lost <= 2]
+        ).reshape(-1, 2)
+        # much bigger than the ball, or bigger and not round (a sliver of a book behind an arm)
+        merged = (ratio >= _SPLIT_RATIO) | ((ratio > 1.0) & (blobs[:, 3] < _SPLIT_ROUNDNESS))
+        merged &= d < _gate(ball) + 2.0 * radius
+        for j in np.nonzero(merged)[0][np.argsort(d[merged])]:
+            found = split_disk(mask, contours[j], ball.prediction, radius, others)
+            if found is not None:
+                return int(j), found[0], found[1]
+        return None
 
     def _select(self, state: _BallState, owners: list[_Track | None]) -> _Track | None:
         """Which of this frame's blobs is the ball.
@@ -390,6 +469,9 @@ class BallTracker:
         seen = [t for t in owners if t is not None]
         selected = state.selected
         if selected is not None and selected.frames_lost == 0:
+            back = self._back_in_range(state, selected, seen)
+            if back is not None:
+                return back
             if selected.moved:
                 # a moving look-alike taken while the ball was away is not round: give it up
                 # for a round mover (the ball, back)
@@ -417,6 +499,8 @@ class BallTracker:
         if waiting:
             assert selected is not None
             reach = config.search_radius_px + 20.0 * selected.frames_lost
+            # the hand goes on moving over the range it moved over; the ball comes back there
+            margin = 2.0 * math.sqrt(selected.mean_area / math.pi) + 10.0 * selected.frames_lost
             scored = []
             for t in candidates:
                 if t.roundness < config.min_roundness + 0.2:
@@ -432,7 +516,7 @@ class BallTracker:
                     )
                 )
                 ratio = t.area / selected.mean_area
-                if d < reach and 0.4 < ratio < 2.5:
+                if d < reach and 0.4 < ratio < 2.5 and state.within_path(t.center, margin):
                     scored.append(
                         (
                             d / config.search_radius_px
@@ -445,6 +529,8 @@ class BallTracker:
                 return None
             best = min(scored, key=lambda item: item[0])[1]
             best.moving_frames = max(best.moving_frames, selected.moving_frames)
+            radius = math.sqrt(selected.mean_area / math.pi)
+            state.provisional = 0 if state.within_path(best.center, 2.0 * radius) else 1
             return best
         movers = [t for t in candidates if t.moved]
         if movers:
@@ -453,6 +539,36 @@ class BallTracker:
         if len(plausible) == 1:
             return plausible[0]
         return None
+
+    def _back_in_range(
+        self, state: _BallState, selected: _Track, seen: list[_Track]
+    ) -> _Track | None:
+        """A blob taken for the ball when it came back outside the range the hand moved over
+        is on probation: a round blob of the ball's size that then shows up inside that range
+        (not one that has been standing there) is the ball, back from behind what hid it."""
+        if not state.provisional:
+            return None
+        radius = math.sqrt(selected.mean_area / math.pi)
+        state.provisional += 1
+        if state.provisional > _PATH_FRAMES or state.within_path(selected.center, 2.0 * radius):
+            state.provisional = 0  # it moves where the hand moved, or has long enough: the ball
+            return None
+        config = self.config
+        inside = [
+            t
+            for t in seen
+            if t is not selected
+            and t.roundness >= config.min_roundness + 0.2
+            and 0.5 < t.area / selected.mean_area < 2.0
+            and not (t.age >= config.static_frames and not t.moved)
+            and state.within_path(t.center, 2.0 * radius)
+        ]
+        if not inside:
+            return None
+        state.provisional = 0
+        back = max(inside, key=lambda t: t.roundness)
+        back.moving_frames = max(back.moving_frames, selected.moving_frames)
+        return back
 
     def _measure(self, mask: np.ndarray, contour: np.ndarray) -> tuple[np.ndarray, float] | None:
         x, y, bw, bh = cv2.boundingRect(contour)
@@ -468,7 +584,9 @@ class BallTracker:
     def _choose(self, mask: np.ndarray, state: _BallState) -> tuple[np.ndarray, float] | None:
         """Update the colour's tracks with one mask; the ball's exact centre and area."""
         contours, blobs = self._blobs(mask)
-        owners = self._associate(state, blobs)
+        owners, split = self._associate(state, blobs, contours, mask)
+        if split is not None:
+            return split  # the ball, followed through its merge with a look-alike
         chosen = self._select(state, owners)
         if chosen is None:
             if state.selected is not None and state.selected.frames_lost == 0:
@@ -485,6 +603,8 @@ class BallTracker:
             state.smoothed = None
             return _LOST
         center, area = found
+        if not state.provisional:  # a blob on probation does not say where the hand goes
+            state.path.append(center)
         s = self.config.smoothing
         if s > 0.0 and state.smoothed is not None:
             center = (1.0 - s) * center + s * state.smoothed
@@ -498,6 +618,121 @@ class BallTracker:
         return BallMeasurement(
             TRACKED, np.asarray(center, dtype=np.float64), radius, depth, position
         )
+
+
+def _gate(track: _Track) -> float:
+    """How far from its prediction a track's blob may be: a few radii, widening for the first
+    frames the track is unseen (not for ever: a look-alike's track long unseen would take up
+    whatever blob of its colour appears, the ball coming back among them)."""
+    radius = math.sqrt(track.mean_area / math.pi)
+    return max(3.0 * radius, 40.0) + 15.0 * min(track.frames_lost, 4)
+
+
+def split_disk(
+    mask: np.ndarray,
+    contour: np.ndarray,
+    near: np.ndarray,
+    radius: float,
+    others: np.ndarray | None = None,
+) -> tuple[np.ndarray, float] | None:
+    """Find a disk of about ``radius`` inside a blob that holds it and something else.
+
+    The blob's distance transform peaks at the centres of its round parts; the peak nearest
+    ``near`` that is deep enough for a disk of ``radius`` is refined by a least-squares circle
+    through the blob's boundary points about ``radius`` from it (the disk's own arc; the other
+    object's boundary lies elsewhere).
+
+    Parameters
+    ----------
+    mask : array, shape (height, width), uint8
+        The colour's mask the contour was found in.
+    contour : array, shape (n, 1, 2)
+        The merged blob's outer contour.
+    near : array, shape (2,)
+        Where the disk is expected (continuous image coordinates, column, row).
+    radius : float
+        The disk's expected radius, pixels.
+    others : array, shape (k, 2), optional
+        Where other objects of the colour are expected (their tracks' predictions): a disk
+        nearer one of them than ``near``, and within half a radius of it, is that object.
+
+    Returns
+    -------
+    (array of shape (2,), float) or None
+        The disk's centre (continuous image coordinates) and area (px²), or None when the blob
+        holds no disk of that size near ``near``, or what it holds is not round.
+    """
+    x, y, w, h = cv2.boundingRect(contour)
+    blob = np.zeros((h + 2, w + 2), np.uint8)  # a frame of background round the blob
+    cv2.drawContours(blob, [contour], 0, 255, cv2.FILLED, offset=(1 - x, 1 - y))
+    blob[1:-1, 1:-1] = cv2.bitwise_and(blob[1:-1, 1:-1], mask[y : y + h, x : x + w])
+    depth = cv2.distanceTransform(blob, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+    peaks = (depth >= 0.75 * radius) & (depth >= cv2.dilate(depth, np.ones((3, 3), np.uint8)))
+    rows, cols = np.nonzero(peaks)
+    if not len(rows):
+        return None
+    # continuous image coordinates of the peak pixels' centres, deepest first
+    order = np.argsort(-depth[rows, cols])
+    points = np.column_stack([cols + x - 1 + 0.5, rows + y - 1 + 0.5])[order]
+    points = points[np.linalg.norm(points - near, axis=1) <= 1.5 * max(radius, 12.0)]
+    starts: list[np.ndarray] = []
+    for p in points:  # one start per round part: peaks closer than a third of a radius are one
+        if all(np.linalg.norm(p - q) > 0.35 * radius for q in starts):
+            starts.append(p)
+        if len(starts) == 4:
+            break
+    if not starts:
+        return None
+    boundary, _ = cv2.findContours(blob, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    edge = np.concatenate([b.reshape(-1, 2) for b in boundary]).astype(np.float64)
+    edge += np.array([x - 1 + 0.5, y - 1 + 0.5])
+    best, best_score = None, -math.inf
+    for start in starts:
+        fit = _fit_disk(edge, start, radius)
+        if fit is None:
+            continue
+        center, fitted_radius, coverage = fit
+        distance = float(np.linalg.norm(center - near))
+        if others is not None and len(others):
+            other = float(np.min(np.linalg.norm(others - center, axis=1)))
+            if other < distance and other < 0.5 * radius:
+                continue  # the look-alike, where its own track expects it
+        # The ball is in front of what it merges with (look-alikes pass behind the hands), so
+        # its own outline is the one seen the most of; then its size, then nearness to the
+        # prediction (which overshoots when the hand turns).
+        size = abs(fitted_radius + 0.5 - radius) / radius
+        score = coverage - 2.0 * size - 0.25 * distance / radius
+        if score > best_score:
+            best, best_score = (center, math.pi * (fitted_radius + 0.5) ** 2), score
+    return best
+
+
+def _fit_disk(
+    edge: np.ndarray, start: np.ndarray, radius: float
+) -> tuple[np.ndarray, float, float] | None:
+    """A circle of about ``radius`` through the boundary points ``edge`` (n, 2) near ``start``:
+    its centre, radius and the fraction of its outline the points cover; None if the points
+    about ``radius`` from ``start`` do not lie on a circle of about that size."""
+    center = start
+    fitted_radius = radius - 0.5  # boundary pixels' centres lie half a pixel inside the edge
+    for tolerance in (0.25 * radius + 1.0, 0.12 * radius + 1.0, 0.06 * radius + 1.0):
+        r = np.linalg.norm(edge - center, axis=1)
+        arc = edge[np.abs(r - fitted_radius) < tolerance]
+        if len(arc) < 12:
+            return None
+        # Kasa's algebraic fit: x² + y² = a x + b y + c
+        design = np.column_stack([arc, np.ones(len(arc))])
+        (a, b, c), *_ = np.linalg.lstsq(design, (arc**2).sum(axis=1), rcond=None)
+        center = np.array([a / 2.0, b / 2.0])
+        fitted_radius = math.sqrt(max(c + center @ center, 0.0))
+    r = np.linalg.norm(arc - center, axis=1)
+    round_enough = np.sqrt(np.mean((r - fitted_radius) ** 2)) < max(1.0, 0.06 * radius)
+    # the arc goes most of the way round (two straight sides of a book would fit a circle too)
+    angles = np.arctan2(arc[:, 1] - center[1], arc[:, 0] - center[0])
+    coverage = len(np.unique(np.floor((angles + math.pi) / (2 * math.pi) * 16))) / 16
+    if not (round_enough and coverage >= 0.5 and 0.8 < (fitted_radius + 0.5) / radius < 1.15):
+        return None
+    return center, fitted_radius, coverage
 
 
 def _check_frame(frame: np.ndarray) -> np.ndarray:
