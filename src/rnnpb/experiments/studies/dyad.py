@@ -94,18 +94,19 @@ class DyadStudySize:
         if options.quick:
             return cls(2, 80, ("set1",), (("set1", "set2"),), (0.1, 1.0), 1, 200,
                        (None, PERSISTENCE), (30,), ("set1",), 1, 2.0)  # fmt: skip
+        # Sized to run in about half an hour of a shared, loaded 2-core machine (docs/dyad.md).
         return cls(
-            start_seeds=10,
-            start_steps=100,
+            start_seeds=5,
+            start_steps=80,
             same_sets=SETS,
             mixed_sets=(("set1", "set2"), ("set3", "set4")),
             rates=(0.03, 0.1, 0.3, 1.0),
             grid_seeds=3,
-            grid_steps=400,
+            grid_steps=300,
             grid_persistence=(None, PERSISTENCE),
-            line_persistence=(30, 120),
+            line_persistence=(30,),
             subject_sets=SETS,
-            subject_seeds=10,
+            subject_seeds=12,
             subject_minutes=FOUND_MINUTES,
         )
 
@@ -335,16 +336,16 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
         def submit(part: str, key: dict[str, Any], function: Any, *args: Any) -> None:
             jobs[pool.submit(function, *args)] = (part, key)
 
-        for name in size.subject_sets:
-            for seed in subject_seeds:
-                record = (
-                    str(out / "sessions" / f"subject_{name}_seed{seed}.csv")
-                    if seed == first
-                    else None
-                )
-                keep = name == size.subject_sets[0] and seed == first
-                submit("subject", {"set": name, "seed": seed}, subject_job, paths[name],
-                       seed, subject_steps, record, keep)  # fmt: skip
+        for k, seed in enumerate(subject_seeds):
+            # Each seed its own session, the sets in turn.
+            name = size.subject_sets[k % len(size.subject_sets)]
+            record = (
+                str(out / "sessions" / f"subject_{name}_seed{seed}.csv")
+                if k < len(size.subject_sets)
+                else None
+            )
+            submit("subject", {"set": name, "seed": seed}, subject_job, paths[name], seed,
+                   subject_steps, record, k == 0)  # fmt: skip
         grid = [
             (persistence, ra, rb)
             for persistence in size.grid_persistence
@@ -594,7 +595,8 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
         "is found once the first joint-attention episode on it has lasted "
         f"{measures.MIN_EPISODE} coherent steps. Up to {size.subject_minutes:g} simulated "
         f"minutes ({subject_steps} steps; a session ends once every pattern is found), seeds "
-        f"{subject_seeds[0]}–{subject_seeds[-1]} per set. Judged by the patterns as taught "
+        f"{subject_seeds[0]}–{subject_seeds[-1]}, each its own session, the sets in turn. "
+        "Judged by the patterns as taught "
         f"only, {len(in_time_looks)}/{len(sessions)} sessions find all three in time.",
         "",
         *table(
