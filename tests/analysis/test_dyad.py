@@ -116,17 +116,33 @@ def test_the_dyad_figures_are_drawn(tmp_path):
         assert (tmp_path / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
-def test_a_robots_own_recognition_can_stand_for_its_movement_class():
-    # Both agents move in synchrony a cycle the templates do not know (pattern 1 with the
-    # right hand's swing turned round: both hands swing together): only their own
-    # recognition makes them coherent.
+def test_a_robots_own_playing_of_a_pattern_counts_as_that_pattern():
+    # Both agents move in synchrony a cycle the demonstrator's templates do not know (pattern
+    # 1 with the right hand's swing turned round: both hands swing together): only when it is
+    # given as how a robot plays pattern 1 (its closed loop) are they coherent on 1.
     a = performed([("1", 60)])
     a[:, 2] = 2 * a[:, 2].mean() - a[:, 2]
-    named = np.full(60, "1", dtype=object)
+    played = {"1": a[5:41]}  # three cycles of it, at another phase than the run's
     assert not dyad.measure_dyad(a, a, LEARNED).coherent.any()
-    both = dyad.measure_dyad(a, a, LEARNED, recognised_a=named, recognised_b=named)
-    assert both.coherent[20:].all()
-    still = np.repeat(a[:1], 60, axis=0)  # named, but not moving: not a movement
+    both = dyad.measure_dyad(a, a, LEARNED, references_a=played, references_b=played)
+    assert both.coherent[11 + dyad.MAX_LAG + dyad.LOCK_STEADY :].all()
+    assert set(both.class_a[11:]) == {"1"}
+    # Only one of the two known to play it so: not the same pattern.
+    assert not dyad.measure_dyad(a, a, LEARNED, references_a=played).coherent.any()
+    still = np.repeat(a[:1], 60, axis=0)  # not moving: no movement, whatever it fits
     assert not dyad.measure_dyad(
-        still, still, LEARNED, recognised_a=named, recognised_b=named
+        still, still, LEARNED, references_a={"1": still}, references_b={"1": still}
     ).coherent.any()
+
+
+def test_phase_lock_finds_a_steady_lag_and_loses_it_when_the_lag_jumps():
+    a = performed([("2", 90)])
+    b = np.concatenate([a[:2], a[:-2]])  # two steps behind ...
+    b[50:] = a[50 - 5 : 90 - 5]  # ... then five steps behind: no longer in step
+    lock = dyad.phase_lock(a, b)
+    settled = 11 + dyad.MAX_LAG + dyad.LOCK_STEADY
+    assert lock.locked[settled:48].all()
+    assert set(lock.lag[settled:48]) == {2}  # B two steps behind A
+    assert not lock.locked[50 + 11 :].any()
+    # Mirror-image roles: A behind B.
+    assert set(dyad.phase_lock(b[:48], a[:48]).lag[settled:48]) == {-2}

@@ -16,6 +16,7 @@ from rnnpb.interaction.dyad import (
     RobotAgent,
     ScriptedSubject,
     SubjectConfig,
+    pattern_references,
     person_hands,
     robot_and_subject,
     robot_to_person_scale,
@@ -73,6 +74,23 @@ def test_an_adaptive_follower_locks_on_to_a_leader_that_does_not_adapt(model):
     # Locked within the paper's limit once the leader's first cycle is there to be seen.
     assert found.first_coherent - leader_on <= LOCK_LIMIT
     assert found.coherent[found.first_coherent :].mean() > 0.8
+
+
+def test_a_robot_taking_the_initiative_is_judged_on_that_pattern_by_what_it_does(model):
+    references = pattern_references(model)
+    assert set(references) == set(model.patterns)
+    assert all(r.shape == (240, 4) and np.isfinite(r).all() for r in references.values())
+    robot = RobotAgent(model, AgentConfig(alone_steps=None), name="a")
+    robot.take_initiative("2")
+    held = robot.config.lead_steps  # then it looks again: nobody follows it here
+    shown = np.array(
+        [RobotCamera().sensory_from_hands(robot.act(np.full(4, 0.5)).hands) for _ in range(held)]
+    )
+    assert np.allclose(shown, references["2"][:held], atol=1e-6)  # it plays its closed loop
+    classes = measures.classify_movement(
+        shown, measures.movement_templates(), references=references
+    ).pattern
+    assert set(classes[11:]) == {"2"}
 
 
 def test_the_subject_explores_and_the_session_is_recorded_per_agent(model, tmp_path):

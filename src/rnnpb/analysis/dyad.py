@@ -4,19 +4,26 @@ Two agents — two robots, or a robot and a subject — each move their hands; e
 movement is taken in the *person's* sensory space (``lhy lhz rhy rhz`` as a robot's camera
 sees a person; a robot's body is mapped there by :mod:`rnnpb.interaction.dyad`). Definitions:
 
-* **movement class** of an agent at step t: over the last ``window`` steps, its trajectory with
-  each coordinate's mean removed is compared with one cycle of each pattern's template (the
-  demonstrator's ideal movement, :func:`movement_templates`) at every phase; the pattern whose
-  best phase fits with the smallest RMS difference, if that RMS is below ``tolerance`` times
-  the template's RMS, else none (``""``: still, or no known movement);
-* **recognised class** (for robots, where asked): the learned pattern nearest the agent's PB,
-  while it moves (some coordinate's spread over the last ``window`` steps above 0.02) — the
-  pattern the robot itself is on, which its closed loop may play unlike the demonstrator;
-* **synchrony error** at step t: RMS difference of the two agents' recent trajectories
-  (``window`` steps), minimised over lags of at most ``max_lag`` steps (the agents see each
-  other one step late, so perfect followers are a step apart);
-* **coherent** at step t (joint attention): both agents' classes (movement or recognised) are
-  the same learned pattern and the synchrony error is below ``sync_tolerance``;
+* **movement class** of an agent at step t: over the last ``window`` steps (one cycle), its
+  trajectory with each coordinate's mean removed is compared with every ``window``-step stretch
+  of each learned pattern's *references* (each stretch's mean removed): the pattern *as taught*
+  (one cycle of the demonstrator's ideal movement at every phase, :func:`movement_templates`)
+  and, for a robot, the pattern *as its network plays it* (its closed-loop generation from the
+  pattern's learned PB, :func:`rnnpb.interaction.dyad.pattern_references`). The class is the
+  pattern of the best-fitting stretch if its RMS misfit is below ``tolerance`` times that
+  stretch's RMS and the agent moves (some coordinate's spread above ``MOVING_LEVEL``); else
+  none (``""``: still, or no learned movement). It is judged from what the agent does, never
+  from what it reports (its PB, its intent);
+* **phase lock** at step t: over the last ``window`` steps, the normalised cross-correlation of
+  the two agents' movements (means removed, the four coordinates together) at lags of at most
+  ``max_lag`` steps (the agents see each other one step late, so a follower is a step or two
+  behind); locked where the best correlation is at least ``LOCK_CORRELATION`` at each of the
+  last ``LOCK_STEADY`` steps and its lag stayed within one step of the present one — a stable
+  phase relation, not one chance alignment;
+* **synchrony error** at step t (reported, not part of coherence): RMS difference of the two
+  agents' recent trajectories, minimised over the same lags;
+* **coherent** at step t (joint attention): both agents' movement classes are the same learned
+  pattern and they are phase-locked;
 * **joint-attention episode**: a run of at least ``min_steps`` coherent steps (gaps shorter
   than ``bridge`` steps do not end it), with its pattern, start and duration;
 * **shifts**: a *pattern shift* is an episode followed by an episode on another pattern; a
@@ -44,6 +51,8 @@ CLASS_WINDOW = 12  # one cycle of the demonstrator's patterns
 CLASS_TOLERANCE = 0.5
 SYNC_TOLERANCE = 0.03
 MAX_LAG = 2
+LOCK_CORRELATION = 0.8  # cross-correlation of the two movements at their best lag
+LOCK_STEADY = 6  # steps (half a cycle) over which the lag must hold
 MIN_EPISODE = 12
 BRIDGE = 3
 MOVING_LEVEL = 0.02  # view units: below this spread over a cycle, an agent is still
@@ -71,12 +80,49 @@ def movement_templates(
 
 @dataclass(frozen=True)
 class MovementClass:
-    """Per step: the pattern (``""`` for none), its best phase (template step index, the phase
-    of the last step) and the relative RMS misfit. Arrays of shape (n,)."""
+    """Per step: the pattern (``""`` for none), its best phase (the template step aligned with
+    the last step; -1 where the best fit is a stretch of a closed-loop reference or none) and
+    the relative RMS misfit. Arrays of shape (n,)."""
 
     pattern: np.ndarray
     phase: np.ndarray
     misfit: np.ndarray
+
+
+def _windows(views: np.ndarray, window: int) -> np.ndarray:
+    """Every ``window``-step stretch of (T, 4), each coordinate's mean removed: (T-window+1,
+    window, 4)."""
+    stretches = np.lib.stride_tricks.sliding_window_view(views, window, axis=0)
+    stretches = np.moveaxis(stretches, -1, 1)  # (T - window + 1, window, 4)
+    return stretches - stretches.mean(axis=1, keepdims=True)
+
+
+def _reference_bank(
+    templates: dict[str, np.ndarray],
+    references: dict[str, np.ndarray] | None,
+    window: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every stretch the movement class compares with: (M, window*4) stretches, (M,) pattern
+    names, (M,) phase (template step, -1 for a reference trajectory's stretch)."""
+    rows, names, phases = [], [], []
+    for name, cycle in templates.items():
+        k = len(cycle)
+        # The template's step j aligned with the stretch's last step, every j (periodic).
+        index = (np.arange(k)[:, None] + np.arange(-window + 1, 1)[None, :]) % k
+        stretches = cycle[index]
+        stretches = stretches - stretches.mean(axis=1, keepdims=True)
+        rows.append(stretches.reshape(k, -1))
+        names += [name] * k
+        phases += list(range(k))
+    for name, trajectory in (references or {}).items():
+        trajectory = np.asarray(trajectory, dtype=np.float64)
+        if len(trajectory) < window or not np.isfinite(trajectory).all():
+            continue
+        stretches = _windows(trajectory, window)
+        rows.append(stretches.reshape(len(stretches), -1))
+        names += [name] * len(stretches)
+        phases += [-1] * len(stretches)
+    return np.concatenate(rows), np.array(names, dtype=object), np.array(phases)
 
 
 def classify_movement(
@@ -84,6 +130,7 @@ def classify_movement(
     templates: dict[str, np.ndarray],
     window: int = CLASS_WINDOW,
     tolerance: float = CLASS_TOLERANCE,
+    references: dict[str, np.ndarray] | None = None,
 ) -> MovementClass:
     """The movement class of each step (see the module's definitions).
 
@@ -92,34 +139,97 @@ def classify_movement(
     views : array, shape (n, 4)
         The agent's hands in the person's sensory space; NaN where not known.
     templates : dict name -> array (K, 4)
-        One cycle of each pattern, mean removed (:func:`movement_templates`).
+        One cycle of each pattern as taught, mean removed (:func:`movement_templates`).
+    references : dict name -> array (T, 4), optional
+        More of each pattern: a trajectory (e.g. a robot's closed-loop generation of it, seen
+        as its partner sees it), every ``window``-step stretch of which is compared too.
     """
     views = np.asarray(views, dtype=np.float64)
     n = len(views)
     pattern = np.full(n, "", dtype=object)
     phase = np.full(n, -1, dtype=np.int64)
     misfit = np.full(n, np.inf)
-    names = list(templates)
-    for t in range(window - 1, n):
-        segment = views[t - window + 1 : t + 1]
-        if not np.isfinite(segment).all():
-            continue
-        segment = segment - segment.mean(axis=0)
-        best = (np.inf, "", -1)
-        for name in names:
-            cycle = templates[name]
-            k = len(cycle)
-            scale = float(np.sqrt(np.mean(cycle**2)))
-            # The template's step j aligned with the segment's last step, every j.
-            index = (np.arange(k)[:, None] + np.arange(-window + 1, 1)[None, :]) % k
-            fits = np.sqrt(np.mean((cycle[index] - segment[None]) ** 2, axis=(1, 2))) / scale
-            j = int(np.argmin(fits))
-            if fits[j] < best[0]:
-                best = (float(fits[j]), name, j)
-        misfit[t] = best[0]
-        if best[0] < tolerance:
-            pattern[t], phase[t] = best[1], best[2]
+    if n < window:
+        return MovementClass(pattern=pattern, phase=phase, misfit=misfit)
+    bank, names, phases = _reference_bank(templates, references, window)
+    scale = np.sqrt(np.mean(bank**2, axis=1))  # (M,)
+    segments = _windows(views, window).reshape(n - window + 1, -1)  # (N, D)
+    finite = np.isfinite(segments).all(axis=1)
+    segments = np.where(finite[:, None], segments, 0.0)
+    squared = (
+        np.sum(segments**2, axis=1)[:, None]
+        + np.sum(bank**2, axis=1)[None, :]
+        - 2.0 * segments @ bank.T
+    )
+    with np.errstate(divide="ignore", invalid="ignore"):
+        fits = np.sqrt(np.maximum(squared, 0.0) / segments.shape[1]) / scale[None, :]
+    fits = np.where(np.isfinite(fits), fits, np.inf)
+    best = np.argmin(fits, axis=1)
+    best_fit = fits[np.arange(len(best)), best]
+    best_fit = np.where(finite, best_fit, np.inf)
+    misfit[window - 1 :] = best_fit
+    hit = best_fit < tolerance
+    at = np.arange(window - 1, n)[hit]
+    pattern[at] = names[best[hit]]
+    phase[at] = phases[best[hit]]
     return MovementClass(pattern=pattern, phase=phase, misfit=misfit)
+
+
+@dataclass(frozen=True)
+class PhaseLock:
+    """Per step: ``locked`` (bool), the best ``lag`` (steps B is behind A; negative: A is
+    behind) and the cross-correlation ``correlation`` at that lag. Arrays of shape (n,)."""
+
+    locked: np.ndarray
+    lag: np.ndarray
+    correlation: np.ndarray
+
+
+def phase_lock(
+    a: np.ndarray,
+    b: np.ndarray,
+    window: int = CLASS_WINDOW,
+    max_lag: int = MAX_LAG,
+    min_correlation: float = LOCK_CORRELATION,
+    steady: int = LOCK_STEADY,
+) -> PhaseLock:
+    """The phase lock of two agents' movements, (n, 4) each (see the module's definitions);
+    from past steps only."""
+    a = np.asarray(a, dtype=np.float64)
+    b = np.asarray(b, dtype=np.float64)
+    n = len(a)
+    lag = np.zeros(n, dtype=np.int64)
+    best = np.full(n, np.nan)
+    locked = np.zeros(n, dtype=bool)
+    if n < window + max_lag:
+        return PhaseLock(locked, lag, best)
+
+    def normalised(views: np.ndarray) -> np.ndarray:
+        stretches = _windows(views, window).reshape(n - window + 1, -1)
+        norm = np.linalg.norm(stretches, axis=1, keepdims=True)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            out = stretches / norm
+        return np.where(np.isfinite(out), out, 0.0)  # still or unknown: no correlation
+
+    wa, wb = normalised(a), normalised(b)  # row i: the stretch ending at step i + window - 1
+    lags = np.arange(-max_lag, max_lag + 1)
+    first = max_lag  # rows from which every lag has its past stretch
+    rows = np.arange(first, len(wa))
+    correlations = np.empty((len(rows), len(lags)))
+    for k, ell in enumerate(lags):
+        if ell >= 0:  # B now against A ``ell`` steps back: A leads
+            correlations[:, k] = np.sum(wa[rows - ell] * wb[rows], axis=1)
+        else:
+            correlations[:, k] = np.sum(wa[rows] * wb[rows + ell], axis=1)
+    k_best = np.argmax(correlations, axis=1)
+    steps = rows + window - 1
+    lag[steps] = lags[k_best]
+    best[steps] = correlations[np.arange(len(rows)), k_best]
+    good = np.nan_to_num(best, nan=-1.0) >= min_correlation
+    for t in steps[steps >= steps[0] + steady - 1]:
+        span = slice(t - steady + 1, t + 1)
+        locked[t] = bool(good[span].all() and np.all(np.abs(lag[span] - lag[t]) <= 1))
+    return PhaseLock(locked=locked, lag=lag, correlation=best)
 
 
 def synchrony_error(
@@ -147,16 +257,14 @@ def synchrony_error(
 def coherence(
     class_a: np.ndarray,
     class_b: np.ndarray,
-    sync_error: np.ndarray,
+    locked: np.ndarray,
     learned: tuple[str, ...],
-    sync_tolerance: float = SYNC_TOLERANCE,
 ) -> np.ndarray:
-    """Per step, True where both agents move the same learned pattern in synchrony. (n,)"""
+    """Per step, True where both agents move the same learned pattern, phase-locked. (n,)"""
     class_a = np.asarray(class_a, dtype=object)
     class_b = np.asarray(class_b, dtype=object)
-    sync = np.nan_to_num(np.asarray(sync_error, dtype=np.float64), nan=np.inf)
     same = (class_a == class_b) & np.isin(class_a, list(learned))
-    return same & (sync < sync_tolerance)
+    return same & np.asarray(locked, dtype=bool)
 
 
 @dataclass(frozen=True)
@@ -334,12 +442,13 @@ class DyadMeasures:
     """Every measure of one two-agent run (see the module's definitions).
 
     Arrays have shape (n,): ``class_a``/``class_b`` movement classes, ``sync_error``,
-    ``coherent``, ``found`` (patterns found by each step).
+    ``lock`` (:class:`PhaseLock`), ``coherent``, ``found`` (patterns found by each step).
     """
 
     class_a: np.ndarray
     class_b: np.ndarray
     sync_error: np.ndarray
+    lock: PhaseLock
     coherent: np.ndarray
     episodes: list[Episode]
     shifts: list[Shift]
@@ -354,10 +463,13 @@ class DyadMeasures:
     def summary(self, dt: float = 0.4) -> dict[str, float | int | None]:
         """The run's scalar measures; rates per simulated minute at ``dt`` seconds a step."""
         minutes = len(self.coherent) * dt / 60.0
+        sync = self.sync_error[self.coherent]
         return {
             "steps": len(self.coherent),
             "coherent_share": self.coherent_share,
             "first_coherent": self.first_coherent,
+            "locked_share": float(self.lock.locked.mean()) if len(self.coherent) else 0.0,
+            "sync_error_coherent": float(np.nanmedian(sync)) if sync.size else float("nan"),
             "episodes": len(self.episodes),
             "mean_episode_steps": (
                 float(np.mean([e.duration for e in self.episodes])) if self.episodes else 0.0
@@ -378,24 +490,16 @@ def moving(
     views: np.ndarray, window: int = CLASS_WINDOW, level: float = MOVING_LEVEL
 ) -> np.ndarray:
     """Per step, True where some coordinate's standard deviation over the last ``window``
-    steps exceeds ``level`` (view units). (n,)"""
+    steps exceeds ``level`` (view units); False where a value is unknown. (n,)"""
     views = np.asarray(views, dtype=np.float64)
     out = np.zeros(len(views), dtype=bool)
-    for t in range(window - 1, len(views)):
-        spread = (
-            np.nanstd(views[t - window + 1 : t + 1], axis=0)
-            if np.isfinite(views[t - window + 1 : t + 1]).any()
-            else np.zeros(1)
-        )
-        out[t] = bool(np.nanmax(spread) > level)
+    if len(views) < window:
+        return out
+    stretches = _windows(views, window)
+    spread = np.sqrt(np.mean(stretches**2, axis=1))  # (N, 4)
+    with np.errstate(invalid="ignore"):
+        out[window - 1 :] = np.isfinite(spread).all(axis=1) & (spread.max(axis=1) > level)
     return out
-
-
-def recognised_classes(recognised: np.ndarray, views: np.ndarray) -> np.ndarray:
-    """An agent's own recognition as its class: the pattern it names (e.g. a robot's PB
-    nearest to a learned pattern's), where it moves (:func:`moving`), else ``""``. (n,)"""
-    recognised = np.asarray(recognised, dtype=object)
-    return np.where(moving(views), recognised, "").astype(object)
 
 
 def measure_dyad(
@@ -406,30 +510,27 @@ def measure_dyad(
     pb_b: np.ndarray | None = None,
     templates: dict[str, np.ndarray] | None = None,
     min_episode: int = MIN_EPISODE,
-    recognised_a: np.ndarray | None = None,
-    recognised_b: np.ndarray | None = None,
+    references_a: dict[str, np.ndarray] | None = None,
+    references_b: dict[str, np.ndarray] | None = None,
 ) -> DyadMeasures:
     """All measures of a run from the two agents' movements in the person's sensory space,
     (n, 4) each, and their PBs (n, P) where they have one (the transfer entropy is on their
-    PB changes; without PBs, on how far their movement class's phase jumps).
+    PB changes; without PBs, on how often their movement class changes).
 
-    ``recognised_a``/``recognised_b`` (n,): where given, the pattern the agent itself is on
-    (a robot: the learned pattern nearest its PB) stands for its movement class
-    (:func:`recognised_classes`); else the movement class against the demonstrator's
-    templates."""
+    ``templates``: each pattern as taught (default: the demonstrator's,
+    :func:`movement_templates`); ``references_a``/``references_b``: each agent's own playing
+    of its learned patterns (name -> (T, 4), e.g. a robot's closed loop,
+    :func:`rnnpb.interaction.dyad.pattern_references`), compared as well."""
     templates = templates or movement_templates()
-    ca = (
-        classify_movement(view_a, templates).pattern
-        if recognised_a is None
-        else recognised_classes(recognised_a, view_a)
-    )
-    cb = (
-        classify_movement(view_b, templates).pattern
-        if recognised_b is None
-        else recognised_classes(recognised_b, view_b)
-    )
+    ca = np.where(
+        moving(view_a), classify_movement(view_a, templates, references=references_a).pattern, ""
+    ).astype(object)
+    cb = np.where(
+        moving(view_b), classify_movement(view_b, templates, references=references_b).pattern, ""
+    ).astype(object)
     sync = synchrony_error(view_a, view_b)
-    coherent_steps = coherence(ca, cb, sync, learned)
+    lock = phase_lock(view_a, view_b)
+    coherent_steps = coherence(ca, cb, lock.locked, learned)
     found = episodes(coherent_steps, ca, min_steps=min_episode)
     shifts = pattern_shifts(found, ca, cb)
     change_a = pb_change(pb_a) if pb_a is not None else _class_changes(ca)
@@ -439,6 +540,7 @@ def measure_dyad(
         class_a=ca,
         class_b=cb,
         sync_error=sync,
+        lock=lock,
         coherent=coherent_steps,
         episodes=found,
         shifts=shifts,

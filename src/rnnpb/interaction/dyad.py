@@ -51,6 +51,7 @@ from rnnpb.robot.camera import RobotCamera
 VIEWS = ("mirrored", "physical")
 WARMUP = 48  # closed-loop steps generated before an initiative is played (4 cycles)
 LEAD_HORIZON = 600  # steps an initiative can last past lead_steps while the partner follows
+REFERENCE_STEPS = 240  # closed-loop steps (after the warm-up) a learned pattern is judged by
 LEADER_HORIZON = 4000  # steps a robot that never follows plans ahead (then plans again)
 RELEASE = 3  # unstable steps after which a leader whose partner no longer follows lets go
 _REFLECT_X = np.array([-1.0, 1.0, 1.0])
@@ -79,6 +80,35 @@ def person_hands(
     # Turned half a turn: the robot's left arm is on the seer's right, where a person's left
     # hand is.
     return body.shoulders + relative * _TURN
+
+
+def pattern_references(
+    model: TrainedModel,
+    view: str = "mirrored",
+    n_steps: int = REFERENCE_STEPS,
+    body: UserBody | None = None,
+    camera: RobotCamera | None = None,
+) -> dict[str, np.ndarray]:
+    """Each learned pattern as this robot's network plays it, seen as its partner sees it:
+    the closed-loop generation from the pattern's learned PB and initial context, after the
+    warm-up an initiative skips (:data:`WARMUP`), ``n_steps`` steps; name -> (n_steps, 4).
+
+    The measures judge a robot's movement against these (and the pattern as taught): a
+    paper-learned network's closed loop may play a learned pattern otherwise than the
+    demonstrator did, or not repeat at all (docs/dyad.md), and it is still that pattern."""
+    camera = camera or RobotCamera()
+    out = {}
+    for name in model.patterns:
+        generated = generate(
+            model,
+            np.clip(model.pattern_pb[name], 0.0, 1.0),
+            WARMUP + n_steps,
+            initial_context=model.pattern_initial_context(name),
+        )
+        out[name] = camera.sensory_from_hands(
+            person_hands(np.asarray(generated.motor[WARMUP:]), body, view)
+        )
+    return out
 
 
 @dataclass(frozen=True)
