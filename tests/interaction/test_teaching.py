@@ -65,9 +65,33 @@ def test_unstructured_movement_is_never_kept():
     assert all(cutter.observe(t, walk[t], "unstructured") is None for t in range(150))
     # a detector mistaking it for novel still gives no whole cycles to keep
     assert all(cutter.observe(t, walk[t], "novel") is None for t in range(150))
-    # a novel run broken by unstructured steps starts again from nothing each time
-    words = (["novel"] * 30 + ["unstructured"]) * 5
+    # a novel run broken by unstructured steps (longer than a hesitation) starts again from
+    # nothing each time
+    words = (["novel"] * 30 + ["unstructured"] * 3) * 4
     assert all(cutter.observe(t, cyclic[t], w) is None for t, w in enumerate(words))
+    # and one called unstructured on every third step is not novel enough to keep, though
+    # each interruption alone would be forgiven
+    words = ["novel", "novel", "unstructured"] * 50
+    cutter = EpisodeCutter()
+    assert all(cutter.observe(t, cyclic[t], w) is None for t, w in enumerate(words))
+
+
+def test_a_hesitating_detector_does_not_break_the_run_but_a_pause_does():
+    _, sensory = _stream("2", 90, seed=4)
+    words = ["novel"] * 90
+    for t in (15, 30, 31, 50):  # a step where the hands turn, a moment's doubt
+        words[t] = ("still", "familiar", "familiar", "unstructured")[(15, 30, 31, 50).index(t)]
+
+    def kept(cutter, words):
+        return [e for t, w in enumerate(words) if (e := cutter.observe(t, sensory[t], w))]
+
+    (episode,) = kept(EpisodeCutter(), words)
+    assert episode.n_cycles == 3 and episode.first_step <= 15 < episode.last_step
+    # the same with the hesitations not forgiven: no run holds three whole cycles
+    assert kept(EpisodeCutter(TeachingConfig(interruption_steps=0)), words) == []
+    # a pause (more still steps than a hesitation) ends the run each time
+    paused = ((["novel"] * 25 + ["still"] * 3) * 4)[:90]
+    assert kept(EpisodeCutter(), paused) == []
 
 
 def test_a_moment_without_evidence_does_not_break_the_run_but_a_lost_hand_does():
@@ -108,7 +132,7 @@ def test_the_keeper_stores_each_novel_movement_once_in_the_memory(tmp_path):
             keeper(SimpleNamespace(step=t, observed=row, novelty=word))
         episodes = memory.episodes()
         assert [e.pattern for e in episodes] == ["new-1", "new-2"]
-        assert all(e.status == "kept" and e.n_cycles == 4 for e in episodes)
+        assert all(e.status == "kept" and e.n_cycles == 3 for e in episodes)
         assert all(e.source == "scenario:held:3" and e.model == "m.npz" for e in episodes)
         # nothing from the unstructured stretch (steps 80-139)
         for e in episodes:

@@ -5,11 +5,16 @@ The novelty detector (each on-line step's ``novelty``: ``familiar``, ``novel``,
 learned pattern fits. :class:`EpisodeCutter` watches those words step by step and keeps the
 movement once it has been ``novel`` long enough to be sure and to hold whole cycles:
 
-1. A *run* is the stretch of consecutive steps called ``novel`` (up to ``tolerance_steps``
-   steps without evidence, ``""``, are forgiven — the detector says nothing while a hand is
-   lost for a moment — but the hand positions must be seen). Any other word ends the run and
-   throws it away: ``unstructured`` movement is never kept, nor a run broken by ``familiar``
-   or ``still``.
+1. A *run* starts on a step called ``novel`` and goes on while the detector keeps calling
+   the movement ``novel``: up to ``tolerance_steps`` consecutive steps without evidence
+   (``""`` — the detector says nothing while a hand is lost for a moment, but the hand
+   positions must be seen) and up to ``interruption_steps`` consecutive steps called
+   ``familiar``, ``unstructured`` or ``still`` (the detector hesitates now and then on a new
+   movement, and says ``still`` for a step where the hands turn) are forgiven. Anything
+   longer (a pause, another movement) or a hand lost ends the run and throws it away.
+   An episode is kept only when at least ``min_novel_share`` of its own steps were called
+   ``novel``, so ``unstructured`` movement — which the detector calls ``novel`` on almost no
+   step — is never kept, nor a learned pattern the detector calls ``familiar``.
 2. The whole cycles of the run are counted with :func:`rnnpb.interaction.learning_phase.
    cycle_bounds`. From ``confirm_cycles`` whole cycles on the cutter is *recording* ("cycle
    k of ``episode_cycles``"); when the run holds ``episode_cycles`` whole cycles, the last
@@ -54,6 +59,10 @@ class TeachingConfig:
         Whole cycles an episode holds.
     tolerance_steps : int
         Consecutive steps without evidence (``""``) a run survives.
+    interruption_steps : int
+        Consecutive steps called ``familiar``, ``unstructured`` or ``still`` a run survives.
+    min_novel_share : float
+        The share of an episode's steps with evidence that must have been called ``novel``.
     max_run_steps : int
         The run's oldest steps are dropped beyond this many (bounds the cost per step).
     plane_x : float
@@ -61,8 +70,15 @@ class TeachingConfig:
     """
 
     confirm_cycles: int = 1
-    episode_cycles: int = 4
+    # Chosen by replaying the cutter over the novelty words of the teach study's script (every
+    # learning set × new shape, user draw 500; checked on the study's own draws 100+,
+    # docs/teaching.md): 4 unbroken cycles kept 5 of 20 new shapes (single `still` steps at
+    # a diagonal's turning points broke the runs); these keep 17 of 20, none from
+    # unstructured movement or with another pattern in them.
+    episode_cycles: int = 3
     tolerance_steps: int = 2
+    interruption_steps: int = 2
+    min_novel_share: float = 0.9
     max_run_steps: int = 200
     plane_x: float = MOUSE_PLANE_X
 
@@ -75,6 +91,10 @@ class TeachingConfig:
             )
         if self.tolerance_steps < 0:
             raise ConfigError(f"tolerance_steps must be >= 0, got {self.tolerance_steps}")
+        if self.interruption_steps < 0:
+            raise ConfigError(f"interruption_steps must be >= 0, got {self.interruption_steps}")
+        if not 0.5 <= self.min_novel_share <= 1.0:
+            raise ConfigError(f"min_novel_share must be in [0.5, 1], got {self.min_novel_share}")
         if self.max_run_steps < 16:
             raise ConfigError(f"max_run_steps must be >= 16, got {self.max_run_steps}")
 
@@ -145,7 +165,9 @@ class EpisodeCutter:
         self._steps: list[int] = []
         self._sensory: list[np.ndarray] = []
         self._hands: list[np.ndarray] = []
+        self._novel: list[float] = []  # 1 novel, 0 familiar or unstructured, nan no evidence
         self._quiet = 0
+        self._interrupted = 0
         self._cycles = 0
         self._kept = False
 
@@ -167,38 +189,51 @@ class EpisodeCutter:
         (2, 3); returns the episode on the step it is complete, else None."""
         observed = np.asarray(observed, dtype=np.float64).reshape(4)
         seen = bool(np.isfinite(observed).all())
-        if novelty == "" and self._steps and self._quiet < self.config.tolerance_steps and seen:
+        config = self.config
+        going = bool(self._steps) and seen
+        if novelty == "novel" and seen:
+            self._quiet = self._interrupted = 0
+        elif novelty == "" and going and self._quiet < config.tolerance_steps:
             self._quiet += 1  # no evidence for a moment: the run goes on
-        elif novelty != "novel" or not seen:
+        elif (
+            novelty in ("familiar", "unstructured", "still")
+            and going
+            and self._interrupted < config.interruption_steps
+        ):
+            self._interrupted += 1  # the detector hesitates: the run goes on
+        else:
             self.reset()
             return None
-        else:
-            self._quiet = 0
         if self._kept:
             return None
         self._steps.append(int(step))
+        self._novel.append(np.nan if novelty == "" else float(novelty == "novel"))
         self._sensory.append(observed)
         self._hands.append(
             np.full((2, 3), np.nan)
             if hands is None
             else np.asarray(hands, dtype=np.float64).reshape(2, 3)
         )
-        if len(self._steps) > self.config.max_run_steps:
-            del self._steps[0], self._sensory[0], self._hands[0]
+        if len(self._steps) > config.max_run_steps:
+            del self._steps[0], self._sensory[0], self._hands[0], self._novel[0]
         cycles = cycle_bounds(np.array(self._sensory))
         self._cycles = len(cycles)
-        if self._cycles < self.config.episode_cycles:
+        if self._cycles < config.episode_cycles:
             return None
-        start, stop = cycles[-self.config.episode_cycles][0], cycles[-1][1]
+        start, stop = cycles[-config.episode_cycles][0], cycles[-1][1]
+        said = np.array(self._novel[start:stop])
+        said = said[np.isfinite(said)]
+        if not said.size or said.mean() < config.min_novel_share:
+            return None  # not novel enough yet: the run goes on, its window slides
         sensory = np.array(self._sensory[start:stop])
         hands = np.array(self._hands[start:stop])
         missing = ~np.isfinite(hands).all(axis=(1, 2))
         if missing.any():
-            hands[missing] = hands_on_plane(sensory[missing], self.camera, self.config.plane_x)
+            hands[missing] = hands_on_plane(sensory[missing], self.camera, config.plane_x)
         motor = self.mapping.motor_from_hands(hands)
         self._kept = True
         return KeptMovement(
-            sensory, motor, self.config.episode_cycles, self._steps[start], self._steps[stop - 1]
+            sensory, motor, config.episode_cycles, self._steps[start], self._steps[stop - 1]
         )
 
 
