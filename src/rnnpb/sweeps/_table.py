@@ -131,5 +131,10 @@ def read_table(path: str | os.PathLike[str]):
     except (OSError, pa.ArrowException) as error:
         raise DataFileError(f"sweep table {path}: cannot read it ({error})") from None
     if not table.schema.equals(schema()):
+        if table.schema.names == [n for n, _ in COLUMNS if n != "study"]:
+            raise DataFileError(
+                f"sweep table {path}: written by an earlier rnnpb (no 'study' column); rerun "
+                "its `rnnpb sweep SPEC --out DIR` to rebuild it from the runs' records"
+            )
         raise DataFileError(f"sweep table {path}: its columns are not a sweep table's")
     return table
