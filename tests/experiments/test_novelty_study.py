@@ -1,12 +1,13 @@
 """`rnnpb study novelty`: its measures from stream runs, and its registration."""
 
 import numpy as np
+import pytest
 
 from rnnpb.experiments.studies import load_study, study_names
 from rnnpb.experiments.studies.novelty import SETTLE_STEPS, StreamRun, judge, measure
 
 
-def _run(kind, movement, novelty, recognised, start=0, score=0.05):
+def _run(kind, movement, novelty, recognised, start=0, score=0.05, confidence=None):
     n = len(novelty)
     return StreamRun(
         "1",
@@ -21,12 +22,20 @@ def _run(kind, movement, novelty, recognised, start=0, score=0.05):
         np.zeros((n, 4)),
         np.zeros((n, 3)),
         np.zeros((n, 4)),
+        tuple(confidence) if confidence is not None else (0.9,) * n,
     )
 
 
 def test_the_measures_count_what_each_step_said():
     n = SETTLE_STEPS + 20
-    learned = _run("learned", "1", ["familiar"] * n, ["1"] * (n - 5) + ["2"] * 5, score=0.02)
+    learned = _run(
+        "learned",
+        "1",
+        ["familiar"] * n,
+        ["1"] * (n - 5) + ["2"] * 5,
+        score=0.02,
+        confidence=[0.9] * (n - 5) + [0.6] * 5,
+    )
     # Called novel 30 steps after it starts, then on every step.
     novel = _run(
         "novel",
@@ -46,6 +55,10 @@ def test_the_measures_count_what_each_step_said():
     assert m["novel_within_3_cycles"] == 0.5 and m["novel_after_detection"] == 0.5
     assert m["unstructured_called_novel"] == 0.0 and m["still_called_still"] == 1.0
     assert m["confusion"]["still"]["still"] == 20
+    # Confidence where the answer was right and where it was wrong (5 wrong judged steps).
+    assert m["confidence_right"] == pytest.approx(0.9)
+    assert m["confidence_wrong"] == pytest.approx(0.6)
+    assert m["wrong_steps"] == 5
     # Half the judged novel steps score above every learned step, half tie with them.
     assert m["roc_auc"] == 0.75
     targets = judge(m)

@@ -1,10 +1,12 @@
 """Recognition with a confidence and the novelty detector (rnnpb.model.recognition)."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
 from rnnpb.errors import ConfigError
-from rnnpb.model import MirrorSystem
+from rnnpb.model import MirrorSystem, OnlineConfig
 from rnnpb.model.recognition import (
     NOVELTY_STATES,
     RecognitionConfig,
@@ -12,6 +14,7 @@ from rnnpb.model.recognition import (
     recognise,
     recognition_timeline,
 )
+from rnnpb.model.reference import ReferenceMirrorSystem
 
 from .synthetic import PERIOD, pattern_values
 
@@ -126,3 +129,32 @@ def test_timeline_and_bad_settings():
     with pytest.raises(ConfigError, match="confidence_level"):
         RecognitionConfig(confidence_level=0.0)
     assert RecognitionConfig.from_dict(RecognitionConfig().to_dict()) == RecognitionConfig()
+
+
+def test_each_pattern_s_evidence_is_averaged_over_evidence_steps():
+    config = RecognitionConfig(evidence_steps=4)
+    names = ("a", "b")
+    learned = np.array([[0.2, 0.2], [0.8, 0.8]])
+    state = initial_recognition_state(1, 2, config)
+    errors = [np.array([e, 0.01]) for e in (1e-4, 4e-4, 9e-4, 1.6e-3, 2.5e-3)]
+    for t, e in enumerate(errors):
+        u = np.array([0.5 + 0.3 * np.sin(2 * np.pi * t / 12)])
+        state, answer = recognise(state, u, np.ones(1, bool), e, learned[0], learned, names, config)
+    # The RMS of the last four steps' mean squared errors, not the last step's alone.
+    assert answer.distances["a"] == pytest.approx(np.sqrt(np.mean([4e-4, 9e-4, 1.6e-3, 2.5e-3])))
+    assert answer.distances["b"] == pytest.approx(0.1)
+    with pytest.raises(ConfigError, match="evidence_steps"):
+        RecognitionConfig(evidence_steps=0)
+
+
+def test_the_settings_follow_the_model_s_learning(trained):
+    # The tests' model is learned with the fast preset: its mirror system takes the fast
+    # preset's recognition settings unless given others.
+    assert OnlineConfig.for_model(trained).recognition == RecognitionConfig.fast()
+    assert MirrorSystem(trained).recognition == RecognitionConfig.fast()
+    assert ReferenceMirrorSystem(trained).recognition == RecognitionConfig.fast()
+    chosen = RecognitionConfig(switch_steps=2)
+    assert MirrorSystem(trained, recognition=chosen).recognition == chosen
+    paper = replace(trained, meta={"train_config": {"optimizer": "momentum"}})
+    assert OnlineConfig.for_model(paper).recognition == RecognitionConfig()
+    assert RecognitionConfig.fast() != RecognitionConfig()

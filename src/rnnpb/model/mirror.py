@@ -33,7 +33,7 @@ from rnnpb.model.online import (
     phase_candidates,
     restart_candidates,
 )
-from rnnpb.model.online_config import OnlineConfig
+from rnnpb.model.online_config import OnlineConfig, suggested_online_config
 from rnnpb.model.recognition import (
     RecognitionConfig,
     initial_recognition_state,
@@ -239,12 +239,12 @@ class MirrorSystem:
     ) -> None:
         """``meta``: the risk network of a safety map (``rnnpb.safety.SafetyMap.meta``); the
         regression uses it as ``config.safety_guard`` says. Without it the guard is off.
-        ``recognition``: the settings of what each step says it sees (the default
-        :class:`RecognitionConfig` when None)."""
+        ``recognition``: the settings of what each step says it sees (when None, the ones
+        chosen for models learned as ``model`` was: ``OnlineConfig.for_model(model)``)."""
         _xla.warn_if_not_configured()  # once per process, if nobody chose XLA's loop setting
         self.model = model
         self.config = config or OnlineConfig()
-        self.recognition = recognition or RecognitionConfig()
+        self.recognition = recognition or suggested_online_config(model).recognition
         self.patterns = tuple(model.pattern_pb)
         self._learned_pb = np.array([model.pattern_pb[name] for name in self.patterns])
         self._layout = PackedLayout.for_network(model.network, len(self.patterns))

@@ -13,6 +13,7 @@ from typing import Any, Literal
 
 from rnnpb.errors import ConfigError
 from rnnpb.model.parametric_bias import PBUpdateConfig
+from rnnpb.model.recognition import RecognitionConfig
 
 
 @dataclass(frozen=True)
@@ -186,7 +187,7 @@ ONLINE_PRESETS: tuple[str, ...] = ("default", "paper", "ungated")
 
 @dataclass(frozen=True)
 class OnlineChoice:
-    """Which on-line regression goes with a model, and why.
+    """Which on-line regression and which recognition settings go with a model, and why.
 
     Attributes
     ----------
@@ -195,11 +196,16 @@ class OnlineChoice:
     config : OnlineConfig
     reason : str
         One line for the user: what in the model decided it.
+    recognition : RecognitionConfig
+        The recognition settings chosen for models learned as this one was
+        (``RecognitionConfig()`` for the paper's algorithm, ``RecognitionConfig.fast()`` for
+        the fast preset: docs/model.md, "Recognition and novelty").
     """
 
     name: str
     config: OnlineConfig
     reason: str
+    recognition: RecognitionConfig = field(default_factory=RecognitionConfig)
 
 
 def suggested_online_config(model: Any) -> OnlineChoice:
@@ -208,7 +214,9 @@ def suggested_online_config(model: Any) -> OnlineChoice:
     A model learned with ``TrainConfig.fast()`` (Adam, noise on the inputs) locks on and
     switches best without the surprise gate (``OnlineConfig.ungated()``); one learned by the
     paper's algorithm (momentum descent), or one whose learning is not recorded, takes the
-    default (docs/model.md, "On-line regression"). The model's ``meta["train_config"]`` is
+    default (docs/model.md, "On-line regression"). The recognition settings follow the same
+    way: the fast preset's models give other evidence levels (docs/model.md, "Recognition and
+    novelty"). The model's ``meta["train_config"]`` is
     what it records of its learning (:class:`rnnpb.model.TrainConfig` as a dict).
 
     Parameters
@@ -225,7 +233,10 @@ def suggested_online_config(model: Any) -> OnlineChoice:
     optimizer = learned.get("optimizer")
     if optimizer == "adam":
         return OnlineChoice(
-            "ungated", OnlineConfig.ungated(), "the model was learned with Adam, the fast preset"
+            "ungated",
+            OnlineConfig.ungated(),
+            "the model was learned with Adam, the fast preset",
+            RecognitionConfig.fast(),
         )
     return OnlineChoice(
         "default",

@@ -16,8 +16,9 @@ How it decides (docs/model.md, "Recognition and novelty", measures it):
 1. **Each learned pattern's own dynamics.** In the compiled step, after the regression, the
    window is run again from its regressed onset with each learned pattern's PB in place of
    the regressed profile (:func:`rnnpb.model.online.pattern_errors`): the RMS error ``d_k``
-   of its last ``recognition_steps`` sensory predictions says how well pattern ``k``'s
-   dynamics predict what was just seen. This is stronger evidence than the distance of the
+   of its last ``recognition_steps`` sensory predictions, averaged (as mean squares) over the
+   last ``evidence_steps`` steps, says how well pattern ``k``'s dynamics predict what was just
+   seen. This is stronger evidence than the distance of the
    regressed PB to the learned ones: two learned PBs can lie close together while their
    dynamics differ clearly, and a PB between them predicts nothing well.
 2. **Confidence.** Each pattern's likelihood is ``exp(-d_k² / 2σ² - e_k² / 2τ²)``
@@ -41,6 +42,11 @@ How it decides (docs/model.md, "Recognition and novelty", measures it):
    evidence for ``switch_steps`` steps running — ``release_steps`` when a recognised pattern
    would give way to none: the evidence dips for a few steps as a pause begins or ends.
 
+The settings depend on how the model was learned: ``RecognitionConfig()`` was chosen for models
+learned by the paper's algorithm, :meth:`RecognitionConfig.fast` for ``TrainConfig.fast()``
+models (their evidence lies at other levels); ``OnlineConfig.for_model`` picks the one that
+suits a model, and :class:`rnnpb.model.MirrorSystem` uses it unless told otherwise.
+
 :func:`recognise` is pure (state in, state and answer out) and NumPy only: it costs tens of
 microseconds a step. The compiled step and its NumPy twin compute the same evidence and call
 the same function, so both give the same answer for the same observations.
@@ -48,7 +54,7 @@ the same function, so both give the same answer for the same observations.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -61,28 +67,33 @@ NOVELTY_STATES: tuple[str, ...] = ("familiar", "novel", "unstructured", "still")
 
 @dataclass(frozen=True)
 class RecognitionConfig:
-    """The detector's settings (see the module doc for how each is used; chosen on draws of
-    the user the study then does not measure on: docs/model.md)."""
+    """The detector's settings (see the module doc for how each is used). The defaults were
+    chosen for models learned by the paper's algorithm, by a search over recorded evidence on
+    draws of the user the study then does not measure on (docs/model.md); :meth:`fast` for
+    the fast preset's models."""
 
     recognition_steps: int = 12  # predictions each pattern's evidence is measured on
-    match_scale: float = 0.02  # σ of the likelihoods, RMS error in normalized units
-    match_level: float = 0.04  # RMS error at which "none learned" is as likely
-    pb_steps: int = 6  # steps the PB is averaged over
-    pb_scale: float = 0.06  # σ of the PB's likelihoods (distance to a learned PB)
-    pb_level: float = 0.12  # PB distance at which "none learned" is as likely
-    confidence_level: float = 0.5
+    evidence_steps: int = 1  # steps each pattern's evidence is averaged over
+    match_scale: float = 0.0046  # σ of the likelihoods, RMS error in normalized units
+    match_level: float = 0.0435  # RMS error at which "none learned" is as likely
+    pb_steps: int = 3  # steps the PB is averaged over
+    pb_scale: float = 0.92  # σ of the PB's likelihoods (distance to a learned PB)
+    pb_level: float = 0.032  # PB distance at which "none learned" is as likely
+    confidence_level: float = 0.645
     structure_steps: int = 12
     lags: tuple[int, int] = (8, 18)  # smallest and largest lag tried, steps
-    structure_level: float = 0.3
+    structure_level: float = 0.354
     still_steps: int = 4
     still_level: float = 0.012  # RMS spread of the observations, normalized units
     hold_steps: int = 10
-    switch_steps: int = 3
-    release_steps: int = 8
+    switch_steps: int = 6
+    release_steps: int = 10
 
     def __post_init__(self) -> None:
         if self.recognition_steps < 1:
             raise ConfigError(f"recognition_steps must be >= 1, got {self.recognition_steps}")
+        if self.evidence_steps < 1:
+            raise ConfigError(f"evidence_steps must be >= 1, got {self.evidence_steps}")
         if self.match_scale <= 0 or self.match_level <= 0:
             raise ConfigError("match_scale and match_level must be > 0")
         if self.pb_steps < 1 or self.pb_scale <= 0 or self.pb_level <= 0:
@@ -99,6 +110,12 @@ class RecognitionConfig:
         if self.hold_steps < 0 or self.switch_steps < 1 or self.release_steps < 1:
             raise ConfigError("hold_steps must be >= 0, switch_steps and release_steps >= 1")
 
+    @classmethod
+    def fast(cls, **changes: Any) -> RecognitionConfig:
+        """The settings chosen for models learned with ``TrainConfig.fast()`` (regressed with
+        ``OnlineConfig.ungated()``): their evidence lies at other levels (docs/model.md)."""
+        return replace(cls(**FAST_SETTINGS), **changes)
+
     @property
     def history(self) -> int:
         """Observed steps the detector keeps."""
@@ -112,6 +129,22 @@ class RecognitionConfig:
         data = dict(data)
         data["lags"] = tuple(data["lags"])
         return cls(**data)
+
+
+#: :meth:`RecognitionConfig.fast`'s settings, where they differ from the defaults (chosen by a
+#: search over recorded evidence: docs/model.md, "Recognition and novelty").
+FAST_SETTINGS: dict[str, Any] = {
+    "evidence_steps": 18,
+    "match_scale": 0.0088,
+    "match_level": 0.0512,
+    "pb_steps": 1,
+    "pb_scale": 0.18,
+    "pb_level": 0.14,
+    "confidence_level": 0.437,
+    "structure_level": 0.581,
+    "switch_steps": 5,
+    "release_steps": 6,
+}
 
 
 class Recognition(NamedTuple):
@@ -144,6 +177,7 @@ class RecognitionState(NamedTuple):
 
     observed: np.ndarray  # (H, S) the last H observations, NaN where not seen; oldest first
     pb: np.ndarray  # (pb_steps, P) the last PBs, NaN before the first; oldest first
+    errors: np.ndarray  # (evidence_steps, K) the last pattern errors, NaN where none
     recognised: str | None
     confidence: float
     still_run: int  # steps the hands have been still
@@ -159,6 +193,7 @@ def initial_recognition_state(
     return RecognitionState(
         np.full((config.history, sensory_size), np.nan),
         np.full((config.pb_steps, pb_size), np.nan),
+        np.full((config.evidence_steps, 0), np.nan),  # K is known at the first step
         None,
         0.0,
         0,
@@ -171,21 +206,29 @@ def initial_recognition_state(
 def _structure(history: np.ndarray, config: RecognitionConfig) -> tuple[float, bool]:
     """The smallest self-difference of the recent observations over the lags, relative to
     twice their variance: near 0 for a repeating movement, about 1 for one that does not
-    repeat (NaN while no lag can be measured yet); and whether every lag was measured."""
+    repeat (NaN while no lag can be measured yet); and whether every lag was measured.
+
+    The lags are tried from the smallest up, as far as the history has no gap (NaN)."""
     recent = config.structure_steps
     low, high = config.lags
-    now = history[-recent:]
-    best, variance, every = np.inf, np.nan, True
-    for lag in range(low, high + 1):
-        before = history[-(recent + lag) : -lag]
-        if np.isnan(before).any() or np.isnan(now).any():
-            every = False
-            break
-        variance = float(np.var(history[-(recent + lag) :], axis=0).mean())
-        best = min(best, float(np.mean((now - before) ** 2)))
-    if not np.isfinite(best) or not variance > 0:
+    size = len(history)
+    lags = np.arange(low, high + 1)
+    gap = np.isnan(history).any(axis=1)
+    if gap[size - recent :].any():
         return float("nan"), False
-    return best / (2.0 * variance), every
+    # Lag l is measured when the steps it compares with (size - recent - l … size - l) have
+    # no gap, and every smaller lag was measured.
+    rows = (size - recent - lags)[:, None] + np.arange(recent)[None]
+    measured = np.cumprod(~gap[rows].any(axis=1)).astype(bool)
+    count = int(measured.sum())
+    if count == 0:
+        return float("nan"), False
+    before = history[rows[:count]]  # (lags measured, recent, S)
+    best = float(np.min(np.mean((history[size - recent :][None] - before) ** 2, axis=(1, 2))))
+    variance = float(np.var(history[size - recent - int(lags[count - 1]) :], axis=0).mean())
+    if not variance > 0:
+        return float("nan"), False
+    return best / (2.0 * variance), count == len(lags)
 
 
 def recognise(
@@ -224,17 +267,23 @@ def recognise(
     observation = np.where(seen, u, np.nan)
     observed = np.concatenate([state.observed[1:], observation[None]])
     pbs = np.concatenate([state.pb[1:], np.asarray(pb, dtype=np.float64)[None]])
-    state = state._replace(pb=pbs)
+    errors = np.asarray(pattern_errors, dtype=np.float64)
+    history = state.errors
+    if history.shape[1] != len(errors):
+        history = np.full((config.evidence_steps, len(errors)), np.nan)
+    row = errors if np.all(np.isfinite(errors)) else np.full(len(errors), np.nan)
+    history = np.concatenate([history[1:], row[None]])
+    state = state._replace(pb=pbs, errors=history)
     none = {name: 0.0 for name in names}
     no_distance = {name: float("nan") for name in names}
     if not seen.any():
         # Nothing seen this step (every hand lost): no evidence, no answer.
-        empty = RecognitionState(observed, pbs, None, 0.0, 0, None, 0, "")
+        empty = initial_recognition_state(len(u), len(pbs[0]), config)
+        empty = empty._replace(observed=observed, pb=pbs)
         return empty, Recognition(None, 0.0, "", none, no_distance, float("nan"))
     # Fill unseen values from the last seen ones, so a hand lost for a step does not end the
     # evidence; the steps before the first seen one stay NaN.
     filled = _forward_fill(observed)
-    errors = np.asarray(pattern_errors, dtype=np.float64)
     if np.isnan(filled[-config.still_steps :]).any() or not np.all(np.isfinite(errors)):
         waiting = state._replace(observed=observed, novelty="")
         return waiting, Recognition(None, 0.0, "", none, no_distance, float("nan"))
@@ -245,10 +294,14 @@ def recognise(
         still_run = state.still_run + 1
         keep = state.recognised if still_run <= config.hold_steps else None
         confidence = state.confidence if keep is not None else 1.0
-        new = RecognitionState(observed, pbs, keep, confidence, still_run, keep, 0, "still")
+        new = RecognitionState(
+            observed, pbs, history, keep, confidence, still_run, keep, 0, "still"
+        )
         return new, Recognition(keep, confidence, "still", none, no_distance, float("nan"))
 
-    d = np.sqrt(np.maximum(errors, 0.0))
+    # The evidence of the last evidence_steps steps (the steps with evidence), averaged: one
+    # step's generated stretch can favour the wrong one of two close patterns by chance.
+    d = np.sqrt(np.maximum(history[~np.isnan(history).any(axis=1)].mean(axis=0), 0.0))
     recent_pb = pbs[~np.isnan(pbs).any(axis=1)]
     e = np.linalg.norm(np.asarray(learned_pb) - recent_pb.mean(axis=0)[None], axis=1)
     # Log-likelihoods, shifted by their largest so that the exponentials cannot underflow.
@@ -286,7 +339,9 @@ def recognise(
             confidence, novelty = float(shares[names.index(answer)]), "familiar"
         else:
             confidence, novelty = float(unknown / total), state.novelty
-    new = RecognitionState(observed, pbs, answer, confidence, 0, candidate, candidate_run, novelty)
+    new = RecognitionState(
+        observed, pbs, history, answer, confidence, 0, candidate, candidate_run, novelty
+    )
     return new, Recognition(
         answer,
         confidence,
@@ -299,11 +354,9 @@ def recognise(
 
 def _forward_fill(observed: np.ndarray) -> np.ndarray:
     """NaN entries take the column's last finite value before them (NaN if none)."""
-    filled = observed.copy()
-    for t in range(1, len(filled)):
-        missing = np.isnan(filled[t])
-        filled[t, missing] = filled[t - 1, missing]
-    return filled
+    rows = np.where(np.isnan(observed), 0, np.arange(len(observed))[:, None])
+    last = np.maximum.accumulate(rows, axis=0)
+    return observed[last, np.arange(observed.shape[1])[None]]
 
 
 def recognition_timeline(answers: list[tuple[str | None, str]]) -> list[dict[str, Any]]:

@@ -25,7 +25,7 @@ from rnnpb.model.mirror import (
 )
 from rnnpb.model.network import Params, logit_numpy
 from rnnpb.model.online import phase_candidates, restart_candidates
-from rnnpb.model.online_config import OnlineConfig
+from rnnpb.model.online_config import OnlineConfig, suggested_online_config
 from rnnpb.model.parametric_bias import PBUpdateConfig
 from rnnpb.model.recognition import RecognitionConfig, initial_recognition_state, recognise
 
@@ -277,7 +277,7 @@ class ReferenceMirrorSystem:
     ) -> None:
         self.model = model
         self.config = config or OnlineConfig()
-        self.recognition = recognition or RecognitionConfig()
+        self.recognition = recognition or suggested_online_config(model).recognition
         self.patterns = tuple(model.pattern_pb)
         self.learned_pb = np.array([model.pattern_pb[name] for name in self.patterns])
         self.pattern_rho = restart_candidates(model)

@@ -17,7 +17,9 @@ paper's algorithm; ``--quick``: ``TrainConfig.fast()``, sets 1 and full only).
 
 from __future__ import annotations
 
+import multiprocessing
 import time
+from concurrent.futures import Future, ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -55,6 +57,7 @@ class StreamRun:
     sensory: np.ndarray  # (T, S) what was observed
     pattern_errors: np.ndarray  # (T, K) the evidence, to replay the detector with other settings
     pb: np.ndarray  # (T, P)
+    confidence: tuple[float, ...] = ()  # the step's confidence in what it said
 
 
 def _streams(
@@ -86,8 +89,10 @@ def run_stream(
     scenario = make_scenario(segments, seed=seed)
     mirror.reset()
     novelty, recognised, nearest, score, evidence, pbs = [], [], [], [], [], []
+    confidence = []
     for u in scenario.sensory:
         result = mirror.step(u)
+        confidence.append(result.confidence)
         evidence.append(result.pattern_errors)
         pbs.append(result.pb)
         novelty.append(result.novelty)
@@ -108,6 +113,7 @@ def run_stream(
         scenario.sensory.copy(),
         np.array(evidence),
         np.array(pbs),
+        tuple(confidence),
     )
 
 
@@ -122,31 +128,83 @@ def replay(run: StreamRun, model: Any, config: Any) -> StreamRun:
     names = tuple(model.pattern_pb)
     learned = np.array([model.pattern_pb[n] for n in names])
     state = initial_recognition_state(run.sensory.shape[1], run.pb.shape[1], config)
-    novelty, recognised = [], []
+    novelty, recognised, confidence = [], [], []
     for u, errors, pb in zip(run.sensory, run.pattern_errors, run.pb, strict=True):
         u, seen = normalized_hands(u, len(u))
         state, answer = recognise(state, u, seen, errors, pb, learned, names, config)
         novelty.append(answer.novelty)
         recognised.append(answer.recognised)
-    return replace(run, novelty=tuple(novelty), recognised=tuple(recognised))
+        confidence.append(answer.confidence)
+    return replace(
+        run, novelty=tuple(novelty), recognised=tuple(recognised), confidence=tuple(confidence)
+    )
 
 
-def _models(out: Path, quick: bool) -> dict[str, Any]:
+#: The models the study measures: name -> (learning set, learned with the fast preset).
+FULL_MODELS: dict[str, tuple[str, bool]] = {
+    "1": ("1", False),
+    "2": ("2", False),
+    "3": ("3", False),
+    "4": ("4", False),
+    "full": ("full", False),
+    "fast-1": ("1", True),
+    "fast-full": ("full", True),
+}
+QUICK_MODELS: dict[str, tuple[str, bool]] = {"fast-1": ("1", True), "fast-full": ("full", True)}
+
+
+def model_file(name: str) -> str:
+    """The file name of the study's model ``name`` in ``DIR/models``."""
+    set_name, fast = (FULL_MODELS | QUICK_MODELS)[name]
+    stem = "full" if set_name == "full" else f"set{set_name}"
+    return f"{'fast_' if fast else ''}{stem}.npz"
+
+
+def _models(out: Path, quick: bool) -> dict[str, Path]:
+    """The study's models by name: their files in ``out/models``, learned there if absent."""
     from rnnpb.demonstrator import learning_set
-    from rnnpb.model import TrainConfig, TrainedModel, train
+    from rnnpb.model import TrainConfig, train
     from rnnpb.robot import JOINT_LIMITS
 
-    names = ("1", "full") if quick else ("1", "2", "3", "4", "full")
     folder = out / "models"
     folder.mkdir(parents=True, exist_ok=True)
-    models = {}
-    for name in names:
-        path = folder / (f"set{name}.npz" if name != "full" else "full.npz")
+    paths = {}
+    for name, (set_name, fast) in (QUICK_MODELS if quick else FULL_MODELS).items():
+        path = folder / model_file(name)
         if not path.exists():
-            config = TrainConfig.fast(seed=0) if quick else TrainConfig(seed=0)
-            train(learning_set(name), JOINT_LIMITS, config=config).save(path)
-        models[name] = TrainedModel.load(path)
-    return models
+            config = TrainConfig.fast(seed=0) if fast else TrainConfig(seed=0)
+            train(learning_set(set_name), JOINT_LIMITS, config=config).save(path)
+        paths[name] = path
+    return paths
+
+
+def _model_job(
+    name: str, path: str, seeds: list[int], steps: int, shapes: tuple[str, ...]
+) -> tuple[str, dict[str, Any], list[StreamRun]]:
+    """Every stream of one model: its on-line regression and recognition settings chosen as
+    ``OnlineConfig.for_model`` chooses them for the model's learning (as the dashboard and
+    ``rnnpb interact`` do)."""
+    from rnnpb.demonstrator import learning_set_patterns, novel_pattern
+    from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel
+    from rnnpb.robot import JOINT_LIMITS
+
+    set_name = (FULL_MODELS | QUICK_MODELS)[name][0]
+    model = TrainedModel.load(path, joint_limits=JOINT_LIMITS)
+    choice = OnlineConfig.for_model(model)
+    mirror = MirrorSystem(model, choice.config, recognition=choice.recognition)
+    patterns = learning_set_patterns(set_name)
+    novel = ((novel_pattern(set_name),) if set_name != "full" else ()) + tuple(shapes)
+    runs = [
+        run_stream(mirror, name, kind, movement, seed, start, segments)
+        for seed in seeds
+        for kind, movement, start, segments in _streams(patterns, novel, seed, steps)
+    ]
+    settings = {
+        "online_preset": choice.name,
+        "online": choice.config.to_dict(),
+        "recognition": choice.recognition.to_dict(),
+    }
+    return name, settings, runs
 
 
 def _judged(run: StreamRun) -> range:
@@ -206,8 +264,16 @@ def measure(runs: list[StreamRun]) -> dict[str, Any]:
         if len(positives) and len(negatives)
         else 0.0
     )
+    right, wrong = [], []
+    for r in learned:
+        for t in _judged(r):
+            if r.recognised[t] is not None and r.novelty[t] == "familiar":
+                (right if r.recognised[t] == r.movement else wrong).append(r.confidence[t])
     return {
         "confusion": confusion,
+        "confidence_right": float(np.mean(right)) if right else float("nan"),
+        "confidence_wrong": float(np.mean(wrong)) if wrong else float("nan"),
+        "wrong_steps": len(wrong),
         "learned_recognised": _share(learned, lambda r, t: r.recognised[t] == r.movement),
         "learned_nearest_pb": _share(learned, lambda r, t: r.nearest_pb[t] == r.movement),
         "learned_called_novel": _share(learned, lambda r, t: r.novelty[t] == "novel"),
@@ -252,9 +318,7 @@ def judge(measures: dict[str, Any]) -> dict[str, Target]:
 def run(out: Path, options: StudyOptions) -> StudyOutcome:
     from rnnpb import _xla
     from rnnpb.analysis.figures import plot_confusion, plot_delays, plot_roc
-    from rnnpb.demonstrator import NEW_SHAPES, learning_set_patterns, novel_pattern
-    from rnnpb.model import MirrorSystem, OnlineConfig
-    from rnnpb.model.recognition import RecognitionConfig
+    from rnnpb.demonstrator import NEW_SHAPES
 
     _xla.configure()
     started = time.perf_counter()
@@ -263,20 +327,30 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
     models = _models(out, options.quick)
     draws = 1 if options.quick else 2
     steps = 72 if options.quick else 84
-    shapes = NEW_SHAPES[:2] if options.quick else NEW_SHAPES
-    seeds = [options.seed + 1000 + i for i in range(draws)]  # not the draws tuned on (0-2)
-    recognition = RecognitionConfig()
+    shapes = tuple(NEW_SHAPES[:2] if options.quick else NEW_SHAPES)
+    seeds = [options.seed + 1000 + i for i in range(draws)]  # not the draws tuned on (0, 1)
     runs: list[StreamRun] = []
-    for name, model in models.items():
-        mirror = MirrorSystem(model, recognition=recognition)
-        patterns = learning_set_patterns(name)
-        novel = ((novel_pattern(name),) if name != "full" else ()) + tuple(shapes)
-        for seed in seeds:
-            for kind, movement, start, segments in _streams(patterns, novel, seed, steps):
-                runs.append(run_stream(mirror, name, kind, movement, seed, start, segments))
+    settings: dict[str, dict[str, Any]] = {}
+    with _pool(min(options.workers, len(models))) as pool:
+        jobs = [
+            pool.submit(_model_job, name, str(path), seeds, steps, shapes)
+            for name, path in models.items()
+        ]
+        for job in jobs:
+            name, chosen, model_runs = job.result()
+            settings[name] = chosen
+            runs += model_runs
     per_set = {name: measure([r for r in runs if r.model == name]) for name in models}
+    presets = {
+        preset: [r for r in runs if settings[r.model]["online_preset"] == preset]
+        for preset in dict.fromkeys(s["online_preset"] for s in settings.values())
+    }
+    per_preset = {preset: measure(rs) for preset, rs in presets.items()}
     overall = measure(runs)
     targets = judge(overall)
+    for preset, m in per_preset.items():
+        if len(presets) > 1:
+            targets |= {f"{preset}: {k}": t for k, t in judge(m).items()}
     plot_confusion(
         {n: m["confusion"] for n, m in per_set.items()}, out / "figures" / "confusion.png"
     )
@@ -286,22 +360,20 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
         period=PERIOD,
     )
     plot_roc({n: m["roc"] for n, m in per_set.items()}, out / "figures" / "roc.png")
-    report = _report(per_set, overall, targets, options, seeds)
+    report = _report(per_set, overall, targets, options, seeds, settings, per_preset)
     results = {
         "study": NAME,
         "quick": options.quick,
         "seeds": seeds,
         "config": {
-            "recognition": recognition.to_dict(),
-            "online": OnlineConfig().to_dict(),
+            "models": settings,
             "steps": steps,
             "settle_steps": SETTLE_STEPS,
             "lead_steps": LEAD_STEPS,
         },
-        "models": {
-            n: str(out / "models" / (f"set{n}.npz" if n != "full" else "full.npz")) for n in models
-        },
+        "models": {n: str(path) for n, path in models.items()},
         "per_set": per_set,
+        "per_preset": per_preset,
         "overall": overall,
         "targets": {k: t.to_json() for k, t in targets.items()},
         "versions": versions(),
@@ -310,19 +382,58 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
     return StudyOutcome(runtime_s=time.perf_counter() - started, targets=targets)
 
 
+class _InProcess:
+    """One worker: the jobs run here, in order (no process to start)."""
+
+    def __enter__(self) -> _InProcess:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        return None
+
+    def submit(self, function, *args) -> Future:
+        future: Future = Future()
+        future.set_result(function(*args))
+        return future
+
+
+def _pool(workers: int) -> ProcessPoolExecutor | _InProcess:
+    if workers == 1:
+        return _InProcess()
+    return ProcessPoolExecutor(
+        max_workers=workers,
+        mp_context=multiprocessing.get_context("spawn"),
+        initializer=_worker_init,
+    )
+
+
+def _worker_init() -> None:
+    # Each worker keeps to one core: the step's speed is that of one core.
+    from rnnpb import _xla
+
+    _xla.configure()
+    _xla.single_threaded()
+
+
 def _report(
     per_set: dict[str, dict[str, Any]],
     overall: dict[str, Any],
     targets: dict[str, Target],
     options: StudyOptions,
     seeds: list[int],
+    settings: dict[str, dict[str, Any]],
+    per_preset: dict[str, dict[str, Any]],
 ) -> list[str]:
     lines = [
         "# Study: novelty — does the robot know what it sees?",
         "",
         f"{'Quick form' if options.quick else 'Full form'}; draws of the user (scenario "
         f"seeds) {seeds}, none of them the draws the detector's settings were chosen on. "
-        f"Steps judged: from {SETTLE_STEPS} steps after a movement starts.",
+        f"Steps judged: from {SETTLE_STEPS} steps after a movement starts. Each model runs "
+        "with the on-line regression and recognition settings chosen for its learning "
+        "(`OnlineConfig.for_model`): "
+        + ", ".join(f"{n}: {s['online_preset']}" for n, s in settings.items())
+        + ". Targets over all models, then per regression preset.",
         "",
         "## Targets",
         "",
@@ -363,6 +474,24 @@ def _report(
             "ROC AUC",
         ],
         rows,
+    )
+    lines += ["", "## Confidence", ""]
+    lines += [
+        "Mean confidence of the recognised pattern on learned patterns' judged steps, where "
+        "it was right and where it was wrong (a meaningful confidence is lower when wrong):",
+        "",
+    ]
+    lines += table(
+        ["models", "when right", "when wrong", "wrong steps"],
+        [
+            [
+                name,
+                fmt(m["confidence_right"]),
+                fmt(m["confidence_wrong"]),
+                str(m["wrong_steps"]),
+            ]
+            for name, m in [*per_preset.items(), ("all", overall)]
+        ],
     )
     lines += ["", "## Confusion of the four states (all sets)", ""]
     lines += table(
