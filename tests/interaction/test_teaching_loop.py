@@ -33,7 +33,7 @@ def test_a_new_shape_is_kept_and_random_movement_is_not(model, tmp_path):
     # whole cycles of the new shape only: nothing of the learned pattern before it, nothing
     # of the random walk after it
     assert set(truth[first : last + 1]) == {"figure-eight"}
-    assert episodes[0].n_cycles == 4 and episodes[0].pattern == "new-1"
+    assert episodes[0].n_cycles == 3 and episodes[0].pattern == "new-1"
 
 
 def test_teaching_consolidates_in_the_background_and_swaps_the_new_version_in(model, tmp_path):
@@ -42,9 +42,9 @@ def test_teaching_consolidates_in_the_background_and_swaps_the_new_version_in(mo
 
     path = tmp_path / "m.npz"
     model.save(path)
-    spec = "scenario:steps:1*30,figure-eight*90"
+    spec = "scenario:steps:1*30,figure-eight*110"
     with open_source(spec, seed=2) as source, MemoryStore(path) as memory:
-        loop = InteractionLoop(MirrorSystem(model), source, config=LoopConfig(max_steps=120))
+        loop = InteractionLoop(MirrorSystem(model), source, config=LoopConfig(max_steps=140))
         # run as fast as possible: the loop waits for the consolidation, so the run repeats
         teacher = Teacher(loop, path, memory, make_mirror=MirrorSystem, source=spec, iterations=20)
         loop.run(between_steps=teacher.between_steps)

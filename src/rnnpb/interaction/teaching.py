@@ -565,6 +565,38 @@ class BackgroundConsolidation:
             self._process.join(5.0)
 
 
+class _PreparedMirror:
+    """A new model version's mirror system, built and its first step compiled in a thread of
+    its own (``mirror`` None when that failed: the swap then builds it, and says why)."""
+
+    def __init__(self, path: str, make_mirror) -> None:
+        import threading
+
+        self.path = path
+        self.model = None
+        self.mirror = None
+        self.error = ""
+        self._make_mirror = make_mirror
+        self._thread = threading.Thread(target=self._run, name="rnnpb-prepare", daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        from rnnpb.model import TrainedModel
+
+        try:
+            model = TrainedModel.load(self.path)
+            mirror = self._make_mirror(model)
+            mirror.step(np.full(model.network.sensory_size, 0.5))  # compiles the step
+            mirror.reset()
+            self.model, self.mirror = model, mirror
+        except Exception as error:  # noqa: BLE001 - the swap builds it on the loop's thread
+            self.error = f"{type(error).__name__}: {error}"
+
+    @property
+    def done(self) -> bool:
+        return not self._thread.is_alive()
+
+
 class Teacher:
     """On-line teaching in the interaction loop (docs/teaching.md).
 
@@ -573,7 +605,9 @@ class Teacher:
     once an episode is kept (``auto``, else on :meth:`confirm`), swaps the new model version in
     between two steps when it is done, and keeps every version for :meth:`undo`. With
     ``wait`` (a run as fast as possible) it blocks until each consolidation finishes, so a
-    scripted run repeats; paced it never waits.
+    scripted run repeats; paced it never waits, and with ``prepare`` (paced: the default) the
+    new version's mirror system is built and its step compiled in a thread before the swap,
+    so the swap itself costs no deadline.
     """
 
     def __init__(
@@ -589,6 +623,7 @@ class Teacher:
         wait: bool | None = None,
         hands_of=None,
         iterations: int | None = None,
+        prepare: bool | None = None,
     ) -> None:
         self.iterations = iterations
         self.loop = loop
@@ -598,6 +633,11 @@ class Teacher:
         self.keeper = EpisodeKeeper(memory, str(model_path), source, config, hands_of)
         self.auto = auto
         self.wait = (not loop.config.paced) if wait is None else wait
+        # Paced, a new version's mirror system is built and its step compiled in a thread
+        # before the swap (seconds: a step's deadline would be missed if it happened between
+        # two steps); as fast as possible, on the loop's thread, so that a run repeats.
+        self.prepare = (not self.wait) if prepare is None else prepare
+        self._prepared: _PreparedMirror | None = None
         self.job: BackgroundConsolidation | None = None
         self.pending: list[int] = []
         self.events = self.keeper.events
@@ -641,7 +681,14 @@ class Teacher:
         start = time.perf_counter()
         if self.job is not None:
             state = self.job.wait() if self.wait else self.job.poll()
-            if state.state == "done":
+            if state.state == "done" and self.prepare:
+                prepared = self._prepared
+                if prepared is None or prepared.path != state.model_path:
+                    self._prepared = _PreparedMirror(state.model_path, self.make_mirror)
+                elif prepared.done:
+                    self._prepared = None
+                    self._swap(state, prepared)
+            elif state.state == "done":
                 self._swap(state)
             elif state.state == "failed":
                 self.events.append(TeachingEvent(self.loop.steps, "failed", state.describe()))
@@ -650,13 +697,16 @@ class Teacher:
         if rest > 0:
             time.sleep(min(rest, 0.02))
 
-    def _swap(self, state: ConsolidationState) -> None:
+    def _swap(self, state: ConsolidationState, prepared: _PreparedMirror | None = None) -> None:
         from rnnpb.model import TrainedModel
 
         assert self.job is not None
         self.job = None
-        model = TrainedModel.load(state.model_path)
-        self.loop.mirror = self.make_mirror(model)
+        if prepared is not None and prepared.mirror is not None:
+            model, self.loop.mirror = prepared.model, prepared.mirror
+        else:  # not prepared (or its preparation failed): built here, as fast runs do
+            model = TrainedModel.load(state.model_path)
+            self.loop.mirror = self.make_mirror(model)
         self.versions.append(state.model_path)
         self.swapped_at.append(self.loop.steps)
         learned = ", ".join(p for p in model.patterns if p.startswith("new-")) or "?"

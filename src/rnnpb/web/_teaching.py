@@ -200,6 +200,7 @@ class SessionTeaching:
             wait=False,
             hands_of=self._hands_of,
             iterations=self.settings.iterations,
+            prepare=False,  # made ready here (`_Prepared`), with the session's safety map
         )
         self._refresh()
         log.info("teaching: short-term memory %s (%s)", self.memory.path, self.mode)

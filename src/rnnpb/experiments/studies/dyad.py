@@ -204,9 +204,7 @@ def subject_job(
     model, refs = _load(path)
     dyad = robot_and_subject(model, AgentConfig(), SubjectConfig(), seed=seed)
     steps: list = []
-    recorder = (
-        DyadRecorder(Path(record), model.network.pb_size, DT) if record is not None else None
-    )
+    recorder = DyadRecorder(Path(record), model.network.pb_size, DT) if record is not None else None
 
     def keep_step(step: Any) -> None:
         steps.append(step)
@@ -561,9 +559,7 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
     # 3. the subject protocol ---------------------------------------------------------------
     sessions = rows("subject")
     results["subject"] = sessions
-    curves = {
-        f"{k['set']} seed {k['seed']}": r["found"] for k, r in done if k["part"] == "subject"
-    }
+    curves = {f"{k['set']} seed {k['seed']}": r["found"] for k, r in done if k["part"] == "subject"}
     figures.plot_patterns_found(curves, DT, 3, out / "figures" / "patterns_found.png")
     example = figure_of("subject")
     figures.plot_dyad(
@@ -600,8 +596,15 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
         f"only, {len(in_time_looks)}/{len(sessions)} sessions find all three in time.",
         "",
         *table(
-            ["set", "sessions", "all found in time", "minutes to all (median)",
-             "found (median)", "pattern shifts (total)", "led by robot / subject"],  # fmt: skip
+            [
+                "set",
+                "sessions",
+                "all found in time",
+                "minutes to all (median)",
+                "found (median)",
+                "pattern shifts (total)",
+                "led by robot / subject",
+            ],  # fmt: skip
             [
                 [
                     name,
