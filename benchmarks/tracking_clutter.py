@@ -20,9 +20,7 @@ from rnnpb.perception import HARD_SCENE_KINDS, clutter_benchmark
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument(
-        "--seeds", default="20,21,22,23,24", help="comma-separated scene seeds"
-    )
+    parser.add_argument("--seeds", default="20,21,22,23,24", help="comma-separated scene seeds")
     parser.add_argument("--frames", type=int, default=150, help="frames per scene")
     parser.add_argument("--kinds", default=",".join(HARD_SCENE_KINDS), help="scene kinds")
     args = parser.parse_args()
