@@ -702,7 +702,7 @@ class Teacher:
 
         assert self.job is not None
         self.job = None
-        if prepared is not None and prepared.mirror is not None:
+        if prepared is not None and prepared.model is not None and prepared.mirror is not None:
             model, self.loop.mirror = prepared.model, prepared.mirror
         else:  # not prepared (or its preparation failed): built here, as fast runs do
             model = TrainedModel.load(state.model_path)

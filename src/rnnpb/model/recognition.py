@@ -213,7 +213,7 @@ def _structure(history: np.ndarray, config: RecognitionConfig) -> tuple[float, b
     low, high = config.lags
     size = len(history)
     lags = np.arange(low, high + 1)
-    gap = np.isnan(history).any(axis=1)
+    gap: np.ndarray = np.asarray(np.isnan(history).any(axis=1), dtype=bool)
     if gap[size - recent :].any():
         return float("nan"), False
     # Lag l is measured when the steps it compares with (size - recent - l … size - l) have
