@@ -8,6 +8,7 @@ import shutil
 
 import pytest
 
+from rnnpb.interaction.teaching import TeachingConfig
 from rnnpb.web import ProtocolError, parse_client_message
 
 from .conftest import TEST_DT
@@ -141,7 +142,7 @@ def test_the_session_keeps_a_new_shape_and_answers_commands_it_cannot_carry_out(
         assert (episode["pattern"], episode["status"], episode["n_cycles"]) == (
             "new-1",
             "kept",
-            4,
+            TeachingConfig().episode_cycles,
         )
         # In confirm mode nothing is consolidated until the person says so.
         assert not teaching.get("consolidating")
