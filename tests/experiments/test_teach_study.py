@@ -39,6 +39,17 @@ def test_the_new_shape_is_kept_learned_and_followed_and_nothing_unstructured_is_
 
 @pytest.mark.xfail(
     strict=True,
+    reason="not yet: the fast-preset detector calls figure-eight novel after 40 steps here, "
+    "past issue 14's three cycles (docs/model.md, 'Recognition and novelty')",
+)
+def test_the_new_shape_is_called_novel_within_three_cycles(study):
+    _, _, results = study
+    (run,) = results["runs"]
+    assert run["detection_delay"] is not None and run["detection_delay"] < 3 * 12
+
+
+@pytest.mark.xfail(
+    strict=True,
     reason="not yet: right after the jerky movement the freshly learned shape is not locked "
     "onto within its next performance (docs/teaching.md, 'The full study')",
 )
