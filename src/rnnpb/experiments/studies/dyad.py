@@ -22,10 +22,9 @@ at ``--seed`` (0).
 
 from __future__ import annotations
 
-import multiprocessing
 import os
 import time
-from concurrent.futures import Future, ProcessPoolExecutor, as_completed
+from concurrent.futures import Future, as_completed
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -37,6 +36,7 @@ from rnnpb.analysis import figures
 from rnnpb.errors import ConfigError
 from rnnpb.experiments.reporting import embed, fmt, table, versions, write_outputs
 from rnnpb.experiments.studies import StudyOptions, StudyOutcome
+from rnnpb.experiments.studies._pool import study_pool
 from rnnpb.experiments.summary import Target
 from rnnpb.interaction.dyad import (
     AgentConfig,
@@ -132,14 +132,6 @@ def _load(path: str) -> tuple[TrainedModel, dict[str, np.ndarray]]:
         model = TrainedModel.load(path)
         _LOADED[path] = (model, pattern_references(model))
     return _LOADED[path]
-
-
-def _worker_init() -> None:
-    # Each worker keeps to one core; the pool provides the parallelism.
-    from rnnpb import _xla
-
-    _xla.configure()
-    _xla.single_threaded()
 
 
 def _figure_arrays(arrays: dict[str, np.ndarray], found: measures.DyadMeasures) -> dict[str, Any]:
@@ -251,31 +243,6 @@ def subject_job(
     return out
 
 
-class _InProcess:
-    """The pool's interface, run here (one worker)."""
-
-    def submit(self, function: Any, *args: Any) -> Future:
-        future: Future = Future()
-        future.set_result(function(*args))
-        return future
-
-    def __enter__(self) -> _InProcess:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        return None
-
-
-def _pool(workers: int) -> ProcessPoolExecutor | _InProcess:
-    if workers == 1:
-        return _InProcess()
-    return ProcessPoolExecutor(
-        max_workers=workers,
-        mp_context=multiprocessing.get_context("spawn"),
-        initializer=_worker_init,
-    )
-
-
 def _median_first(rows: list[dict[str, Any]], key: str = "first_coherent") -> float:
     return float(np.median([r[key] if r[key] is not None else np.inf for r in rows]))
 
@@ -327,9 +294,8 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
     jobs: dict[Future, tuple[str, dict[str, Any]]] = {}
     done: list[tuple[dict[str, Any], dict[str, Any]]] = []
     subject_steps = int(round(size.subject_minutes * 60 / DT))
-    if options.workers > 1:
-        _worker_init()  # inherited by the workers
-    with _pool(options.workers) as pool:
+    # Kept to one core here too when workers are started: they inherit it.
+    with study_pool(options.workers, init_here=options.workers > 1) as pool:
 
         def submit(part: str, key: dict[str, Any], function: Any, *args: Any) -> None:
             jobs[pool.submit(function, *args)] = (part, key)

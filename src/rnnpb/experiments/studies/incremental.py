@@ -18,9 +18,8 @@ patterns; movements of the demonstrator beyond them plug in at the end of
 from __future__ import annotations
 
 import math
-import multiprocessing
 import time
-from concurrent.futures import Future, ProcessPoolExecutor, as_completed
+from concurrent.futures import as_completed
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -37,6 +36,7 @@ from rnnpb.experiments.paper import (
 )
 from rnnpb.experiments.reporting import embed, fmt, table, versions, write_outputs
 from rnnpb.experiments.studies import StudyOptions, StudyOutcome
+from rnnpb.experiments.studies._pool import study_pool
 from rnnpb.experiments.summary import Target
 from rnnpb.model import OnlineConfig, TrainConfig, TrainedModel, train
 from rnnpb.model.consolidation import (
@@ -294,40 +294,6 @@ def _switching_with(
     return pairs
 
 
-class _InProcess:
-    """One worker: the jobs run here, in order (no process to start, compilations shared)."""
-
-    def __enter__(self) -> _InProcess:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        return None
-
-    def submit(self, function, *args) -> Future:
-        future: Future = Future()
-        future.set_result(function(*args))
-        return future
-
-
-def _pool(workers: int) -> ProcessPoolExecutor | _InProcess:
-    if workers == 1:
-        return _InProcess()
-    _worker_init()  # inherited by the workers this process starts
-    return ProcessPoolExecutor(
-        max_workers=workers,
-        mp_context=multiprocessing.get_context("spawn"),
-        initializer=_worker_init,
-    )
-
-
-def _worker_init() -> None:
-    # Each worker keeps to one core: a consolidation's time is that of one core.
-    from rnnpb import _xla
-
-    _xla.configure()
-    _xla.single_threaded()
-
-
 def _demonstrations(patterns, config: IncrementalConfig, seed: int):
     from rnnpb.demonstrator import pattern_dataset
 
@@ -452,7 +418,7 @@ def run_study(out: Path, config: IncrementalConfig, log=print) -> StudyOutcome:
         )
         return StudyOutcome(runtime, targets)
 
-    with _pool(config.workers) as pool:
+    with study_pool(config.workers, init_here=config.workers > 1) as pool:
         starts = {name: _start_model(name, config, out) for name in config.learning_sets}
         jobs = {
             pool.submit(set_job, name, None, starts[name], config, ""): "set"

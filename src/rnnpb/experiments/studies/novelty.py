@@ -17,9 +17,7 @@ paper's algorithm; ``--quick``: ``TrainConfig.fast()``, sets 1 and full only).
 
 from __future__ import annotations
 
-import multiprocessing
 import time
-from concurrent.futures import Future, ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -28,6 +26,7 @@ import numpy as np
 
 from rnnpb.experiments.reporting import embed, fmt, table, versions, write_outputs
 from rnnpb.experiments.studies import StudyOptions, StudyOutcome
+from rnnpb.experiments.studies._pool import study_pool
 from rnnpb.experiments.summary import Target
 
 NAME = "novelty"
@@ -331,7 +330,7 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
     seeds = [options.seed + 1000 + i for i in range(draws)]  # not the draws tuned on (0, 1)
     runs: list[StreamRun] = []
     settings: dict[str, dict[str, Any]] = {}
-    with _pool(min(options.workers, len(models))) as pool:
+    with study_pool(min(options.workers, len(models))) as pool:
         jobs = [
             pool.submit(_model_job, name, str(path), seeds, steps, shapes)
             for name, path in models.items()
@@ -380,39 +379,6 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
     }
     write_outputs(out, report, results)
     return StudyOutcome(runtime_s=time.perf_counter() - started, targets=targets)
-
-
-class _InProcess:
-    """One worker: the jobs run here, in order (no process to start)."""
-
-    def __enter__(self) -> _InProcess:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        return None
-
-    def submit(self, function, *args) -> Future:
-        future: Future = Future()
-        future.set_result(function(*args))
-        return future
-
-
-def _pool(workers: int) -> ProcessPoolExecutor | _InProcess:
-    if workers == 1:
-        return _InProcess()
-    return ProcessPoolExecutor(
-        max_workers=workers,
-        mp_context=multiprocessing.get_context("spawn"),
-        initializer=_worker_init,
-    )
-
-
-def _worker_init() -> None:
-    # Each worker keeps to one core: the step's speed is that of one core.
-    from rnnpb import _xla
-
-    _xla.configure()
-    _xla.single_threaded()
 
 
 def _report(

@@ -45,11 +45,10 @@ quick form teaches the shipped fast-preset model of learning set 1 one shape.
 from __future__ import annotations
 
 import math
-import multiprocessing
 import resource
 import shutil
 import time
-from concurrent.futures import Future, ProcessPoolExecutor, as_completed
+from concurrent.futures import Future, as_completed
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -60,6 +59,7 @@ from rnnpb.analysis import metrics
 from rnnpb.errors import ConfigError
 from rnnpb.experiments.reporting import embed, fmt, table, versions, write_outputs
 from rnnpb.experiments.studies import StudyOptions, StudyOutcome
+from rnnpb.experiments.studies._pool import study_pool
 from rnnpb.experiments.summary import Target
 from rnnpb.interaction.teaching import TeachingConfig
 from rnnpb.model import OnlineConfig
@@ -655,40 +655,6 @@ def paced_job(
     )
 
 
-class _InProcess:
-    """One worker: the jobs run here, in order."""
-
-    def __enter__(self) -> _InProcess:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        return None
-
-    def submit(self, function, *args) -> Future:
-        future: Future = Future()
-        future.set_result(function(*args))
-        return future
-
-
-def _worker_init() -> None:
-    # One core per worker (and per consolidation it starts: the environment is inherited).
-    from rnnpb import _xla
-
-    _xla.configure()
-    _xla.single_threaded()
-
-
-def _pool(workers: int) -> ProcessPoolExecutor | _InProcess:
-    _worker_init()
-    if workers == 1:
-        return _InProcess()
-    return ProcessPoolExecutor(
-        max_workers=workers,
-        mp_context=multiprocessing.get_context("spawn"),
-        initializer=_worker_init,
-    )
-
-
 def _start_models(config: TeachConfig) -> dict[str, str]:
     if config.shipped:
         from rnnpb.models import SHIPPED_MODEL
@@ -740,7 +706,8 @@ def run_study(out: Path, config: TeachConfig, log=print) -> StudyOutcome:
 
     total = len(config.learning_sets) * (len(config.shapes) + int(config.paper_measures))
     total += int(config.paced is not None)
-    with _pool(config.workers) as pool:
+    # One core here too: the jobs may run here, and the consolidations they start inherit it.
+    with study_pool(config.workers, init_here=True) as pool:
         jobs: dict[Future, Any] = {}
         if config.paper_measures:
             for name in config.learning_sets:
