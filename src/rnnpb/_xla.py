@@ -20,6 +20,14 @@ is told once, when they build a :class:`~rnnpb.model.MirrorSystem`
 the setting takes effect only before the first JAX computation of the process.
 ``RNNPB_XLA_DEFAULTS=0`` (or an ``--xla_backend_extra_options`` of one's own in ``XLA_FLAGS``)
 keeps XLA's defaults and silences the notice.
+
+The compiled programs are kept on disk (:func:`compilation_cache`): XLA compiles the learning
+iteration and each on-line configuration's step in a few seconds each, in every new process. The
+``rnnpb`` command, the test suite and every worker process they start (the demo's, the studies',
+a sweep's Ray tasks) keep them in JAX's persistent compilation cache, so that a process compiles
+only what no earlier process did: ``~/.cache/rnnpb/xla`` (``$XDG_CACHE_HOME/rnnpb/xla``), or the
+folder ``RNNPB_XLA_CACHE`` names; ``RNNPB_XLA_CACHE=0`` turns it off, and a
+``JAX_COMPILATION_CACHE_DIR`` of one's own is used as it is.
 """
 
 from __future__ import annotations
@@ -28,6 +36,7 @@ import os
 import sys
 import warnings
 from collections.abc import Mapping, MutableMapping
+from pathlib import Path
 
 SMALL_LOOP_OPTION = "xla_cpu_small_while_loop_byte_threshold"
 SMALL_LOOP_BYTES = 1 << 20
@@ -125,3 +134,65 @@ def backend_started() -> bool:
 def active() -> bool:
     """Whether this process's ``XLA_FLAGS`` carries rnnpb's setting (as bench reports it)."""
     return FLAG in os.environ.get("XLA_FLAGS", "")
+
+
+CACHE_ENV = "RNNPB_XLA_CACHE"
+CACHE_MAX_BYTES = 1 << 30  # JAX's cache evicts the least recently used entries beyond this
+CACHE_MIN_COMPILE_S = 0.2  # programs that compile faster are not worth a file
+
+
+def cache_folder(environ: Mapping[str, str] | None = None) -> Path | None:
+    """Where compiled programs are kept (:func:`compilation_cache`), or None when off."""
+    environ = os.environ if environ is None else environ
+    chosen = environ.get(CACHE_ENV, "").strip()
+    if chosen == "0":
+        return None
+    if chosen and chosen != "1":
+        return Path(chosen).expanduser()
+    base = environ.get("XDG_CACHE_HOME", "").strip()
+    return (Path(base) if base else Path.home() / ".cache") / "rnnpb" / "xla"
+
+
+def compilation_cache(environ: MutableMapping[str, str] | None = None) -> Path | None:
+    """Keep compiled programs on disk, for this process and the processes it starts.
+
+    Sets JAX's persistent compilation cache through the environment (which JAX reads when it
+    is imported, and worker processes inherit), and in this process's JAX when it is already
+    imported. The cache has a size bound, which also makes JAX take a file lock around every
+    read and write, so that processes sharing it never read a half-written entry; an entry a
+    killed process left unreadable is reported by JAX once and compiled again.
+
+    Returns the folder, or None: turned off (``RNNPB_XLA_CACHE=0``), or the folder cannot be
+    made (a read-only home: compiling as before, silently). A ``JAX_COMPILATION_CACHE_DIR`` the
+    user set is left as it is and returned.
+    """
+    environ = os.environ if environ is None else environ
+    own = environ.get("JAX_COMPILATION_CACHE_DIR", "").strip()
+    if own:
+        return Path(own)
+    folder = cache_folder(environ)
+    if folder is None:
+        return None
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        return None
+    settings = {
+        "JAX_COMPILATION_CACHE_DIR": str(folder),
+        "JAX_COMPILATION_CACHE_MAX_SIZE": str(CACHE_MAX_BYTES),
+        "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS": str(CACHE_MIN_COMPILE_S),
+    }
+    for name, value in settings.items():
+        environ.setdefault(name, value)
+    if environ is os.environ and "jax" in sys.modules:
+        import jax
+
+        jax.config.update("jax_compilation_cache_dir", environ["JAX_COMPILATION_CACHE_DIR"])
+        jax.config.update(
+            "jax_compilation_cache_max_size", int(environ["JAX_COMPILATION_CACHE_MAX_SIZE"])
+        )
+        jax.config.update(
+            "jax_persistent_cache_min_compile_time_secs",
+            float(environ["JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS"]),
+        )
+    return folder

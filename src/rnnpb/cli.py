@@ -92,6 +92,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         with interrupts:
             # Before any command imports JAX: XLA reads its flags once, when its backend starts.
             _xla.configure()
+            _xla.compilation_cache()  # compiled programs kept for the next process
             parser = build_parser()
             args = parser.parse_args(argv)
             if not getattr(args, "_run", None):

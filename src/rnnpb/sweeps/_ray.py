@@ -31,6 +31,7 @@ def _worker_init() -> None:
 
     _xla.configure()
     _xla.single_threaded()
+    _xla.compilation_cache()  # a cluster's node keeps its own
 
 
 def _call(function: Callable[..., Any], args: tuple[Any, ...]) -> Any:
