@@ -127,3 +127,47 @@ def test_a_robot_takes_only_its_own_patterns(model):
     robot = RobotAgent(model)
     with pytest.raises(ConfigError, match="not one this robot learned"):
         robot.take_initiative("4")
+
+
+def _pair(model, side_by_side):
+    from rnnpb.interaction.dyad import robot_pair
+
+    dyad = robot_pair(model, model, AgentConfig(patience=5), AgentConfig(persistence=20), seed=4)
+    dyad.side_by_side = side_by_side
+    return dyad
+
+
+def test_two_robots_step_the_same_side_by_side_as_one_after_the_other(model):
+    together = _pair(model, True).run(40)
+    in_turn = _pair(model, False).run(40)
+    for key in ("a_motor", "b_motor", "a_pb", "b_pb", "a_shown", "b_shown", "b_initiative"):
+        assert np.array_equal(together[key], in_turn[key]), key
+    # Robots are side by side where two cores may be used; a subject acts in the caller's.
+    assert robot_and_subject(model, seed=1).side_by_side is False
+
+
+def test_an_error_in_the_agent_acting_beside_reaches_the_caller(model):
+    dyad = _pair(model, True)
+
+    def broken(view):
+        raise RuntimeError("b broke")
+
+    dyad.b.act = broken  # type: ignore[method-assign]
+    with pytest.raises(RuntimeError, match="b broke"):
+        dyad.step()
+
+
+def test_a_subject_keeps_to_its_initiative_before_following_the_robot(model):
+    # The robot plays pattern 1 and never follows; the subject starts on its pattern 2.
+    def first_follow(commit):
+        robot = RobotAgent(model, AgentConfig(adaptation=0.0), initial_pb=model.pattern_pb["1"])
+        config = SubjectConfig(repertoire=("1", "2"), commit_steps=commit, patience=500)
+        seed = next(k for k in range(50) if ScriptedSubject(config, seed=k).pattern == "2")
+        intents = Dyad(robot, ScriptedSubject(config, seed=seed)).run(80)["b_intent"]
+        assert intents[0] == "2"
+        return int(np.flatnonzero(intents == "1")[0])
+
+    assert first_follow(0) < 30  # it takes up the robot's movement as soon as it sees it
+    assert first_follow(40) >= 40  # ... or only after keeping to its own for 40 steps
+    with pytest.raises(ConfigError, match="commit_steps"):
+        SubjectConfig(commit_steps=-1)

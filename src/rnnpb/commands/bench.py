@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+import os
+from typing import Any
 
 NAME = "bench"
 HELP = "time learning, the on-line step and tracking (single-threaded)"
@@ -22,7 +24,8 @@ single-threaded, after warm-up:
   - the same on-line step in a straightforward NumPy implementation (the reference the
     tests hold the compiled one to), and the ratio;
   - colour-ball tracking of 640x480 frames;
-  - two coupled agents (docs/dyad.md): one step of both against one agent's on-line step.
+  - two coupled agents (docs/dyad.md): one step of both against one agent's step, one after
+    the other and side by side, in a process of their own on up to two cores.
 
 --json FILE writes the same figures (keys train_iteration_ms_median,
 online_step_ms_median, online_step_ms_p99, ...) with the machine and versions.
@@ -48,9 +51,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+_CORES: list[int] = []  # the cores the process could use before _single_core pinned it
+
+
 def _single_core() -> str:
     """Pin this process to one core and make XLA single-threaded (before JAX starts)."""
-    import os
     import sys
 
     from rnnpb import _xla
@@ -59,6 +64,7 @@ def _single_core() -> str:
     note = "single core"
     if hasattr(os, "sched_setaffinity"):
         cores = sorted(os.sched_getaffinity(0))
+        _CORES[:] = cores  # the dyad's side-by-side figure uses two of them
         os.sched_setaffinity(0, {cores[0]})
         note = f"pinned to core {cores[0]}"
     if "jax" in sys.modules:
@@ -213,24 +219,9 @@ def run(args: argparse.Namespace) -> int:
     reference_ms = float(np.median(reference_times))
     next_part()
 
-    # Two coupled agents (rnnpb.interaction.dyad): a whole step of both — two on-line steps,
-    # forward kinematics and the cameras — against one agent's on-line step, alternately.
-    from rnnpb.interaction.dyad import Dyad, RobotAgent
-
-    pair = Dyad(
-        RobotAgent(model, online=online, name="a"), RobotAgent(model, online=online, name="b")
-    )
-    for _ in range(40):
-        pair.step()
-    dyad_times, single_times = [], []
-    for t in range(args.steps):
-        t0 = time.perf_counter()
-        pair.step()
-        dyad_times.append((time.perf_counter() - t0) * 1e3)
-        t0 = time.perf_counter()
-        mirror.step(stream[(40 + t) % len(stream)])
-        single_times.append((time.perf_counter() - t0) * 1e3)
-    dyad_ms = float(np.median(dyad_times))
+    # Two coupled agents (rnnpb.interaction.dyad), in a process of their own that may use two
+    # cores (this one is pinned to one, and XLA sizes its threads when it starts).
+    dyad_figures = _dyad_figures(model, online, args.steps)
 
     figures = {
         "train_iteration_ms_median": train_ms,
@@ -254,8 +245,7 @@ def run(args: argparse.Namespace) -> int:
         },
         "online_step_reference_numpy_ms_median": reference_ms,
         "online_speedup_vs_numpy": reference_ms / float(np.median(step_times)),
-        "dyad_step_ms_median": dyad_ms,
-        "dyad_step_vs_one_agent": dyad_ms / float(np.median(single_times)),
+        **dyad_figures,
     }
     if not args.no_tracking:
         from rnnpb.perception import tracking_benchmark
@@ -315,9 +305,18 @@ def run(args: argparse.Namespace) -> int:
         f"(over {args.reference_steps} steps) — compiled is "
         f"{figures['online_speedup_vs_numpy']:.0f}x faster"
     )
+    cores = int(figures["dyad_cores"])
     print(
-        f"  two coupled agents, one step of both:    {dyad_ms:8.3f} ms median "
-        f"({figures['dyad_step_vs_one_agent']:.2f}x one agent's step, timed alternately)"
+        f"  two coupled agents, one step of both:    "
+        f"{figures['dyad_step_ms_median']:8.3f} ms median "
+        f"({figures['dyad_step_vs_one_agent']:.2f}x one agent's step of "
+        f"{figures['dyad_step_one_agent_ms_median']:.3f} ms, one after the other)"
+    )
+    print(
+        f"    side by side, on {cores} core{'s' if cores > 1 else ''}:          "
+        f"{figures['dyad_step_side_by_side_ms_median']:8.3f} ms median "
+        f"({figures['dyad_step_side_by_side_vs_one_agent']:.2f}x; processor time "
+        f"{figures['dyad_step_side_by_side_cpu_vs_one_agent']:.2f}x)"
     )
     if "tracking_frames_per_s" in figures:
         print(
@@ -340,3 +339,73 @@ def run(args: argparse.Namespace) -> int:
             json.dump(document, handle, indent=2)
         print(f"wrote {args.json}")
     return 0
+
+
+def _dyad_worker_start(cores: list[int]) -> None:
+    from rnnpb import _xla
+
+    _xla.configure()
+    _xla.single_threaded()
+    _xla.compilation_cache()
+    if cores and hasattr(os, "sched_setaffinity"):
+        os.sched_setaffinity(0, set(cores))
+
+
+def _dyad_figures(model: Any, online: Any, steps: int) -> dict[str, float]:
+    """Time two coupled agents against one, in a fresh process on up to two cores."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    cores = _CORES[:2]
+    with ProcessPoolExecutor(
+        1,
+        mp_context=multiprocessing.get_context("spawn"),
+        initializer=_dyad_worker_start,
+        initargs=(cores,),
+    ) as pool:
+        return pool.submit(dyad_timing, model, online, steps).result()
+
+
+def dyad_timing(model: Any, online: Any, steps: int) -> dict[str, float]:
+    """One step of two coupled agents (each regressing, moving its body and showing it)
+    against one agent's step, alternately: the agents one after the other, and side by side
+    (:class:`rnnpb.interaction.dyad.Dyad`). The single agent watches a robot moving as the
+    dyad's agents do (its own partner, which it follows), so that it sees the same kind of
+    movement. Medians of wall-clock and of processor time (all threads), in ms and as ratios."""
+    import time
+
+    import numpy as np
+
+    from rnnpb.interaction.dyad import Dyad, RobotAgent, usable_cores
+
+    def agents() -> tuple[RobotAgent, RobotAgent]:
+        return RobotAgent(model, online=online, name="a"), RobotAgent(
+            model, online=online, name="b"
+        )
+
+    figures: dict[str, float] = {"dyad_cores": float(usable_cores())}
+    kinds = {"dyad_step": False, "dyad_step_side_by_side": True}
+    for prefix, side_by_side in kinds.items():
+        pair = Dyad(*agents(), side_by_side=side_by_side)
+        watcher = Dyad(*agents(), side_by_side=False)
+        solo, partner = watcher.a, watcher.b
+        for _ in range(40):
+            pair.step()
+            watcher.step()
+        both, one, both_cpu, one_cpu = [], [], [], []
+        for _ in range(steps):
+            t0, c0 = time.perf_counter(), time.process_time()
+            pair.step()
+            both.append(time.perf_counter() - t0)
+            both_cpu.append(time.process_time() - c0)
+            view = watcher.view(partner)
+            t0, c0 = time.perf_counter(), time.process_time()
+            solo.act(view)
+            one.append(time.perf_counter() - t0)
+            one_cpu.append(time.process_time() - c0)
+            partner.act(watcher.view(solo))  # the partner moves on, untimed
+        figures[f"{prefix}_ms_median"] = float(np.median(both)) * 1e3
+        figures[f"{prefix}_vs_one_agent"] = float(np.median(both) / np.median(one))
+        figures[f"{prefix}_cpu_vs_one_agent"] = float(np.median(both_cpu) / np.median(one_cpu))
+        figures[f"{prefix}_one_agent_ms_median"] = float(np.median(one)) * 1e3
+    return figures

@@ -32,8 +32,10 @@ initiative and starts another of its patterns (``None``: never), and *noise* on 
 from __future__ import annotations
 
 import math
+import os
 import time
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor, wait
 from dataclasses import dataclass, field, replace
 from typing import Protocol
 
@@ -414,6 +416,11 @@ class SubjectConfig:
         synchrony as long again before exploring.
     follow_steps : int
         Steps the robot must move one of its other patterns before it follows it.
+    commit_steps : int
+        Steps it keeps to a pattern it has just initiated before it would follow another of
+        the robot's movements: a person who starts a movement gives the partner time to take
+        it up (the robot's switching takes up to 15 steps), and does not drop it the moment
+        the partner is still doing the old one (0: it follows at once).
     phase_coupling : float
         Fraction of the phase difference to the robot it closes each step while matched.
     period_steps : float
@@ -427,6 +434,7 @@ class SubjectConfig:
     patience: int = 30
     memorize_steps: int = 24
     follow_steps: int = 4
+    commit_steps: int = 20
     phase_coupling: float = 0.3
     period_steps: float = 12.0
     match_tolerance: float = 0.5
@@ -437,6 +445,8 @@ class SubjectConfig:
         for name in ("patience", "memorize_steps", "follow_steps"):
             if getattr(self, name) < 1:
                 raise ConfigError(f"subject {name} must be >= 1, got {getattr(self, name)}")
+        if self.commit_steps < 0:
+            raise ConfigError(f"subject commit_steps must be >= 0, got {self.commit_steps}")
         if not 0.0 <= self.phase_coupling <= 1.0:
             raise ConfigError("subject phase_coupling must be in [0, 1]")
         if not 3.0 <= self.period_steps <= 200.0:
@@ -482,6 +492,7 @@ class ScriptedSubject:
         self._unmatched = 0
         self._dwell = 0
         self._other = ("", 0)
+        self._committed = self.config.commit_steps  # its first movement is its own initiative
         self._hands = self._pose()
 
     @property
@@ -505,6 +516,7 @@ class ScriptedSubject:
         self.pattern = str(self.rng.choice(choices))
         self._matched = self._unmatched = self._dwell = 0
         self._other = ("", 0)
+        self._committed = self.config.commit_steps
 
     def _robot_movement(self) -> tuple[str, int]:
         """What it takes the robot to be doing: the one of its own patterns (and its phase)
@@ -538,6 +550,7 @@ class ScriptedSubject:
         config = self.config
         initiative = False
         self._dwell += 1
+        self._committed -= 1
         if robot and robot == self.pattern:
             self._matched += 1  # over the time on this pattern: a flicker does not reset it
             self._unmatched = 0
@@ -554,7 +567,7 @@ class ScriptedSubject:
                 initiative = True
         else:
             self._unmatched += 1
-            if robot and robot != self.pattern:
+            if robot and robot != self.pattern and self._committed <= 0:
                 name, count = self._other
                 self._other = (robot, count + 1 if name == robot else 1)
                 if self._other[1] >= config.follow_steps:
@@ -592,24 +605,65 @@ class DyadStep:
 
 
 class Dyad:
-    """Two agents facing each other; each sees the other's hands through its own camera."""
+    """Two agents facing each other; each sees the other's hands through its own camera.
 
-    def __init__(self, a: Agent, b: Agent, camera: RobotCamera | None = None) -> None:
+    ``side_by_side``: two robots act at once, agent B in a thread of the dyad's own while A
+    acts in the caller's (JAX computes without holding Python's lock, so on a machine with a
+    core for each the two on-line steps overlap). The agents share nothing they change, so
+    the steps are the same either way. None (the default): side by side when both agents are
+    robots and this process may use two cores or more.
+    """
+
+    def __init__(
+        self,
+        a: Agent,
+        b: Agent,
+        camera: RobotCamera | None = None,
+        *,
+        side_by_side: bool | None = None,
+    ) -> None:
         self.a, self.b = a, b
         self.camera = camera or RobotCamera()
         self.steps = 0
+        if side_by_side is None:
+            side_by_side = (
+                isinstance(a, RobotAgent) and isinstance(b, RobotAgent) and usable_cores() >= 2
+            )
+        self.side_by_side = side_by_side
+        self._thread: ThreadPoolExecutor | None = None
+        self._shown: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
     def view(self, of: Agent) -> np.ndarray:
         """What a robot's camera sees of an agent now, (4,)."""
-        return self.camera.sensory_from_hands(of.hands)
+        hands = of.hands
+        kept = self._shown.get(id(of))
+        if kept is not None and np.array_equal(kept[0], hands):
+            return kept[1].copy()
+        seen = self.camera.sensory_from_hands(hands)
+        self._shown[id(of)] = (np.array(hands, copy=True), seen)
+        return seen.copy()
+
+    def _act_both(
+        self, view_of_b: np.ndarray, view_of_a: np.ndarray
+    ) -> tuple[AgentStep, AgentStep]:
+        if not self.side_by_side:
+            return self.a.act(view_of_b), self.b.act(view_of_a)
+        if self._thread is None:
+            self._thread = ThreadPoolExecutor(max_workers=1, thread_name_prefix="dyad-b")
+        later = self._thread.submit(self.b.act, view_of_a)
+        try:
+            a = self.a.act(view_of_b)
+        except BaseException:
+            wait([later])  # B's step ends before A's error goes up: nothing runs on unseen
+            raise
+        return a, later.result()  # B's error, if any, is raised here
 
     def step(self) -> DyadStep:
         """Both agents see each other as they are and act (each sees the other one step
         late)."""
         start = time.perf_counter()
         view_of_b, view_of_a = self.view(self.b), self.view(self.a)
-        a = self.a.act(view_of_b)
-        b = self.b.act(view_of_a)
+        a, b = self._act_both(view_of_b, view_of_a)
         seconds = time.perf_counter() - start
         record = DyadStep(self.steps, a, b, seconds, self.view(self.a), self.view(self.b))
         self.steps += 1
@@ -685,6 +739,13 @@ class DyadRun:
 
     def __len__(self) -> int:
         return len(self.arrays.get("step", ()))
+
+
+def usable_cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - a platform without affinity (macOS)
+        return os.cpu_count() or 1
 
 
 def random_start(model: TrainedModel, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
