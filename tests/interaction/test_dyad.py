@@ -171,3 +171,23 @@ def test_a_subject_keeps_to_its_initiative_before_following_the_robot(model):
     assert first_follow(40) >= 40  # ... or only after keeping to its own for 40 steps
     with pytest.raises(ConfigError, match="commit_steps"):
         SubjectConfig(commit_steps=-1)
+
+
+def test_of_two_robots_that_initiate_together_one_gives_way(model):
+    def leads(yield_steps):
+        a, b = (
+            RobotAgent(model, AgentConfig(yield_steps=yield_steps), seed=k, name=n)
+            for k, n in enumerate("ab")
+        )
+        a.take_initiative("1")
+        b.take_initiative("2")
+        run = Dyad(a, b).run(24)
+        return run["a_intent"] != "", run["b_intent"] != ""
+
+    held_a, held_b = leads(None)
+    assert held_a.all() and held_b.all()  # both hold their initiative for lead_steps
+    a, b = leads(2)
+    # One gave way (to follow the other) before that; the other held its initiative.
+    assert a.all() != b.all()
+    with pytest.raises(ConfigError, match="yield_steps"):
+        AgentConfig(yield_steps=0)

@@ -143,6 +143,13 @@ class AgentConfig:
         The movement (view units) under which the partner counts as still.
     lead_steps : int
         How long an initiative is held before the agent looks again.
+    yield_steps : int or None
+        While it leads, steps of predicting its partner well on a pattern that is neither the
+        one it leads nor the one they were on before (the partner took an initiative of its
+        own at about the same time) after which it gives way and follows the partner: each
+        time drawn from ``yield_steps`` to three times as many, so that two agents do not give
+        way together. None: it holds its initiative for ``lead_steps`` whatever the partner
+        does.
     stable_error : float
         RMS prediction error (view units) under which a step counts as stable.
     """
@@ -154,6 +161,7 @@ class AgentConfig:
     alone_steps: int | None = 12
     still_level: float = 0.01
     lead_steps: int = 24
+    yield_steps: int | None = 3
     stable_error: float = 0.03
 
     def __post_init__(self) -> None:
@@ -171,6 +179,8 @@ class AgentConfig:
             raise ConfigError(f"still_level must be >= 0, got {self.still_level}")
         if self.lead_steps < 0:
             raise ConfigError(f"lead_steps must be >= 0, got {self.lead_steps}")
+        if self.yield_steps is not None and self.yield_steps < 1:
+            raise ConfigError(f"yield_steps must be >= 1 step or None, got {self.yield_steps}")
         if not self.stable_error > 0:
             raise ConfigError(f"stable_error must be > 0, got {self.stable_error}")
 
@@ -271,6 +281,9 @@ class RobotAgent:
         self._led = 0
         self._patience = self._draw_patience()
         self._intent = ""
+        self._before = ""  # the pattern they were on when it took the initiative
+        self._contested = 0
+        self._yield_after: int | None = None
         self._recent: list[np.ndarray] = []
         self._plan: list[np.ndarray] = []  # joint angles to play while leading
         if self.config.adaptation == 0.0:
@@ -302,8 +315,8 @@ class RobotAgent:
     def take_initiative(self, pattern: str | None = None) -> str:
         """Start another learned pattern now (``pattern``, or one drawn from the others) and
         play it without looking for ``lead_steps`` steps; returns its name."""
+        current = self.model.nearest_pattern(self.mirror.pb)[0]
         if pattern is None:
-            current = self.model.nearest_pattern(self.mirror.pb)[0]
             others = [p for p in self.patterns if p != current] or list(self.patterns)
             pattern = str(self.rng.choice(others))
         if pattern not in self.patterns:
@@ -317,6 +330,9 @@ class RobotAgent:
             self.model.pattern_initial_context(pattern),
         )
         self._stable, self._unstable, self._led, self._intent = 0, 0, 0, pattern
+        self._before, self._contested = current, 0
+        y = self.config.yield_steps
+        self._yield_after = None if y is None else y + int(self.rng.integers(0, 2 * y + 1))
         self._patience = self._draw_patience()
         self._recent.clear()
         return pattern
@@ -366,7 +382,19 @@ class RobotAgent:
         if leading:
             # Led: stable while the partner follows the led pattern (the mirror system, which
             # watches it, recognises that pattern in it).
-            stable = stable and self.model.nearest_pattern(result.pb)[0] == self._intent
+            seen_pattern = self.model.nearest_pattern(result.pb)[0]
+            contested = stable and seen_pattern not in (self._intent, self._before)
+            self._contested = self._contested + 1 if contested else 0
+            stable = stable and seen_pattern == self._intent
+            if (
+                not initiative
+                and self._yield_after is not None
+                and self._contested >= self._yield_after
+            ):
+                # The partner leads a pattern of its own: give way, follow it from this step.
+                self._plan, self._intent, leading = [], "", False
+                self._stable, self._unstable, self._contested = 0, 0, 0
+                self._patience = self._draw_patience()
         self._stable = self._stable + 1 if stable else 0
         self._unstable = 0 if stable else self._unstable + 1
         if leading:
