@@ -6,7 +6,7 @@ import pytest
 
 from rnnpb.demonstrator import learning_set
 from rnnpb.interaction import InteractionLoop, LoopConfig, open_source
-from rnnpb.interaction.teaching import EpisodeKeeper
+from rnnpb.interaction.teaching import EpisodeKeeper, episode_steps, shown_as
 from rnnpb.memory import MemoryStore
 from rnnpb.model import MirrorSystem, TrainConfig, train
 from rnnpb.robot import JOINT_LIMITS
@@ -29,7 +29,8 @@ def test_a_new_shape_is_kept_and_random_movement_is_not(model, tmp_path):
         episodes = memory.episodes()
     truth = [r.truth.get("pattern", "") for r in records]
     assert len(episodes) == 1, [e.note for e in episodes]
-    first, last = (int(v) for v in episodes[0].note.removeprefix("steps ").split("-"))
+    first, last = episode_steps(episodes[0].note)
+    assert shown_as(episodes[0].note) == "figure-eight"  # what the scenario said it performed
     # whole cycles of the new shape only: nothing of the learned pattern before it, nothing
     # of the random walk after it
     assert set(truth[first : last + 1]) == {"figure-eight"}
@@ -57,8 +58,15 @@ def test_teaching_consolidates_in_the_background_and_swaps_the_new_version_in(mo
         # every learned sequence rehearsed, and the new one
         assert consolidation.status == "done"
         assert consolidation.n_rehearsed == len(model.sequence_patterns) + 1
+        # The scenario said what it performed: the episode's note keeps it, for the person.
+        assert shown_as(memory.episodes()[0].note) == "figure-eight"
         teacher.undo()
         assert "new-1" not in loop.mirror.model.patterns
+        # What the undone version learned is kept again (a Confirm learns it again), and it is
+        # not learned again at once: the person has just said no to it.
+        assert memory.episodes()[0].status == "kept"
+        assert teacher.pending == [] and teacher.job is None
+        assert "episode 1 kept again" in teacher.events[-1].text
     assert "new-1" in TrainedModel.load(version_path(path, 2)).patterns  # kept on disk
 
 

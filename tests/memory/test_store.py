@@ -51,6 +51,25 @@ def test_an_episode_comes_back_as_it_went_in(tmp_path):
             memory.episode(second)
 
 
+def test_an_undone_version_gives_its_episodes_back_as_kept(tmp_path):
+    with MemoryStore(tmp_path / "m.npz") as memory:
+        first, second, third = (
+            memory.add_episode(
+                *_movement(seed=k), source="s", model="v1.npz", pattern=f"new-{k}", n_cycles=2
+            )
+            for k in range(3)
+        )
+        for ids, after in (([first], "v2.npz"), ([second, third], "v3.npz")):
+            memory.add_consolidation(
+                model_before="v1.npz", model_after=tmp_path / after, episode_ids=ids, rehearsed=[]
+            )
+        memory.set_status(third, "discarded")  # since then: left as it is
+        assert memory.unlearn(tmp_path / "v3.npz") == [second]
+        assert [e.status for e in memory.episodes()] == ["learned", "kept", "discarded"]
+        assert memory.unlearn(tmp_path / "v3.npz") == []  # twice: nothing more
+        assert memory.unlearn(tmp_path / "elsewhere.npz") == []
+
+
 def test_a_consolidation_keeps_its_rehearsals_and_marks_its_episodes_learned(tmp_path):
     with MemoryStore(tmp_path / "m.npz") as memory:
         episode = memory.add_episode(

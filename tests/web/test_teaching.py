@@ -223,6 +223,9 @@ def test_the_panel_records_consolidates_learns_renames_and_undoes(browser, model
         _until(page, "document.querySelector('#confidence-bars').textContent.includes('new-1')")
         assert "set1.v2.npz" in page.text_content("#teach-versions")
         assert page.locator("#teach-undo").is_enabled()
+        eight = "#patterns button[data-pattern='figure-eight']"
+        _until(page, f"document.querySelector(\"{eight}\").textContent.includes('as new-1')")
+        assert "(novel)" not in page.text_content(eight)
         _shot(page, "teach-5-learned", "#teach")
 
         # Renamed: in the new version's file and history, and everywhere the page names it.
@@ -251,6 +254,9 @@ def test_the_panel_records_consolidates_learns_renames_and_undoes(browser, model
         )
         assert page.evaluate("rnnpbDashboard.state.running")
         assert "back to set1.npz" in page.text_content("#teach-result")
+        # The episode the undone version learned is kept again, to learn on a Confirm.
+        _until(page, "rnnpbDashboard.state.teaching.pending === 1")
+        assert "not learned by this model" in page.text_content(eight)
         _shot(page, "teach-7-undone", "#teach")
         page.click("#stop")
     assert version_path(model_file, 2).exists()  # the undone version stays on disk

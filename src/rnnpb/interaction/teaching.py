@@ -253,6 +253,30 @@ class TeachingEvent:
     pattern: str = ""
 
 
+SHOWN_STEPS = 2000  # steps of a source's own account kept (an episode is far shorter)
+SHOWN_AS = "shown as "  # in an episode's note: what a scripted source said it performed
+
+
+def episode_steps(note: str) -> tuple[int, int] | None:
+    """The loop steps an episode's note says it was cut from, (first, last), or None."""
+    part = note.split("; ")[0]
+    if not part.startswith("steps "):
+        return None
+    try:
+        first, last = (int(v) for v in part.removeprefix("steps ").split("-"))
+    except ValueError:
+        return None
+    return first, last
+
+
+def shown_as(note: str) -> str:
+    """The pattern an episode's note says a scripted source performed, or ""."""
+    for part in note.split("; "):
+        if part.startswith(SHOWN_AS):
+            return part[len(SHOWN_AS) :]
+    return ""
+
+
 class EpisodeKeeper:
     """A loop subscriber: cuts novel movements with an :class:`EpisodeCutter` and stores each
     as an episode in the short-term memory, under the next free name ``new-1``, ``new-2`` ….
@@ -290,6 +314,9 @@ class EpisodeKeeper:
         self.events: list[TeachingEvent] = []
         self.kept: list[int] = []
         self._last_text = ""
+        # What a scripted source says it performed, per recent step (a demonstrator's
+        # pattern): only written into an episode's note, for the person; never used to learn.
+        self._shown: dict[int, str] = {}
 
     def next_pattern_name(self) -> str:
         """``new-N`` for the smallest N no episode of the memory is named yet."""
@@ -299,7 +326,19 @@ class EpisodeKeeper:
             n += 1
         return f"new-{n}"
 
+    def _shown_as(self, first: int, last: int) -> str:
+        """The pattern the source said it performed over most of steps first..last, or ""."""
+        names = [self._shown.get(step, "") for step in range(first, last + 1)]
+        best = max(set(names), key=names.count) if names else ""
+        return best if best and names.count(best) * 2 > len(names) else ""
+
     def __call__(self, record) -> None:
+        truth = getattr(record, "truth", None)
+        shown = truth.get("pattern", "") if isinstance(truth, dict) else ""
+        if shown:
+            self._shown[record.step] = str(shown)
+        for step in [s for s in self._shown if s < record.step - SHOWN_STEPS]:
+            del self._shown[step]
         hands = self.hands_of(record) if self.hands_of is not None else None
         episode = self.cutter.observe(
             record.step, record.observed, getattr(record, "novelty", ""), hands
@@ -312,6 +351,7 @@ class EpisodeKeeper:
             return
         self._last_text = text
         pattern = self.next_pattern_name()
+        shown_as = self._shown_as(episode.first_step, episode.last_step)
         from rnnpb.errors import RnnpbError
 
         try:
@@ -322,7 +362,8 @@ class EpisodeKeeper:
                 model=self.model,
                 pattern=pattern,
                 n_cycles=episode.n_cycles,
-                note=f"steps {episode.first_step}-{episode.last_step}",
+                note=f"steps {episode.first_step}-{episode.last_step}"
+                + (f"; {SHOWN_AS}{shown_as}" if shown_as else ""),
             )
         except RnnpbError as error:
             self.events.append(TeachingEvent(record.step, "refused", str(error)))
@@ -725,10 +766,18 @@ class Teacher:
 
         if len(self.versions) < 2:
             return
-        self.versions.pop()
+        undone = self.versions.pop()
         self.loop.mirror = self.make_mirror(TrainedModel.load(self.model_path))
+        # What that version learned is kept again, not learned: a Confirm learns it again
+        # (never at once, even with ``auto``: the person has just said no to it).
+        again = self.memory.unlearn(undone)
+        kept = f"; episode{'s' if len(again) > 1 else ''} {', '.join(map(str, again))} kept again"
         self.events.append(
-            TeachingEvent(self.loop.steps, "undone", f"back to {Path(self.model_path).name}")
+            TeachingEvent(
+                self.loop.steps,
+                "undone",
+                f"back to {Path(self.model_path).name}{kept if again else ''}",
+            )
         )
 
     def rename(self, pattern: str, name: str) -> None:

@@ -432,6 +432,33 @@ class MemoryStore:
             "UPDATE episodes SET status = ? WHERE id = ?", (status, int(episode_id)), episode_id
         )
 
+    def unlearn(self, model_after: str | os.PathLike[str]) -> list[int]:
+        """The episodes a consolidation into ``model_after`` learned are ``kept`` again (that
+        version was undone): one transaction; returns their ids. Episodes since forgotten or
+        discarded are left as they are."""
+        target = Path(model_after).resolve()
+        ids = sorted(
+            {
+                episode_id
+                for c in self.consolidations()
+                if c.status == "done" and c.model_after and Path(c.model_after).resolve() == target
+                for episode_id in c.episode_ids
+            }
+        )
+
+        def statements(db: sqlite3.Connection) -> list[int]:
+            back = []
+            for episode_id in ids:
+                changed = db.execute(
+                    "UPDATE episodes SET status = 'kept' WHERE id = ? AND status = 'learned'",
+                    (episode_id,),
+                ).rowcount
+                if changed:
+                    back.append(episode_id)
+            return back
+
+        return self._write(statements)
+
     def rename(self, episode_id: int, pattern: str) -> None:
         self._change(
             "UPDATE episodes SET pattern = ? WHERE id = ?",

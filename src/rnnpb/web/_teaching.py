@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from rnnpb.errors import ConfigError, RnnpbError
-from rnnpb.interaction.teaching import TeachingConfig
+from rnnpb.interaction.teaching import TeachingConfig, shown_as
 from rnnpb.web._protocol import TEACH_MODES
 
 log = logging.getLogger("rnnpb.web")
@@ -165,6 +165,7 @@ class SessionTeaching:
         self._prepared: _Prepared | None = None
         self._version_patterns: dict[str, list[str]] = {}
         self._lists: dict[str, Any] = {"episodes": [], "pending": 0}
+        self._shapes: dict[str, str] = {}  # demonstrator shape -> the pattern it was learned as
         self._started_at = 0.0
         self._pending_use: tuple | None = None
 
@@ -415,6 +416,7 @@ class SessionTeaching:
         """Re-read the memory's episodes (on the session thread)."""
         if self.memory is None:
             self._lists = {"episodes": [], "pending": 0}
+            self._shapes = {}
             return
         try:
             episodes = self.memory.episodes()
@@ -436,6 +438,12 @@ class SessionTeaching:
         ][:SHOWN_EPISODES]
         pending = sum(e.status == "kept" for e in episodes)
         self._lists = {"episodes": shown, "pending": pending, "total": len(episodes)}
+        # Which demonstrator shape each learned pattern was shown as (the buttons say so).
+        self._shapes = {
+            shown_as(e.note): e.pattern
+            for e in episodes
+            if e.status == "learned" and shown_as(e.note)
+        }
 
     def _patterns_of(self, path: str) -> list[str]:
         if path not in self._version_patterns:
@@ -484,7 +492,14 @@ class SessionTeaching:
             **self._lists,
         }
         if teacher is None:
-            return {**out, "versions": [], "taught": [], "can_undo": False, "folder": ""}
+            return {
+                **out,
+                "versions": [],
+                "taught": [],
+                "taught_shapes": {},
+                "can_undo": False,
+                "folder": "",
+            }
         first = set(self._patterns_of(teacher.versions[0]))
         running = list(self.session.model.patterns) if self.session.model is not None else []
         out.update(
@@ -499,6 +514,7 @@ class SessionTeaching:
                 for i, v in enumerate(teacher.versions)
             ],
             taught=[p for p in running if p not in first],
+            taught_shapes={k: v for k, v in self._shapes.items() if v in running},
             can_undo=len(teacher.versions) > 1 and teacher.job is None,
             consolidating=teacher.job is not None,
         )

@@ -61,7 +61,7 @@ from rnnpb.experiments.reporting import embed, fmt, table, versions, write_outpu
 from rnnpb.experiments.studies import StudyOptions, StudyOutcome
 from rnnpb.experiments.studies._pool import study_pool
 from rnnpb.experiments.summary import Target
-from rnnpb.interaction.teaching import TeachingConfig
+from rnnpb.interaction.teaching import TeachingConfig, episode_steps
 from rnnpb.model import OnlineConfig
 
 NAME = "teach"
@@ -325,7 +325,10 @@ def _episodes(memory, teacher, labels) -> list[KeptEpisode]:
     kept_at = {e.episode_id: e.step for e in teacher.events if e.kind == "kept"}
     out = []
     for episode in memory.episodes():
-        first, last = (int(v) for v in episode.note.removeprefix("steps ").split("-"))
+        steps = episode_steps(episode.note)
+        if steps is None:  # not kept by this study's teacher: it writes every episode's steps
+            continue
+        first, last = steps
         movements: dict[str, int] = {}
         for label in labels[first : last + 1]:
             movements[label] = movements.get(label, 0) + 1

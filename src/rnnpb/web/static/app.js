@@ -217,18 +217,23 @@ function updateStatus() {
 function buildPatternButtons(state) {
   const box = $("patterns");
   const key = JSON.stringify([state.patterns, state.demonstrator_patterns,
-    state.demonstrator_pattern]);
+    state.demonstrator_pattern, (state.teaching && state.teaching.taught_shapes) || {}]);
   if (box.dataset.key === key) return;
   box.dataset.key = key;
   box.replaceChildren();
+  // A shape taught by showing is learned under its own name (new-1, or what the person called
+  // it): the button says so.
+  const shapes = (state.teaching && state.teaching.taught_shapes) || {};
   for (const p of [...state.demonstrator_patterns, "pause"]) {
-    const learned = state.patterns.includes(p);
+    const taughtAs = Object.hasOwn(shapes, p) && shapes[p] !== p ? shapes[p] : "";
+    const learned = state.patterns.includes(p) || taughtAs !== "";
     // The paper's patterns are numbered; the new shapes (figure-eight, ...) go by their name.
     const title = Object.hasOwn(PATTERN_NAMES, p) ? `Pattern ${p}` : `New shape: ${p}`;
     const button = p === "pause"
       ? el("button", {}, "❚❚ Pause", el("small", {}, "hands held still"))
       : el("button", {}, `${title}${learned ? "" : " (novel)"}`,
-        el("small", {}, `${describe(p)}${learned ? "" : " — not learned by this model"}`));
+        el("small", {}, `${describe(p)}${taughtAs ? ` — learned by showing, as ${taughtAs}`
+          : learned ? "" : " — not learned by this model"}`));
     button.dataset.pattern = p;
     button.classList.toggle("active", state.demonstrator_pattern === p);
     button.onclick = () => send({ type: "pattern", pattern: p });
