@@ -55,6 +55,7 @@ WARMUP = 48  # closed-loop steps generated before an initiative is played (4 cyc
 LEAD_HORIZON = 600  # steps an initiative can last past lead_steps while the partner follows
 REFERENCE_STEPS = 240  # closed-loop steps (after the warm-up) a learned pattern is judged by
 LEADER_HORIZON = 4000  # steps a robot that never follows plans ahead (then plans again)
+UNMATCHED = ("novel", "unstructured", "still")  # what the detector calls no learned pattern
 RELEASE = 3  # unstable steps after which a leader whose partner no longer follows lets go
 _REFLECT_X = np.array([-1.0, 1.0, 1.0])
 _TURN = np.array([-1.0, -1.0, 1.0])  # half a turn about the vertical axis
@@ -152,6 +153,12 @@ class AgentConfig:
         does.
     stable_error : float
         RMS prediction error (view units) under which a step counts as stable.
+    familiar_only : bool
+        A step counts as stable only if, besides predicting the partner, its mirror system
+        recognises a learned pattern in what it sees (or has not decided yet): two robots can
+        settle on a movement that each predicts well and that is none of their patterns, which
+        their own novelty detector calls ``novel``, ``unstructured`` or ``still``; that is a
+        movement they cannot match, after which the patience runs out as for any other.
     """
 
     adaptation: float = 1.0
@@ -163,6 +170,7 @@ class AgentConfig:
     lead_steps: int = 24
     yield_steps: int | None = 3
     stable_error: float = 0.03
+    familiar_only: bool = True
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.adaptation) and 0.0 <= self.adaptation <= 10.0):
@@ -329,8 +337,10 @@ class RobotAgent:
             self.config.lead_steps + LEAD_HORIZON,
             self.model.pattern_initial_context(pattern),
         )
+        # The pattern they were on, if they were on one (an initiative after a stable while):
+        # a partner still doing it has not followed yet, and is no reason to give way.
+        self._before, self._contested = (current if self._stable > 0 else ""), 0
         self._stable, self._unstable, self._led, self._intent = 0, 0, 0, pattern
-        self._before, self._contested = current, 0
         y = self.config.yield_steps
         self._yield_after = None if y is None else y + int(self.rng.integers(0, 2 * y + 1))
         self._patience = self._draw_patience()
@@ -379,6 +389,8 @@ class RobotAgent:
             math.isfinite(result.prediction_error)
             and math.sqrt(result.prediction_error) < self.config.stable_error
         )
+        if self.config.familiar_only and not leading and result.novelty in UNMATCHED:
+            stable = False  # predicted, but none of its patterns: they cannot match on it
         if leading:
             # Led: stable while the partner follows the led pattern (the mirror system, which
             # watches it, recognises that pattern in it).
