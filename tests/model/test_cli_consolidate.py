@@ -38,13 +38,17 @@ def test_consolidate_then_info(files, capsys):
                 str(out),
                 "--iterations",
                 "60",
+                "--hold-old-pb",
+                "first-half",
                 "--no-progress",
             ]
         )
         == 0
     )
     assert "patterns 0, 1, 2" in capsys.readouterr().out
-    assert TrainedModel.load(out).patterns == ("0", "1", "2")
+    grown = TrainedModel.load(out)
+    assert grown.patterns == ("0", "1", "2")
+    assert grown.history[-1].details["hold_old_pb"] == "first-half"
     assert (
         main(
             [

@@ -1,5 +1,7 @@
 """Incremental learning: rehearsal and consolidation, the alternatives, history and bad input."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -141,14 +143,57 @@ def test_interrupted_consolidation_resumes_to_the_same_model(two_patterns, tmp_p
     assert resumed.fingerprint == whole.fingerprint
     # A checkpoint resumes only the consolidation of the same model: fine-tuning learns the
     # same data from any model, so the start is checked apart from the data.
-    from dataclasses import replace
-
     finetune = ConsolidationConfig("finetune", train=config.train)
     with pytest.raises(KeyboardInterrupt):
         consolidate(model, new, finetune, progress=stop, checkpoint_path=tmp_path / "f.npz")
     other = replace(model, params=type(model.params)(*(np.asarray(w) * 1.01 for w in model.params)))
     with pytest.raises(ModelFileError, match="another starting model or method"):
         consolidate(other, new, finetune, checkpoint_path=tmp_path / "f.npz", resume=True)
+
+
+def test_held_old_pbs_stay_where_they_were_learned(two_patterns, tmp_path):
+    model, new = two_patterns
+    config = ConsolidationConfig(
+        train=TrainConfig.fast(iterations=200, checkpoint_every=100), hold_old_pb="all"
+    )
+    held = consolidate(model, new, config)
+    # Rehearsed from each pattern's PB: every old sequence starts, and stays, there.
+    n_old = len(model.sequence_patterns)
+    for pb, pattern in zip(held.sequence_pb[:n_old], model.sequence_patterns, strict=True):
+        assert np.array_equal(pb, model.pattern_pb[pattern])
+    for pattern in model.patterns:
+        assert np.array_equal(held.pattern_pb[pattern], model.pattern_pb[pattern])
+    assert not np.allclose(held.sequence_pb[n_old:], 0.5)  # the new PB learned
+    assert not np.array_equal(np.asarray(held.params[0]), np.asarray(model.params[0]))
+    # The option is in the history, through a file.
+    held.save(tmp_path / "held.npz")
+    assert TrainedModel.load(tmp_path / "held.npz").history[-1].details["hold_old_pb"] == "all"
+    free = consolidate(model, new, replace(config, hold_old_pb="off"))
+    assert free.history[-1].details["hold_old_pb"] == "off"
+    assert not np.array_equal(free.sequence_pb[0], model.pattern_pb["1"])
+    # Held for the first half: the chunk ends where the PBs are let go, and they then move.
+    half = consolidate(model, new, replace(config, hold_old_pb="first-half"))
+    assert [i for i, _ in half.meta["training"]["history"]] == [0, 100, 200]
+    assert not np.array_equal(half.sequence_pb[0], model.pattern_pb["1"])
+    # A checkpoint of one hold never resumes another.
+    def stop(progress):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        consolidate(model, new, config, progress=stop, checkpoint_path=tmp_path / "c.npz")
+    for other in ("off", "first-half"):
+        with pytest.raises(ModelFileError, match="another starting model or method"):
+            consolidate(
+                model,
+                new,
+                replace(config, hold_old_pb=other),
+                checkpoint_path=tmp_path / "c.npz",
+                resume=True,
+            )
+    resumed = consolidate(model, new, config, checkpoint_path=tmp_path / "c.npz", resume=True)
+    assert resumed.fingerprint == held.fingerprint
+    with pytest.raises(ConfigError, match="hold_old_pb must be one of"):
+        ConsolidationConfig(hold_old_pb="half")  # type: ignore[arg-type]
 
 
 def test_the_alternatives_run_the_same_way(two_patterns):
@@ -190,8 +235,6 @@ def test_bad_input_is_refused_clearly(two_patterns):
     with pytest.raises(ConfigError, match="rehearsal_source must be one of"):
         ConsolidationConfig(rehearsal_source="data")  # type: ignore[arg-type]
     # A model of another network size: its sensory-motor vector is not the data's.
-    from dataclasses import replace
-
     import jax
 
     from rnnpb.model import NetworkConfig, init_params

@@ -130,11 +130,12 @@ def run(args: argparse.Namespace) -> int:
     inputs = jax.numpy.asarray(data.inputs, jax.numpy.float32)
     valid = jax.numpy.asarray(data.valid)
     chunk = 200
-    state = jax.block_until_ready(run_chunk(state, inputs, valid, chunk))
+    every_pb = jax.numpy.ones(data.valid.shape[0], bool)
+    state = jax.block_until_ready(run_chunk(state, inputs, valid, chunk, every_pb))
     chunk_times = []
     for _ in range(7):
         t0 = time.perf_counter()
-        state = jax.block_until_ready(run_chunk(state, inputs, valid, chunk))
+        state = jax.block_until_ready(run_chunk(state, inputs, valid, chunk, every_pb))
         chunk_times.append((time.perf_counter() - t0) / chunk * 1e3)
     train_ms = float(np.median(chunk_times))
     next_part()

@@ -55,6 +55,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="FILE_OR_DIR",
         help="the original training data (replay and scratch)",
     )
+    parser.add_argument(
+        "--hold-old-pb",
+        choices=("off", "all", "first-half"),
+        default="off",
+        help="keep the old patterns' PBs at their learned values while the weights learn "
+        "(rehearsal and replay): never, for all of it, or its first half (default: off)",
+    )
     parser.add_argument("--iterations", type=int, help="learning iterations")
     parser.add_argument("--seed", type=int, help="random seed (default: the model's)")
     parser.add_argument(
@@ -96,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
             f"--replay-data is for the methods replay and scratch, not "
             f"{args.method} (rehearsal needs no original data)"
         )
-    config = ConsolidationConfig(method=args.method)
+    config = ConsolidationConfig(method=args.method, hold_old_pb=args.hold_old_pb)
     learning = config.learning_for(model)
     changes = {"iterations": args.iterations, "seed": args.seed}
     learning = replace(

@@ -69,7 +69,15 @@ afterwards moved: learning set 1's pattern 1 by RMS 0.139-0.154 from the origina
 # "Consolidation"). Adam (the fast preset) needs a tenth of its 3,000 too, rounded up.
 CONSOLIDATION_ITERATIONS = {"momentum": 5_000, "adam": 500}
 
+HOLD_OLD_PB_OPTIONS = ("off", "all", "first-half")
+"""How long a consolidation keeps the old sequences' PBs at their learned values:
+never (they learn by eqs. 1–2 with the new ones), for all of it, or for its first half."""
+HOLD_OLD_PB = "off"
+"""The default: the old PBs learn (docs/model.md, "Consolidation": holding them was measured
+and not taken)."""
+
 Method = Literal["rehearsal", "finetune", "replay", "scratch"]
+HoldOldPB = Literal["off", "all", "first-half"]
 RehearsalSource = Literal["patterns", "sequences"]
 REHEARSAL_SOURCES = ("patterns", "sequences")
 """What :func:`rehearse` runs the closed loop from: each pattern's PB, or each sequence's."""
@@ -94,6 +102,15 @@ class ConsolidationConfig:
         full iterations.
     rehearsal_steps, rehearsal_transient : int
         Length of each rehearsed sequence, and the closed-loop steps run before it.
+    rehearsal_source : str
+        What :func:`rehearse` runs the closed loop from (:data:`REHEARSAL_SOURCES`).
+    hold_old_pb : str
+        One of :data:`HOLD_OLD_PB_OPTIONS`: whether the old sequences' PBs stay at their
+        learned values while the weights learn the new pattern — ``"all"`` of the
+        consolidation, its ``"first-half"`` (while the new pattern's error is largest), or
+        ``"off"``. The new sequences' PBs always learn. For ``rehearsal`` and ``replay``, the
+        methods that learn old sequences from their learned PBs; ``finetune`` learns no old
+        sequence and ``scratch`` has no learned PB to hold, so neither uses it.
     """
 
     method: Method = "rehearsal"
@@ -101,6 +118,7 @@ class ConsolidationConfig:
     rehearsal_steps: int = REHEARSAL_STEPS
     rehearsal_transient: int = REHEARSAL_TRANSIENT
     rehearsal_source: RehearsalSource = REHEARSAL_SOURCE
+    hold_old_pb: HoldOldPB = HOLD_OLD_PB
 
     def __post_init__(self) -> None:
         if self.method not in CONSOLIDATION_METHODS:
@@ -116,6 +134,11 @@ class ConsolidationConfig:
             raise ConfigError(
                 f"rehearsal_source must be one of {', '.join(REHEARSAL_SOURCES)}, "
                 f"got {self.rehearsal_source!r}"
+            )
+        if self.hold_old_pb not in HOLD_OLD_PB_OPTIONS:
+            raise ConfigError(
+                f"hold_old_pb must be one of {', '.join(HOLD_OLD_PB_OPTIONS)}, "
+                f"got {self.hold_old_pb!r}"
             )
 
     def learning_for(self, model: TrainedModel) -> TrainConfig:
@@ -272,6 +295,18 @@ def _replay_matches(
     return True
 
 
+def _held(
+    config: ConsolidationConfig, learning: TrainConfig, n_old: int, n_new: int
+) -> tuple[np.ndarray | None, int | None]:
+    """The :class:`WarmStart`'s ``pb_held`` and ``hold_iterations`` for
+    ``config.hold_old_pb``, the old sequences first."""
+    if config.hold_old_pb == "off":
+        return None, None
+    held = np.concatenate([np.ones(n_old, dtype=bool), np.zeros(n_new, dtype=bool)])
+    until = None if config.hold_old_pb == "all" else learning.iterations // 2
+    return held, until
+
+
 def consolidate(
     model: TrainedModel,
     new_sequences: SequenceABC[Sequence],
@@ -300,7 +335,7 @@ def consolidate(
         The model's file name, for the history.
     progress, checkpoint_path, resume
         As for :func:`rnnpb.model.training.train`: a checkpoint of a consolidation resumes only
-        the same consolidation (same model, method, data and learning).
+        the same consolidation (same model, method, PB hold, data and learning).
 
     Returns
     -------
@@ -329,11 +364,13 @@ def consolidate(
             np.vstack([[s.meta["initial_context"] for s in old], fresh_context]),
             np.vstack([[s.meta["pb"] for s in old], fresh_pb]),
             tag,
+            *_held(config, learning, len(old), len(new)),
         )
         details.update(
             rehearsal_steps=config.rehearsal_steps,
             rehearsal_transient=config.rehearsal_transient,
             rehearsal_source=config.rehearsal_source,
+            hold_old_pb=config.hold_old_pb,
         )
         sequences = [*old, *new]
     elif config.method == "finetune":
@@ -352,7 +389,9 @@ def consolidate(
                 np.vstack([[contexts[s.pattern] for s in old], fresh_context]),
                 np.vstack([[pbs[s.pattern] for s in old], fresh_pb]),
                 tag,
+                *_held(config, learning, len(old), len(new)),
             )
+            details["hold_old_pb"] = config.hold_old_pb
         sequences = [*old, *new]
     learned = train(
         sequences,
@@ -364,6 +403,12 @@ def consolidate(
         resume=resume,
         warm_start=warm,
     )
+    if warm is not None and warm.pb_held is not None and warm.hold_iterations is None:
+        # A PB held to the end is the start's: its profile kept the float32 logit of it bit
+        # for bit, and the round trip back is no learning.
+        sequence_pb = learned.sequence_pb.copy()
+        sequence_pb[warm.pb_held] = warm.pb[warm.pb_held]
+        learned = replace(learned, sequence_pb=sequence_pb)
     if config.method == "finetune":
         # The old patterns were not trained: they keep their PBs and initial contexts.
         learned = replace(

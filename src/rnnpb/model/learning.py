@@ -6,7 +6,8 @@ own learned initial context. Each iteration runs every sequence open loop (teach
 back-propagates the squared prediction error through time, and updates
 
 * the weights (and initial contexts) by gradient descent with momentum — the paper's — or Adam;
-* each sequence's ``rho`` profile by eqs. 1–2.
+* each sequence's ``rho`` profile by eqs. 1–2 — or, for a sequence whose PB is held (a
+  consolidation keeping the old patterns' PBs, :class:`WarmStart`), not at all.
 
 This module is the pure part: the settings, the training data as arrays, the error, and one
 compiled chunk of iterations (state in, state out). The driver that runs the chunks with a
@@ -191,11 +192,16 @@ def squared_error(
     return 0.5 * jnp.sum(error**2)
 
 
-def chunk_runner(
-    config: TrainConfig,
-) -> Callable[[TrainState, jax.Array, jax.Array, jax.Array], TrainState]:
-    """The compiled function ``run_chunk(state, inputs, valid, n_iterations) -> state`` that
-    runs ``n_iterations`` learning iterations (``inputs`` (S, T, I), ``valid`` (S, T-1))."""
+ChunkRunner = Callable[[TrainState, jax.Array, jax.Array, jax.Array, jax.Array], TrainState]
+"""``run_chunk(state, inputs, valid, n_iterations, pb_learning) -> state``."""
+
+
+def chunk_runner(config: TrainConfig) -> ChunkRunner:
+    """The compiled function ``run_chunk(state, inputs, valid, n_iterations, pb_learning) ->
+    state`` that runs ``n_iterations`` learning iterations (``inputs`` (S, T, I), ``valid``
+    (S, T-1)); ``pb_learning`` (S,) bool says whose PB profile learns (eqs. 1–2): a sequence
+    with False keeps its ``rho`` exactly, and its momentum stays zero. One function for every
+    mask: the mask is an argument, not a setting compiled in."""
     # Settings that do not enter the compiled update are normalized away so that runs that
     # differ only in them share one compiled function.
     return _compiled_chunk(
@@ -204,13 +210,13 @@ def chunk_runner(
 
 
 @functools.lru_cache(maxsize=16)
-def _compiled_chunk(
-    config: TrainConfig,
-) -> Callable[[TrainState, jax.Array, jax.Array, jax.Array], TrainState]:
+def _compiled_chunk(config: TrainConfig) -> ChunkRunner:
     optimizer = optimizer_for(config)
     grad_fn = jax.grad(squared_error, argnums=(0, 1))
 
-    def one_iteration(state: TrainState, inputs: jax.Array, valid: jax.Array) -> TrainState:
+    def one_iteration(
+        state: TrainState, inputs: jax.Array, valid: jax.Array, pb_learning: jax.Array
+    ) -> TrainState:
         key, noise_key = jax.random.split(state.key)
         noise = config.input_noise * jax.random.normal(noise_key, inputs[:, :-1].shape)
         trainable = (state.params, state.initial_context_logit)
@@ -229,16 +235,24 @@ def _compiled_chunk(
         rho, rho_velocity = jax.vmap(lambda r, v, g, m: pb_update(r, v, g, config.pb, m))(
             state.rho, state.rho_velocity, grad_rho, valid
         )
+        # A held PB profile keeps its values bit for bit (a select, not a zero step).
+        learns = pb_learning[:, None, None]
+        rho = jnp.where(learns, rho, state.rho)
+        rho_velocity = jnp.where(learns, rho_velocity, state.rho_velocity)
         return TrainState(
             params, context_logit, opt_state, rho, rho_velocity, key, state.iteration + 1
         )
 
     @jax.jit
     def run_chunk(
-        state: TrainState, inputs: jax.Array, valid: jax.Array, n_iterations: jax.Array
+        state: TrainState,
+        inputs: jax.Array,
+        valid: jax.Array,
+        n_iterations: jax.Array,
+        pb_learning: jax.Array,
     ) -> TrainState:
         return jax.lax.fori_loop(
-            0, n_iterations, lambda _, s: one_iteration(s, inputs, valid), state
+            0, n_iterations, lambda _, s: one_iteration(s, inputs, valid, pb_learning), state
         )
 
     return run_chunk
@@ -274,14 +288,57 @@ class WarmStart:
     pb : array, shape (S, P)
         Each training sequence's starting PB, in (0, 1): its whole PB profile starts there.
     fingerprint : str
-        Names the start (the model's fingerprint and the method), so that a checkpoint of one
-        start never resumes another.
+        Names the start (the model's fingerprint and the method); :attr:`identity` adds the
+        PB hold, so that a checkpoint of one start never resumes another.
+    pb_held : array of bool, shape (S,), optional
+        Sequences whose PB stays at ``pb`` (their ``rho`` profile does not learn) for the
+        first ``hold_iterations`` iterations. None: every PB learns.
+    hold_iterations : int or None
+        How long the held PBs stay held; None: for the whole learning.
     """
 
     params: Params
     initial_context: np.ndarray
     pb: np.ndarray
     fingerprint: str
+    pb_held: np.ndarray | None = None
+    hold_iterations: int | None = None
+
+    def __post_init__(self) -> None:
+        if self.hold_iterations is not None and self.hold_iterations < 0:
+            raise ConfigError(f"hold_iterations must be >= 0, got {self.hold_iterations}")
+        if self.pb_held is not None and np.shape(self.pb_held) != (np.shape(self.pb)[0],):
+            raise ConfigError(
+                f"pb_held must have one flag per sequence ({np.shape(self.pb)[0]}), "
+                f"got shape {np.shape(self.pb_held)}"
+            )
+
+    @property
+    def identity(self) -> str:
+        """The start and its PB hold, as a checkpoint records it."""
+        if self.pb_held is None or not np.any(self.pb_held):
+            return self.fingerprint
+        held = "".join("1" if h else "0" for h in np.asarray(self.pb_held, dtype=bool))
+        until = "end" if self.hold_iterations is None else str(self.hold_iterations)
+        return f"{self.fingerprint}:pb-held={held}:until={until}"
+
+    def pb_learning(self, iteration: int) -> np.ndarray:
+        """The (S,) bool mask of PBs that learn at ``iteration`` (0-based)."""
+        n_seq = np.shape(self.pb)[0]
+        held = (
+            np.zeros(n_seq, dtype=bool)
+            if self.pb_held is None
+            else np.asarray(self.pb_held, dtype=bool)
+        )
+        if self.hold_iterations is not None and iteration >= self.hold_iterations:
+            held = np.zeros(n_seq, dtype=bool)
+        return ~held
+
+    def next_release(self, iteration: int) -> int | None:
+        """The iteration at which the held PBs are released, if it is still ahead."""
+        if self.pb_held is None or self.hold_iterations is None:
+            return None
+        return self.hold_iterations if iteration < self.hold_iterations else None
 
 
 def init_state(

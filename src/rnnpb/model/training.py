@@ -81,7 +81,7 @@ def train(
         required).
     warm_start : WarmStart, optional
         Start from these weights, initial contexts and PBs instead of random weights
-        (incremental learning, :mod:`rnnpb.model.consolidation`).
+        (incremental learning, :mod:`rnnpb.model.consolidation`), holding the PBs it names.
     """
     network = network or NetworkConfig()
     config = config or TrainConfig()
@@ -92,12 +92,13 @@ def train(
             f"network expects {network.io_size}"
         )
     state = init_state(data, network, config, warm_start)
-    start_name = warm_start.fingerprint if warm_start is not None else None
+    start_name = warm_start.identity if warm_start is not None else None
     if resume and checkpoint_path is not None and os.path.exists(checkpoint_path):
         state = load_checkpoint(checkpoint_path, state, data, network, config, start_name)
     run_chunk = chunk_runner(config)
     inputs = jnp.asarray(data.inputs, jnp.float32)
     valid = jnp.asarray(data.valid)
+    every_pb_learns = np.ones(data.valid.shape[0], dtype=bool)
 
     bar = None
     if progress is True:
@@ -131,7 +132,15 @@ def train(
             n = min(config.chunk_iterations, config.iterations - done)
             next_checkpoint = (done // config.checkpoint_every + 1) * config.checkpoint_every
             n = min(n, next_checkpoint - done)
-            state = run_chunk(state, inputs, valid, jnp.asarray(n, jnp.int32))
+            pb_learning = every_pb_learns
+            if warm_start is not None:
+                pb_learning = warm_start.pb_learning(done)
+                release = warm_start.next_release(done)
+                if release is not None:  # a chunk ends where the held PBs are let go
+                    n = min(n, release - done)
+            state = run_chunk(
+                state, inputs, valid, jnp.asarray(n, jnp.int32), jnp.asarray(pb_learning)
+            )
             done += n
             mse = float(
                 jnp.mean(
@@ -219,7 +228,7 @@ def save_checkpoint(
     warm_start: str | None = None,
 ) -> None:
     """Write the whole training state atomically, to continue with ``resume=True``;
-    ``warm_start`` names the start it continued from (:attr:`WarmStart.fingerprint`)."""
+    ``warm_start`` names the start it continued from (:attr:`WarmStart.identity`)."""
     leaves = jax.tree_util.tree_leaves(state)
     arrays = {f"state/{i:04d}": np.asarray(leaf) for i, leaf in enumerate(leaves)}
     meta = {
