@@ -175,6 +175,7 @@ def test_held_old_pbs_stay_where_they_were_learned(two_patterns, tmp_path):
     half = consolidate(model, new, replace(config, hold_old_pb="first-half"))
     assert [i for i, _ in half.meta["training"]["history"]] == [0, 100, 200]
     assert not np.array_equal(half.sequence_pb[0], model.pattern_pb["1"])
+
     # A checkpoint of one hold never resumes another.
     def stop(progress):
         raise KeyboardInterrupt
