@@ -314,7 +314,7 @@ def run(args: argparse.Namespace) -> int:
         f"{figures['dyad_step_one_agent_ms_median']:.3f} ms, one after the other)"
     )
     print(
-        f"    side by side, on {cores} core{'s' if cores > 1 else ''}:          "
+        f"{f'    side by side, on {cores} core' + ('s:' if cores > 1 else ':'):<43}"
         f"{figures['dyad_step_side_by_side_ms_median']:8.3f} ms median "
         f"({figures['dyad_step_side_by_side_vs_one_agent']:.2f}x; processor time "
         f"{figures['dyad_step_side_by_side_cpu_vs_one_agent']:.2f}x)"
