@@ -113,7 +113,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=int,
         metavar="N",
         help="with --learn: learning iterations of each consolidation "
-        "(default: the consolidation's own, docs/model.md)",
+        "(default: twice the consolidation's own, 10,000 for the paper's learning; "
+        "docs/teaching.md)",
     )
     parser.add_argument(
         "--no-safety",

@@ -93,7 +93,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--consolidation-iterations",
         type=int,
         metavar="N",
-        help="learning iterations of each consolidation (default: the consolidation's own)",
+        help="learning iterations of each consolidation (default: twice the consolidation's own)",
     )
     parser.add_argument(
         "--teach-dir",

@@ -442,6 +442,15 @@ def rename_pattern(model, pattern: str, name: str):
     return replace(model, sequence_patterns=renamed(model.sequence_patterns), meta=meta)
 
 
+TEACHING_ITERATIONS_FACTOR = 2
+"""On-line teaching consolidates for twice the consolidation's own iterations
+(:data:`rnnpb.model.consolidation.CONSOLIDATION_ITERATIONS`: 10,000 for the paper's learning).
+A taught episode is three cycles of an imperfect demonstration, and with 5,000 iterations the
+network predicted the person's next performance of it just above the lock-on threshold (docs/
+teaching.md, "The full study"): chosen on user draws 101 (15 → 19 of 20 followed within 90 s),
+checked on draws 102."""
+
+
 def _consolidation_worker(
     model_path: str,
     memory_path: str,
@@ -467,10 +476,10 @@ def _consolidation_worker(
             queue.put(("progress", int(p.iteration), int(p.total), float(p.mse)))
 
         config = ConsolidationConfig()
-        if iterations is not None:
-            config = ConsolidationConfig(
-                train=replace(config.learning_for(model), iterations=int(iterations))
-            )
+        learning = config.learning_for(model)
+        if iterations is None:
+            iterations = TEACHING_ITERATIONS_FACTOR * learning.iterations
+        config = ConsolidationConfig(train=replace(learning, iterations=int(iterations)))
         learned = consolidate(model, sequences, config, parent=model_path, progress=progress)
         learned.save(out_path)
         rehearsed = rehearse(model)
@@ -581,12 +590,15 @@ class BackgroundConsolidation:
         return self.state
 
     def wait(self, timeout_s: float | None = None) -> ConsolidationState:
-        """Block until the consolidation has finished (or ``timeout_s``)."""
+        """Block until the consolidation has finished (or ``timeout_s``), and its process
+        has ended (up to 5 s more)."""
         deadline = None if timeout_s is None else time.perf_counter() + timeout_s
         while self.poll().state == "running":
             if deadline is not None and time.perf_counter() > deadline:
                 break
             self._process.join(0.05)
+        if self.state.state != "running":
+            self._process.join(5.0)
         return self.state
 
     def _take(self, message: tuple) -> None:
@@ -594,11 +606,17 @@ class BackgroundConsolidation:
         if kind == "progress":
             self.state = ConsolidationState("running", message[1], message[2])
         elif kind == "done":
+            # Not joined here: the process takes a moment to end after it reported (its
+            # interpreter and JAX shut down), and poll() must never hold up a paced loop.
+            # ``ended`` tells when it has; ``wait`` and ``cancel`` join it.
             self.state = ConsolidationState("done", model_path=message[1], seconds=message[2])
-            self._process.join(5.0)
         else:
             self.state = ConsolidationState("failed", message=message[1])
-            self._process.join(5.0)
+
+    @property
+    def ended(self) -> bool:
+        """Whether the process has exited (and been reaped); never blocks."""
+        return not self._process.is_alive()
 
     def cancel(self) -> None:
         if self._process.is_alive():

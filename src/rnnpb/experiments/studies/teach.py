@@ -291,6 +291,7 @@ class _Watch:
         self._started: tuple[int, float, float] | None = None
         self.stop_after: int | None = None
         self.step_limit: int | None = None
+        self._ending: list = []  # (job, step, cpu, wall) of consolidations whose process ends
 
     def started(self) -> None:
         """A consolidation was started outside a step (confirmed before the run)."""
@@ -302,19 +303,31 @@ class _Watch:
         if self.teacher.job is not None and self._started is None:
             self._started = (self.loop.steps, _children_cpu(), time.perf_counter())
 
+    def _record_ended(self, block: bool = False) -> None:
+        """A finished consolidation's CPU time counts among the children's once its process
+        has ended and been reaped, a moment after it reported: recorded then, without
+        holding up the loop (``block``: after the run, wait for it)."""
+        for item in list(self._ending):
+            job, step, cpu, wall = item
+            process = getattr(job, "_process", None)
+            if process is not None and block:
+                process.join(120.0)
+            if process is None or not process.is_alive():
+                self._ending.remove(item)
+                self.times.append((step, _children_cpu() - cpu, wall, job.state.seconds))
+
+    def finish(self) -> None:
+        """After the run: the consolidations still ending are waited for and recorded."""
+        self._record_ended(block=True)
+
     def between_steps(self, wait_s: float) -> None:
         job = self.teacher.job
         self.teacher.between_steps(wait_s)
         if job is not None and self.teacher.job is None and self._started is not None:
             step, cpu, wall = self._started
             self._started = None
-            wall = time.perf_counter() - wall
-            # Its CPU time counts among the children's once the process has ended and been
-            # reaped; the teacher gives it only a few seconds to end after it reported.
-            process = getattr(job, "_process", None)
-            if process is not None:
-                process.join(120.0)
-            self.times.append((step, _children_cpu() - cpu, wall, job.state.seconds))
+            self._ending.append((job, step, cpu, time.perf_counter() - wall))
+        self._record_ended()
         if self.stop_after is not None and self.loop.steps >= self.stop_after:
             self.loop.stop()
         if self.step_limit is not None and self.loop.steps >= self.step_limit:
@@ -453,6 +466,7 @@ def teach_job(
         loop.run(on_step=watch.on_step, between_steps=watch.between_steps)
         if teacher.job is not None:  # kept on the last step: consolidate before measuring
             watch.between_steps(0.0)
+        watch.finish()
         labels = list(scenario.labels)
         episodes = _episodes(memory, teacher, labels)
     records = watch.records
@@ -623,6 +637,7 @@ def paced_job(
         loop.run(on_step=watch.on_step, between_steps=between)
         if teacher.job is not None:
             teacher.job.cancel()
+        watch.finish()
         summary = loop.summary()
     records = watch.records
     starts = np.array([r.time_s for r in records])
