@@ -22,11 +22,13 @@ PACKAGES = (
 )
 
 
-def _python(code, **env_changes):
+def _python(code, drop: tuple[str, ...] = (), **env_changes):
+    """Run ``code`` in a new interpreter, without the process-wide choices of this one (and
+    without the variables starting with a prefix in ``drop``)."""
     env = {
         k: v
         for k, v in os.environ.items()
-        if k not in ("XLA_FLAGS", "RNNPB_XLA_DEFAULTS", "MUJOCO_GL")
+        if k not in ("XLA_FLAGS", "RNNPB_XLA_DEFAULTS", "MUJOCO_GL") and not k.startswith(drop)
     }
     env.update(env_changes)
     result = subprocess.run(
@@ -134,3 +136,33 @@ def test_the_command_line_lists_its_commands_without_loading_jax():
         print(sorted(m for m in ("jax", "mujoco", "cv2", "ray", "pyarrow") if m in sys.modules))
     """)
     assert result.stdout.strip().splitlines()[-1] == "[]"
+
+
+CACHED_PROGRAM = """
+    from rnnpb import _xla
+    _xla.configure()
+    _xla.compilation_cache()
+    import jax, jax.numpy as jnp
+    def f(x):
+        for k in range(60):
+            x = jnp.sin(x @ x.T + k)
+        return x
+    print(float(jax.jit(f)(jnp.ones((8, 8))).sum()))
+"""
+
+
+def test_a_second_process_reads_what_the_first_compiled(tmp_path):
+    # rnnpb._xla.compilation_cache: programs kept on disk for the next process.
+    def run():
+        return _python(
+            CACHED_PROGRAM,
+            drop=("JAX_",),  # this test process's own cache settings
+            RNNPB_XLA_CACHE=str(tmp_path),
+            JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS="0",
+        ).stdout.strip()
+
+    first = run()
+    entries = sorted(p.name for p in tmp_path.iterdir() if p.name.endswith("-cache"))
+    assert entries, "the first process kept nothing"
+    assert run() == first  # the same result from the kept program
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.endswith("-cache")) == entries

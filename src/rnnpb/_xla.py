@@ -183,7 +183,8 @@ def compilation_cache(environ: MutableMapping[str, str] | None = None) -> Path |
         "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS": str(CACHE_MIN_COMPILE_S),
     }
     for name, value in settings.items():
-        environ.setdefault(name, value)
+        if not environ.get(name, "").strip():  # unset or blank; a value of the user's stays
+            environ[name] = value
     if environ is os.environ and "jax" in sys.modules:
         import jax
 
