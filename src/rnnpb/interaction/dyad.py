@@ -782,6 +782,7 @@ class DyadRun:
 
 
 def usable_cores() -> int:
+    """The cores this process may run on (its affinity, where the platform has one)."""
     try:
         return len(os.sched_getaffinity(0))
     except AttributeError:  # pragma: no cover - a platform without affinity (macOS)

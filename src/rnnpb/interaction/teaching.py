@@ -32,6 +32,7 @@ from __future__ import annotations
 import os
 import re
 import time
+from collections import deque
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -316,7 +317,7 @@ class EpisodeKeeper:
         self._last_text = ""
         # What a scripted source says it performed, per recent step (a demonstrator's
         # pattern): only written into an episode's note, for the person; never used to learn.
-        self._shown: dict[int, str] = {}
+        self._shown: deque[tuple[int, str]] = deque(maxlen=SHOWN_STEPS)  # (step, pattern)
 
     def next_pattern_name(self) -> str:
         """``new-N`` for the smallest N no episode of the memory is named yet."""
@@ -328,7 +329,8 @@ class EpisodeKeeper:
 
     def _shown_as(self, first: int, last: int) -> str:
         """The pattern the source said it performed over most of steps first..last, or ""."""
-        names = [self._shown.get(step, "") for step in range(first, last + 1)]
+        said = dict(self._shown)  # only when an episode is cut: rare
+        names = [said.get(step, "") for step in range(first, last + 1)]
         best = max(set(names), key=names.count) if names else ""
         return best if best and names.count(best) * 2 > len(names) else ""
 
@@ -336,9 +338,7 @@ class EpisodeKeeper:
         truth = getattr(record, "truth", None)
         shown = truth.get("pattern", "") if isinstance(truth, dict) else ""
         if shown:
-            self._shown[record.step] = str(shown)
-        for step in [s for s in self._shown if s < record.step - SHOWN_STEPS]:
-            del self._shown[step]
+            self._shown.append((record.step, str(shown)))  # the oldest fall off the end
         hands = self.hands_of(record) if self.hands_of is not None else None
         episode = self.cutter.observe(
             record.step, record.observed, getattr(record, "novelty", ""), hands
