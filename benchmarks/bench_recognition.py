@@ -1,9 +1,10 @@
 """What recognition and the novelty detector cost the on-line step.
 
 Times, alternately on the same machine (pinned to one core where possible), the full
-``MirrorSystem.step`` (the regression, each learned pattern's evidence and the detector) and
-the same compiled step without the evidence and without the detector. Prints both medians and
-their ratio; quote the ratio from one run (other processes change the absolute figures).
+``MirrorSystem.step`` (the regression, each learned pattern's evidence and the detector with
+the hands as taught), the same with a model that kept no taught hands, and the same compiled
+step without the evidence and without the detector. Prints the medians and their ratios;
+quote the ratios from one run (other processes change the absolute figures).
 
     .venv/bin/python benchmarks/bench_recognition.py [--steps N]
 """
@@ -13,6 +14,7 @@ from __future__ import annotations
 import argparse
 import os
 import time
+from dataclasses import replace
 
 
 def main() -> None:
@@ -48,8 +50,10 @@ def main() -> None:
         sequence_pb=rng.uniform(0.2, 0.8, (len(sequences), network.pb_size)),
         sequence_patterns=tuple(s.pattern for s in sequences),
         initial_context=np.full((len(sequences), network.context_size), 0.5),
+        taught_sensory=np.array([s.sensory for s in sequences]),
     )
     mirror = MirrorSystem(model)
+    untaught = MirrorSystem(replace(model, taught_sensory=None))
     params = jax.tree_util.tree_map(lambda a: jnp.asarray(a, jnp.float32), model.params)
     state = initial_state(model, mirror.config)
     candidates = jnp.asarray(restart_candidates(model), jnp.float32)
@@ -66,21 +70,30 @@ def main() -> None:
     stream = np.concatenate([s.sensory for s in sequences])
     for t in range(40):
         mirror.step(stream[t])
+        untaught.step(stream[t])
         bare(stream[t])
-    with_times, without_times = [], []
+    with_times, untaught_times, without_times = [], [], []
     for t in range(args.steps):
         u = stream[(40 + t) % len(stream)]
         t0 = time.perf_counter()
         mirror.step(u)
         t1 = time.perf_counter()
-        bare(u)
+        untaught.step(u)
         t2 = time.perf_counter()
+        bare(u)
+        t3 = time.perf_counter()
         with_times.append((t1 - t0) * 1e3)
-        without_times.append((t2 - t1) * 1e3)
+        untaught_times.append((t2 - t1) * 1e3)
+        without_times.append((t3 - t2) * 1e3)
     with_ms, without_ms = float(np.median(with_times)), float(np.median(without_times))
+    untaught_ms = float(np.median(untaught_times))
     print(f"on-line step with recognition and novelty:    {with_ms:7.3f} ms median")
+    print(f"the same, a model without taught hands:       {untaught_ms:7.3f} ms median")
     print(f"the same step without evidence and detector:  {without_ms:7.3f} ms median")
     print(f"the detector costs {with_ms - without_ms:+.3f} ms ({with_ms / without_ms:.3f}x)")
+    print(
+        f"of which the taught hands {with_ms - untaught_ms:+.3f} ms ({with_ms / untaught_ms:.3f}x)"
+    )
 
 
 if __name__ == "__main__":

@@ -214,6 +214,18 @@ def test_the_alternatives_run_the_same_way(two_patterns):
         model, new, ConsolidationConfig("replay", train=short), replay_data=original
     )
     assert replayed.history[-1].details["replay_data_matches_record"] is True
+    # The hands as taught: a rehearsal or fine-tuning keeps the old patterns' own (the
+    # rehearsed sequences are the network's generation, not what was shown) and adds the new
+    # data's; replay and scratch learn from the original data, whose hands they are.
+    shown = np.array([s.sensory for s in [*original, *new]])
+    for method in ("rehearsal", "finetune", "replay", "scratch"):
+        grown = consolidate(
+            model, new, ConsolidationConfig(method, train=short), replay_data=original
+        )
+        assert grown.taught_sensory is not None
+        np.testing.assert_allclose(grown.taught_sensory, shown, atol=1e-12)
+    without = replace(model, taught_sensory=None)  # a model of format 2 kept none
+    assert consolidate(without, new, ConsolidationConfig(train=short)).taught_sensory is None
     # The scratch method without a config: the first training's whole length.
     assert ConsolidationConfig("scratch").learning_for(model).iterations == 1200
     assert ConsolidationConfig().learning_for(model).iterations == 500

@@ -132,3 +132,60 @@ def test_trained_model_passes_the_robot_check_and_narrower_bounds_do_too(trained
     )
     with pytest.raises(ModelFileError, match="outside the robot's joint limits"):
         TrainedModel.load(wide, joint_limits=JOINT_LIMITS)
+
+
+def test_the_hands_as_taught_are_kept_and_read_back(trained, sequences, tmp_path):
+    # Training keeps each sequence's hands (normalized: sensory values are in [0, 1] as they
+    # are), recognition's templates.
+    assert trained.taught_sensory is not None
+    for taught, sequence in zip(trained.taught_sensory, sequences, strict=True):
+        np.testing.assert_allclose(taught[: sequence.n_steps], sequence.sensory, atol=1e-12)
+        assert np.isnan(taught[sequence.n_steps :]).all()
+    hands = trained.taught_hands
+    assert hands is not None and set(hands) == set(trained.patterns)
+    assert sum(len(h) for h in hands.values()) == len(sequences)
+    path = tmp_path / "model.npz"
+    trained.save(path)
+    loaded = TrainedModel.load(path)
+    np.testing.assert_array_equal(loaded.taught_sensory, trained.taught_sensory)
+    assert loaded.fingerprint == trained.fingerprint
+    assert "taught_steps" not in loaded.meta
+
+
+def test_a_model_of_format_2_loads_without_taught_hands(trained, tmp_path):
+    def as_format_2(meta, arrays):
+        meta.update(format_version=2)
+        meta.pop("taught_steps")
+        arrays.pop("taught_sensory")
+
+    loaded = TrainedModel.load(_corrupt(trained, tmp_path, as_format_2))
+    assert loaded.taught_sensory is None and loaded.taught_hands is None
+    mirror = MirrorSystem(loaded)  # recognition goes by the network's evidence alone
+    assert mirror.step([0.5, 0.5, 0.5, 0.5]).novelty == ""
+
+
+def _taught_edit(change):
+    def edit(meta, arrays):
+        taught = arrays["taught_sensory"].copy()
+        change(taught)
+        arrays["taught_sensory"] = taught
+
+    return edit
+
+
+@pytest.mark.parametrize(
+    "edit, message",
+    [
+        (_taught_edit(lambda t: t.__setitem__((0, 3, 1), np.nan)), "padded with NaN"),
+        (_taught_edit(lambda t: t.__setitem__((0, 3, 1), 1.5)), r"in \[0, 1\]"),
+        (_taught_edit(lambda t: t.__setitem__((0, 3, 1), np.inf)), "infinite"),
+        (lambda m, a: m.update(taught_steps=0), "taught_steps"),
+        (lambda m, a: m.update(taught_steps=7), "has shape"),
+        (lambda m, a: a.pop("taught_sensory"), "missing array 'taught_sensory'"),
+    ],
+)
+def test_bad_taught_hands_are_refused(trained, tmp_path, edit, message):
+    path = _corrupt(trained, tmp_path, edit)
+    with pytest.raises(ModelFileError, match=message) as error:
+        TrainedModel.load(path)
+    assert str(path) in str(error.value)

@@ -13,6 +13,8 @@ from rnnpb.model.recognition import (
     initial_recognition_state,
     recognise,
     recognition_timeline,
+    taught_distances,
+    taught_stretches,
 )
 from rnnpb.model.reference import ReferenceMirrorSystem
 
@@ -158,3 +160,89 @@ def test_the_settings_follow_the_model_s_learning(trained):
     paper = replace(trained, meta={"train_config": {"optimizer": "momentum"}})
     assert OnlineConfig.for_model(paper).recognition == RecognitionConfig()
     assert RecognitionConfig.fast() != RecognitionConfig()
+    # A model that kept no taught hands (a file of format 1 or 2) gets the settings chosen for
+    # the network's evidence alone.
+    untaught = replace(trained, taught_sensory=None)
+    assert MirrorSystem(untaught).recognition == RecognitionConfig.untaught(fast=True)
+    untaught_paper = replace(paper, taught_sensory=None)
+    assert OnlineConfig.for_model(untaught_paper).recognition == RecognitionConfig.untaught()
+    assert RecognitionConfig.untaught() != RecognitionConfig()
+
+
+def _taught(kinds=(0, 1), steps=50):
+    """Two patterns' taught hands, as a model keeps them (one noisy sequence each)."""
+    rng = np.random.default_rng(11)
+    out = {}
+    for kind in kinds:
+        u, _ = pattern_values(kind, 2 * np.pi * np.arange(steps) / PERIOD)
+        out[str(kind)] = [u + 0.01 * rng.standard_normal(u.shape)]
+    return out
+
+
+def test_the_hands_as_taught_tell_apart_patterns_the_network_confuses():
+    # Both patterns' dynamics predict what is seen equally well and the PB lies between them:
+    # the network's evidence cannot decide. The taught shapes can.
+    config = RecognitionConfig()
+    names = ("0", "1")
+    learned = np.array([[0.4, 0.4], [0.6, 0.6]])
+    taught = taught_stretches(_taught(), names, config)
+    assert taught is not None
+    for kind in (0, 1):
+        for stretches in (taught, None):
+            state = initial_recognition_state(4, 2, config)
+            said = []
+            for u in _cycle(kind, 48, seed=20 + kind):
+                equal = np.array([1e-5, 1e-5])
+                state, answer = recognise(
+                    state, u, np.ones(4, bool), equal, [0.5, 0.5], learned, names, config, stretches
+                )
+                said.append((answer.recognised, answer.novelty))
+            if stretches is None:
+                assert all(name is None for name, _ in said[24:])  # an even split: not sure
+            else:
+                assert said[24:] == [(str(kind), "familiar")] * 24, said
+
+
+def test_the_taught_shape_ignores_the_size_of_the_movement_but_not_a_missing_arm():
+    config = RecognitionConfig()
+    taught = taught_stretches(_taught(), ("0", "1"), config)
+    assert taught is not None
+    u, _ = pattern_values(1, 2 * np.pi * np.arange(12) / PERIOD + 0.3)
+    smaller = 0.5 + 0.4 * (u - 0.5)  # the same movement at 40 % of the size
+    assert taught_distances(smaller, taught)[1] < 0.12  # seen between two taught stretches
+    assert taught_distances(smaller, taught)[0] > 0.95  # vertical is nothing like horizontal
+    one_arm = u.copy()
+    one_arm[:, 2:] = 0.5  # the right hand rests
+    assert taught_distances(one_arm, taught)[1] > 0.6
+    # Slower than taught: one of the template speeds fits it.
+    slow, _ = pattern_values(1, 2 * np.pi * np.arange(12) / (1.2 * PERIOD))
+    assert taught_distances(slow, taught)[1] < 0.1
+    # A pattern with too few taught steps for a stretch: none to match against.
+    assert taught_stretches({"0": [u[:5]], "1": [u]}, ("0", "1"), config) is None
+    with pytest.raises(ConfigError, match="template"):
+        RecognitionConfig(template_speeds=())
+
+
+def test_one_hand_swinging_while_the_other_rests_is_movement_not_stillness():
+    # At the turning points of a one-arm swing, the four values together hardly move; the
+    # swinging hand does.
+    # The demonstrator's size (0.14 of the view) and sensor noise.
+    config = RecognitionConfig()
+    u = np.full((60, 4), 0.5)
+    u[:, 1] += 0.14 * np.sin(2 * np.pi * np.arange(60) / PERIOD + np.pi / 12)
+    u += 0.004 * np.random.default_rng(2).standard_normal(u.shape)
+    state = initial_recognition_state(4, 2, config)
+    novelty = []
+    for x in u:
+        state, answer = recognise(
+            state,
+            x,
+            np.ones(4, bool),
+            np.array([1e-5]),
+            [0.5, 0.5],
+            np.array([[0.5, 0.5]]),
+            ("a",),
+            config,
+        )
+        novelty.append(answer.novelty)
+    assert "still" not in novelty, novelty

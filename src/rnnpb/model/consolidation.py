@@ -164,6 +164,22 @@ class ConsolidationConfig:
         return replace(own, iterations=CONSOLIDATION_ITERATIONS[own.optimizer])
 
 
+def _taught(model: TrainedModel, learned: TrainedModel, n_new: int) -> np.ndarray | None:
+    """The consolidated model's hands as taught, for a rehearsal or a fine-tuning (one old
+    sequence each of the model's, in its order, then the new): the old sequences keep the
+    hands they were first taught with (a rehearsal learned the network's own generation, not
+    what the user showed), the new ones are their data's. None when the old model kept none."""
+    if model.taught_sensory is None or learned.taught_sensory is None:
+        return None
+    old, new = model.taught_sensory, learned.taught_sensory[len(learned.taught_sensory) - n_new :]
+    steps = max(old.shape[1], new.shape[1])
+    padded = [
+        np.pad(a, ((0, 0), (0, steps - a.shape[1]), (0, 0)), constant_values=np.nan)
+        for a in (old, new)
+    ]
+    return np.concatenate(padded)
+
+
 def model_joint_limits(model: TrainedModel) -> np.ndarray:
     """The motor normalization of ``model`` as joint limits (M, 2): a consolidation keeps the
     model's normalization, so its weights mean what they meant."""
@@ -417,6 +433,9 @@ def consolidate(
             sequence_patterns=(*model.sequence_patterns, *learned.sequence_patterns),
             initial_context=np.vstack([model.initial_context, learned.initial_context]),
         )
+    if config.method in ("rehearsal", "finetune"):
+        # Replay and scratch learn from the original data, whose hands are the taught ones.
+        learned = replace(learned, taught_sensory=_taught(model, learned, len(new)))
     training = learned.meta["training"]
     entry = HistoryEntry(
         method=config.method,

@@ -8,7 +8,9 @@ config, the pattern names, the training config, the training results and the mod
 It is read with ``allow_pickle=False``: a model file cannot run code. Writes are atomic.
 
 Format 2 added the history; a file of format 1 still loads, with the history its training
-record implies (one ``train`` entry, time unknown).
+record implies (one ``train`` entry, time unknown). Format 3 added the hands as taught
+(``taught_sensory``, what recognition matches against); a file of format 1 or 2 loads without
+them.
 
 Reading trusts nothing in the file. Before an array is decompressed the zip's central directory
 is checked: only the members the format names (``meta.json`` and, for a model, exactly the
@@ -49,9 +51,12 @@ from rnnpb.sequences import pattern_name_problem
 from rnnpb.vectors import MOTOR_NAMES
 
 MODEL_FORMAT = "rnnpb-model"
-MODEL_FORMAT_VERSION = 2
-READABLE_MODEL_FORMAT_VERSIONS = (1, 2)
-"""Format versions :meth:`TrainedModel.load` reads (1: before the history was recorded)."""
+MODEL_FORMAT_VERSION = 3
+READABLE_MODEL_FORMAT_VERSIONS = (1, 2, 3)
+"""Format versions :meth:`TrainedModel.load` reads (1: before the history was recorded; 2:
+before the hands as taught were kept)."""
+MAX_TAUGHT_STEPS = 100_000
+"""Most steps of taught hands a model file may hold per sequence."""
 HISTORY_METHODS = ("train", "rehearsal", "finetune", "replay", "scratch")
 """How a model's patterns were learned: a first training, or a consolidation method
 (:mod:`rnnpb.model.consolidation`)."""
@@ -221,6 +226,12 @@ class TrainedModel:
     meta : dict
         Training config, results and provenance (JSON-serializable); ``meta["history"]``, a
         list of :meth:`HistoryEntry.to_json`, once the model has been consolidated or saved.
+    taught_sensory : array, shape (S, T, 4), or None
+        Each training sequence's hands as taught, normalized, NaN after a shorter sequence's
+        end: what on-line recognition matches what it sees against
+        (:func:`rnnpb.model.recognition.taught_stretches`). A rehearsed pattern keeps the
+        hands it was first taught with. None for a model saved before they were kept (format
+        1 or 2): recognition then goes by the network's evidence alone.
     """
 
     network: NetworkConfig
@@ -231,6 +242,7 @@ class TrainedModel:
     sequence_patterns: tuple[str, ...]
     initial_context: np.ndarray
     meta: dict[str, Any] = field(default_factory=dict)
+    taught_sensory: np.ndarray | None = None
 
     @property
     def patterns(self) -> tuple[str, ...]:
@@ -246,6 +258,17 @@ class TrainedModel:
     def pattern_initial_context(self, pattern: str) -> np.ndarray:
         names = np.asarray(self.sequence_patterns)
         return self.initial_context[names == pattern].mean(axis=0)
+
+    @property
+    def taught_hands(self) -> dict[str, list[np.ndarray]] | None:
+        """Each pattern's taught sequences' hands, each (T_i, 4) normalized without the
+        padding; None when the model has none."""
+        if self.taught_sensory is None:
+            return None
+        out: dict[str, list[np.ndarray]] = {name: [] for name in self.patterns}
+        for name, hands in zip(self.sequence_patterns, self.taught_sensory, strict=True):
+            out[name].append(hands[~np.isnan(hands).any(axis=1)])
+        return out
 
     @property
     def mean_initial_context(self) -> np.ndarray:
@@ -275,6 +298,9 @@ class TrainedModel:
         for array in (self.lower, self.upper, self.sequence_pb, self.initial_context):
             digest.update(np.ascontiguousarray(array, dtype=np.float64).tobytes())
         digest.update("\n".join(self.sequence_patterns).encode())
+        if self.taught_sensory is not None:  # a model without them keeps its fingerprint
+            digest.update(b"taught_sensory")
+            digest.update(np.ascontiguousarray(self.taught_sensory, dtype=np.float64).tobytes())
         return digest.hexdigest()
 
     def normalize(self, x: np.ndarray) -> np.ndarray:
@@ -301,9 +327,15 @@ class TrainedModel:
             "rnnpb_version": __version__,
             "network": asdict(self.network),
             "sequence_patterns": list(self.sequence_patterns),
-            **{k: v for k, v in self.meta.items() if k not in ("format", "format_version")},
+            **{
+                k: v
+                for k, v in self.meta.items()
+                if k not in ("format", "format_version", "taught_steps")
+            },
             "history": [entry.to_json() for entry in self.history],
         }
+        if self.taught_sensory is not None:
+            meta["taught_steps"] = int(self.taught_sensory.shape[1])
         arrays = {f"params/{k}": v for k, v in params_to_numpy(self.params).items()}
         arrays.update(
             lower=np.asarray(self.lower),
@@ -311,6 +343,8 @@ class TrainedModel:
             sequence_pb=np.asarray(self.sequence_pb),
             initial_context=np.asarray(self.initial_context),
         )
+        if self.taught_sensory is not None:
+            arrays["taught_sensory"] = np.asarray(self.taught_sensory)
         save_archive(path, meta, arrays)
 
     @classmethod
@@ -332,7 +366,22 @@ class TrainedModel:
         network, patterns, expected = _model_layout(path, meta)
         history = _checked_history(path, meta)
         for name in expected:
-            check_numeric(path, name, arrays[name])
+            if name != "taught_sensory":
+                check_numeric(path, name, arrays[name])
+        taught = arrays.get("taught_sensory")
+        if taught is not None:
+            # Hands in [0, 1], NaN only as the padding after a sequence's end.
+            check_numeric(path, "taught_sensory", np.where(np.isnan(taught), 0.0, taught))
+            rows = np.isnan(taught).any(axis=2)
+            if (
+                np.any(np.isnan(taught) != rows[..., None])
+                or np.any(rows[:, 1:] < rows[:, :-1])
+                or np.any((taught < 0) | (taught > 1))
+            ):
+                raise ModelFileError(
+                    f"{path}: array 'taught_sensory' is not hands in [0, 1] padded with NaN "
+                    "after each sequence's end"
+                )
         if np.any(arrays["upper"] <= arrays["lower"]):
             raise ModelFileError(f"{path}: normalization has upper <= lower")
         for name in ("sequence_pb", "initial_context"):
@@ -345,7 +394,15 @@ class TrainedModel:
         extra = {
             k: v
             for k, v in meta.items()
-            if k not in ("format", "format_version", "network", "sequence_patterns", "history")
+            if k
+            not in (
+                "format",
+                "format_version",
+                "network",
+                "sequence_patterns",
+                "history",
+                "taught_steps",
+            )
         }
         if history is not None:
             extra["history"] = [entry.to_json() for entry in history]
@@ -358,6 +415,7 @@ class TrainedModel:
             sequence_patterns=patterns,
             initial_context=arrays["initial_context"].astype(np.float64),
             meta=extra,
+            taught_sensory=None if taught is None else taught.astype(np.float64),
         )
         if joint_limits is not None:
             check_joint_limits(model, joint_limits, str(path))
@@ -395,6 +453,18 @@ def _model_layout(
         sequence_pb=(n_seq, network.pb_size),
         initial_context=(n_seq, network.context_size),
     )
+    taught_steps = meta.get("taught_steps")
+    if taught_steps is not None:
+        if (
+            not isinstance(taught_steps, int)
+            or isinstance(taught_steps, bool)
+            or not 1 <= taught_steps <= MAX_TAUGHT_STEPS
+        ):
+            raise ModelFileError(
+                f"{path}: meta.json's taught_steps is not a whole number from 1 to "
+                f"{MAX_TAUGHT_STEPS} ({_shown(taught_steps)})"
+            )
+        shapes["taught_sensory"] = (n_seq, taught_steps, network.sensory_size)
     return network, tuple(patterns), shapes
 
 

@@ -38,6 +38,7 @@ from rnnpb.model.recognition import (
     RecognitionConfig,
     initial_recognition_state,
     recognise,
+    taught_stretches,
 )
 
 
@@ -247,6 +248,7 @@ class MirrorSystem:
         self.recognition = recognition or suggested_online_config(model).recognition
         self.patterns = tuple(model.pattern_pb)
         self._learned_pb = np.array([model.pattern_pb[name] for name in self.patterns])
+        self._taught = taught_stretches(model.taught_hands or {}, self.patterns, self.recognition)
         self._layout = PackedLayout.for_network(model.network, len(self.patterns))
         self._pattern_rho = jnp.asarray(restart_candidates(model), jnp.float32)
         self._recognition = initial_recognition_state(
@@ -327,6 +329,7 @@ class MirrorSystem:
             self._learned_pb,
             self.patterns,
             self.recognition,
+            self._taught,
         )
         return StepResult(
             motor=motor_command(self.model, outputs.motor),

@@ -226,9 +226,13 @@ def suggested_online_config(model: Any) -> OnlineChoice:
     """
     meta = getattr(model, "meta", None) or {}
     learned = meta.get("train_config") if isinstance(meta, dict) else None
+    # A model that kept its hands as taught is recognised with them, one that did not (a file
+    # of format 1 or 2) by the network's evidence alone, each with the settings chosen for it.
+    taught = getattr(model, "taught_sensory", None) is not None
+    paper = RecognitionConfig() if taught else RecognitionConfig.untaught()
     if not isinstance(learned, dict):
         return OnlineChoice(
-            "default", OnlineConfig(), "the model does not record how it was learned"
+            "default", OnlineConfig(), "the model does not record how it was learned", paper
         )
     optimizer = learned.get("optimizer")
     if optimizer == "adam":
@@ -236,10 +240,11 @@ def suggested_online_config(model: Any) -> OnlineChoice:
             "ungated",
             OnlineConfig.ungated(),
             "the model was learned with Adam, the fast preset",
-            RecognitionConfig.fast(),
+            RecognitionConfig.fast() if taught else RecognitionConfig.untaught(fast=True),
         )
     return OnlineChoice(
         "default",
         OnlineConfig(),
         f"the model was learned with {optimizer} descent, the paper's algorithm",
+        paper,
     )

@@ -21,35 +21,52 @@ How it decides (docs/model.md, "Recognition and novelty", measures it):
    seen. This is stronger evidence than the distance of the
    regressed PB to the learned ones: two learned PBs can lie close together while their
    dynamics differ clearly, and a PB between them predicts nothing well.
-2. **Confidence.** Each pattern's likelihood is ``exp(-d_k² / 2σ² - e_k² / 2τ²)``
-   (σ = ``match_scale``), where ``e_k`` is the distance of the PB, averaged over the last
-   ``pb_steps`` steps, to pattern ``k``'s learned PB (τ = ``pb_scale``): over a few steps the
-   regressed PB is steadier than in one. A pattern nobody learned has the likelihood of a fit
-   at ``match_level`` and ``pb_level``. Each share of the
-   sum is a pattern's confidence; the best pattern is recognised when its share is at least
-   ``confidence_level``.
-3. **Structure.** Where no pattern is recognised, the movement is ``novel`` if what is seen
+2. **The hands as taught.** A model keeps each training sequence's hands
+   (:attr:`rnnpb.model.TrainedModel.taught_sensory`). ``m_k`` says how unlike pattern ``k``'s
+   taught shape the last ``template_steps`` observations are: the sine of the smallest angle
+   between them and any stretch of the pattern's taught hands (every half step, at each of
+   ``template_speeds``), each with its mean removed (:func:`taught_distances`). Where the user
+   stands and how large the movement is do not count; which hands move, and how together, do:
+   one arm of a two-arm pattern is as unlike it as a quarter turn. This is what tells apart
+   two patterns whose dynamics the network learned alike (the paper's algorithm left several
+   such pairs, whose generated predictions lie within 0.005 RMS of each other).
+3. **Confidence.** Each pattern's likelihood is
+   ``exp(-d_k² / 2σ² - e_k² / 2τ² - m_k² / 2μ²)`` (σ = ``match_scale``, τ = ``pb_scale``,
+   μ = ``template_scale``), where ``e_k`` is the distance of the PB, averaged over the last
+   ``pb_steps`` steps, to pattern ``k``'s learned PB: over a few steps the regressed PB is
+   steadier than in one. A pattern nobody learned has the likelihood of a fit at
+   ``match_level``, ``pb_level`` and ``template_level``. With the taught hands at hand,
+   ``d_k`` and ``e_k`` count up to their levels and no further: the network's evidence can
+   speak for a pattern, and a pattern shown plainly while the network does not yet predict it
+   well (not yet locked on, a user unlike the teacher) is that pattern, not a new movement.
+   Each share of the sum is a pattern's confidence; the best pattern is recognised when its
+   share is at least ``confidence_level``. A model without taught hands (a file of format 1
+   or 2) goes by ``d_k`` and ``e_k`` alone, unclipped.
+4. **Structure.** Where no pattern is recognised, the movement is ``novel`` if what is seen
    repeats itself: the smallest mean squared difference between the last ``structure_steps``
    observations and the same steps one lag back, for lags in ``lags``, relative to twice the
    variance of what is seen, is below ``structure_level``. A cycle repeats at its period; a
    random walk or jumps between random targets do not repeat at any lag. Else it is
    ``unstructured``.
-4. **Stillness.** The hands are ``still`` when the spread of the last ``still_steps``
-   observations is below ``still_level``. Through a short pause (``hold_steps``) the last
-   recognised pattern stays recognised: the robot keeps generating it, as in the paper's
-   section 3.1.
-5. **Hysteresis.** A new answer replaces the current one only after it has been the step's
+5. **Stillness.** The hands are ``still`` when no observed value's spread over the last
+   ``still_steps`` observations reaches ``still_level``. Through a short pause
+   (``hold_steps``) the last recognised pattern stays recognised: the robot keeps generating
+   it, as in the paper's section 3.1.
+6. **Hysteresis.** A new answer replaces the current one only after it has been the step's
    evidence for ``switch_steps`` steps running — ``release_steps`` when a recognised pattern
    would give way to none: the evidence dips for a few steps as a pause begins or ends.
 
-The settings depend on how the model was learned: ``RecognitionConfig()`` was chosen for models
-learned by the paper's algorithm, :meth:`RecognitionConfig.fast` for ``TrainConfig.fast()``
-models (their evidence lies at other levels); ``OnlineConfig.for_model`` picks the one that
-suits a model, and :class:`rnnpb.model.MirrorSystem` uses it unless told otherwise.
+The settings depend on how the model was learned and on what it kept: ``RecognitionConfig()``
+was chosen for models learned by the paper's algorithm, :meth:`RecognitionConfig.fast` for
+``TrainConfig.fast()`` models (their evidence lies at other levels), and
+:meth:`RecognitionConfig.untaught` for models of either kind that kept no taught hands;
+``OnlineConfig.for_model`` picks the one that suits a model, and
+:class:`rnnpb.model.MirrorSystem` uses it unless told otherwise.
 
-:func:`recognise` is pure (state in, state and answer out) and NumPy only: it costs tens of
-microseconds a step. The compiled step and its NumPy twin compute the same evidence and call
-the same function, so both give the same answer for the same observations.
+:func:`recognise` is pure (state in, state and answer out) and NumPy only: it costs about a
+hundred microseconds a step, about half of it matching the taught stretches. The compiled step
+and its NumPy twin compute the same evidence and call the same function, so both give the
+same answer for the same observations.
 """
 
 from __future__ import annotations
@@ -74,20 +91,25 @@ class RecognitionConfig:
 
     recognition_steps: int = 12  # predictions each pattern's evidence is measured on
     evidence_steps: int = 1  # steps each pattern's evidence is averaged over
-    match_scale: float = 0.0046  # σ of the likelihoods, RMS error in normalized units
-    match_level: float = 0.0435  # RMS error at which "none learned" is as likely
+    match_scale: float = 0.016  # σ of the likelihoods, RMS error in normalized units
+    match_level: float = 0.035  # RMS error at which "none learned" is as likely
     pb_steps: int = 3  # steps the PB is averaged over
     pb_scale: float = 0.92  # σ of the PB's likelihoods (distance to a learned PB)
     pb_level: float = 0.032  # PB distance at which "none learned" is as likely
-    confidence_level: float = 0.645
+    confidence_level: float = 0.59
     structure_steps: int = 12
     lags: tuple[int, int] = (8, 18)  # smallest and largest lag tried, steps
     structure_level: float = 0.354
     still_steps: int = 4
-    still_level: float = 0.012  # RMS spread of the observations, normalized units
+    still_level: float = 0.012  # largest RMS spread of one value, normalized units
     hold_steps: int = 10
     switch_steps: int = 6
     release_steps: int = 10
+    # The hands as taught (3 in the module doc): matched over template_steps, at these speeds.
+    template_steps: int = 12
+    template_speeds: tuple[float, ...] = (0.8, 0.9, 1.0, 1.1, 1.25)
+    template_scale: float = 0.15  # σ of the taught-shape likelihoods (a sine, in [0, 1])
+    template_level: float = 0.43  # taught-shape distance at which "none learned" is as likely
 
     def __post_init__(self) -> None:
         if self.recognition_steps < 1:
@@ -109,6 +131,12 @@ class RecognitionConfig:
             raise ConfigError("still_steps must be >= 2 and still_level >= 0")
         if self.hold_steps < 0 or self.switch_steps < 1 or self.release_steps < 1:
             raise ConfigError("hold_steps must be >= 0, switch_steps and release_steps >= 1")
+        if self.template_steps < 2 or not self.template_speeds:
+            raise ConfigError("template_steps must be >= 2, with at least one template speed")
+        if not all(0.25 <= speed <= 4 for speed in self.template_speeds):
+            raise ConfigError(f"template_speeds must lie in [0.25, 4], got {self.template_speeds}")
+        if self.template_scale <= 0 or self.template_level <= 0:
+            raise ConfigError("template_scale and template_level must be > 0")
 
     @classmethod
     def fast(cls, **changes: Any) -> RecognitionConfig:
@@ -116,10 +144,16 @@ class RecognitionConfig:
         ``OnlineConfig.ungated()``): their evidence lies at other levels (docs/model.md)."""
         return replace(cls(**FAST_SETTINGS), **changes)
 
+    @classmethod
+    def untaught(cls, fast: bool = False, **changes: Any) -> RecognitionConfig:
+        """The settings chosen for a model that kept no hands as taught (a file of format 1
+        or 2), which goes by the network's evidence alone; ``fast`` for the fast preset's."""
+        return replace(cls(**(UNTAUGHT_FAST_SETTINGS if fast else UNTAUGHT_SETTINGS)), **changes)
+
     @property
     def history(self) -> int:
         """Observed steps the detector keeps."""
-        return max(self.lags[1] + self.structure_steps, self.still_steps)
+        return max(self.lags[1] + self.structure_steps, self.still_steps, self.template_steps)
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -128,12 +162,39 @@ class RecognitionConfig:
     def from_dict(cls, data: dict[str, Any]) -> RecognitionConfig:
         data = dict(data)
         data["lags"] = tuple(data["lags"])
+        if "template_speeds" in data:
+            data["template_speeds"] = tuple(data["template_speeds"])
         return cls(**data)
 
 
 #: :meth:`RecognitionConfig.fast`'s settings, where they differ from the defaults (chosen by a
 #: search over recorded evidence: docs/model.md, "Recognition and novelty").
 FAST_SETTINGS: dict[str, Any] = {
+    "evidence_steps": 18,
+    "match_scale": 0.041,
+    "match_level": 0.066,
+    "pb_steps": 1,
+    "pb_scale": 0.18,
+    "pb_level": 0.14,
+    "confidence_level": 0.6,
+    "structure_level": 0.33,
+    "switch_steps": 6,
+    "release_steps": 7,
+    "template_scale": 0.18,
+    "template_level": 0.37,
+}
+
+
+#: :meth:`RecognitionConfig.untaught`'s settings, where they differ from the defaults: a search
+#: over recorded evidence like the others', made before models kept their taught hands.
+UNTAUGHT_SETTINGS: dict[str, Any] = {
+    "match_scale": 0.0046,
+    "match_level": 0.0435,
+    "confidence_level": 0.645,
+    "switch_steps": 6,
+    "release_steps": 10,
+}
+UNTAUGHT_FAST_SETTINGS: dict[str, Any] = {
     "evidence_steps": 18,
     "match_scale": 0.0088,
     "match_level": 0.0512,
@@ -184,6 +245,7 @@ class RecognitionState(NamedTuple):
     candidate: str | None  # the answer the evidence gives, waiting for switch_steps
     candidate_run: int
     novelty: str
+    moving_run: int = 0  # steps since the hands were last still (or nothing was seen)
 
 
 def initial_recognition_state(
@@ -201,6 +263,88 @@ def initial_recognition_state(
         0,
         "",
     )
+
+
+TEMPLATE_START_STEP = 0.5
+"""Taught steps between two stretches' starts: with a whole step, a movement seen half a step
+out of phase with every stretch (a twelfth of a cycle) looked 0.2 unlike its own shape."""
+
+
+class TaughtStretches(NamedTuple):
+    """Every ``template_steps``-long stretch of each learned pattern's taught hands, each
+    resampled at every template speed, its mean removed and scaled to unit length
+    (:func:`taught_stretches`).
+
+    Attributes
+    ----------
+    directions : array, shape (K, N, W·S)
+        Pattern k's stretches, flattened; rows past its own count repeat its first stretch.
+    """
+
+    directions: np.ndarray
+
+
+def taught_stretches(
+    taught: dict[str, list[np.ndarray]], names: tuple[str, ...], config: RecognitionConfig
+) -> TaughtStretches | None:
+    """The taught stretches the detector matches what it sees against, or None when a learned
+    pattern has no taught hands (a model saved before they were kept: the detector then goes
+    by the network's evidence alone).
+
+    Parameters
+    ----------
+    taught : dict of str to list of array, shape (T_i, S)
+        Each pattern's taught sequences' hands, normalized (NaN after a sequence's end).
+    names : tuple of str, length K
+        The learned patterns, in the detector's order.
+    """
+    steps = config.template_steps
+    per_pattern = []
+    for name in names:
+        stretches = []
+        for sequence in taught.get(name, []):
+            values = np.asarray(sequence, dtype=np.float64)
+            values = values[~np.isnan(values).any(axis=1)]  # the padding after its end
+            length = len(values)
+            for speed in config.template_speeds:
+                span = speed * (steps - 1)  # the stretch covers this many taught steps
+                if length - 1 < span:
+                    continue
+                starts = np.arange(0.0, length - 1 - span + 1e-9, TEMPLATE_START_STEP)
+                times = starts[:, None] + speed * np.arange(steps)[None]  # (n, W)
+                low = np.minimum(np.floor(times).astype(int), length - 2)
+                weight = (times - low)[..., None]
+                stretches.append(values[low] * (1 - weight) + values[low + 1] * weight)
+        if not stretches:
+            return None
+        pattern = np.concatenate(stretches)
+        pattern = (pattern - pattern.mean(axis=1, keepdims=True)).reshape(len(pattern), -1)
+        length = np.linalg.norm(pattern, axis=1, keepdims=True)
+        per_pattern.append(pattern[length[:, 0] > 0] / length[length[:, 0] > 0])
+        if not len(per_pattern[-1]):
+            return None  # the pattern was taught without moving
+    if not per_pattern:
+        return None
+    count = max(len(p) for p in per_pattern)
+    return TaughtStretches(
+        np.stack(
+            [np.concatenate([p, np.repeat(p[:1], count - len(p), axis=0)]) for p in per_pattern]
+        )
+    )
+
+
+def taught_distances(window: np.ndarray, taught: TaughtStretches) -> np.ndarray:
+    """How unlike each learned pattern's taught shape the window ``(W, S)`` is, shape (K,), in
+    [0, 1]: the sine of the smallest angle between the window and the pattern's taught
+    stretches, each with its mean removed (0: the same shape at some size; 1: nothing in
+    common). Its size does not count, so a user who moves smaller or larger than the teacher
+    matches as well; a movement that is a part of a pattern (one arm of two) does not."""
+    seen = (window - window.mean(axis=0, keepdims=True)).ravel()
+    length = float(np.linalg.norm(seen))
+    if not length > 0:
+        return np.ones(len(taught.directions))  # no movement has no shape
+    best = np.clip((taught.directions @ (seen / length)).max(axis=1), 0.0, 1.0)
+    return np.sqrt(1.0 - best**2)
 
 
 def _structure(history: np.ndarray, config: RecognitionConfig) -> tuple[float, bool]:
@@ -240,6 +384,7 @@ def recognise(
     learned_pb: np.ndarray,
     names: tuple[str, ...],
     config: RecognitionConfig,
+    taught: TaughtStretches | None = None,
 ) -> tuple[RecognitionState, Recognition]:
     """One step of recognition and novelty detection.
 
@@ -258,6 +403,9 @@ def recognise(
         The learned patterns' PBs.
     names : tuple of str, length K
         The learned patterns, in the order of ``pattern_errors``.
+    taught : TaughtStretches, optional
+        The learned patterns' taught hands (:func:`taught_stretches`), in the same order;
+        without them the detector goes by the network's evidence alone.
 
     Returns
     -------
@@ -285,17 +433,19 @@ def recognise(
     # evidence; the steps before the first seen one stay NaN.
     filled = _forward_fill(observed)
     if np.isnan(filled[-config.still_steps :]).any() or not np.all(np.isfinite(errors)):
-        waiting = state._replace(observed=observed, novelty="")
+        waiting = state._replace(observed=observed, novelty="", moving_run=state.moving_run + 1)
         return waiting, Recognition(None, 0.0, "", none, no_distance, float("nan"))
 
     recent = filled[-config.still_steps :]
-    spread = float(np.sqrt(np.mean(np.var(recent, axis=0))))
+    # The largest spread of any one coordinate: one hand moving is movement, though the other
+    # rests (averaged over all four values, a one-arm swing looked still at its turning points).
+    spread = float(np.sqrt(np.var(recent, axis=0).max()))
     if spread < config.still_level:
         still_run = state.still_run + 1
         keep = state.recognised if still_run <= config.hold_steps else None
         confidence = state.confidence if keep is not None else 1.0
         new = RecognitionState(
-            observed, pbs, history, keep, confidence, still_run, keep, 0, "still"
+            observed, pbs, history, keep, confidence, still_run, keep, 0, "still", 0
         )
         return new, Recognition(keep, confidence, "still", none, no_distance, float("nan"))
 
@@ -304,11 +454,41 @@ def recognise(
     d = np.sqrt(np.maximum(history[~np.isnan(history).any(axis=1)].mean(axis=0), 0.0))
     recent_pb = pbs[~np.isnan(pbs).any(axis=1)]
     e = np.linalg.norm(np.asarray(learned_pb) - recent_pb.mean(axis=0)[None], axis=1)
+    # The taught shapes are matched once the window holds movement alone: a pause inside it
+    # (the hands at rest, then moving on) is a shape no pattern was taught with. Until then
+    # the last answer stands (undecided at the start; after a pause, the pattern it held).
+    moving_run = state.moving_run + 1
+    window = filled[-config.template_steps :]
+    if taught is not None and (moving_run < config.template_steps or np.isnan(window).any()):
+        novelty = "familiar" if state.recognised is not None else ""
+        waiting = state._replace(observed=observed, still_run=0, moving_run=moving_run)
+        waiting = waiting._replace(novelty=novelty)
+        distances = {name: float(x) for name, x in zip(names, d, strict=True)}
+        return waiting, Recognition(
+            state.recognised,
+            state.confidence if state.recognised else 0.0,
+            novelty,
+            none,
+            distances,
+            float("nan"),
+        )
+    m = None if taught is None else taught_distances(window, taught)
+    if m is not None:
+        # With the taught shapes to go by, the network's and the PB's evidence speak for a
+        # pattern up to their levels, and no further against it: a pattern shown plainly
+        # while the network does not yet predict it well (not locked on, a user unlike the
+        # teacher) is that pattern, not a new movement.
+        d_for, e_for = np.minimum(d, config.match_level), np.minimum(e, config.pb_level)
+    else:
+        d_for, e_for = d, e
     # Log-likelihoods, shifted by their largest so that the exponentials cannot underflow.
-    log_l = -0.5 * ((d / config.match_scale) ** 2 + (e / config.pb_scale) ** 2)
+    log_l = -0.5 * ((d_for / config.match_scale) ** 2 + (e_for / config.pb_scale) ** 2)
     log_unknown = -0.5 * (
         (config.match_level / config.match_scale) ** 2 + (config.pb_level / config.pb_scale) ** 2
     )
+    if m is not None:
+        log_l = log_l - 0.5 * (m / config.template_scale) ** 2
+        log_unknown -= 0.5 * (config.template_level / config.template_scale) ** 2
     top = max(log_l.max(), log_unknown)
     likelihood, unknown = np.exp(log_l - top), float(np.exp(log_unknown - top))
     total = likelihood.sum() + unknown
@@ -340,7 +520,7 @@ def recognise(
         else:
             confidence, novelty = float(unknown / total), state.novelty
     new = RecognitionState(
-        observed, pbs, history, answer, confidence, 0, candidate, candidate_run, novelty
+        observed, pbs, history, answer, confidence, 0, candidate, candidate_run, novelty, moving_run
     )
     return new, Recognition(
         answer,

@@ -27,7 +27,12 @@ from rnnpb.model.network import Params, logit_numpy
 from rnnpb.model.online import phase_candidates, restart_candidates
 from rnnpb.model.online_config import OnlineConfig, suggested_online_config
 from rnnpb.model.parametric_bias import PBUpdateConfig
-from rnnpb.model.recognition import RecognitionConfig, initial_recognition_state, recognise
+from rnnpb.model.recognition import (
+    RecognitionConfig,
+    initial_recognition_state,
+    recognise,
+    taught_stretches,
+)
 
 
 def sigmoid(z: np.ndarray) -> np.ndarray:
@@ -280,6 +285,7 @@ class ReferenceMirrorSystem:
         self.recognition = recognition or suggested_online_config(model).recognition
         self.patterns = tuple(model.pattern_pb)
         self.learned_pb = np.array([model.pattern_pb[name] for name in self.patterns])
+        self.taught = taught_stretches(model.taught_hands or {}, self.patterns, self.recognition)
         self.pattern_rho = restart_candidates(model)
         self.params = model.params
         # The safety guard's risk network, as the compiled step takes it (docs/safety.md).
@@ -346,6 +352,7 @@ class ReferenceMirrorSystem:
             self.learned_pb,
             self.patterns,
             self.recognition,
+            self.taught,
         )
         return StepResult(
             motor=motor_command(self.model, motor),

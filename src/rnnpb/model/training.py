@@ -207,6 +207,11 @@ def _finish(
         "rnnpb_version": __version__,
         "jax_version": jax.__version__,
     }
+    # The hands as taught (normalized sensory inputs), NaN on the padding after each end:
+    # step 0 is real, and step t + 1 where step t predicts a real step.
+    real = np.concatenate([np.ones((len(data.valid), 1), bool), data.valid], axis=1)
+    hands = np.clip(data.inputs[..., : network.sensory_size], 0.0, 1.0)
+    taught = np.where(real[..., None], hands, np.nan)
     return TrainedModel(
         network=network,
         params=state.params,
@@ -216,6 +221,7 @@ def _finish(
         sequence_patterns=data.patterns,
         initial_context=np.asarray(jax.nn.sigmoid(state.initial_context_logit), dtype=np.float64),
         meta=meta,
+        taught_sensory=taught.astype(np.float64),
     )
 
 

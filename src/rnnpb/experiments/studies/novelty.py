@@ -116,21 +116,23 @@ def run_stream(
     )
 
 
-def replay(run: StreamRun, model: Any, config: Any) -> StreamRun:
+def replay(run: StreamRun, model: Any, config: Any, use_taught: bool = True) -> StreamRun:
     """The same stream's evidence through the detector with other settings (the regression
-    does not depend on them): how the settings were chosen."""
+    does not depend on them): how the settings were chosen, and (``use_taught=False``) what
+    the detector says without the hands as taught."""
     from dataclasses import replace
 
     from rnnpb.model.mirror import normalized_hands
-    from rnnpb.model.recognition import initial_recognition_state, recognise
+    from rnnpb.model.recognition import initial_recognition_state, recognise, taught_stretches
 
     names = tuple(model.pattern_pb)
     learned = np.array([model.pattern_pb[n] for n in names])
+    taught = taught_stretches(model.taught_hands or {}, names, config) if use_taught else None
     state = initial_recognition_state(run.sensory.shape[1], run.pb.shape[1], config)
     novelty, recognised, confidence = [], [], []
     for u, errors, pb in zip(run.sensory, run.pattern_errors, run.pb, strict=True):
         u, seen = normalized_hands(u, len(u))
-        state, answer = recognise(state, u, seen, errors, pb, learned, names, config)
+        state, answer = recognise(state, u, seen, errors, pb, learned, names, config, taught)
         novelty.append(answer.novelty)
         recognised.append(answer.recognised)
         confidence.append(answer.confidence)
@@ -183,6 +185,8 @@ def _model_job(
     """Every stream of one model: its on-line regression and recognition settings chosen as
     ``OnlineConfig.for_model`` chooses them for the model's learning (as the dashboard and
     ``rnnpb interact`` do)."""
+    from dataclasses import replace
+
     from rnnpb.demonstrator import learning_set_patterns, novel_pattern
     from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel
     from rnnpb.robot import JOINT_LIMITS
@@ -202,8 +206,14 @@ def _model_job(
         "online_preset": choice.name,
         "online": choice.config.to_dict(),
         "recognition": choice.recognition.to_dict(),
+        "taught_hands": model.taught_sensory is not None,
     }
-    return name, settings, runs
+    # The same evidence without the hands as taught: what they add (the network's evidence,
+    # the PB and the structure test alone, with the settings chosen for that, as a model that
+    # kept no taught hands gets them).
+    untaught = OnlineConfig.for_model(replace(model, taught_sensory=None)).recognition
+    alone = [replay(r, model, untaught, use_taught=False) for r in runs]
+    return name, settings, runs, alone
 
 
 def _judged(run: StreamRun) -> range:
@@ -329,6 +339,7 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
     shapes = tuple(NEW_SHAPES[:2] if options.quick else NEW_SHAPES)
     seeds = [options.seed + 1000 + i for i in range(draws)]  # not the draws tuned on (0, 1)
     runs: list[StreamRun] = []
+    alone: list[StreamRun] = []
     settings: dict[str, dict[str, Any]] = {}
     with study_pool(min(options.workers, len(models))) as pool:
         jobs = [
@@ -336,9 +347,10 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
             for name, path in models.items()
         ]
         for job in jobs:
-            name, chosen, model_runs = job.result()
+            name, chosen, model_runs, model_alone = job.result()
             settings[name] = chosen
             runs += model_runs
+            alone += model_alone
     per_set = {name: measure([r for r in runs if r.model == name]) for name in models}
     presets = {
         preset: [r for r in runs if settings[r.model]["online_preset"] == preset]
@@ -346,6 +358,8 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
     }
     per_preset = {preset: measure(rs) for preset, rs in presets.items()}
     overall = measure(runs)
+    without_taught = {name: measure([r for r in alone if r.model == name]) for name in models}
+    without_taught["all"] = measure(alone)
     targets = judge(overall)
     for preset, m in per_preset.items():
         if len(presets) > 1:
@@ -359,7 +373,9 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
         period=PERIOD,
     )
     plot_roc({n: m["roc"] for n, m in per_set.items()}, out / "figures" / "roc.png")
-    report = _report(per_set, overall, targets, options, seeds, settings, per_preset)
+    report = _report(
+        per_set, overall, targets, options, seeds, settings, per_preset, without_taught
+    )
     results = {
         "study": NAME,
         "quick": options.quick,
@@ -374,6 +390,9 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
         "per_set": per_set,
         "per_preset": per_preset,
         "overall": overall,
+        "without_taught_hands": {
+            name: {key: m[key] for key in TARGETS} for name, m in without_taught.items()
+        },
         "targets": {k: t.to_json() for k, t in targets.items()},
         "versions": versions(),
     }
@@ -389,6 +408,7 @@ def _report(
     seeds: list[int],
     settings: dict[str, dict[str, Any]],
     per_preset: dict[str, dict[str, Any]],
+    without_taught: dict[str, dict[str, Any]],
 ) -> list[str]:
     lines = [
         "# Study: novelty — does the robot know what it sees?",
@@ -440,6 +460,33 @@ def _report(
             "ROC AUC",
         ],
         rows,
+    )
+    lines += ["", "## What the hands as taught add", ""]
+    lines += [
+        "The same evidence replayed through the detector without the third term (the hands "
+        'as taught; docs/model.md, "Recognition and novelty"): the network\'s evidence, the '
+        "PB and the structure test alone, as before models kept their taught hands. A model "
+        "without them (a file of format 1 or 2) runs this way; "
+        + (
+            "every model here kept them."
+            if all(s["taught_hands"] for s in settings.values())
+            else "here: " + ", ".join(n for n, s in settings.items() if not s["taught_hands"]) + "."
+        ),
+        "",
+    ]
+    lines += table(
+        ["models", *TARGETS],
+        [
+            [
+                f"{name}{suffix}",
+                *[fmt(100 * m[key]) for key in TARGETS],
+            ]
+            for name in [*per_set, "all"]
+            for suffix, m in (
+                ("", overall if name == "all" else per_set[name]),
+                (" without", without_taught[name]),
+            )
+        ],
     )
     lines += ["", "## Confidence", ""]
     lines += [
