@@ -151,6 +151,9 @@ def run(args: argparse.Namespace) -> int:
         sequence_pb=rng.uniform(0.2, 0.8, (len(sequences), network.pb_size)),
         sequence_patterns=data.patterns,
         initial_context=np.full((len(sequences), network.context_size), 0.5),
+        # The hands as taught, which recognition matches what it sees against (as a model
+        # learned today keeps them).
+        taught_sensory=data.inputs[..., : network.sensory_size].astype(np.float64),
     )
     online = OnlineConfig()
     # The default step and the same step without phase restarts, timed alternately so that
