@@ -37,23 +37,12 @@ def test_the_new_shape_is_kept_learned_and_followed_and_nothing_unstructured_is_
     assert outcome.targets["nothing_kept_from_unstructured"].met
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="not yet: the fast-preset detector calls figure-eight novel after 40 steps here, "
-    "past issue 14's three cycles (docs/model.md, 'Recognition and novelty')",
-)
 def test_the_new_shape_is_called_novel_within_three_cycles(study):
     _, _, results = study
     (run,) = results["runs"]
     assert run["detection_delay"] is not None and run["detection_delay"] < 3 * 12
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="not yet: the freshly learned shape is not locked onto on its next performance, "
-    "nor from rest: its hands are predicted just above the lock-on threshold and it is called "
-    "novel (docs/teaching.md, 'The full study')",
-)
 def test_the_new_shape_is_followed_on_its_next_performance(study):
     _, _, results = study
     (run,) = results["runs"]

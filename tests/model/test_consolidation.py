@@ -300,11 +300,11 @@ def test_a_model_file_of_format_1_still_loads(tmp_path):
 def test_a_bad_history_is_refused(tmp_path, change, message):
     import json
 
-    from rnnpb.model.io import load_archive, save_archive
+    from rnnpb.model.io import MODEL_FORMAT_VERSION, load_archive, save_archive
 
     model = TrainedModel.load(__file__.rsplit("/", 1)[0] + "/data/model_format1.npz")
     model.save(tmp_path / "m.npz")
-    meta, arrays = load_archive(tmp_path / "m.npz", "rnnpb-model", 2)
+    meta, arrays = load_archive(tmp_path / "m.npz", "rnnpb-model", MODEL_FORMAT_VERSION)
     history = json.loads(json.dumps(meta["history"]))
     change(history)
     save_archive(tmp_path / "bad.npz", {**meta, "history": history}, arrays)
