@@ -70,6 +70,8 @@ def test_consolidate_then_info(files, capsys):
     assert "fast preset: use --online ungated" in text
     assert "0. train: learned 0, 1" in text and "1. rehearsal: learned 2 from m.npz" in text
     assert "4 PB, 40 hidden, 30 context" in text
+    # The consolidated model keeps the old patterns' taught hands and adds the new one's.
+    assert "recognition: with the hands as taught (6 sequence(s)" in text
 
 
 def test_replay_takes_the_original_data(files, capsys):

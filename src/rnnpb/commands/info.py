@@ -84,6 +84,17 @@ def run(args: argparse.Namespace) -> int:
     else:
         print("learning: not recorded")
     print(f"on-line regression: {suited_regression(preset)}")
+    if model.taught_sensory is None:
+        print(
+            "recognition: by the network's evidence alone (the file keeps no hands as taught: "
+            "saved before model format 3)"
+        )
+    else:
+        print(
+            "recognition: with the hands as taught "
+            f"({model.taught_sensory.shape[0]} sequence(s), up to "
+            f"{model.taught_sensory.shape[1]} steps each)"
+        )
     training = model.meta.get("training")
     if isinstance(training, dict) and "mse_max" in training:
         print(
