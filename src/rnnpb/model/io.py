@@ -372,7 +372,7 @@ class TrainedModel:
         if taught is not None:
             # Hands in [0, 1], NaN only as the padding after a sequence's end.
             check_numeric(path, "taught_sensory", np.where(np.isnan(taught), 0.0, taught))
-            rows = np.isnan(taught).any(axis=2)
+            rows: np.ndarray = np.asarray(np.isnan(taught).any(axis=2), dtype=bool)
             if (
                 np.any(np.isnan(taught) != rows[..., None])
                 or np.any(rows[:, 1:] < rows[:, :-1])
