@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from rnnpb.experiments.studies import load_study, study_names
-from rnnpb.experiments.studies.novelty import SETTLE_STEPS, StreamRun, judge, measure
+from rnnpb.experiments.studies import StudyOptions, load_study, study_names
+from rnnpb.experiments.studies.novelty import SETTLE_STEPS, TARGETS, StreamRun, judge, measure
 
 
 def _run(kind, movement, novelty, recognised, start=0, score=0.05, confidence=None):
@@ -68,3 +68,19 @@ def test_the_measures_count_what_each_step_said():
 def test_the_study_is_registered():
     assert "novelty" in study_names()
     assert load_study("novelty").NAME == "novelty"
+
+
+def test_the_quick_form_meets_every_target_with_the_taught_hands(tmp_path):
+    # Two fast-preset models learned here, one draw of the user (seed 1000, never tuned on),
+    # two new shapes: the six targets, over all and per model.
+    import json
+
+    outcome = load_study("novelty").run(tmp_path, StudyOptions(quick=True, workers=1))
+    assert all(target.met for target in outcome.targets.values()), outcome.targets
+    results = json.loads((tmp_path / "results.json").read_text())
+    assert set(results["per_set"]) == {"fast-1", "fast-full"}
+    assert all(settings["taught_hands"] for settings in results["config"]["models"].values())
+    # Beside it, the same evidence without the taught hands (what they add).
+    assert set(results["without_taught_hands"]) == {"fast-1", "fast-full", "all"}
+    assert set(results["without_taught_hands"]["all"]) == set(TARGETS)
+    assert "## What the hands as taught add" in (tmp_path / "report.md").read_text()
