@@ -219,6 +219,8 @@ def test_the_taught_shape_ignores_the_size_of_the_movement_but_not_a_missing_arm
     assert taught_distances(slow, taught)[1] < 0.1
     # A pattern with too few taught steps for a stretch: none to match against.
     assert taught_stretches({"0": [u[:5]], "1": [u]}, ("0", "1"), config) is None
+    # Nor for a pattern taught without moving: it has no shape.
+    assert taught_stretches({"0": [np.full((50, 4), 0.5)], "1": [u]}, ("0", "1"), config) is None
     with pytest.raises(ConfigError, match="template"):
         RecognitionConfig(template_speeds=())
 

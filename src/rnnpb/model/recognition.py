@@ -319,10 +319,10 @@ def taught_stretches(
             return None
         pattern = np.concatenate(stretches)
         pattern = (pattern - pattern.mean(axis=1, keepdims=True)).reshape(len(pattern), -1)
-        length = np.linalg.norm(pattern, axis=1, keepdims=True)
-        per_pattern.append(pattern[length[:, 0] > 0] / length[length[:, 0] > 0])
-        if not len(per_pattern[-1]):
-            return None  # the pattern was taught without moving
+        size = np.linalg.norm(pattern, axis=1)
+        if not (size > 0).any():
+            return None  # the pattern was taught without moving: it has no shape
+        per_pattern.append(pattern[size > 0] / size[size > 0, None])
     if not per_pattern:
         return None
     count = max(len(p) for p in per_pattern)
