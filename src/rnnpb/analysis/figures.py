@@ -721,9 +721,15 @@ def plot_confusion(
 ) -> None:
     """The novelty states said (columns) per true kind of movement (rows), as shares of the
     row's steps, one panel per learning set (``rnnpb study novelty``)."""
-    fig = Figure(figsize=(3.6 * len(matrices), 3.4))
-    axes = fig.subplots(1, len(matrices), squeeze=False)
-    for ax, (set_name, matrix) in zip(axes[0], matrices.items(), strict=True):
+    # At most four panels a row, each wide enough that its row labels stay clear of the
+    # panel to its left (seven in one row overlapped).
+    columns = min(len(matrices), 4)
+    rows = -(-len(matrices) // columns)
+    fig = Figure(figsize=(4.2 * columns, 3.6 * rows), layout="constrained")
+    axes = fig.subplots(rows, columns, squeeze=False).ravel()
+    for ax in axes[len(matrices) :]:
+        ax.set_axis_off()
+    for ax, (set_name, matrix) in zip(axes, matrices.items(), strict=False):
         kinds = list(matrix)
         grid = np.array(
             [[matrix[k].get(s, 0) for s in NOVELTY_STATES_SHOWN] for k in kinds], dtype=float
@@ -749,7 +755,7 @@ def plot_confusion(
         )
         ax.set_yticks(range(len(kinds)), kinds, fontsize=8)
         ax.set_title(f"learning set {set_name}", fontsize=9)
-    fig.suptitle("Novelty state said (%) per true movement", y=1.02)
+    fig.suptitle("Novelty state said (%) per true movement")
     save(fig, path)
 
 
