@@ -30,6 +30,11 @@ def test_quick_study_writes_its_measures_and_shows_forgetting(tmp_path):
             if p["generation_vs_before"] is not None
         )
 
+    # Both readings of what the user performs: the on-line recognition's and the nearest PB.
+    for method, measured in after.items():
+        for name, p in measured["pattern"].items():
+            assert p["nearest_pb"] in measured["patterns"], (method, name)
+            assert p["recognized"] is None or p["recognized"] in measured["patterns"]
     # Fine-tuning on the new pattern alone moves the old patterns more than rehearsal does.
     assert worst_old("finetune") > worst_old("rehearsal")
     assert results["config"]["quick"] is True and results["versions"]["jax"]

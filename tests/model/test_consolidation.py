@@ -231,6 +231,25 @@ def test_the_alternatives_run_the_same_way(two_patterns):
     assert ConsolidationConfig().learning_for(model).iterations == 500
 
 
+def test_a_warm_consolidation_learns_with_some_input_noise(two_patterns):
+    """Without a learning of its own a warm-started consolidation adds at least
+    CONSOLIDATION_INPUT_NOISE to the teacher-forced inputs (a model of the paper's algorithm
+    has none); a model with more keeps its own, and learning from scratch is the first's."""
+    from rnnpb.model.consolidation import CONSOLIDATION_INPUT_NOISE
+
+    model, _ = two_patterns
+    paper = TrainConfig.paper(iterations=900)
+    as_paper = replace(model, meta={**model.meta, "train_config": paper.to_dict()})
+    for method in ("rehearsal", "finetune", "replay"):
+        learning = ConsolidationConfig(method).learning_for(as_paper)
+        assert learning.input_noise == CONSOLIDATION_INPUT_NOISE > 0
+        assert (learning.optimizer, learning.learning_rate) == ("momentum", paper.learning_rate)
+    assert ConsolidationConfig("scratch").learning_for(as_paper).input_noise == 0.0
+    own = model.meta["train_config"]["input_noise"]
+    assert own > CONSOLIDATION_INPUT_NOISE
+    assert ConsolidationConfig().learning_for(model).input_noise == own
+
+
 def test_bad_input_is_refused_clearly(two_patterns):
     from rnnpb.demonstrator import pattern_dataset
 

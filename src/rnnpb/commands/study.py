@@ -33,8 +33,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--models",
         metavar="DIR",
-        help="learned models to start from, for the studies that take them (teach: set1.npz "
-        "... set4.npz and full.npz or full_seed0.npz; default results/demo/models)",
+        help="learned models to start from, for the studies that take them (incremental: "
+        "set1.npz ... set4.npz; teach: those and full.npz or full_seed0.npz; default "
+        "results/demo/models)",
     )
 
 

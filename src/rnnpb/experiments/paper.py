@@ -123,6 +123,8 @@ class Run:
     context: np.ndarray  # (T, C)
     motor_error: np.ndarray  # (T,)
     sensory_error: np.ndarray  # (T,)
+    # What each step's recognition said the user performs (None: nothing recognised).
+    recognised: tuple[str | None, ...] = ()
 
     def session(self) -> dict[str, np.ndarray]:
         """The run as the columns of a session recording (for the plots)."""
@@ -174,6 +176,7 @@ def run_scenario(
         context=np.array([r.context for r in records]),
         motor_error=metrics.motor_error(motor, scenario.motor, joint_limits),
         sensory_error=metrics.sensory_error(predicted, observed),
+        recognised=tuple(r.recognised for r in records),
     )
 
 
@@ -203,6 +206,9 @@ class Synchronization:
     pause_start: int
     pause_end: int
     run: Run | None  # None where only the measures are kept (the other draws)
+    # The on-line recognition's answer before the pause (rnnpb.model.recognition): None when
+    # it recognised nothing there.
+    detected_pattern: str | None = None
 
     def without_run(self) -> Synchronization:
         """The measures alone, light to send back from a worker."""
@@ -256,6 +262,7 @@ def synchronization(
         pause_start=before,
         pause_end=pause_end,
         run=run,
+        detected_pattern=run.recognised[before - 1] if run.recognised else None,
     )
 
 

@@ -10,9 +10,9 @@ each method takes.
 
 The full form starts from the demo's models of the learning sets, learned with the paper's
 algorithm (:data:`DEFAULT_MODELS`; :attr:`IncrementalConfig.models` names another directory);
-the quick form learns small fast-preset models of its own. The chain uses the paper's four
-patterns; movements of the demonstrator beyond them plug in at the end of
-:attr:`IncrementalConfig.chain_added`.
+the quick form learns small fast-preset models of its own. The chain learns patterns 1 and 2,
+adds 3 and 4 and then a new shape of the demonstrator beyond the paper's four (figure-eight),
+three consolidations; more shapes go at the end of :attr:`IncrementalConfig.chain_added`.
 """
 
 from __future__ import annotations
@@ -63,8 +63,8 @@ class IncrementalConfig:
 
     ``models``: a directory with ``set1.npz`` … ``set4.npz`` (the demo's) to start from; None:
     learn the starting models with ``start_train``. ``chain_start``, ``chain_added``: the
-    chain's first patterns and those it adds one at a time — movements of the demonstrator
-    beyond the paper's four go at the end of ``chain_added``.
+    chain's first patterns and those it adds one at a time, ending with a new shape of the
+    demonstrator beyond the paper's four (:data:`rnnpb.demonstrator.NEW_SHAPES`).
     """
 
     quick: bool = False
@@ -82,7 +82,7 @@ class IncrementalConfig:
     )
     online: OnlineConfig = field(default_factory=OnlineConfig)
     chain_start: tuple[str, ...] = ("1", "2")
-    chain_added: tuple[str, ...] = ("3", "4")
+    chain_added: tuple[str, ...] = ("3", "4", "figure-eight")
     data_seed: int = 0
     new_data_seed: int = 0
     scenario_seed: int = 100
@@ -133,13 +133,17 @@ class IncrementalConfig:
 
 @dataclass(frozen=True)
 class PatternMeasures:
-    """One pattern of one model. ``generation_vs_before``: RMS distance (normalized joints)
-    of its closed-loop cycle from the starting model's (None: a pattern the start did not
-    hold); ``generation_vs_data``: from the nearest demonstration's cycle."""
+    """One pattern of one model. ``recognized``: what the on-line recognition said the user
+    performs before the pause (:mod:`rnnpb.model.recognition`; None: nothing);
+    ``nearest_pb``: the learned pattern whose PB was nearest then (the paper's reading);
+    ``generation_vs_before``: RMS distance (normalized joints) of its closed-loop cycle from
+    the starting model's (None: a pattern the start did not hold); ``generation_vs_data``:
+    from the nearest demonstration's cycle."""
 
     pattern: str
     steps_to_lock: int | None
-    recognized: str
+    recognized: str | None
+    nearest_pb: str
     period: float | None
     generation_vs_before: float | None
     generation_vs_data: float
@@ -246,6 +250,7 @@ def measure(
         per_pattern[name] = PatternMeasures(
             name,
             sync.steps_to_lock,
+            sync.detected_pattern,
             sync.recognized_pattern,
             attractors[name].period,
             vs_before,
@@ -463,7 +468,11 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
         config = IncrementalConfig.quick_run(options.seed)
     else:
         config = IncrementalConfig(
-            models=str(DEFAULT_MODELS), data_seed=options.seed, new_data_seed=options.seed
+            models=str(options.models or DEFAULT_MODELS),
+            # The demo's models learned the draw-0 data, which replay and scratch take again;
+            # --seed draws the new pattern's demonstrations and the user.
+            new_data_seed=options.seed,
+            scenario_seed=100 + options.seed,
         )
     return run_study(Path(out), replace(config, workers=options.workers))
 
@@ -519,7 +528,11 @@ def _report(config, before, after, chained, targets, runtime, progress) -> list[
         "scratch: everything learned anew). Generation: RMS distance (normalized joints) "
         "of each pattern's closed-loop cycle from the starting model's and from the "
         "nearest demonstration's. Lock-on and switching in steps (targets "
-        f"{metrics.LOCK_LIMIT} and {metrics.SWITCH_LIMIT}).",
+        f"{metrics.LOCK_LIMIT} and {metrics.SWITCH_LIMIT}). Recognised as: the on-line "
+        f"recognition's answer after the pattern's first {config.sync_before} steps (what the "
+        "robot says it "
+        'sees; docs/model.md, "Recognition and novelty"); nearest PB: the learned pattern '
+        "whose PB was nearest then (the paper's reading, for comparison).",
         "",
         f"Starting models: {config.models or 'learned here'}; "
         f"{'quick form' if config.quick else 'full form'}; runtime {runtime:.0f} s"
@@ -559,7 +572,8 @@ def _report(config, before, after, chained, targets, runtime, progress) -> list[
                     ", ".join(m.patterns),
                     fmt(max(old), 3) if old else "–",
                     ", ".join(fmt(p.steps_to_lock) for p in m.pattern.values()),
-                    ", ".join(p.recognized for p in m.pattern.values()),
+                    ", ".join(p.recognized or "–" for p in m.pattern.values()),
+                    ", ".join(p.nearest_pb for p in m.pattern.values()),
                     fmt(worst_switch),
                     f"{m.train_mse_max:.1e}",
                     f"{m.seconds:.1f}" if label != "before" else "–",
@@ -576,6 +590,7 @@ def _report(config, before, after, chained, targets, runtime, progress) -> list[
             "old generation vs before (worst)",
             "lock-on per pattern",
             "recognised as",
+            "nearest PB",
             "worst switch",
             "training MSE (max)",
             "seconds (wall)",
