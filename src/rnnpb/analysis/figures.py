@@ -1021,7 +1021,8 @@ def plot_teaching_timeline(
     ``timeline`` holds per step ``movement``, ``novelty``, ``recognised`` (names, "" for
     none), ``cutter`` and ``motor_error`` (T,), and ``kept`` (list of (first, last, step)),
     ``consolidations`` (list of (step, text)), ``swaps`` (list of steps), ``unstructured``
-    (the movements that are not structured).
+    (the movements that are not structured), and optionally ``taught`` (a newly learned
+    pattern's name → the movement it was taught from, whose colour it takes).
     """
     movement = list(timeline["movement"])
     steps = np.arange(len(movement))
@@ -1033,9 +1034,13 @@ def plot_teaching_timeline(
     }
     recognised = [r or "" for r in timeline["recognised"]]
     recognised_colors = {"": "#f0f0f0"}
+    taught = timeline.get("taught", {})
+    spare = iter(range(len(names), len(names) + len(recognised)))
     for name in dict.fromkeys(recognised):
         if name:
-            recognised_colors[name] = movement_colors.get(name, cmap(len(recognised_colors) % 10))
+            recognised_colors[name] = movement_colors.get(
+                name, movement_colors.get(taught.get(name, ""), cmap(next(spare) % 10))
+            )
     for name in recognised_colors:
         movement_colors.setdefault(name, recognised_colors[name])
     fig = Figure(figsize=(11, 5.2))

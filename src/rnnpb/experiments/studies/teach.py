@@ -535,6 +535,12 @@ def teach_job(
         ],
         "swaps": list(teacher.swapped_at),
         "unstructured": list(UNSTRUCTURED_MOVEMENTS),
+        # The movement each newly learned pattern was taught from (its colour in the figure).
+        "taught": {
+            e.pattern: max(e.movements, key=e.movements.get)
+            for e in episodes
+            if e.pattern in new_names
+        },
     }
     return TeachRun(
         learning_set=set_name,
