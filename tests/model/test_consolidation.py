@@ -329,3 +329,27 @@ def test_a_bad_history_is_refused(tmp_path, change, message):
     save_archive(tmp_path / "bad.npz", {**meta, "history": history}, arrays)
     with pytest.raises(ModelFileError, match=message):
         TrainedModel.load(tmp_path / "bad.npz")
+
+
+def test_a_new_pattern_starts_at_the_pb_farthest_from_the_learned_ones(two_patterns):
+    from rnnpb.model.consolidation import farthest_pb
+
+    corners = np.array([[0.0, 0.0], [1.0, 1.0], [0.0, 1.0], [1.0, 0.0]])
+    np.testing.assert_allclose(farthest_pb(corners), [0.5, 0.5])
+    learned = np.array([[0.2, 0.2, 0.2, 0.2], [0.8, 0.8, 0.2, 0.2]])
+    start = farthest_pb(learned)
+    grid = np.linspace(0.1, 0.9, 5)
+    assert all(v in grid for v in start)
+    best = min(np.linalg.norm(start - p) for p in learned)
+    mesh = np.stack(np.meshgrid(*[grid] * 4, indexing="ij"), -1).reshape(-1, 4)
+    assert best >= max(min(np.linalg.norm(g - p) for p in learned) for g in mesh) - 1e-12
+    # Consolidating: the start is recorded, the centre is still there, a bad name is refused.
+    model, new = two_patterns
+    short = TrainConfig.fast(iterations=20)
+    grown = consolidate(model, new, ConsolidationConfig(train=short))
+    assert grown.history[-1].details["new_pb_start"] == "farthest"
+    centre = consolidate(model, new, ConsolidationConfig(train=short, new_pb_start="centre"))
+    assert centre.history[-1].details["new_pb_start"] == "centre"
+    assert not np.allclose(grown.sequence_pb[-1], centre.sequence_pb[-1])
+    with pytest.raises(ConfigError, match="new_pb_start must be one of"):
+        ConsolidationConfig(new_pb_start="middle")  # type: ignore[arg-type]

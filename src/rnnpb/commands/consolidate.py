@@ -58,9 +58,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--hold-old-pb",
         choices=("off", "all", "first-half"),
-        default="off",
+        default="first-half",
         help="keep the old patterns' PBs at their learned values while the weights learn "
-        "(rehearsal and replay): never, for all of it, or its first half (default: off)",
+        "(rehearsal and replay): never, for all of it, or its first half (default: "
+        "first-half)",
+    )
+    parser.add_argument(
+        "--new-pb-start",
+        choices=("centre", "farthest"),
+        default="farthest",
+        help="where the new pattern's PB starts: at 0.5, or at the point of PB space farthest "
+        "from the learned patterns' PBs (default: farthest)",
     )
     parser.add_argument("--iterations", type=int, help="learning iterations")
     parser.add_argument("--seed", type=int, help="random seed (default: the model's)")
@@ -103,7 +111,9 @@ def run(args: argparse.Namespace) -> int:
             f"--replay-data is for the methods replay and scratch, not "
             f"{args.method} (rehearsal needs no original data)"
         )
-    config = ConsolidationConfig(method=args.method, hold_old_pb=args.hold_old_pb)
+    config = ConsolidationConfig(
+        method=args.method, hold_old_pb=args.hold_old_pb, new_pb_start=args.new_pb_start
+    )
     learning = config.learning_for(model)
     changes = {"iterations": args.iterations, "seed": args.seed}
     learning = replace(
