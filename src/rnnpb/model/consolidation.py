@@ -25,8 +25,9 @@ progress, checkpoints and resume):
 
 All but ``scratch`` start from the model's weights ("warm start"); an old sequence starts from
 its learned PB and initial context (by default held there for the first half), a new sequence
-from context 0.5 and, by default, the PB farthest from the learned ones. The old patterns keep their names, the new pattern gets PBs of its own, and the
-result records the step in its history (:class:`rnnpb.model.io.HistoryEntry`).
+from context 0.5 and, by default, the PB farthest from the learned ones. The old patterns keep
+their names, the new pattern gets PBs of its own, and the result records the step in its
+history (:class:`rnnpb.model.io.HistoryEntry`).
 
 Unlike the rest of the model this module reads a clock: the time the history records.
 """
