@@ -50,6 +50,23 @@ def test_the_new_shape_is_followed_on_its_next_performance(study):
     assert run["follow_s"] == pytest.approx(sum(run["follow_steps"].values()) * 0.4)
 
 
+def test_teaching_consolidates_with_its_own_start(study):
+    """The taught version was learned by rehearsal from the centre with every PB learning
+    (teaching's own start, not the consolidation's defaults) and the first training's noise."""
+    from rnnpb.interaction.teaching import TEACHING_HOLD_OLD_PB, TEACHING_NEW_PB_START
+    from rnnpb.model import TrainConfig, TrainedModel
+
+    out, _, _ = study
+    versions = sorted(out.glob("runs/*/*.v2.npz"))  # the run's, and the paced run's if done
+    assert versions
+    for version in versions:
+        last = TrainedModel.load(version).history[-1]
+        assert last.method == "rehearsal" and last.added == ("new-1",)
+        assert last.details["hold_old_pb"] == TEACHING_HOLD_OLD_PB == "off"
+        assert last.details["new_pb_start"] == TEACHING_NEW_PB_START == "centre"
+        assert last.train_config["input_noise"] == TrainConfig.fast().input_noise
+
+
 def test_the_paced_run_and_the_files(study):
     out, outcome, results = study
     paced = results["paced"]
