@@ -343,6 +343,11 @@ def test_a_new_pattern_starts_at_the_pb_farthest_from_the_learned_ones(two_patte
     best = min(np.linalg.norm(start - p) for p in learned)
     mesh = np.stack(np.meshgrid(*[grid] * 4, indexing="ij"), -1).reshape(-1, 4)
     assert best >= max(min(np.linalg.norm(g - p) for p in learned) for g in mesh) - 1e-12
+    # A large PB space is searched over a fixed, seeded set of points in the same box.
+    wide = np.random.default_rng(1).uniform(0, 1, (5, 12))
+    far = farthest_pb(wide)
+    assert far.shape == (12,) and np.all((far >= 0.1) & (far <= 0.9))
+    np.testing.assert_array_equal(far, farthest_pb(wide))
     # Consolidating: the start is recorded, the centre is still there, a bad name is refused.
     model, new = two_patterns
     short = TrainConfig.fast(iterations=20)

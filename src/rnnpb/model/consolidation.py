@@ -219,12 +219,22 @@ def _taught(model: TrainedModel, learned: TrainedModel, n_new: int) -> np.ndarra
     return np.concatenate(padded)
 
 
+FARTHEST_PB_CANDIDATES = 20_000
+"""Most candidate points :func:`farthest_pb` weighs."""
+
+
 def farthest_pb(learned: np.ndarray, levels: int = 5) -> np.ndarray:
     """The point of a grid of PB space (``levels`` values per dimension from 0.1 to 0.9) whose
-    nearest learned PB (rows of ``learned``) is farthest; ties go to the grid's first."""
+    nearest learned PB (rows of ``learned``) is farthest; ties go to the grid's first. A PB
+    space too large for such a grid (more than :data:`FARTHEST_PB_CANDIDATES` points) is
+    searched over that many points drawn uniformly in the same box with a fixed seed."""
     learned = np.atleast_2d(np.asarray(learned, dtype=np.float64))
-    axes = [np.linspace(0.1, 0.9, levels)] * learned.shape[1]
-    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, learned.shape[1])
+    n_dims = learned.shape[1]
+    if levels**n_dims <= FARTHEST_PB_CANDIDATES:
+        axes = [np.linspace(0.1, 0.9, levels)] * n_dims
+        grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, n_dims)
+    else:
+        grid = np.random.default_rng(0).uniform(0.1, 0.9, (FARTHEST_PB_CANDIDATES, n_dims))
     nearest = np.min(np.linalg.norm(grid[:, None, :] - learned[None, :, :], axis=-1), axis=1)
     return grid[int(np.argmax(nearest))]
 
