@@ -67,7 +67,8 @@ def test_consolidate_then_info(files, capsys):
     assert "'2' already learned" in capsys.readouterr().err
     assert main(["info", str(out)]) == 0
     text = capsys.readouterr().out
-    assert "fast preset: use --online ungated" in text
+    assert "learning: fast preset in its first training; last step, adam" in text
+    assert "on-line regression: ungated (the model was learned with Adam" in text
     assert "0. train: learned 0, 1" in text and "1. rehearsal: learned 2 from m.npz" in text
     assert "4 PB, 40 hidden, 30 context" in text
     # The consolidated model keeps the old patterns' taught hands and adds the new one's.

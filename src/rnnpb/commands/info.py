@@ -43,14 +43,14 @@ def preset_of(train_config: dict[str, Any] | None) -> str:
     return "custom"
 
 
-def suited_regression(preset: str) -> str:
-    """The on-line regression to run a model of ``preset`` with (docs/model.md, "Which
+def suited_regression(model: Any) -> str:
+    """The on-line regression ``rnnpb interact`` and ``serve`` run ``model`` with, and why
+    (:func:`rnnpb.model.online_config.suggested_online_config`; docs/model.md, "Which
     learning, and why the gate is on")."""
-    if preset == "fast":
-        return "fast preset: use --online ungated"
-    if preset == "paper":
-        return "paper preset: use the default on-line regression (--online default)"
-    return "not a preset: try the default, and --online ungated if it follows poorly"
+    from rnnpb.model.online_config import suggested_online_config
+
+    choice = suggested_online_config(model)
+    return f"{choice.name} ({choice.reason}; --online chooses another)"
 
 
 def run(args: argparse.Namespace) -> int:
@@ -74,16 +74,22 @@ def run(args: argparse.Namespace) -> int:
         print(f"  {name}: PB {np.array2string(pb, precision=3)} ({counts[name]} sequence(s))")
     config = model.meta.get("train_config")
     preset = preset_of(config)
+    history = model.history
+    if len(history) > 1:
+        # A grown model records its last step's learning; the preset is its first training's.
+        preset = f"{preset_of(history[0].train_config)} preset in its first training; last step"
+    else:
+        preset = f"{preset} preset"
     if isinstance(config, dict):
         print(
-            f"learning: {preset} preset, {config.get('optimizer')}, "
+            f"learning: {preset}, {config.get('optimizer')}, "
             f"{config.get('iterations')} iterations, learning rate "
             f"{config.get('learning_rate')}, input noise {config.get('input_noise')}, "
             f"seed {config.get('seed')}"
         )
     else:
         print("learning: not recorded")
-    print(f"on-line regression: {suited_regression(preset)}")
+    print(f"on-line regression: {suited_regression(model)}")
     if model.taught_sensory is None:
         print(
             "recognition: by the network's evidence alone (the file keeps no hands as taught: "
