@@ -7,6 +7,7 @@ keeps its inline plots.
 
 from __future__ import annotations
 
+import itertools
 import os
 from collections.abc import Sequence as SequenceABC
 from typing import Protocol
@@ -1035,7 +1036,7 @@ def plot_teaching_timeline(
     recognised = [r or "" for r in timeline["recognised"]]
     recognised_colors = {"": "#f0f0f0"}
     taught = timeline.get("taught", {})
-    spare = iter(range(len(names), len(names) + len(recognised)))
+    spare = itertools.count(len(names))  # colours after the movements' for the others
     for name in dict.fromkeys(recognised):
         if name:
             recognised_colors[name] = movement_colors.get(

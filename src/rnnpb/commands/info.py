@@ -73,13 +73,13 @@ def run(args: argparse.Namespace) -> int:
     for name, pb in model.pattern_pb.items():
         print(f"  {name}: PB {np.array2string(pb, precision=3)} ({counts[name]} sequence(s))")
     config = model.meta.get("train_config")
-    preset = preset_of(config)
     history = model.history
-    if len(history) > 1:
-        # A grown model records its last step's learning; the preset is its first training's.
-        preset = f"{preset_of(history[0].train_config)} preset in its first training; last step"
-    else:
-        preset = f"{preset} preset"
+    # A grown model records its last step's learning; its preset is its first training's.
+    preset = (
+        f"{preset_of(history[0].train_config)} preset in its first training; last step"
+        if len(history) > 1
+        else f"{preset_of(config)} preset"
+    )
     if isinstance(config, dict):
         print(
             f"learning: {preset}, {config.get('optimizer')}, "

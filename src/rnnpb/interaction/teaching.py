@@ -470,8 +470,7 @@ def first_training_noise(model) -> float:
     noise, on the teach study's user draws 102 and 103, the old patterns locked on within 10
     steps 46 and 52 times of 64 (without: 58 and 59) and the new shape was followed within 90 s
     in 18 and 19 runs of 20 (without: 19 and 20; docs/teaching.md, "Study")."""
-    first = model.history[0].train_config if model.history else model.meta.get("train_config")
-    noise = first.get("input_noise", 0.0) if isinstance(first, dict) else 0.0
+    noise = model.history[0].train_config.get("input_noise", 0.0)
     return float(noise) if isinstance(noise, int | float) else 0.0
 
 
