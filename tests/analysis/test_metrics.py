@@ -73,6 +73,21 @@ def test_cycle_distance_and_response_cases():
     assert unsteady.case == 3
 
 
+def test_attractor_distance_compares_runs_as_point_sets():
+    """A quasi-periodic run against itself stopped later: one period's windows differ, the
+    runs as point sets hardly; an offset run is as far as its offset; bad shapes are refused."""
+    t = np.arange(600)[:, None]
+    k = np.arange(8)[None, :]
+    torus = 0.3 * np.sin(2 * np.pi * t / 12 + k) + 0.1 * np.sin(2 * np.pi * t / (12 * 5.37) + k)
+    early, late = torus[200:400], torus[220:420]
+    assert metrics.attractor_distance(early, early) == 0.0
+    window = metrics.cycle_distance(metrics.last_cycle(early, 12), metrics.last_cycle(late, 12))
+    assert metrics.attractor_distance(early, late) < 0.5 * window
+    assert metrics.attractor_distance(early, early + 0.05) == pytest.approx(0.05, rel=0.05)
+    with pytest.raises(ValueError, match="two runs"):
+        metrics.attractor_distance(early, early[:, :4])
+
+
 def test_pb_settling():
     pbs = np.r_[np.linspace(0, 1, 10)[:, None].repeat(4, 1), np.ones((20, 4))]
     assert metrics.pb_settle_step(pbs) == 10

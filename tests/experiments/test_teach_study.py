@@ -51,10 +51,16 @@ def test_the_new_shape_is_followed_on_its_next_performance(study):
 
 
 def test_teaching_consolidates_with_its_own_start(study):
-    """The taught version was learned by rehearsal from the centre with every PB learning
-    (teaching's own start, not the consolidation's defaults) and the first training's noise."""
-    from rnnpb.interaction.teaching import TEACHING_HOLD_OLD_PB, TEACHING_NEW_PB_START
+    """The taught version was learned by rehearsal of the old network's function from the
+    centre with every PB learning (teaching's own start, not the consolidation's defaults),
+    with teaching's iterations and the function's least noise (the fast model has as much)."""
+    from rnnpb.interaction.teaching import (
+        TEACHING_HOLD_OLD_PB,
+        TEACHING_ITERATIONS,
+        TEACHING_NEW_PB_START,
+    )
     from rnnpb.model import TrainConfig, TrainedModel
+    from rnnpb.model.consolidation import FUNCTION_REHEARSAL_INPUT_NOISE
 
     out, _, _ = study
     versions = sorted(out.glob("runs/*/*.v2.npz"))  # the run's, and the paced run's if done
@@ -64,7 +70,10 @@ def test_teaching_consolidates_with_its_own_start(study):
         assert last.method == "rehearsal" and last.added == ("new-1",)
         assert last.details["hold_old_pb"] == TEACHING_HOLD_OLD_PB == "off"
         assert last.details["new_pb_start"] == TEACHING_NEW_PB_START == "centre"
-        assert last.train_config["input_noise"] == TrainConfig.fast().input_noise
+        assert last.details["rehearsal_target"] == "function"
+        noise = max(TrainConfig.fast().input_noise, FUNCTION_REHEARSAL_INPUT_NOISE)
+        assert last.train_config["input_noise"] == noise
+        assert last.iterations == TEACHING_ITERATIONS["adam"]
 
 
 def test_the_paced_run_and_the_files(study):

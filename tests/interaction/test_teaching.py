@@ -171,32 +171,3 @@ def test_a_new_version_is_made_ready_off_the_loop_and_a_broken_one_says_why(tmp_
     failed = _PreparedMirror(str(broken), MirrorSystem)
     failed._thread.join(60)
     assert failed.mirror is None and failed.error.startswith("ModelFileError")
-
-
-def test_teaching_consolidates_with_the_noise_of_the_models_first_training():
-    """Teaching learns with the first training's input noise, not the consolidation's added
-    noise: the shipped fast model's 0.02; a model of the paper's algorithm none, also after a
-    consolidation recorded more."""
-    from dataclasses import replace
-
-    from rnnpb.interaction.teaching import first_training_noise
-    from rnnpb.model import TrainConfig, TrainedModel
-    from rnnpb.model.io import HistoryEntry
-    from rnnpb.models import SHIPPED_MODEL
-
-    model = TrainedModel.load(SHIPPED_MODEL)
-    assert first_training_noise(model) == TrainConfig.fast().input_noise > 0
-    paper = TrainConfig.paper(iterations=10).to_dict()
-    first = replace(model.history[0], train_config=paper)
-    later = replace(first, method="rehearsal", train_config={**paper, "input_noise": 0.01})
-    grown = replace(
-        model,
-        meta={
-            **model.meta,
-            "train_config": later.train_config,
-            "history": [e.to_json() for e in (first, later)],
-        },
-    )
-    assert [e.method for e in grown.history][-1] == "rehearsal"
-    assert first_training_noise(grown) == 0.0
-    assert isinstance(first, HistoryEntry)

@@ -234,20 +234,36 @@ def test_the_alternatives_run_the_same_way(two_patterns):
 def test_a_warm_consolidation_learns_with_some_input_noise(two_patterns):
     """Without a learning of its own a warm-started consolidation adds at least
     CONSOLIDATION_INPUT_NOISE to the teacher-forced inputs (a model of the paper's algorithm
-    has none); a model with more keeps its own, and learning from scratch is the first's."""
-    from rnnpb.model.consolidation import CONSOLIDATION_INPUT_NOISE
+    has none), a rehearsal of the old function at least FUNCTION_REHEARSAL_INPUT_NOISE; a
+    model with more keeps its own, and learning from scratch is the first's."""
+    from rnnpb.model.consolidation import (
+        CONSOLIDATION_INPUT_NOISE,
+        CONSOLIDATION_ITERATIONS,
+        FUNCTION_REHEARSAL_INPUT_NOISE,
+    )
 
     model, _ = two_patterns
     paper = TrainConfig.paper(iterations=900)
     as_paper = replace(model, meta={**model.meta, "train_config": paper.to_dict()})
-    for method in ("rehearsal", "finetune", "replay"):
-        learning = ConsolidationConfig(method).learning_for(as_paper)
-        assert learning.input_noise == CONSOLIDATION_INPUT_NOISE > 0
+    least = {
+        ConsolidationConfig(): FUNCTION_REHEARSAL_INPUT_NOISE,
+        ConsolidationConfig(rehearsal_target="trajectory"): CONSOLIDATION_INPUT_NOISE,
+        ConsolidationConfig("finetune"): CONSOLIDATION_INPUT_NOISE,
+        ConsolidationConfig("replay"): CONSOLIDATION_INPUT_NOISE,
+    }
+    for config, noise in least.items():
+        learning = config.learning_for(as_paper)
+        assert learning.input_noise == noise > 0
         assert (learning.optimizer, learning.learning_rate) == ("momentum", paper.learning_rate)
+        assert learning.iterations == CONSOLIDATION_ITERATIONS["momentum"]
+    assert FUNCTION_REHEARSAL_INPUT_NOISE > CONSOLIDATION_INPUT_NOISE
     assert ConsolidationConfig("scratch").learning_for(as_paper).input_noise == 0.0
-    own = model.meta["train_config"]["input_noise"]
-    assert own > CONSOLIDATION_INPUT_NOISE
-    assert ConsolidationConfig().learning_for(model).input_noise == own
+    own = 0.05
+    noisy = replace(
+        model,
+        meta={**model.meta, "train_config": {**model.meta["train_config"], "input_noise": own}},
+    )
+    assert ConsolidationConfig().learning_for(noisy).input_noise == own
 
 
 def test_bad_input_is_refused_clearly(two_patterns):
@@ -358,3 +374,84 @@ def test_a_new_pattern_starts_at_the_pb_farthest_from_the_learned_ones(two_patte
     assert not np.allclose(grown.sequence_pb[-1], centre.sequence_pb[-1])
     with pytest.raises(ConfigError, match="new_pb_start must be one of"):
         ConsolidationConfig(new_pb_start="middle")  # type: ignore[arg-type]
+
+
+def _response_change(before: TrainedModel, after: TrainedModel, noise: float) -> float:
+    """RMS difference of ``after``'s and ``before``'s one-step predictions from the same noisy
+    teacher-forced inputs around each of ``before``'s rehearsed cycles, each network from its
+    own PB and initial context of the sequence (``after``'s old sequences come first)."""
+    import jax.numpy as jnp
+
+    from rnnpb.model.network import open_loop
+
+    rehearsed = rehearse(before)
+    data = prepare_data(rehearsed, model_joint_limits(before))
+    rng = np.random.default_rng(7)
+    forced = data.inputs[:, :-1] + noise * rng.standard_normal(data.inputs[:, :-1].shape)
+
+    def predict(model: TrainedModel, pb: np.ndarray, context: np.ndarray) -> np.ndarray:
+        pbs = np.broadcast_to(pb[:, None], (*forced.shape[:2], pb.shape[1]))
+        out, _ = open_loop(
+            model.params,
+            jnp.asarray(context, jnp.float32),
+            jnp.asarray(np.swapaxes(forced, 0, 1), jnp.float32),
+            jnp.asarray(np.swapaxes(pbs, 0, 1), jnp.float32),
+        )
+        return np.asarray(out)
+
+    n = len(rehearsed)
+    was = predict(
+        before,
+        np.stack([s.meta["pb"] for s in rehearsed]),
+        np.stack([s.meta["initial_context"] for s in rehearsed]),
+    )
+    now = predict(after, after.sequence_pb[:n], after.initial_context[:n])
+    return float(np.sqrt(np.mean((now - was) ** 2)))
+
+
+def test_function_rehearsal_keeps_the_old_networks_response_near_its_cycles(two_patterns):
+    """A rehearsed sequence learning the old network's function keeps what the network
+    predicts from inputs near the cycle (a person's version of the pattern); learning the
+    cycle's next steps teaches it to pull them back onto the cycle instead."""
+    model, new = two_patterns
+    learning = TrainConfig.fast(iterations=1000)  # on this small model: 0.0036 against 0.0052
+    function = consolidate(model, new, ConsolidationConfig(train=learning))
+    trajectory = consolidate(
+        model, new, ConsolidationConfig(train=learning, rehearsal_target="trajectory")
+    )
+    assert function.history[-1].details["rehearsal_target"] == "function"  # the default
+    assert trajectory.history[-1].details["rehearsal_target"] == "trajectory"
+    kept = _response_change(model, function, learning.input_noise)
+    moved = _response_change(model, trajectory, learning.input_noise)
+    assert kept < 0.8 * moved, (kept, moved)
+
+
+def test_teacher_targets_are_the_start_networks_predictions():
+    """Without noise a rehearsal's teacher predicts its rehearsed next steps (it generated
+    them); a sequence it does not teach keeps its own next steps; noise moves the teacher's."""
+    import jax.numpy as jnp
+
+    from rnnpb.demonstrator import pattern_dataset
+    from rnnpb.model.learning import Teacher, WarmStart, teacher_targets
+    from rnnpb.robot import JOINT_LIMITS
+
+    model = train(pattern_dataset(0, ("1",)), JOINT_LIMITS, config=TrainConfig.fast(iterations=50))
+    rehearsed = rehearse(model, n_steps=12, transient=20)
+    data = prepare_data(rehearsed, model_joint_limits(model))
+    inputs = jnp.asarray(data.inputs, jnp.float32)
+    context = np.stack([s.meta["initial_context"] for s in rehearsed])
+    pb = np.stack([s.meta["pb"] for s in rehearsed])
+    taught = np.arange(len(rehearsed)) == 0
+    warm = WarmStart(model.params, context, pb, "start", taught=taught)
+    teacher = warm.teacher()
+    assert isinstance(teacher, Teacher)
+    assert warm.identity == "start:taught=" + "".join("1" if t else "0" for t in taught)
+    zero = jnp.zeros_like(inputs[:, :-1])
+    targets = np.asarray(teacher_targets(teacher, inputs, zero))
+    np.testing.assert_allclose(targets, data.inputs[:, 1:], atol=1e-5)
+    noisy = np.asarray(teacher_targets(teacher, inputs, zero + 0.05))
+    assert not np.allclose(noisy[0], data.inputs[0, 1:], atol=1e-3)
+    np.testing.assert_array_equal(noisy[1:], data.inputs[1:, 1:])
+    assert WarmStart(model.params, context, pb, "start").teacher() is None
+    with pytest.raises(ConfigError, match="one flag per sequence"):
+        WarmStart(model.params, context, pb, "start", taught=np.ones(5, bool))

@@ -245,6 +245,23 @@ def cycle_distance(a: np.ndarray, b: np.ndarray, n: int = 60) -> float:
     return float(min(np.sqrt(np.mean((ra - np.roll(rb, k, axis=0)) ** 2)) for k in range(n)))
 
 
+def attractor_distance(a: np.ndarray, b: np.ndarray) -> float:
+    """RMS distance (per value) of two runs (T_a, D) and (T_b, D) as sets of points: every
+    point's distance to the nearest point of the other run, both ways. For generations that
+    are no limit cycle, where one period's window (:func:`cycle_distance`) depends on where
+    the run stops: a quasi-periodic run against itself stopped 10-30 steps later is 0.013-0.035
+    apart by cycle distance (docs/model.md, "Consolidation")."""
+    from scipy.spatial import cKDTree
+
+    a = np.asarray(a, dtype=np.float64)
+    b = np.asarray(b, dtype=np.float64)
+    if a.ndim != 2 or b.ndim != 2 or a.shape[1] != b.shape[1] or not len(a) or not len(b):
+        raise ValueError(f"attractor_distance needs two runs (T, D), got {a.shape} and {b.shape}")
+    to_b = cKDTree(b).query(a)[0]
+    to_a = cKDTree(a).query(b)[0]
+    return float(np.sqrt(np.mean(np.concatenate([to_b, to_a]) ** 2) / a.shape[1]))
+
+
 @dataclass(frozen=True)
 class ResponseCase:
     case: int  # 1 like a learned limit cycle, 2 new limit cycle, 3 unsteady

@@ -12,7 +12,10 @@ Add new movement patterns to a learned model (Ito & Tani 2004, section 4.1, afte
 
 Methods:
   rehearsal  (default) the model regenerates each learned pattern in closed loop from its PB,
-             without the original data, and learns the new pattern together with them
+             without the original data, and learns the new pattern together with them;
+             a rehearsed pattern learns the old network's function on its cycle (what the
+             model predicts from noisy inputs near it), or with --rehearsal-target
+             trajectory the cycle's own next steps
   finetune   learns the new pattern alone (the old ones are overwritten: for comparison)
   replay     learns the new pattern with the original data (--replay-data)
   scratch    learns the original data and the new pattern anew from random weights
@@ -21,7 +24,7 @@ Methods:
 The new files are sequence CSVs as for `rnnpb train`; their patterns must have names the
 model does not hold. Learning continues from the model's weights (scratch: from random ones)
 with the model's own algorithm (paper or fast preset); --iterations overrides the default
-(paper: 5,000; fast: 500; scratch: the model's first training's). The new model records its
+(paper: 20,000; fast: 500; scratch: the model's first training's). The new model records its
 history (see `rnnpb info`). The model given is never changed; the new one is written only when
 learning is done, atomically. A checkpoint is written next to it (OUT.checkpoint.npz) every
 --checkpoint-every iterations; after an interruption --resume continues from it.
@@ -70,6 +73,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="where the new pattern's PB starts: at 0.5, or at the point of PB space farthest "
         "from the learned patterns' PBs (default: farthest)",
     )
+    parser.add_argument(
+        "--rehearsal-target",
+        choices=("function", "trajectory"),
+        default="function",
+        help="what a rehearsed pattern learns towards: the old network's predictions from the "
+        "same noisy inputs, or the rehearsed cycle's next steps (default: function)",
+    )
     parser.add_argument("--iterations", type=int, help="learning iterations")
     parser.add_argument("--seed", type=int, help="random seed (default: the model's)")
     parser.add_argument(
@@ -112,7 +122,10 @@ def run(args: argparse.Namespace) -> int:
             f"{args.method} (rehearsal needs no original data)"
         )
     config = ConsolidationConfig(
-        method=args.method, hold_old_pb=args.hold_old_pb, new_pb_start=args.new_pb_start
+        method=args.method,
+        hold_old_pb=args.hold_old_pb,
+        new_pb_start=args.new_pb_start,
+        rehearsal_target=args.rehearsal_target,
     )
     learning = config.learning_for(model)
     changes = {"iterations": args.iterations, "seed": args.seed}

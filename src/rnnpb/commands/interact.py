@@ -113,7 +113,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=int,
         metavar="N",
         help="with --learn: learning iterations of each consolidation "
-        "(default: twice the consolidation's own, 10,000 for the paper's learning; "
+        "(default: 20,000 for the paper's learning, 1,000 for the fast preset's; "
         "docs/teaching.md)",
     )
     parser.add_argument(

@@ -442,13 +442,14 @@ def rename_pattern(model, pattern: str, name: str):
     return replace(model, sequence_patterns=renamed(model.sequence_patterns), meta=meta)
 
 
-TEACHING_ITERATIONS_FACTOR = 2
-"""On-line teaching consolidates for twice the consolidation's own iterations
-(:data:`rnnpb.model.consolidation.CONSOLIDATION_ITERATIONS`: 10,000 for the paper's learning).
-A taught episode is three cycles of an imperfect demonstration, and with 5,000 iterations the
-network predicted the person's next performance of it just above the lock-on threshold (docs/
-teaching.md, "The full study"): chosen on user draws 101 (15 → 19 of 20 followed within 90 s),
-checked on draws 102."""
+TEACHING_ITERATIONS = {"momentum": 20_000, "adam": 1_000}
+"""On-line teaching's consolidation iterations by optimizer. A taught episode is three cycles
+of an imperfect demonstration: with 5,000 iterations of the paper's learning the network
+predicted the person's next performance of it just above the lock-on threshold, with 10,000
+it followed (user draws 101: 15 → 19 of 20 followed within 90 s, checked on 102). Rehearsing
+the old network's function (:data:`rnnpb.model.consolidation.REHEARSAL_TARGET`) learns with
+20,000, the consolidation's own (docs/teaching.md, "The full study"). Adam (the fast preset):
+twice the consolidation's 500."""
 
 
 TEACHING_HOLD_OLD_PB = "off"
@@ -460,18 +461,6 @@ user draws 102 and 103 (38 of 40 shapes followed within 90 s against 39, old loc
 128 against 117, switches 276 of 288 against 273), and the shipped fast model taught
 figure-eight locked on its next performance after 11 steps instead of within 10
 (docs/teaching.md, "Study")."""
-
-
-def first_training_noise(model) -> float:
-    """The input noise of ``model``'s first training (0 when it recorded none): what teaching
-    consolidates with, rather than the consolidation's added
-    :data:`rnnpb.model.consolidation.CONSOLIDATION_INPUT_NOISE`. A taught episode is a few
-    cycles of an imperfect demonstration learned for twice the iterations; with the added
-    noise, on the teach study's user draws 102 and 103, the old patterns locked on within 10
-    steps 46 and 52 times of 64 (without: 58 and 59) and the new shape was followed within 90 s
-    in 18 and 19 runs of 20 (without: 19 and 20; docs/teaching.md, "Study")."""
-    noise = model.history[0].train_config.get("input_noise", 0.0)
-    return float(noise) if isinstance(noise, int | float) else 0.0
 
 
 def _consolidation_worker(
@@ -498,17 +487,13 @@ def _consolidation_worker(
         def progress(p) -> None:
             queue.put(("progress", int(p.iteration), int(p.total), float(p.mse)))
 
-        config = ConsolidationConfig()
+        config = ConsolidationConfig(
+            hold_old_pb=TEACHING_HOLD_OLD_PB, new_pb_start=TEACHING_NEW_PB_START
+        )
         learning = config.learning_for(model)
         if iterations is None:
-            iterations = TEACHING_ITERATIONS_FACTOR * learning.iterations
-        config = ConsolidationConfig(
-            train=replace(
-                learning, iterations=int(iterations), input_noise=first_training_noise(model)
-            ),
-            hold_old_pb=TEACHING_HOLD_OLD_PB,
-            new_pb_start=TEACHING_NEW_PB_START,
-        )
+            iterations = TEACHING_ITERATIONS.get(learning.optimizer, learning.iterations)
+        config = replace(config, train=replace(learning, iterations=int(iterations)))
         learned = consolidate(model, sequences, config, parent=model_path, progress=progress)
         learned.save(out_path)
         rehearsed = rehearse(model)

@@ -180,28 +180,60 @@ def squared_error(
     inputs: jax.Array,
     valid: jax.Array,
     noise: jax.Array,
+    targets: jax.Array | None = None,
 ) -> jax.Array:
-    """0.5 · Σ over sequences, valid steps and outputs of the squared prediction error."""
+    """0.5 · Σ over sequences, valid steps and outputs of the squared prediction error:
+    predictions from the (noisy) teacher-forced ``inputs[:, :-1]`` against ``targets`` (S,
+    T-1, I), by default the next steps ``inputs[:, 1:]``."""
     params, context_logit = trainable
     pbs = jax.nn.sigmoid(rho)  # (S, T-1, P)
     teacher = inputs[:, :-1] + noise
     predictions, _ = open_loop(
         params, jax.nn.sigmoid(context_logit), jnp.swapaxes(teacher, 0, 1), jnp.swapaxes(pbs, 0, 1)
     )
-    error = (jnp.swapaxes(predictions, 0, 1) - inputs[:, 1:]) * valid[..., None]
+    targets = inputs[:, 1:] if targets is None else targets
+    error = (jnp.swapaxes(predictions, 0, 1) - targets) * valid[..., None]
     return 0.5 * jnp.sum(error**2)
 
 
-ChunkRunner = Callable[[TrainState, jax.Array, jax.Array, jax.Array, jax.Array], TrainState]
-"""``run_chunk(state, inputs, valid, n_iterations, pb_learning) -> state``."""
+class Teacher(NamedTuple):
+    """A network whose function some sequences learn (a rehearsal of the old network's
+    function, :mod:`rnnpb.model.consolidation`): a sequence flagged in ``taught`` learns
+    towards what ``params``, run from that sequence's ``initial_context`` and ``pb``, predicts
+    from the same noisy teacher-forced inputs, instead of towards its own next step."""
+
+    params: Params
+    initial_context: jax.Array  # (S, C), in (0, 1)
+    pb: jax.Array  # (S, P), in (0, 1)
+    taught: jax.Array  # (S,) bool
+
+
+def teacher_targets(teacher: Teacher, inputs: jax.Array, noise: jax.Array) -> jax.Array:
+    """The learning targets (S, T-1, I): ``teacher``'s predictions from ``inputs[:, :-1] +
+    noise`` for its taught sequences, the next steps ``inputs[:, 1:]`` for the others."""
+    forced = inputs[:, :-1] + noise
+    pbs = jnp.broadcast_to(teacher.pb[:, None, :], (*forced.shape[:2], teacher.pb.shape[-1]))
+    predictions, _ = open_loop(
+        teacher.params,
+        teacher.initial_context,
+        jnp.swapaxes(forced, 0, 1),
+        jnp.swapaxes(pbs, 0, 1),
+    )
+    predicted = jax.lax.stop_gradient(jnp.swapaxes(predictions, 0, 1))
+    return jnp.where(teacher.taught[:, None, None], predicted, inputs[:, 1:])
+
+
+ChunkRunner = Callable[..., TrainState]
+"""``run_chunk(state, inputs, valid, n_iterations, pb_learning, teacher=None) -> state``."""
 
 
 def chunk_runner(config: TrainConfig) -> ChunkRunner:
-    """The compiled function ``run_chunk(state, inputs, valid, n_iterations, pb_learning) ->
-    state`` that runs ``n_iterations`` learning iterations (``inputs`` (S, T, I), ``valid``
-    (S, T-1)); ``pb_learning`` (S,) bool says whose PB profile learns (eqs. 1–2): a sequence
-    with False keeps its ``rho`` exactly, and its momentum stays zero. One function for every
-    mask: the mask is an argument, not a setting compiled in."""
+    """The compiled function ``run_chunk(state, inputs, valid, n_iterations, pb_learning,
+    teacher=None) -> state`` that runs ``n_iterations`` learning iterations (``inputs`` (S, T,
+    I), ``valid`` (S, T-1)); ``pb_learning`` (S,) bool says whose PB profile learns (eqs. 1–2):
+    a sequence with False keeps its ``rho`` exactly, and its momentum stays zero. One function
+    for every mask: the mask is an argument, not a setting compiled in. ``teacher``
+    (:class:`Teacher`) gives the sequences it flags its predictions as their targets."""
     # Settings that do not enter the compiled update are normalized away so that runs that
     # differ only in them share one compiled function.
     return _compiled_chunk(
@@ -215,12 +247,17 @@ def _compiled_chunk(config: TrainConfig) -> ChunkRunner:
     grad_fn = jax.grad(squared_error, argnums=(0, 1))
 
     def one_iteration(
-        state: TrainState, inputs: jax.Array, valid: jax.Array, pb_learning: jax.Array
+        state: TrainState,
+        inputs: jax.Array,
+        valid: jax.Array,
+        pb_learning: jax.Array,
+        teacher: Teacher | None,
     ) -> TrainState:
         key, noise_key = jax.random.split(state.key)
         noise = config.input_noise * jax.random.normal(noise_key, inputs[:, :-1].shape)
         trainable = (state.params, state.initial_context_logit)
-        grad_trainable, grad_rho = grad_fn(trainable, state.rho, inputs, valid, noise)
+        targets = None if teacher is None else teacher_targets(teacher, inputs, noise)
+        grad_trainable, grad_rho = grad_fn(trainable, state.rho, inputs, valid, noise, targets)
         # Weights see the mean error per prediction step so their step size does not depend on
         # how much data there is; each PB profile sees its own sequence's summed error (eq. 1).
         n_valid = jnp.maximum(jnp.sum(valid), 1)
@@ -250,9 +287,13 @@ def _compiled_chunk(config: TrainConfig) -> ChunkRunner:
         valid: jax.Array,
         n_iterations: jax.Array,
         pb_learning: jax.Array,
+        teacher: Teacher | None = None,
     ) -> TrainState:
         return jax.lax.fori_loop(
-            0, n_iterations, lambda _, s: one_iteration(s, inputs, valid, pb_learning), state
+            0,
+            n_iterations,
+            lambda _, s: one_iteration(s, inputs, valid, pb_learning, teacher),
+            state,
         )
 
     return run_chunk
@@ -295,6 +336,11 @@ class WarmStart:
         first ``hold_iterations`` iterations. None: every PB learns.
     hold_iterations : int or None
         How long the held PBs stay held; None: for the whole learning.
+    taught : array of bool, shape (S,), optional
+        Sequences that learn the start's function rather than their own next steps: towards
+        what ``params``, from the sequence's starting ``initial_context`` and ``pb``, predicts
+        from the same noisy inputs (:class:`Teacher`). None: every sequence learns its next
+        steps.
     """
 
     params: Params
@@ -303,6 +349,7 @@ class WarmStart:
     fingerprint: str
     pb_held: np.ndarray | None = None
     hold_iterations: int | None = None
+    taught: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if self.hold_iterations is not None and self.hold_iterations < 0:
@@ -312,15 +359,33 @@ class WarmStart:
                 f"pb_held must have one flag per sequence ({np.shape(self.pb)[0]}), "
                 f"got shape {np.shape(self.pb_held)}"
             )
+        if self.taught is not None and np.shape(self.taught) != (np.shape(self.pb)[0],):
+            raise ConfigError(
+                f"taught must have one flag per sequence ({np.shape(self.pb)[0]}), "
+                f"got shape {np.shape(self.taught)}"
+            )
 
     @property
     def identity(self) -> str:
-        """The start and its PB hold, as a checkpoint records it."""
-        if self.pb_held is None or not np.any(self.pb_held):
-            return self.fingerprint
-        held = "".join("1" if h else "0" for h in np.asarray(self.pb_held, dtype=bool))
-        until = "end" if self.hold_iterations is None else str(self.hold_iterations)
-        return f"{self.fingerprint}:pb-held={held}:until={until}"
+        """The start, its PB hold and its taught sequences, as a checkpoint records it."""
+        name = self.fingerprint
+        if self.pb_held is not None and np.any(self.pb_held):
+            until = "end" if self.hold_iterations is None else str(self.hold_iterations)
+            name += f":pb-held={_flags(self.pb_held)}:until={until}"
+        if self.taught is not None and np.any(self.taught):
+            name += f":taught={_flags(self.taught)}"
+        return name
+
+    def teacher(self) -> Teacher | None:
+        """The start's network as the :class:`Teacher` of its taught sequences, if any."""
+        if self.taught is None or not np.any(self.taught):
+            return None
+        return Teacher(
+            Params(*(jnp.asarray(v, jnp.float32) for v in self.params)),
+            jnp.asarray(self.initial_context, jnp.float32),
+            jnp.asarray(self.pb, jnp.float32),
+            jnp.asarray(self.taught, bool),
+        )
 
     def pb_learning(self, iteration: int) -> np.ndarray:
         """The (S,) bool mask of PBs that learn at ``iteration`` (0-based)."""
@@ -339,6 +404,10 @@ class WarmStart:
         if self.pb_held is None or self.hold_iterations is None:
             return None
         return self.hold_iterations if iteration < self.hold_iterations else None
+
+
+def _flags(mask: np.ndarray) -> str:
+    return "".join("1" if f else "0" for f in np.asarray(mask, dtype=bool))
 
 
 def init_state(

@@ -81,7 +81,8 @@ def train(
         required).
     warm_start : WarmStart, optional
         Start from these weights, initial contexts and PBs instead of random weights
-        (incremental learning, :mod:`rnnpb.model.consolidation`), holding the PBs it names.
+        (incremental learning, :mod:`rnnpb.model.consolidation`), holding the PBs it names and
+        teaching the sequences it names its own function.
     """
     network = network or NetworkConfig()
     config = config or TrainConfig()
@@ -99,6 +100,7 @@ def train(
     inputs = jnp.asarray(data.inputs, jnp.float32)
     valid = jnp.asarray(data.valid)
     every_pb_learns = np.ones(data.valid.shape[0], dtype=bool)
+    teacher = warm_start.teacher() if warm_start is not None else None
 
     bar = None
     if progress is True:
@@ -139,7 +141,7 @@ def train(
                 if release is not None:  # a chunk ends where the held PBs are let go
                     n = min(n, release - done)
             state = run_chunk(
-                state, inputs, valid, jnp.asarray(n, jnp.int32), jnp.asarray(pb_learning)
+                state, inputs, valid, jnp.asarray(n, jnp.int32), jnp.asarray(pb_learning), teacher
             )
             done += n
             mse = float(

@@ -29,6 +29,7 @@ import numpy as np
 from rnnpb.analysis import metrics
 from rnnpb.errors import ConfigError
 from rnnpb.experiments.paper import (
+    Attractor,
     learned_attractors,
     run_scenario,
     switching,
@@ -137,7 +138,9 @@ class PatternMeasures:
     performs before the pause (:mod:`rnnpb.model.recognition`; None: nothing);
     ``nearest_pb``: the learned pattern whose PB was nearest then (the paper's reading);
     ``generation_vs_before``: RMS distance (normalized joints) of its closed-loop cycle from
-    the starting model's (None: a pattern the start did not hold); ``generation_vs_data``:
+    the starting model's, or of the runs as point sets where either is no limit cycle
+    (:func:`_generation_distance`; None: a pattern the start did not hold);
+    ``generation_vs_data``:
     from the nearest demonstration's cycle."""
 
     pattern: str
@@ -237,11 +240,7 @@ def measure(
             before=config.sync_before,
             after=config.sync_before // 2,
         )
-        vs_before = (
-            metrics.cycle_distance(attractors[name].cycle, start[name].cycle)
-            if name in start
-            else None
-        )
+        vs_before = _generation_distance(attractors[name], start[name]) if name in start else None
         vs_data = (
             min(metrics.cycle_distance(attractors[name].cycle, c) for c in cycles.get(name, []))
             if name in cycles
@@ -276,6 +275,17 @@ def measure(
         float(info["seconds"]),
         int(info["iterations"]),
     )
+
+
+def _generation_distance(after: Attractor, before: Attractor) -> float:
+    """How far a pattern's closed-loop generation moved: the distance of the two limit cycles
+    (:func:`rnnpb.analysis.metrics.cycle_distance`), or, where either generation is no limit
+    cycle, of the two post-transient runs as sets of points
+    (:func:`rnnpb.analysis.metrics.attractor_distance`): one period's window of a
+    quasi-periodic run depends on where the run stops."""
+    if after.period is not None and before.period is not None:
+        return metrics.cycle_distance(after.cycle, before.cycle)
+    return metrics.attractor_distance(after.motor, before.motor)
 
 
 def _switching_with(
