@@ -459,8 +459,9 @@ not the consolidation's defaults (farthest, old PBs held for the first half). Th
 old patterns' cycles closer in the incremental study, but in teaching they measured level on
 user draws 102 and 103 (38 of 40 shapes followed within 90 s against 39, old lock-ons 115 of
 128 against 117, switches 276 of 288 against 273), and the shipped fast model taught
-figure-eight locked on its next performance after 11 steps instead of within 10
-(docs/teaching.md, "Study")."""
+figure-eight locked on its next performance after 11 steps instead of within 10. With the old
+network's function rehearsed they were worse on the same draws (old lock-ons 116 of 128
+against 122, switches 273 of 288 against 278; docs/teaching.md, "Study")."""
 
 
 def _consolidation_worker(
