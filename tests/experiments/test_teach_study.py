@@ -53,9 +53,10 @@ def test_the_new_shape_is_followed_on_its_next_performance(study):
 def test_teaching_consolidates_with_its_own_start(study):
     """The taught version was learned by rehearsal of the old network's function from the
     centre with every PB learning (teaching's own start, not the consolidation's defaults),
-    with teaching's iterations and the function's least noise (the fast model has as much)."""
+    with teaching's iterations and noise (more than the fast model's own or the function's)."""
     from rnnpb.interaction.teaching import (
         TEACHING_HOLD_OLD_PB,
+        TEACHING_INPUT_NOISE,
         TEACHING_ITERATIONS,
         TEACHING_NEW_PB_START,
     )
@@ -71,7 +72,9 @@ def test_teaching_consolidates_with_its_own_start(study):
         assert last.details["hold_old_pb"] == TEACHING_HOLD_OLD_PB == "off"
         assert last.details["new_pb_start"] == TEACHING_NEW_PB_START == "centre"
         assert last.details["rehearsal_target"] == "function"
-        noise = max(TrainConfig.fast().input_noise, FUNCTION_REHEARSAL_INPUT_NOISE)
+        noise = max(
+            TrainConfig.fast().input_noise, FUNCTION_REHEARSAL_INPUT_NOISE, TEACHING_INPUT_NOISE
+        )
         assert last.train_config["input_noise"] == noise
         assert last.iterations == TEACHING_ITERATIONS["adam"]
 

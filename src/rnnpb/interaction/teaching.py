@@ -452,6 +452,17 @@ the old network's function (:data:`rnnpb.model.consolidation.REHEARSAL_TARGET`) 
 twice the consolidation's 500."""
 
 
+TEACHING_INPUT_NOISE = 0.03
+"""The least input noise of a teaching consolidation (normalized units), above the
+consolidation's own 0.02 for a rehearsal of the old network's function
+(:data:`rnnpb.model.consolidation.FUNCTION_REHEARSAL_INPUT_NOISE`). The noise is where the old
+function is learned, and a person's version of an old pattern can lie further from its cycle
+than the noise of 0.02 reaches (set 1's pattern 2: 0.041-0.05). Chosen on the teach study's
+user draws 102 and 103 (old lock-ons within 10: 124 of 128 against 122, switches within 15:
+285 of 288 against 278; new shapes followed within 90 s: 38 of 40 against 39), checked on
+draws 104 (62 of 64 against 60, 140 of 144 against 138, 20 of 20 both; docs/teaching.md,
+"Study")."""
+
 TEACHING_HOLD_OLD_PB = "off"
 TEACHING_NEW_PB_START = "centre"
 """Teaching's own start of a consolidation: the new PB at the centre and every PB learning,
@@ -494,7 +505,10 @@ def _consolidation_worker(
         learning = config.learning_for(model)
         if iterations is None:
             iterations = TEACHING_ITERATIONS.get(learning.optimizer, learning.iterations)
-        config = replace(config, train=replace(learning, iterations=int(iterations)))
+        noise = max(learning.input_noise, TEACHING_INPUT_NOISE)
+        config = replace(
+            config, train=replace(learning, iterations=int(iterations), input_noise=noise)
+        )
         learned = consolidate(model, sequences, config, parent=model_path, progress=progress)
         learned.save(out_path)
         rehearsed = rehearse(model)
