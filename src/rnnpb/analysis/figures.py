@@ -926,7 +926,7 @@ def plot_forgetting(
         ax.set_ylim(bottom / 1.5, top * 1.5)
         ax.set_title(method)
         ax.set_xlabel("learning set")
-    axes[0][0].set_ylabel("old pattern's cycle vs before\n(RMS, normalized joints)")
+    axes[0][0].set_ylabel("old pattern's generation vs before\n(RMS, normalized joints)")
     fig.suptitle(f"Forgetting by method (target <= {limit:g})", y=1.02)
     save(fig, path)
 

@@ -508,7 +508,8 @@ def _targets(
         old = [d for m in rehearsal.values() for d in m.old_generation()]
         targets["rehearsal_old_generation"] = Target(
             bool(old) and max(old) <= GENERATION_LIMIT,
-            f"worst old pattern's cycle moved {fmt(max(old), 3)} RMS (limit {GENERATION_LIMIT})",
+            f"worst old pattern's generation moved {fmt(max(old), 3)} RMS "
+            f"(limit {GENERATION_LIMIT})",
         )
         cpu = [m.cpu_seconds for m in rehearsal.values() if m.cpu_seconds is not None]
         wall = [m.seconds for m in rehearsal.values()]
