@@ -39,3 +39,13 @@ def test_quick_study_writes_its_measures_and_shows_forgetting(tmp_path):
     assert worst_old("finetune") > worst_old("rehearsal")
     assert results["config"]["quick"] is True and results["versions"]["jax"]
     assert [m["patterns"] for m in results["chain"]] == [["1"], ["1", "2"]]
+    # The larger set (learned here: the quick form has no demo models) and a new shape added.
+    larger = results["larger_set"]
+    assert set(larger) == {"before", "figure-eight"}
+    assert larger["before"]["patterns"] == ["1", "2", "3", "4"]
+    assert larger["figure-eight"]["patterns"] == ["1", "2", "3", "4", "figure-eight"]
+    grown = larger["figure-eight"]["pattern"]
+    assert all(grown[p]["generation_vs_before"] is not None for p in "1234")
+    assert grown["figure-eight"]["generation_vs_before"] is None
+    assert larger["figure-eight"]["cpu_seconds"] > 0
+    assert "## The larger set and new shapes" in (tmp_path / "report.md").read_text()

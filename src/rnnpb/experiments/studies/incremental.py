@@ -84,6 +84,9 @@ class IncrementalConfig:
     online: OnlineConfig = field(default_factory=OnlineConfig)
     chain_start: tuple[str, ...] = ("1", "2")
     chain_added: tuple[str, ...] = ("3", "4", "figure-eight")
+    # New shapes of the demonstrator beyond the paper's four, each added by rehearsal to the
+    # larger set's model (the four patterns: `full.npz` or `full_seed0.npz` of ``models``).
+    larger_set_shapes: tuple[str, ...] = ("figure-eight", "diagonal", "one-arm", "asymmetric")
     data_seed: int = 0
     new_data_seed: int = 0
     scenario_seed: int = 100
@@ -119,6 +122,7 @@ class IncrementalConfig:
             online=OnlineConfig.ungated(),
             chain_start=("1",),
             chain_added=("2",),
+            larger_set_shapes=("figure-eight",),
             data_seed=seed,
             new_data_seed=seed,
             attractor_steps=200,
@@ -316,18 +320,20 @@ def _demonstrations(patterns, config: IncrementalConfig, seed: int):
 
 
 def _start_model(set_name: str, config: IncrementalConfig, out: Path) -> str:
-    """The path of learning set ``set_name``'s starting model (learned here if need be)."""
+    """The path of learning set ``set_name``'s starting model (learned here if need be); the
+    larger set (``"full"``) is the demo's ``full.npz`` or ``full_seed0.npz``."""
     from rnnpb.demonstrator import learning_set
 
+    names = ("full.npz", "full_seed0.npz") if set_name == "full" else (f"set{set_name}.npz",)
     if config.models is not None:
-        path = Path(config.models) / f"set{set_name}.npz"
-        if not path.is_file():
+        found = [Path(config.models) / n for n in names if (Path(config.models) / n).is_file()]
+        if not found:
             raise ConfigError(
-                f"{path}: no starting model for learning set {set_name} (run "
-                "`rnnpb demo` first, or give another directory)"
+                f"{Path(config.models) / names[0]}: no starting model for learning set "
+                f"{set_name} (run `rnnpb demo` first, or give another directory)"
             )
-        return str(path)
-    path = out / "models" / f"set{set_name}.npz"
+        return str(found[0])
+    path = out / "models" / names[0]
     from rnnpb.robot import JOINT_LIMITS
 
     train(
@@ -342,18 +348,24 @@ def _method_config(method: str, config: IncrementalConfig) -> ConsolidationConfi
 
 
 def set_job(
-    set_name: str, method: str | None, start_path: str, config: IncrementalConfig, out_path: str
+    set_name: str,
+    method: str | None,
+    start_path: str,
+    config: IncrementalConfig,
+    out_path: str,
+    added: str | None = None,
 ) -> tuple[str, str | None, ModelMeasures]:
-    """Measure the starting model (``method`` None) or add the set's left-out pattern to it by
-    ``method``, and measure the result."""
+    """Measure the starting model (``method`` None) or add a pattern to it by ``method`` —
+    ``added``, by default the set's left-out pattern — and measure the result."""
     from rnnpb.demonstrator import learning_set, novel_pattern
 
     start = TrainedModel.load(start_path)
-    added = novel_pattern(set_name)
+    if method is None:
+        original = learning_set(set_name, seed=config.data_seed)
+        return set_name, None, measure(start, "before", config, original)
+    added = added or novel_pattern(set_name)
     original = learning_set(set_name, seed=config.data_seed)
     new = _demonstrations((added,), config, config.new_data_seed)
-    if method is None:
-        return set_name, None, measure(start, "before", config, original)
     cpu = time.process_time()
     model = consolidate(
         start, new, _method_config(method, config), replay_data=original, parent=start_path
@@ -411,6 +423,7 @@ def run_study(out: Path, config: IncrementalConfig, log=print) -> StudyOutcome:
     before: dict[str, ModelMeasures] = {}
     after: dict[str, dict[str, ModelMeasures]] = {}
     chained: list[ModelMeasures] = []
+    larger: dict[str, ModelMeasures] = {}  # "before", then each new shape added
 
     def write(done: int, total: int) -> StudyOutcome:
         # After every job: a run stopped early keeps what it measured, marked partial.
@@ -428,8 +441,8 @@ def run_study(out: Path, config: IncrementalConfig, log=print) -> StudyOutcome:
         progress = (done, total)
         write_outputs(
             out,
-            _report(config, before, after, chained, targets, runtime, progress),
-            _results(config, before, after, chained, targets, runtime, progress),
+            _report(config, before, after, chained, larger, targets, runtime, progress),
+            _results(config, before, after, chained, larger, targets, runtime, progress),
         )
         return StudyOutcome(runtime, targets)
 
@@ -456,10 +469,15 @@ def run_study(out: Path, config: IncrementalConfig, log=print) -> StudyOutcome:
             )
             if k == 0:
                 jobs[pool.submit(chain_job, config, out)] = "chain"
+                jobs.update(_larger_set_jobs(pool, config, out))
         for done, future in enumerate(as_completed(jobs), start=1):
             if jobs[future] == "chain":
                 chained.extend(future.result())
                 log("  chain done")
+            elif jobs[future].startswith("larger:"):
+                shape = jobs[future].removeprefix("larger:")
+                larger[shape] = future.result()[2]
+                log(f"  larger set {'before' if shape == 'before' else '+ ' + shape} done")
             else:
                 name, method, measured = future.result()
                 if method is None:
@@ -469,6 +487,19 @@ def run_study(out: Path, config: IncrementalConfig, log=print) -> StudyOutcome:
                 log(f"  set {name} {method or 'before'} done")
             outcome = write(done, len(jobs))
     return outcome
+
+
+def _larger_set_jobs(pool, config: IncrementalConfig, out: Path) -> dict[Any, str]:
+    """The larger set measured, then each of ``larger_set_shapes`` added to it by rehearsal."""
+    if not config.larger_set_shapes:
+        return {}
+    start = _start_model("full", config, out)
+    jobs = {pool.submit(set_job, "full", None, start, config, ""): "larger:before"}
+    for shape in config.larger_set_shapes:
+        path = str(out / "models" / f"full_{shape}_rehearsal.npz")
+        job = pool.submit(set_job, "full", "rehearsal", start, config, path, shape)
+        jobs[job] = f"larger:{shape}"
+    return jobs
 
 
 def run(out: Path, options: StudyOptions) -> StudyOutcome:
@@ -529,7 +560,7 @@ def _targets(
     return targets
 
 
-def _report(config, before, after, chained, targets, runtime, progress) -> list[str]:
+def _report(config, before, after, chained, larger, targets, runtime, progress) -> list[str]:
     lines = [
         "# Incremental learning: rehearsal and consolidation",
         "",
@@ -666,10 +697,46 @@ def _report(config, before, after, chained, targets, runtime, progress) -> list[
             for m in chained
         ],
     )
+    if larger:
+        lines += [
+            "",
+            "## The larger set and new shapes",
+            "",
+            "The larger set's model (the paper's four patterns), and each new shape of the "
+            f"demonstrator ({', '.join(config.larger_set_shapes)}) added to it by rehearsal.",
+            "",
+        ]
+        lines += table(
+            (
+                "added",
+                "lock-on per pattern",
+                "recognised as",
+                "old generation vs before (worst)",
+                "worst switch",
+                "CPU seconds",
+                "all followed",
+            ),
+            [
+                (
+                    shape,
+                    ", ".join(f"{p}: {fmt(v.steps_to_lock)}" for p, v in m.pattern.items()),
+                    ", ".join(v.recognized or "–" for v in m.pattern.values()),
+                    fmt(max(m.old_generation()), 3) if m.old_generation() else "–",
+                    fmt(
+                        None
+                        if any(v is None for v in m.switching.values())
+                        else max(m.switching.values(), default=0)
+                    ),
+                    fmt(m.cpu_seconds, 1) if m.cpu_seconds is not None else "–",
+                    "yes" if m.followed else "no",
+                )
+                for shape, m in larger.items()
+            ],
+        )
     return lines
 
 
-def _results(config, before, after, chained, targets, runtime, progress) -> dict[str, Any]:
+def _results(config, before, after, chained, larger, targets, runtime, progress) -> dict[str, Any]:
     return {
         "study": NAME,
         "config": asdict(config),
@@ -681,4 +748,5 @@ def _results(config, before, after, chained, targets, runtime, progress) -> dict
         "before": {k: asdict(v) for k, v in before.items()},
         "after": {k: {m: asdict(v) for m, v in d.items()} for k, d in after.items()},
         "chain": [asdict(m) for m in chained],
+        "larger_set": {k: asdict(v) for k, v in larger.items()},
     }
