@@ -455,3 +455,25 @@ def test_teacher_targets_are_the_start_networks_predictions():
     assert WarmStart(model.params, context, pb, "start").teacher() is None
     with pytest.raises(ConfigError, match="one flag per sequence"):
         WarmStart(model.params, context, pb, "start", taught=np.ones(5, bool))
+
+
+def test_a_checkpoint_of_one_rehearsal_target_never_resumes_the_other(two_patterns, tmp_path):
+    model, new = two_patterns
+    learning = TrainConfig.fast(iterations=200, checkpoint_every=100)
+    checkpoint = tmp_path / "c.npz"
+
+    def stop(progress):
+        if progress.iteration >= 100:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        consolidate(
+            model,
+            new,
+            ConsolidationConfig(train=learning),
+            progress=stop,
+            checkpoint_path=checkpoint,
+        )
+    trajectory = ConsolidationConfig(train=learning, rehearsal_target="trajectory")
+    with pytest.raises(ModelFileError, match="another starting model or method"):
+        consolidate(model, new, trajectory, checkpoint_path=checkpoint, resume=True)

@@ -483,7 +483,7 @@ def consolidate(
             model.params,
             np.vstack([[s.meta["initial_context"] for s in old], fresh_context]),
             np.vstack([[s.meta["pb"] for s in old], fresh_pb]),
-            f"{tag}:target={config.rehearsal_target}",
+            tag,
             *_held(config, learning, len(old), len(new)),
             taught=(
                 np.arange(len(old) + len(new)) < len(old)

@@ -33,6 +33,13 @@ STUDY_MODULES: dict[str, str] = {
 }
 
 
+def demo_model_names(learning_set: str) -> tuple[str, ...]:
+    """The file names, in order of preference, under which ``rnnpb demo``'s models directory
+    holds a learning set's model: ``setK.npz``; the larger set (``"full"``) ``full.npz`` or
+    its first seed's ``full_seed0.npz``."""
+    return ("full.npz", "full_seed0.npz") if learning_set == "full" else (f"set{learning_set}.npz",)
+
+
 @dataclass(frozen=True)
 class StudyOptions:
     """What every study takes. ``quick``: the short form (the one the tests run); ``workers``:

@@ -36,7 +36,7 @@ from rnnpb.experiments.paper import (
     synchronization,
 )
 from rnnpb.experiments.reporting import embed, fmt, table, versions, write_outputs
-from rnnpb.experiments.studies import StudyOptions, StudyOutcome
+from rnnpb.experiments.studies import StudyOptions, StudyOutcome, demo_model_names
 from rnnpb.experiments.studies._pool import study_pool
 from rnnpb.experiments.summary import Target
 from rnnpb.model import OnlineConfig, TrainConfig, TrainedModel, train
@@ -324,7 +324,7 @@ def _start_model(set_name: str, config: IncrementalConfig, out: Path) -> str:
     larger set (``"full"``) is the demo's ``full.npz`` or ``full_seed0.npz``."""
     from rnnpb.demonstrator import learning_set
 
-    names = ("full.npz", "full_seed0.npz") if set_name == "full" else (f"set{set_name}.npz",)
+    names = demo_model_names(set_name)
     if config.models is not None:
         found = [Path(config.models) / n for n in names if (Path(config.models) / n).is_file()]
         if not found:
@@ -360,11 +360,10 @@ def set_job(
     from rnnpb.demonstrator import learning_set, novel_pattern
 
     start = TrainedModel.load(start_path)
+    original = learning_set(set_name, seed=config.data_seed)
     if method is None:
-        original = learning_set(set_name, seed=config.data_seed)
         return set_name, None, measure(start, "before", config, original)
     added = added or novel_pattern(set_name)
-    original = learning_set(set_name, seed=config.data_seed)
     new = _demonstrations((added,), config, config.new_data_seed)
     cpu = time.process_time()
     model = consolidate(

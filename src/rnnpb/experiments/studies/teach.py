@@ -58,7 +58,7 @@ import numpy as np
 from rnnpb.analysis import metrics
 from rnnpb.errors import ConfigError
 from rnnpb.experiments.reporting import embed, fmt, table, versions, write_outputs
-from rnnpb.experiments.studies import StudyOptions, StudyOutcome
+from rnnpb.experiments.studies import StudyOptions, StudyOutcome, demo_model_names
 from rnnpb.experiments.studies._pool import study_pool
 from rnnpb.experiments.summary import Target
 from rnnpb.interaction.teaching import TeachingConfig, episode_steps
@@ -687,7 +687,7 @@ def _start_models(config: TeachConfig) -> dict[str, str]:
     folder = Path(config.models or DEFAULT_MODELS)
     out = {}
     for name in config.learning_sets:
-        names = ("full.npz", "full_seed0.npz") if name == "full" else (f"set{name}.npz",)
+        names = demo_model_names(name)
         found = next((folder / n for n in names if (folder / n).is_file()), None)
         if found is None:
             raise ConfigError(
