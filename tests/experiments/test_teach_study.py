@@ -102,3 +102,41 @@ def test_the_full_form_names_a_missing_models_directory(tmp_path):
 
     with pytest.raises(ConfigError, match="no model set1.npz"):
         load_study("teach").run(tmp_path, StudyOptions(models=str(tmp_path / "none")))
+
+
+def test_following_needs_the_papers_lock_on_as_well_as_the_time():
+    """A shape locked onto after more than LOCK_LIMIT steps of its next performance is not
+    followed, however soon; one never locked onto is not either."""
+    from rnnpb.experiments.studies.teach import TeachConfig, TeachRun, judge
+
+    def run(lock: int | None, follow_s: float | None) -> TeachRun:
+        return TeachRun(
+            learning_set="1",
+            shape="figure-eight",
+            new_pattern="new-1",
+            segments=[],
+            detection_delay=10,
+            episodes=[],
+            consolidations=[],
+            swaps=[],
+            lock_next=lock,
+            recognised_next=1.0,
+            lock_in_timeline={},
+            follow_s=follow_s,
+            follow_steps={},
+            after=None,
+            loop_steps=0,
+            seconds=0.0,
+            timeline={},
+        )
+
+    config = TeachConfig(quick=True, models=None, shipped=True, paper_measures=False)
+    limit = metrics.LOCK_LIMIT
+    followed = judge([run(limit, 60.0)], {}, None, config)["follow_within_90s"]
+    assert followed.met and followed.detail.startswith("1/1 runs locked on within")
+    late = judge([run(limit, 60.0), run(limit + 1, 60.0)], {}, None, config)["follow_within_90s"]
+    assert not late.met and "1/2" in late.detail and f"locked on later ({limit + 1}" in late.detail
+    slow = judge([run(3, 95.0)], {}, None, config)["follow_within_90s"]
+    assert not slow.met and slow.detail.startswith("0/1")
+    never = judge([run(None, None)], {}, None, config)["follow_within_90s"]
+    assert not never.met and "1 never followed" in never.detail

@@ -802,6 +802,11 @@ def _worst(values) -> int | None:
     return None if not values or any(v is None for v in values) else max(values)
 
 
+def ok_lock(steps: int | None) -> bool:
+    """Whether a lock-on meets the paper's target (within :data:`metrics.LOCK_LIMIT`)."""
+    return steps is not None and steps <= metrics.LOCK_LIMIT
+
+
 def judge(
     runs: list[TeachRun],
     before: dict[str, PaperMeasures],
@@ -809,14 +814,27 @@ def judge(
     config: TeachConfig,
 ) -> dict[str, Target]:
     targets = {}
+    # Following is the paper's lock-on (within LOCK_LIMIT steps) on the new shape's next
+    # performance; the time counts to the step it locked on.
     follows = [r.follow_s for r in runs]
-    met = [f is not None and f <= FOLLOW_LIMIT_S for f in follows]
-    finite = [f for f in follows if f is not None]
+    locked = [ok_lock(r.lock_next) for r in runs]
+    met = [
+        ok and f is not None and f <= FOLLOW_LIMIT_S for ok, f in zip(locked, follows, strict=True)
+    ]
+    timely = [f for ok, f in zip(locked, follows, strict=True) if ok and f is not None]
+    late = [r.lock_next for r in runs if r.lock_next is not None and not ok_lock(r.lock_next)]
+    never = sum(r.lock_next is None or r.follow_s is None for r in runs)
     targets["follow_within_90s"] = Target(
         all(met) and bool(runs),
-        f"{sum(met)}/{len(runs)} runs within {FOLLOW_LIMIT_S:.0f} s of interaction "
-        f"(worst {fmt(max(finite)) if finite else 'never'} s"
-        + (f"; {len(runs) - len(finite)} never followed" if len(finite) < len(runs) else "")
+        f"{sum(met)}/{len(runs)} runs locked on within {metrics.LOCK_LIMIT} steps of the "
+        f"shape's next performance, within {FOLLOW_LIMIT_S:.0f} s of interaction "
+        f"(worst {fmt(max(timely)) if timely else 'none'} s"
+        + (
+            f"; {len(late)} locked on later ({', '.join(str(v) for v in sorted(late))} steps)"
+            if late
+            else ""
+        )
+        + (f"; {never} never followed" if never else "")
         + ")",
     )
     if paced is not None:
