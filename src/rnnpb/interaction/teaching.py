@@ -446,10 +446,11 @@ TEACHING_ITERATIONS = {"momentum": 20_000, "adam": 1_000}
 """On-line teaching's consolidation iterations by optimizer. A taught episode is three cycles
 of an imperfect demonstration: with 5,000 iterations of the paper's learning the network
 predicted the person's next performance of it just above the lock-on threshold, with 10,000
-it followed (user draws 101: 15 → 19 of 20 followed within 90 s, checked on 102). Rehearsing
-the old network's function (:data:`rnnpb.model.consolidation.REHEARSAL_TARGET`) learns with
-20,000, the consolidation's own (docs/teaching.md, "The full study"). Adam (the fast preset):
-twice the consolidation's 500."""
+it followed (user draws 101: 15 → 19 of 20 locked onto within 90 s, counted by any
+lock-on, checked on 102). Rehearsing the old network's function
+(:data:`rnnpb.model.consolidation.REHEARSAL_TARGET`) learns with 20,000, the consolidation's
+own (docs/teaching.md, "The full study"). Adam (the fast preset): twice the consolidation's
+500."""
 
 
 TEACHING_INPUT_NOISE = 0.03
@@ -459,16 +460,16 @@ consolidation's own 0.02 for a rehearsal of the old network's function
 function is learned, and a person's version of an old pattern can lie further from its cycle
 than the noise of 0.02 reaches (set 1's pattern 2: 0.041-0.05). Chosen on the teach study's
 user draws 102 and 103 (old lock-ons within 10: 124 of 128 against 122, switches within 15:
-285 of 288 against 278; new shapes followed within 90 s: 38 of 40 against 39), checked on
-draws 104 (62 of 64 against 60, 140 of 144 against 138, 20 of 20 both; docs/teaching.md,
-"Study")."""
+285 of 288 against 278; new shapes locked onto within 90 s, counted by any lock-on: 38 of
+40 against 39), checked on draws 104 (62 of 64 against 60, 140 of 144 against 138, 20 of 20
+both; docs/teaching.md, "Study")."""
 
 TEACHING_HOLD_OLD_PB = "off"
 TEACHING_NEW_PB_START = "centre"
 """Teaching's own start of a consolidation: the new PB at the centre and every PB learning,
 not the consolidation's defaults (farthest, old PBs held for the first half). Those kept the
 old patterns' cycles closer in the incremental study, but in teaching they measured level on
-user draws 102 and 103 (38 of 40 shapes followed within 90 s against 39, old lock-ons 115 of
+user draws 102 and 103 (38 of 40 shapes locked onto within 90 s against 39, old lock-ons 115 of
 128 against 117, switches 276 of 288 against 273), and the shipped fast model taught
 figure-eight locked on its next performance after 11 steps instead of within 10. With the old
 network's function rehearsed they were worse on the same draws (old lock-ons 116 of 128
