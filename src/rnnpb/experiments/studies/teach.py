@@ -903,7 +903,8 @@ def _report(config, runs, before, paced, targets, runtime, progress) -> list[str
         "consolidation, so a run repeats. *Follow*: steps from the new shape's first step "
         "until its episode is kept, plus the steps a paced loop runs while the consolidation "
         "takes its CPU time on one core, plus the lock-on steps on the shape's next "
-        f"performance, × dt {config.dt:g} s (target ≤ {FOLLOW_LIMIT_S:.0f} s). The "
+        f"performance, × dt {config.dt:g} s (target ≤ {FOLLOW_LIMIT_S:.0f} s, and the "
+        f"lock-on itself within {metrics.LOCK_LIMIT} steps, the paper's). The "
         "consolidation's wall time on this shared machine is the load's and is shown beside.",
         "",
         f"{'Quick form (shipped fast-preset model)' if config.quick else 'Full form'}; models "
