@@ -802,7 +802,7 @@ def _worst(values) -> int | None:
     return None if not values or any(v is None for v in values) else max(values)
 
 
-def ok_lock(steps: int | None) -> bool:
+def _locked(steps: int | None) -> bool:
     """Whether a lock-on meets the paper's target (within :data:`metrics.LOCK_LIMIT`)."""
     return steps is not None and steps <= metrics.LOCK_LIMIT
 
@@ -816,19 +816,15 @@ def judge(
     targets = {}
     # Following is the paper's lock-on (within LOCK_LIMIT steps) on the new shape's next
     # performance; the time counts to the step it locked on.
-    follows = [r.follow_s for r in runs]
-    locked = [ok_lock(r.lock_next) for r in runs]
-    met = [
-        ok and f is not None and f <= FOLLOW_LIMIT_S for ok, f in zip(locked, follows, strict=True)
-    ]
-    timely = [f for ok, f in zip(locked, follows, strict=True) if ok and f is not None]
-    late = [r.lock_next for r in runs if r.lock_next is not None and not ok_lock(r.lock_next)]
+    locked = [r.follow_s for r in runs if _locked(r.lock_next) and r.follow_s is not None]
+    met = [f for f in locked if f <= FOLLOW_LIMIT_S]
+    late = [r.lock_next for r in runs if r.lock_next is not None and not _locked(r.lock_next)]
     never = sum(r.lock_next is None or r.follow_s is None for r in runs)
     targets["follow_within_90s"] = Target(
-        all(met) and bool(runs),
-        f"{sum(met)}/{len(runs)} runs locked on within {metrics.LOCK_LIMIT} steps of the "
+        len(met) == len(runs) > 0,
+        f"{len(met)}/{len(runs)} runs locked on within {metrics.LOCK_LIMIT} steps of the "
         f"shape's next performance, within {FOLLOW_LIMIT_S:.0f} s of interaction "
-        f"(worst {fmt(max(timely)) if timely else 'none'} s"
+        f"(worst {fmt(max(locked)) if locked else 'none'} s"
         + (
             f"; {len(late)} locked on later ({', '.join(str(v) for v in sorted(late))} steps)"
             if late
@@ -858,14 +854,14 @@ def judge(
             for segment, v in run.lock_in_timeline.items():
                 if segment.split(":", 1)[1] != run.shape:
                     locks.append(v)
-                    if v is None or v > metrics.LOCK_LIMIT:
+                    if not _locked(v):
                         misses.append(f"set {run.learning_set}: lock {segment} {fmt(v)}")
             continue
         old = tuple(p for p in run.after.lock if p != run.new_pattern)
         for p in old:
             v = run.after.lock[p]
             locks.append(v)
-            if v is None or v > metrics.LOCK_LIMIT:
+            if not _locked(v):
                 misses.append(f"set {run.learning_set} {run.shape}: lock {p} {fmt(v)}")
         for pair, v in _old_pairs(run.after, old).items():
             switches.append(v)
@@ -873,7 +869,7 @@ def judge(
                 misses.append(f"set {run.learning_set} {run.shape}: switch {pair} {fmt(v)}")
     targets["old_patterns_keep_paper_targets"] = Target(
         not misses and bool(locks),
-        f"old lock-on {sum(v is not None and v <= metrics.LOCK_LIMIT for v in locks)}/"
+        f"old lock-on {sum(map(_locked, locks))}/"
         f"{len(locks)} within {metrics.LOCK_LIMIT}, old switches "
         f"{sum(v is not None and v <= metrics.SWITCH_LIMIT for v in switches)}/{len(switches)} "
         f"within {metrics.SWITCH_LIMIT}"
