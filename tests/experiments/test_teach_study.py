@@ -3,11 +3,15 @@
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import pytest
 
 from rnnpb.analysis import metrics
+from rnnpb.experiments.scenarios.teaching_measures import TeachRun
+from rnnpb.experiments.scenarios.teaching_scenario import TeachConfig, segments
 from rnnpb.experiments.studies import StudyOptions, load_study
+from rnnpb.experiments.studies.teach import judge, limits
 
 
 @pytest.fixture(scope="module")
@@ -107,36 +111,77 @@ def test_the_full_form_names_a_missing_models_directory(tmp_path):
 def test_following_needs_the_papers_lock_on_as_well_as_the_time():
     """A shape locked onto after more than LOCK_LIMIT steps of its next performance is not
     followed, however soon; one never locked onto is not either."""
-    from rnnpb.experiments.studies.teach import TeachConfig, TeachRun, judge
-
-    def run(lock: int | None, follow_s: float | None) -> TeachRun:
-        return TeachRun(
-            learning_set="1",
-            shape="figure-eight",
-            new_pattern="new-1",
-            segments=[],
-            detection_delay=10,
-            episodes=[],
-            consolidations=[],
-            swaps=[],
-            lock_next=lock,
-            recognised_next=1.0,
-            lock_in_timeline={},
-            follow_s=follow_s,
-            follow_steps={},
-            after=None,
-            loop_steps=0,
-            seconds=0.0,
-            timeline={},
-        )
-
     config = TeachConfig(quick=True, models=None, shipped=True, paper_measures=False)
     limit = metrics.LOCK_LIMIT
-    followed = judge([run(limit, 60.0)], {}, None, config)["follow_within_90s"]
+    followed = judge([_run(limit, 60.0)], {}, None, config)["follow_within_90s"]
     assert followed.met and followed.detail.startswith("1/1 runs locked on within")
-    late = judge([run(limit, 60.0), run(limit + 1, 60.0)], {}, None, config)["follow_within_90s"]
+    late = judge([_run(limit, 60.0), _run(limit + 1, 60.0)], {}, None, config)["follow_within_90s"]
     assert not late.met and "1/2" in late.detail and f"locked on later ({limit + 1}" in late.detail
-    slow = judge([run(3, 95.0)], {}, None, config)["follow_within_90s"]
+    slow = judge([_run(3, 95.0)], {}, None, config)["follow_within_90s"]
     assert not slow.met and slow.detail.startswith("0/1")
-    never = judge([run(None, None)], {}, None, config)["follow_within_90s"]
+    never = judge([_run(None, None)], {}, None, config)["follow_within_90s"]
     assert not never.met and "1 never followed" in never.detail
+
+
+def test_the_judge_reads_every_threshold_it_is_given():
+    """A run followed in 60 s within 5 steps meets the default limits and misses stricter
+    ones; an old pattern locked on in 8 steps misses a lock-on limit of 6."""
+    config = TeachConfig(quick=True, models=None, shipped=True, paper_measures=False)
+    run = replace(_run(5, 60.0), lock_in_timeline={"2:2": 8, "6:figure-eight": 5})
+    default = judge([run], {}, None, config)
+    assert default["follow_within_90s"].met and default["old_patterns_keep_paper_targets"].met
+    strict = judge([run], {}, None, config, {**limits(), "follow_s": 30.0, "lock_steps": 6})
+    assert (
+        not strict["follow_within_90s"].met and "within 30 s" in strict["follow_within_90s"].detail
+    )
+    old = strict["old_patterns_keep_paper_targets"]
+    assert not old.met and "lock 2:2 8" in old.detail
+
+
+def test_the_scripted_user_leads_with_another_learned_pattern_per_shape():
+    config = TeachConfig(quick=True, models=None, shipped=True, paper_measures=False)
+    first = segments(("1", "2", "3"), "diagonal", 0, config)
+    second = segments(("1", "2", "3"), "one-arm", 1, config)
+    assert [m for m, _ in first] == ["1", "diagonal", "2", "3", "random-walk", "jerky", "diagonal"]
+    assert [m for m, _ in second][:3] == ["2", "one-arm", "1"]
+    assert first[1][1] == config.new_steps and first[-1][1] == config.again_steps
+
+
+def _run(lock: int | None, follow_s: float | None) -> TeachRun:
+    return TeachRun(
+        learning_set="1",
+        shape="figure-eight",
+        new_pattern="new-1",
+        segments=[],
+        detection_delay=10,
+        episodes=[],
+        consolidations=[],
+        swaps=[],
+        lock_next=lock,
+        recognised_next=1.0,
+        lock_in_timeline={},
+        follow_s=follow_s,
+        follow_steps={},
+        after=None,
+        loop_steps=0,
+        seconds=0.0,
+        timeline={},
+    )
+
+
+def test_the_models_of_a_directory_are_taken_by_the_names_the_demo_writes(tmp_path):
+    import shutil
+
+    from rnnpb.errors import ConfigError
+    from rnnpb.experiments.scenarios.study_models import study_models
+    from rnnpb.models import SHIPPED_MODEL
+
+    def never_learned(name: str):
+        raise AssertionError(f"learned {name}, though the directory holds it")
+
+    shutil.copyfile(SHIPPED_MODEL, tmp_path / "set1.npz")
+    shutil.copyfile(SHIPPED_MODEL, tmp_path / "full_seed0.npz")
+    paths = study_models(("1", "full"), tmp_path, tmp_path / "out", never_learned)
+    assert paths == {"1": str(tmp_path / "set1.npz"), "full": str(tmp_path / "full_seed0.npz")}
+    with pytest.raises(ConfigError, match="no model set2.npz for learning set 2"):
+        study_models(("2",), tmp_path, tmp_path / "out", never_learned)

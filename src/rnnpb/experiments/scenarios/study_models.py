@@ -1,0 +1,68 @@
+"""The models a study starts from: the ones ``--models DIR`` names, else learned here.
+
+``rnnpb demo`` writes a learning set's model as ``setK.npz`` and the larger set's as
+``full.npz`` (or its first seed's ``full_seed0.npz``): :func:`study_models` reads those names
+from a directory, and where no directory is given learns each model on the learning set's
+draw of the demonstrator and saves it under the same name, so that a study runs on a fresh
+checkout. :func:`paper_training` is how the demo learns each set (the full forms' models);
+the quick forms pass a short fast-preset learning of their own.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from dataclasses import replace
+from pathlib import Path
+
+from rnnpb.errors import ConfigError
+from rnnpb.experiments.studies import demo_model_names
+from rnnpb.model import TrainConfig
+
+
+def paper_training(learning_set: str, seed: int = 0) -> TrainConfig:
+    """How ``rnnpb demo`` learns ``learning_set``'s model with the paper's algorithm: its
+    :class:`~rnnpb.experiments.paper.ExperimentConfig`'s learning (the larger set's own)."""
+    from rnnpb.experiments.paper import ExperimentConfig
+
+    demo = ExperimentConfig()
+    return replace(demo.larger_train if learning_set == "full" else demo.train, seed=seed)
+
+
+def learn_model(learning_set: str, train_config: TrainConfig, path: Path, data_seed: int) -> str:
+    """Learn ``learning_set``'s model on the demonstrator's draw ``data_seed``; save it at
+    ``path`` and return the path."""
+    from rnnpb.demonstrator import learning_set as demonstrations
+    from rnnpb.model import train
+    from rnnpb.robot import JOINT_LIMITS
+
+    model = train(demonstrations(learning_set, seed=data_seed), JOINT_LIMITS, config=train_config)
+    model.save(path)
+    return str(path)
+
+
+def study_models(
+    learning_sets: Iterable[str],
+    directory: str | Path | None,
+    out: Path,
+    learning: Callable[[str], TrainConfig],
+    data_seed: int = 0,
+) -> dict[str, str]:
+    """The path of each learning set's model: ``directory``'s (a clear error when it has
+    none), or, with no directory, learned with ``learning(set)`` into ``out``."""
+    paths = {}
+    for name in learning_sets:
+        names = demo_model_names(name)
+        if directory is not None:
+            found = next(
+                (Path(directory) / n for n in names if (Path(directory) / n).is_file()), None
+            )
+            if found is None:
+                raise ConfigError(
+                    f"{directory}: no model {' or '.join(names)} for learning set {name} (the "
+                    "models `rnnpb demo` learns; run it, or give no --models to learn them here)"
+                )
+            paths[name] = str(found)
+        else:
+            out.mkdir(parents=True, exist_ok=True)
+            paths[name] = learn_model(name, learning(name), out / names[0], data_seed)
+    return paths
