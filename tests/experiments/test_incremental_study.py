@@ -49,3 +49,45 @@ def test_quick_study_writes_its_measures_and_shows_forgetting(tmp_path):
     assert grown["figure-eight"]["generation_vs_before"] is None
     assert larger["figure-eight"]["cpu_seconds"] > 0
     assert "## The larger set and new shapes" in (tmp_path / "report.md").read_text()
+    # No --models: the starting models were learned into the output, under the demo's names.
+    assert (tmp_path / "models" / "set1.npz").is_file()
+    assert (tmp_path / "models" / "full.npz").is_file()
+
+
+def _measures(label, locks, generation, switch=5, cpu=2.0):
+    from rnnpb.experiments.scenarios.incremental_measures import ModelMeasures, PatternMeasures
+
+    patterns = tuple(locks)
+    return ModelMeasures(
+        label=label,
+        patterns=patterns,
+        pattern={
+            p: PatternMeasures(p, lock, p, p, 12.0, generation.get(p), 0.01)
+            for p, lock in locks.items()
+        },
+        switching={f"{a}->{b}": switch for a in patterns for b in patterns if a != b},
+        train_mse_max=1e-4,
+        seconds=3.0,
+        iterations=200,
+        cpu_seconds=cpu,
+    )
+
+
+def test_the_judge_reads_forgetting_time_and_following_against_its_thresholds():
+    """Rehearsal that moved an old pattern by 0.03 in 2 s of CPU, every pattern locked on in
+    4 steps: met against the default limits, missed against stricter ones."""
+    from rnnpb.experiments.scenarios.incremental_scenario import IncrementalConfig
+    from rnnpb.experiments.studies.incremental import judge, limits
+
+    config = IncrementalConfig.quick_run()
+    rehearsed = _measures("rehearsal", {"1": 4, "2": 4}, {"1": 0.03})
+    chain = [_measures("1", {"1": 4}, {}), _measures("+2", {"1": 4, "2": 4}, {"1": 0.01})]
+    after = {"1": {"rehearsal": rehearsed}}
+    default = judge(config, after, chain)
+    assert all(t.met for t in default.values()), default
+    assert "moved 0.030 RMS (limit 0.05)" in default["rehearsal_old_generation"].detail
+    strict = {**limits(), "generation": 0.02, "rehearsal_s": 1.0, "lock_steps": 3}
+    judged = judge(config, after, chain, strict)
+    assert not any(t.met for t in judged.values()), judged
+    assert "(limit 0.02)" in judged["rehearsal_old_generation"].detail
+    assert judged["chain_all_followed"].detail == "after 1 consolidation(s): 1: lock 4, 2: lock 4"
