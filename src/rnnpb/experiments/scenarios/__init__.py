@@ -1,8 +1,11 @@
-"""What the studies run and measure: their scenarios, measures and starting models.
+"""The studies' scenarios and measures: library code under ``rnnpb study NAME``.
 
-A study in :mod:`rnnpb.experiments.studies` is a runner, a judge and a report; the scripted
-users it plays, the jobs its worker processes run and the measures it takes live here, one
-module per study and part (``teaching_*`` for ``rnnpb study teach``, ``incremental_*`` for
-``rnnpb study incremental``), with :mod:`~rnnpb.experiments.scenarios.study_models` finding or
-learning the models a study starts from.
+One module per study (``novelty``, ``safety``, ``dyad``), or per study and part
+(``teaching_scenario``, ``teaching_measures``, ``teaching_runs``; ``incremental_scenario``,
+``incremental_measures``, ``incremental_runs``): what the study's users do (generated streams,
+adversarial users, scripted subjects), the jobs that run them through the mirror system, and
+the measures taken of the runs; :mod:`~rnnpb.experiments.scenarios.study_models` finds or
+learns the models a study starts from. A study's module in :mod:`rnnpb.experiments.studies`
+is a thin script over them: a runner, a judge by its exam (:mod:`rnnpb.experiments.exams`)
+and a report.
 """
