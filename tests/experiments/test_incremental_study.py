@@ -1,6 +1,7 @@
 """`rnnpb study incremental --quick`: every method, the chain, the report and its figure."""
 
 import json
+from dataclasses import replace
 
 import pytest
 
@@ -52,6 +53,10 @@ def test_quick_study_writes_its_measures_and_shows_forgetting(tmp_path):
     # No --models: the starting models were learned into the output, under the demo's names.
     assert (tmp_path / "models" / "set1.npz").is_file()
     assert (tmp_path / "models" / "full.npz").is_file()
+    # The exam's judge of the finished results gives the run's own verdicts.
+    from rnnpb.experiments.exams import load_exam
+
+    assert study.judge_results(results, load_exam("incremental")) == outcome.targets
 
 
 def _measures(label, locks, generation, switch=5, cpu=2.0):
@@ -73,21 +78,39 @@ def _measures(label, locks, generation, switch=5, cpu=2.0):
     )
 
 
-def test_the_judge_reads_forgetting_time_and_following_against_its_thresholds():
+def test_the_judge_reads_forgetting_time_and_following_against_the_exam():
     """Rehearsal that moved an old pattern by 0.03 in 2 s of CPU, every pattern locked on in
     4 steps: met against the default limits, missed against stricter ones."""
-    from rnnpb.experiments.scenarios.incremental_scenario import IncrementalConfig
-    from rnnpb.experiments.studies.incremental import judge, limits
+    from rnnpb.experiments.exams import load_exam
+    from rnnpb.experiments.studies.incremental import judge
 
-    config = IncrementalConfig.quick_run()
     rehearsed = _measures("rehearsal", {"1": 4, "2": 4}, {"1": 0.03})
     chain = [_measures("1", {"1": 4}, {}), _measures("+2", {"1": 4, "2": 4}, {"1": 0.01})]
     after = {"1": {"rehearsal": rehearsed}}
-    default = judge(config, after, chain)
+    default = judge(after, chain)
     assert all(t.met for t in default.values()), default
     assert "moved 0.030 RMS (limit 0.05)" in default["rehearsal_old_generation"].detail
-    strict = {**limits(), "generation": 0.02, "rehearsal_s": 1.0, "lock_steps": 3}
-    judged = judge(config, after, chain, strict)
+    exam = load_exam("incremental")
+    stricter = {
+        "rehearsal_all_followed": {"parameters": {"lock_steps": 3, "switch_steps": 15}},
+        "rehearsal_old_generation": {"limit": 0.02},
+        "rehearsal_within_60s": {"limit": 1.0},
+        "chain_all_followed": {"parameters": {"lock_steps": 3, "switch_steps": 15}},
+    }
+    targets = {name: replace(t, **stricter[name]) for name, t in exam.targets.items()}
+    judged = judge(after, chain, replace(exam, targets=targets))
     assert not any(t.met for t in judged.values()), judged
     assert "(limit 0.02)" in judged["rehearsal_old_generation"].detail
     assert judged["chain_all_followed"].detail == "after 1 consolidation(s): 1: lock 4, 2: lock 4"
+
+
+def test_the_exam_runs_the_full_form_on_its_own_draws():
+    from rnnpb.experiments.exams import load_exam
+    from rnnpb.experiments.studies.incremental import study_config
+
+    exam = load_exam("incremental")
+    config = study_config(StudyOptions(exam=exam))
+    assert not config.quick and config.models is None
+    assert config.new_data_seed == exam.seed_list("new_data")[0]
+    assert config.scenario_seed == exam.seed_list("user")[0]
+    assert config.learning_sets == exam.learning_sets

@@ -8,10 +8,11 @@ from dataclasses import replace
 import pytest
 
 from rnnpb.analysis import metrics
+from rnnpb.experiments.exams import load_exam
 from rnnpb.experiments.scenarios.teaching_measures import TeachRun
 from rnnpb.experiments.scenarios.teaching_scenario import TeachConfig, segments
 from rnnpb.experiments.studies import StudyOptions, load_study
-from rnnpb.experiments.studies.teach import judge, limits
+from rnnpb.experiments.studies.teach import judge, judge_results
 
 
 @pytest.fixture(scope="module")
@@ -111,26 +112,27 @@ def test_the_full_form_names_a_missing_models_directory(tmp_path):
 def test_following_needs_the_papers_lock_on_as_well_as_the_time():
     """A shape locked onto after more than LOCK_LIMIT steps of its next performance is not
     followed, however soon; one never locked onto is not either."""
-    config = TeachConfig(quick=True, models=None, shipped=True, paper_measures=False)
     limit = metrics.LOCK_LIMIT
-    followed = judge([_run(limit, 60.0)], {}, None, config)["follow_within_90s"]
+    followed = judge([_run(limit, 60.0)], None)["follow_within_90s"]
     assert followed.met and followed.detail.startswith("1/1 runs locked on within")
-    late = judge([_run(limit, 60.0), _run(limit + 1, 60.0)], {}, None, config)["follow_within_90s"]
+    late = judge([_run(limit, 60.0), _run(limit + 1, 60.0)], None)["follow_within_90s"]
     assert not late.met and "1/2" in late.detail and f"locked on later ({limit + 1}" in late.detail
-    slow = judge([_run(3, 95.0)], {}, None, config)["follow_within_90s"]
+    slow = judge([_run(3, 95.0)], None)["follow_within_90s"]
     assert not slow.met and slow.detail.startswith("0/1")
-    never = judge([_run(None, None)], {}, None, config)["follow_within_90s"]
+    never = judge([_run(None, None)], None)["follow_within_90s"]
     assert not never.met and "1 never followed" in never.detail
 
 
-def test_the_judge_reads_every_threshold_it_is_given():
-    """A run followed in 60 s within 5 steps meets the default limits and misses stricter
-    ones; an old pattern locked on in 8 steps misses a lock-on limit of 6."""
-    config = TeachConfig(quick=True, models=None, shipped=True, paper_measures=False)
+def test_the_judge_reads_every_threshold_from_the_exam():
+    """A run followed in 60 s within 5 steps meets the teach exam's definitions and misses
+    stricter ones; an old pattern locked on in 8 steps misses a lock-on limit of 6."""
     run = replace(_run(5, 60.0), lock_in_timeline={"2:2": 8, "6:figure-eight": 5})
-    default = judge([run], {}, None, config)
+    default = judge([run], None)
     assert default["follow_within_90s"].met and default["old_patterns_keep_paper_targets"].met
-    strict = judge([run], {}, None, config, {**limits(), "follow_s": 30.0, "lock_steps": 6})
+    exam = load_exam("teach")
+    exam = _stricter(exam, "follow_within_90s", seconds=30.0)
+    exam = _stricter(exam, "old_patterns_keep_paper_targets", lock_steps=6)
+    strict = judge([run], None, exam)
     assert (
         not strict["follow_within_90s"].met and "within 30 s" in strict["follow_within_90s"].detail
     )
@@ -145,6 +147,18 @@ def test_the_scripted_user_leads_with_another_learned_pattern_per_shape():
     assert [m for m, _ in first] == ["1", "diagonal", "2", "3", "random-walk", "jerky", "diagonal"]
     assert [m for m, _ in second][:3] == ["2", "one-arm", "1"]
     assert first[1][1] == config.new_steps and first[-1][1] == config.again_steps
+
+
+def test_the_judge_reads_a_finished_results_file(study):
+    """The exam's judge of a finished ``results.json`` gives the run's own verdicts."""
+    _, outcome, results = study
+    assert judge_results(results, load_exam("teach")) == outcome.targets
+
+
+def _stricter(exam, name: str, **parameters):
+    target = exam.target(name)
+    target = replace(target, parameters={**target.parameters, **parameters})
+    return replace(exam, targets={**exam.targets, name: target})
 
 
 def _run(lock: int | None, follow_s: float | None) -> TeachRun:
@@ -185,3 +199,16 @@ def test_the_models_of_a_directory_are_taken_by_the_names_the_demo_writes(tmp_pa
     assert paths == {"1": str(tmp_path / "set1.npz"), "full": str(tmp_path / "full_seed0.npz")}
     with pytest.raises(ConfigError, match="no model set2.npz for learning set 2"):
         study_models(("2",), tmp_path, tmp_path / "out", never_learned)
+
+
+def test_the_exam_runs_the_full_form_on_its_own_user_shapes_and_sets():
+    from rnnpb.experiments.studies.teach import study_config
+
+    exam = load_exam("teach")
+    config = study_config(StudyOptions(exam=exam, models="models"))
+    assert not config.quick and config.models == "models" and config.paper_measures
+    assert config.scenario_seed == exam.seed_list("user")[0]
+    assert config.shapes == exam.shapes and config.learning_sets == exam.learning_sets
+    # Without an exam the user is drawn from --seed, and no --models means learned here.
+    free = study_config(StudyOptions(seed=3))
+    assert free.scenario_seed == 103 and free.models is None and not free.shipped

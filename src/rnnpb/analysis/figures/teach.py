@@ -144,3 +144,24 @@ def plot_teaching_timeline(
         "between two steps); pink dotted: the new model swapped in.",
     )
     save(fig, path)
+
+
+def timeline_file(learning_set: str, shape: str) -> str:
+    """The file name of the timeline of learning set ``learning_set`` taught ``shape``."""
+    return f"timeline_set{learning_set}_{shape}.png"
+
+
+def plot_taught_run(
+    timeline: dict, folder: str | os.PathLike[str], learning_set: str, shape: str, dt: float
+) -> None:
+    """:func:`plot_teaching_timeline` of one run of the teach study, as
+    ``folder/``:func:`timeline_file`, locked on below the paper's motor error threshold."""
+    from rnnpb.analysis.metrics import MOTOR_LOCK_THRESHOLD
+
+    plot_teaching_timeline(
+        timeline,
+        os.path.join(folder, timeline_file(learning_set, shape)),
+        f"Learning set {learning_set} taught {shape}",
+        dt,
+        MOTOR_LOCK_THRESHOLD,
+    )

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -72,6 +73,12 @@ class ModelMeasures:
         )
         switches = all(v is not None and v <= switch_limit for v in self.switching.values())
         return locks and switches
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> ModelMeasures:
+        """The measures as ``results.json`` holds them."""
+        pattern = {name: PatternMeasures(**m) for name, m in data["pattern"].items()}
+        return cls(**{**data, "patterns": tuple(data["patterns"]), "pattern": pattern})
 
     def old_generation(self) -> list[float]:
         """How far each old pattern's generation moved from the starting model's."""

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from rnnpb.analysis import metrics
+from rnnpb.experiments.reporting import fmt
 from rnnpb.experiments.scenarios.teaching_scenario import UNSTRUCTURED_MOVEMENTS, TeachConfig
 from rnnpb.interaction.teaching import episode_steps
 
@@ -111,6 +112,21 @@ class TeachRun:
         out["motor_error"] = self.timeline["motor_error"]
         return out
 
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> TeachRun:
+        """The run :meth:`to_json` wrote."""
+        fields = {key: value for key, value in data.items() if key != "motor_error"}
+        return cls(
+            **{
+                **fields,
+                "segments": [tuple(s) for s in data["segments"]],
+                "episodes": [KeptEpisode(**e) for e in data["episodes"]],
+                "consolidations": [ConsolidationTime(**c) for c in data["consolidations"]],
+                "after": PaperMeasures(**data["after"]) if data["after"] else None,
+                "timeline": {**data["timeline"], "motor_error": data.get("motor_error", [])},
+            }
+        )
+
 
 @dataclass(frozen=True)
 class PacedRun:
@@ -131,6 +147,17 @@ class PacedRun:
     swap_step: int | None
     lock_after_swap: int | None
     swap_step_ms: float | None  # the first step with the new model: its work
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> PacedRun:
+        """The paced run as ``results.json`` holds it."""
+        consolidation = data["consolidation"]
+        return cls(
+            **{
+                **data,
+                "consolidation": ConsolidationTime(**consolidation) if consolidation else None,
+            }
+        )
 
 
 def kept_episodes(memory, teacher, labels: list[str]) -> list[KeptEpisode]:
@@ -275,3 +302,39 @@ def paced_timing(records, dt: float) -> dict[str, Any]:
         "max_step_ms": float(work.max()) if n else 0.0,
         "work_ms": work,
     }
+
+
+def old_pattern_misses(
+    runs: list[TeachRun], lock: float, switch: float
+) -> tuple[list[int | None], list[int | None], list[str]]:
+    """The old patterns' lock-ons and switches after teaching, over ``runs``, and those beyond
+    ``lock`` and ``switch`` steps (or never), in words; a run that learned nothing is a miss.
+    Without the paper's measures (the quick form) a run's old patterns are judged by their
+    lock-on in the timeline after the swap."""
+
+    def locked(v: int | None) -> bool:
+        return v is not None and v <= lock
+
+    locks, switches, misses = [], [], []
+    for run in runs:
+        where = f"set {run.learning_set}"
+        if not run.new_pattern:
+            misses.append(f"{where} {run.shape}: nothing learned")
+            continue
+        if run.after is None:
+            for segment, v in run.lock_in_timeline.items():
+                if segment.split(":", 1)[1] != run.shape:
+                    locks.append(v)
+                    if not locked(v):
+                        misses.append(f"{where}: lock {segment} {fmt(v)}")
+            continue
+        old = tuple(p for p in run.after.lock if p != run.new_pattern)
+        for p in old:
+            locks.append(run.after.lock[p])
+            if not locked(run.after.lock[p]):
+                misses.append(f"{where} {run.shape}: lock {p} {fmt(run.after.lock[p])}")
+        for pair, v in run.after.switching_among(old).items():
+            switches.append(v)
+            if v is None or v > switch:
+                misses.append(f"{where} {run.shape}: switch {pair} {fmt(v)}")
+    return locks, switches, misses

@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from rnnpb.analysis import metrics
+from rnnpb.experiments.exams import Exam, load_exam
 from rnnpb.experiments.reporting import embed, fmt, table, versions, write_outputs
 from rnnpb.experiments.scenarios.incremental_measures import ModelMeasures
 from rnnpb.experiments.scenarios.incremental_runs import study_jobs
@@ -38,33 +39,26 @@ NAME = "incremental"
 SUMMARY = "add a pattern to a learned model by rehearsal, fine-tuning, replay or from scratch"
 
 PAPER_PATTERNS = ("1", "2", "3", "4")
-GENERATION_LIMIT = 0.05
-"""RMS (normalized joints) an old pattern's closed-loop cycle may move from the original
-model's."""
-REHEARSAL_LIMIT_S = 60.0
-"""CPU seconds a rehearsal may take, in a single-threaded process."""
-
-
-def limits() -> dict[str, float]:
-    """The thresholds the targets are judged against: ``generation`` (:data:`GENERATION_LIMIT`),
-    ``rehearsal_s`` (:data:`REHEARSAL_LIMIT_S`), and the paper's lock-on and switching,
-    ``lock_steps`` and ``switch_steps`` (:data:`rnnpb.analysis.metrics.LOCK_LIMIT`,
-    ``SWITCH_LIMIT``)."""
-    return {
-        "generation": GENERATION_LIMIT,
-        "rehearsal_s": REHEARSAL_LIMIT_S,
-        "lock_steps": metrics.LOCK_LIMIT,
-        "switch_steps": metrics.SWITCH_LIMIT,
-    }
-
-
 # --- the runner ------------------------------------------------------------------------------
 
 
 def run(out: Path, options: StudyOptions) -> StudyOutcome:
     """``rnnpb study incremental``: the models of ``--models DIR``, else learned here."""
+    return run_study(Path(out), study_config(options), exam=options.exam)
+
+
+def study_config(options: StudyOptions) -> IncrementalConfig:
+    """What the study runs for ``options``: the quick form, the exam's new data, user and
+    learning sets, or the full form with both drawn from ``options.seed``."""
+    exam = options.exam
     if options.quick:
         config = IncrementalConfig.quick_run(options.seed)
+    elif exam is not None:
+        config = IncrementalConfig(
+            new_data_seed=exam.seed_list("new_data")[0],
+            scenario_seed=exam.seed_list("user")[0],
+        )
+        config = replace(config, learning_sets=exam.learning_sets or config.learning_sets)
     else:
         config = IncrementalConfig(
             # The demo's models learned the draw-0 data, which replay and scratch take again;
@@ -72,13 +66,18 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
             new_data_seed=options.seed,
             scenario_seed=100 + options.seed,
         )
-    config = replace(config, models=options.models, workers=options.workers)
-    return run_study(Path(out), config)
+    return replace(config, models=options.models, workers=options.workers)
 
 
-def run_study(out: Path, config: IncrementalConfig, log=print) -> StudyOutcome:
+def run_study(
+    out: Path, config: IncrementalConfig, log=print, exam: Exam | None = None
+) -> StudyOutcome:
     """Run the study and write ``out/report.md``, ``out/results.json`` and the figures; after
-    every job, so that a run stopped early keeps what it measured, marked partial."""
+    every job, so that a run stopped early keeps what it measured, marked partial. ``exam``:
+    the run is that exam (recorded in ``results.json``); the targets are judged by the exam
+    file's definitions in any case."""
+    definitions = exam or load_exam(NAME)
+    generation_limit = definitions.target("rehearsal_old_generation").limit
     from rnnpb.analysis.figures import plot_forgetting
 
     began = time.perf_counter()
@@ -98,15 +97,14 @@ def run_study(out: Path, config: IncrementalConfig, log=print) -> StudyOutcome:
             }
             for m in config.methods
         }
-        plot_forgetting(forgetting, out / "figures" / "forgetting.png", GENERATION_LIMIT)
-        targets = judge(config, after, chained)
+        plot_forgetting(forgetting, out / "figures" / "forgetting.png", generation_limit)
+        targets = judge(after, chained, definitions)
         runtime = time.perf_counter() - began
         measured = (before, after, chained, larger)
-        write_outputs(
-            out,
-            report(config, *measured, targets, runtime, (done, total)),
-            results(config, *measured, targets, runtime, (done, total)),
-        )
+        outputs = results(config, *measured, targets, runtime, (done, total))
+        if exam is not None:
+            outputs["exam"] = exam.to_json()
+        write_outputs(out, report(config, *measured, targets, runtime, (done, total)), outputs)
         return StudyOutcome(runtime, targets)
 
     outcome = StudyOutcome(0.0)
@@ -134,49 +132,69 @@ def run_study(out: Path, config: IncrementalConfig, log=print) -> StudyOutcome:
 
 
 def judge(
-    config: IncrementalConfig,
     after: dict[str, dict[str, ModelMeasures]],
     chained: list[ModelMeasures],
-    thresholds: dict[str, float] | None = None,
+    exam: Exam | None = None,
 ) -> dict[str, Target]:
-    """Every target, against ``thresholds`` (default :func:`limits`)."""
-    limit = thresholds or limits()
-    lock, switch = limit["lock_steps"], limit["switch_steps"]
-    targets: dict[str, Target] = {}
-    rehearsal = {
-        name: after[name]["rehearsal"]
-        for name in config.learning_sets
-        if "rehearsal" in after.get(name, {})
-    }
+    """Every target measured, by ``exam``'s definitions (default: the study's exam file)."""
+    exam = exam or load_exam(NAME)
+    measured: dict[str, tuple[float | None, str]] = {}
+    rehearsal = {name: m["rehearsal"] for name, m in after.items() if "rehearsal" in m}
     if rehearsal:
-        followed = [name for name, m in rehearsal.items() if m.followed(lock, switch)]
-        targets["rehearsal_all_followed"] = Target(
-            len(followed) == len(rehearsal),
-            f"{len(followed)}/{len(rehearsal)} learning sets: every pattern locked on within "
-            f"{lock:g} and recognised, every switch within {switch:g}",
-        )
-        old = [d for m in rehearsal.values() for d in m.old_generation()]
-        targets["rehearsal_old_generation"] = Target(
-            bool(old) and max(old) <= limit["generation"],
-            f"worst old pattern's generation moved {fmt(max(old), 3)} RMS "
-            f"(limit {limit['generation']:g})",
-        )
-        cpu = [m.cpu_seconds for m in rehearsal.values() if m.cpu_seconds is not None]
-        wall = [m.seconds for m in rehearsal.values()]
-        targets["rehearsal_within_60s"] = Target(
-            bool(cpu) and max(cpu) <= limit["rehearsal_s"],
-            f"slowest {max(cpu, default=math.nan):.1f} s of CPU time in a single-threaded "
-            f"process ({max(wall):.1f} s wall-clock of learning, inflated by other load)",
-        )
+        measured |= _rehearsal(rehearsal, exam)
     if chained:
-        n = len(chained) - 1
+        target = exam.target("chain_all_followed")
+        lock, switch = target.parameter("lock_steps"), target.parameter("switch_steps")
         locks = ", ".join(
             f"{p}: lock {fmt(m.steps_to_lock)}" for p, m in chained[-1].pattern.items()
         )
-        targets["chain_all_followed"] = Target(
-            chained[-1].followed(lock, switch), f"after {n} consolidation(s): {locks}"
+        measured["chain_all_followed"] = (
+            float(chained[-1].followed(lock, switch)),
+            f"after {len(chained) - 1} consolidation(s): {locks}",
         )
-    return targets
+    return {
+        name: Target(exam.target(name).met(value), detail)
+        for name, (value, detail) in measured.items()
+    }
+
+
+def judge_results(results: dict[str, Any], exam: Exam) -> dict[str, Target]:
+    """The targets judged by ``exam``'s definitions from a finished ``results.json``."""
+    after = {
+        name: {method: ModelMeasures.from_json(m) for method, m in methods.items()}
+        for name, methods in results["after"].items()
+    }
+    return judge(after, [ModelMeasures.from_json(m) for m in results["chain"]], exam)
+
+
+def _rehearsal(
+    rehearsal: dict[str, ModelMeasures], exam: Exam
+) -> dict[str, tuple[float | None, str]]:
+    """The rehearsal targets' values: the share of learning sets followed, the worst old
+    pattern's generation moved, the slowest consolidation's CPU seconds."""
+    target = exam.target("rehearsal_all_followed")
+    lock, switch = target.parameter("lock_steps"), target.parameter("switch_steps")
+    followed = [name for name, m in rehearsal.items() if m.followed(lock, switch)]
+    old = [d for m in rehearsal.values() for d in m.old_generation()]
+    cpu = [m.cpu_seconds for m in rehearsal.values() if m.cpu_seconds is not None]
+    wall = [m.seconds for m in rehearsal.values()]
+    return {
+        "rehearsal_all_followed": (
+            len(followed) / len(rehearsal),
+            f"{len(followed)}/{len(rehearsal)} learning sets: every pattern locked on within "
+            f"{lock:g} and recognised, every switch within {switch:g}",
+        ),
+        "rehearsal_old_generation": (
+            max(old, default=None),
+            f"worst old pattern's generation moved {fmt(max(old, default=math.nan), 3)} RMS "
+            f"(limit {exam.target('rehearsal_old_generation').limit:g})",
+        ),
+        "rehearsal_within_60s": (
+            max(cpu, default=None),
+            f"slowest {max(cpu, default=math.nan):.1f} s of CPU time in a single-threaded "
+            f"process ({max(wall):.1f} s wall-clock of learning, inflated by other load)",
+        ),
+    }
 
 
 # --- the report ------------------------------------------------------------------------------

@@ -15,18 +15,21 @@ shipped fast-preset model of learning set 1 one shape.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
 
 from rnnpb.analysis import metrics
+from rnnpb.experiments.exams import Exam, ExamTarget, load_exam
 from rnnpb.experiments.reporting import embed, fmt, table, versions, write_outputs
 from rnnpb.experiments.scenarios.teaching_measures import (
     LATE_S,
     PacedRun,
     PaperMeasures,
     TeachRun,
+    old_pattern_misses,
     worst,
 )
 from rnnpb.experiments.scenarios.teaching_runs import job_count, paced_job, study_jobs
@@ -38,41 +41,40 @@ from rnnpb.experiments.summary import Target
 NAME = "teach"
 SUMMARY = "teach a new shape on-line: notice it, keep it, consolidate it while moving, follow it"
 
-FOLLOW_LIMIT_S = 90.0
-"""Interaction time from a new shape's first cycle until the robot follows it."""
-
-
-def limits() -> dict[str, float]:
-    """The thresholds the targets are judged against: ``follow_s``, the interaction time to
-    follow a new shape; ``lock_steps`` and ``switch_steps``, the paper's lock-on and
-    switching (:data:`rnnpb.analysis.metrics.LOCK_LIMIT`, ``SWITCH_LIMIT``)."""
-    return {
-        "follow_s": FOLLOW_LIMIT_S,
-        "lock_steps": metrics.LOCK_LIMIT,
-        "switch_steps": metrics.SWITCH_LIMIT,
-    }
-
-
 # --- the runner ------------------------------------------------------------------------------
 
 
 def run(out: Path, options: StudyOptions) -> StudyOutcome:
     """``rnnpb study teach``: the models of ``--models DIR``, else the shipped model (quick)
     or models learned here with the paper's algorithm (full)."""
+    return run_study(Path(out), study_config(options), exam=options.exam)
+
+
+def study_config(options: StudyOptions) -> TeachConfig:
+    """What the study runs for ``options``: the quick form, the exam's user, shapes and
+    learning sets, or the full form with the user drawn from ``options.seed``."""
+    exam = options.exam
     if options.quick:
         config = TeachConfig.quick_run(options.seed)
         if options.models is not None:
             config = replace(config, models=options.models, shipped=False)
-    else:
-        config = TeachConfig(
-            models=options.models, scenario_seed=100 + options.seed, workers=options.workers
-        )
-    return run_study(Path(out), config)
+        return config
+    seed = exam.seed_list("user")[0] if exam is not None else 100 + options.seed
+    config = TeachConfig(models=options.models, scenario_seed=seed, workers=options.workers)
+    if exam is None:
+        return config
+    sets = exam.learning_sets or config.learning_sets
+    return replace(config, shapes=exam.shapes or config.shapes, learning_sets=sets)
 
 
-def run_study(out: Path, config: TeachConfig, log=print) -> StudyOutcome:
+def run_study(out: Path, config: TeachConfig, log=print, exam: Exam | None = None) -> StudyOutcome:
     """Run the study and write ``out/report.md``, ``out/results.json`` and the figures; after
-    every job, so that a run stopped early keeps what it measured, marked partial."""
+    every job, so that a run stopped early keeps what it measured, marked partial. ``exam``:
+    the run is that exam (recorded in ``results.json``); the targets are judged by the exam
+    file's definitions in any case."""
+    definitions = exam or load_exam(NAME)
+    from rnnpb.analysis.figures.teach import plot_taught_run
+
     began = time.perf_counter()
     out = Path(out)
     (out / "figures").mkdir(parents=True, exist_ok=True)
@@ -86,13 +88,16 @@ def run_study(out: Path, config: TeachConfig, log=print) -> StudyOutcome:
         ordered = [
             runs[(n, s)] for n in config.learning_sets for s in config.shapes if (n, s) in runs
         ]
-        targets = judge(ordered, before, paced, config)
+        targets = judge(ordered, paced, definitions)
         runtime = time.perf_counter() - began
         progress = (done, total)
+        measured = results(config, ordered, before, paced, targets, runtime, starts, progress)
+        if exam is not None:
+            measured["exam"] = exam.to_json()
         write_outputs(
             out,
-            report(config, ordered, before, paced, targets, runtime, progress),
-            results(config, ordered, before, paced, targets, runtime, starts, progress),
+            report(config, ordered, before, paced, targets, runtime, progress, definitions),
+            measured,
         )
         return StudyOutcome(runtime, targets)
 
@@ -103,7 +108,9 @@ def run_study(out: Path, config: TeachConfig, log=print) -> StudyOutcome:
         for done, result in enumerate(jobs, start=1):
             if isinstance(result, TeachRun):
                 runs[(result.learning_set, result.shape)] = result
-                _plot_timeline(result, out / "figures", config)
+                plot_taught_run(
+                    result.timeline, out / "figures", result.learning_set, result.shape, config.dt
+                )
                 log(
                     f"  [{done}/{total}] set {result.learning_set} {result.shape}: "
                     f"{len(result.episodes)} episode(s), follow {fmt(result.follow_s)} s"
@@ -120,59 +127,50 @@ def run_study(out: Path, config: TeachConfig, log=print) -> StudyOutcome:
     return outcome
 
 
-def _plot_timeline(run: TeachRun, folder: Path, config: TeachConfig) -> None:
-    from rnnpb.analysis.figures import plot_teaching_timeline
-
-    plot_teaching_timeline(
-        run.timeline,
-        folder / f"timeline_set{run.learning_set}_{run.shape}.png",
-        f"Learning set {run.learning_set} taught {run.shape}",
-        config.dt,
-        metrics.MOTOR_LOCK_THRESHOLD,
-    )
-
-
 # --- the judge -------------------------------------------------------------------------------
 
 
 def judge(
-    runs: list[TeachRun],
-    before: dict[str, PaperMeasures],
-    paced: PacedRun | None,
-    config: TeachConfig,
-    thresholds: dict[str, float] | None = None,
+    runs: list[TeachRun], paced: PacedRun | None, exam: Exam | None = None
 ) -> dict[str, Target]:
-    """Every target, against ``thresholds`` (default :func:`limits`)."""
-    limit = thresholds or limits()
-    targets = {"follow_within_90s": _follow_target(runs, limit)}
-    if paced is not None:
-        targets["no_missed_deadline"] = _deadline_target(paced)
-    targets["old_patterns_keep_paper_targets"] = _old_patterns_target(runs, limit)
-    unstructured = sum(r.episodes_unstructured for r in runs)
-    targets["nothing_kept_from_unstructured"] = Target(
-        unstructured == 0,
-        f"{unstructured} episode(s) with unstructured movement, over {len(runs)} runs "
-        f"({sum(len(r.episodes) for r in runs)} episodes kept in all)",
-    )
-    return targets
+    """Every target measured, by ``exam``'s definitions (default: the study's exam file)."""
+    exam = exam or load_exam(NAME)
+    measured = {
+        "follow_within_90s": _follow(runs, exam.target("follow_within_90s")),
+        "no_missed_deadline": _deadlines(paced) if paced is not None else None,
+        "old_patterns_keep_paper_targets": _old_patterns(
+            runs, exam.target("old_patterns_keep_paper_targets")
+        ),
+        "nothing_kept_from_unstructured": _unstructured(runs),
+    }
+    return {
+        name: Target(exam.target(name).met(value), detail)
+        for name, (value, detail) in ((k, m) for k, m in measured.items() if m is not None)
+    }
 
 
-def _follow_target(runs: list[TeachRun], limit: dict[str, float]) -> Target:
-    """Following is the paper's lock-on on the new shape's next performance; the time counts
-    to the step it locked on."""
-    lock = limit["lock_steps"]
+def judge_results(results: dict[str, Any], exam: Exam) -> dict[str, Target]:
+    """The targets judged by ``exam``'s definitions from a finished ``results.json``."""
+    runs = [TeachRun.from_json(r) for r in results["runs"]]
+    paced = PacedRun.from_json(results["paced"]) if results["paced"] else None
+    return judge(runs, paced, exam)
+
+
+def _follow(runs: list[TeachRun], target: ExamTarget) -> tuple[float, str]:
+    """The share of runs that followed: locked on to the new shape's next performance within
+    the target's steps, within its seconds of interaction counted to the step it locked on."""
+    lock, seconds = target.parameter("lock_steps"), target.parameter("seconds")
     locked = [
         r.follow_s
         for r in runs
         if r.lock_next is not None and r.lock_next <= lock and r.follow_s is not None
     ]
-    met = [f for f in locked if f <= limit["follow_s"]]
+    met = [f for f in locked if f <= seconds]
     late = [r.lock_next for r in runs if r.lock_next is not None and r.lock_next > lock]
     never = sum(r.lock_next is None or r.follow_s is None for r in runs)
-    return Target(
-        len(met) == len(runs) > 0,
+    return len(met) / len(runs) if runs else math.nan, (
         f"{len(met)}/{len(runs)} runs locked on within {lock:g} steps of the "
-        f"shape's next performance, within {limit['follow_s']:.0f} s of interaction "
+        f"shape's next performance, within {seconds:.0f} s of interaction "
         f"(worst {fmt(max(locked)) if locked else 'none'} s"
         + (
             f"; {len(late)} locked on later ({', '.join(str(v) for v in sorted(late))} steps)"
@@ -180,74 +178,59 @@ def _follow_target(runs: list[TeachRun], limit: dict[str, float]) -> Target:
             else ""
         )
         + (f"; {never} never followed" if never else "")
-        + ")",
+        + ")"
     )
 
 
-def _deadline_target(paced: PacedRun) -> Target:
-    """A deadline is the end of a step's slot: missed when the step's work took longer than dt
-    (the loop's count) or its late start plus its work ran past the slot. A start later than
-    ``LATE_S`` within the slot is jitter, reported but not a miss."""
+def _deadlines(paced: PacedRun) -> tuple[float, str]:
+    """The paced steps that missed their deadline: the end of a step's slot, missed when the
+    step's work took longer than dt (the loop's count) or its late start plus its work ran past
+    the slot. A start later than ``LATE_S`` within the slot is jitter, reported beside."""
     full = paced.swap_step is not None
-    return Target(
-        paced.missed_deadlines == 0 and paced.overrun_steps == 0,
+    return paced.missed_deadlines + paced.overrun_steps, (
         f"{paced.missed_deadlines} missed, {paced.overrun_steps} ran past their slot; "
         f"{paced.late_steps} started > {LATE_S * 1e3:.0f} ms late (latest "
         f"{paced.max_lateness_ms:.0f} ms) over {paced.steps} paced steps at dt {paced.dt:g}"
-        + (" through the consolidation and the swap" if full else " (consolidation cut short)"),
+        + (" through the consolidation and the swap" if full else " (consolidation cut short)")
     )
 
 
-def _old_patterns_target(runs: list[TeachRun], limit: dict[str, float]) -> Target:
-    """The old patterns keep the paper's lock-on and switching after teaching (the quick form,
-    without the paper's measures: their lock-on in the timeline after the swap)."""
-    lock, switch = limit["lock_steps"], limit["switch_steps"]
+def _old_patterns(runs: list[TeachRun], target: ExamTarget) -> tuple[float | None, str]:
+    """The old patterns' lock-ons and switches beyond the target's steps after teaching (the
+    quick form, without the paper's measures: their lock-on in the timeline after the swap);
+    a run that learned nothing counts one. None when no old pattern was measured."""
+    lock, switch = target.parameter("lock_steps"), target.parameter("switch_steps")
 
-    def locked(v: int | None) -> bool:
-        return v is not None and v <= lock
-
-    locks, switches, misses = [], [], []
-    for run in runs:
-        where = f"set {run.learning_set}"
-        if not run.new_pattern:
-            misses.append(f"{where} {run.shape}: nothing learned")
-            continue
-        if run.after is None:
-            for segment, v in run.lock_in_timeline.items():
-                if segment.split(":", 1)[1] != run.shape:
-                    locks.append(v)
-                    if not locked(v):
-                        misses.append(f"{where}: lock {segment} {fmt(v)}")
-            continue
-        old = tuple(p for p in run.after.lock if p != run.new_pattern)
-        for p in old:
-            locks.append(run.after.lock[p])
-            if not locked(run.after.lock[p]):
-                misses.append(f"{where} {run.shape}: lock {p} {fmt(run.after.lock[p])}")
-        for pair, v in run.after.switching_among(old).items():
-            switches.append(v)
-            if v is None or v > switch:
-                misses.append(f"{where} {run.shape}: switch {pair} {fmt(v)}")
-    return Target(
-        not misses and bool(locks),
-        f"old lock-on {sum(map(locked, locks))}/{len(locks)} within {lock:g}, old switches "
+    locks, switches, misses = old_pattern_misses(runs, lock, switch)
+    return len(misses) if locks else None, (
+        f"old lock-on {sum(v is not None and v <= lock for v in locks)}/{len(locks)} within "
+        f"{lock:g}, old switches "
         f"{sum(v is not None and v <= switch for v in switches)}/{len(switches)} "
         f"within {switch:g}"
         + (
             f"; missed: {'; '.join(misses[:12])}" + (" …" if len(misses) > 12 else "")
             if misses
             else ""
-        ),
+        )
+    )
+
+
+def _unstructured(runs: list[TeachRun]) -> tuple[float, str]:
+    """The episodes kept that hold unstructured movement."""
+    unstructured = sum(r.episodes_unstructured for r in runs)
+    return unstructured, (
+        f"{unstructured} episode(s) with unstructured movement, over {len(runs)} runs "
+        f"({sum(len(r.episodes) for r in runs)} episodes kept in all)"
     )
 
 
 # --- the report ------------------------------------------------------------------------------
 
 
-def report(config, runs, before, paced, targets, runtime, progress) -> list[str]:
+def report(config, runs, before, paced, targets, runtime, progress, exam: Exam) -> list[str]:
     """``report.md``, section by section."""
     return [
-        *_introduction(config, runs, runtime, progress),
+        *_introduction(config, runs, runtime, progress, exam.target("follow_within_90s")),
         *_targets_section(targets),
         *_runs_section(runs),
         *_old_patterns_section(runs, before),
@@ -256,7 +239,9 @@ def report(config, runs, before, paced, targets, runtime, progress) -> list[str]
     ]
 
 
-def _introduction(config: TeachConfig, runs, runtime: float, progress) -> list[str]:
+def _introduction(
+    config: TeachConfig, runs, runtime: float, progress, follow: ExamTarget
+) -> list[str]:
     performed = " → ".join(f"{m} ×{n}" for m, n in (runs[0].segments if runs else []))
     partial = progress[0] != progress[1]
     return [
@@ -268,8 +253,8 @@ def _introduction(config: TeachConfig, runs, runtime: float, progress) -> list[s
         "consolidation, so a run repeats. *Follow*: steps from the new shape's first step "
         "until its episode is kept, plus the steps a paced loop runs while the consolidation "
         "takes its CPU time on one core, plus the lock-on steps on the shape's next "
-        f"performance, × dt {config.dt:g} s (target ≤ {FOLLOW_LIMIT_S:.0f} s, and the "
-        f"lock-on itself within {metrics.LOCK_LIMIT} steps, the paper's). The "
+        f"performance, × dt {config.dt:g} s (target ≤ {follow.parameter('seconds'):.0f} s, and "
+        f"the lock-on itself within {follow.parameter('lock_steps'):g} steps, the paper's). The "
         "consolidation's wall time on this shared machine is the load's and is shown beside.",
         "",
         f"{'Quick form (shipped fast-preset model)' if config.quick else 'Full form'}; models "
@@ -377,10 +362,10 @@ def _paced_section(paced: PacedRun) -> list[str]:
 
 
 def _timelines_section(runs: list[TeachRun]) -> list[str]:
+    from rnnpb.analysis.figures.teach import timeline_file
+
     figures = [
-        embed(
-            f"set {r.learning_set} taught {r.shape}", f"timeline_set{r.learning_set}_{r.shape}.png"
-        )
+        embed(f"set {r.learning_set} taught {r.shape}", timeline_file(r.learning_set, r.shape))
         for r in runs
     ]
     return ["", "## Timelines", "", *figures, ""]
