@@ -41,6 +41,7 @@ from rnnpb.experiments.summary import Target
 NAME = "teach"
 SUMMARY = "teach a new shape on-line: notice it, keep it, consolidate it while moving, follow it"
 
+
 # --- the runner ------------------------------------------------------------------------------
 
 
@@ -72,9 +73,9 @@ def run_study(out: Path, config: TeachConfig, log=print, exam: Exam | None = Non
     every job, so that a run stopped early keeps what it measured, marked partial. ``exam``:
     the run is that exam (recorded in ``results.json``); the targets are judged by the exam
     file's definitions in any case."""
-    definitions = exam or load_exam(NAME)
     from rnnpb.analysis.figures.teach import plot_taught_run
 
+    definitions = exam or load_exam(NAME)
     began = time.perf_counter()
     out = Path(out)
     (out / "figures").mkdir(parents=True, exist_ok=True)
@@ -200,7 +201,6 @@ def _old_patterns(runs: list[TeachRun], target: ExamTarget) -> tuple[float | Non
     quick form, without the paper's measures: their lock-on in the timeline after the swap);
     a run that learned nothing counts one. None when no old pattern was measured."""
     lock, switch = target.parameter("lock_steps"), target.parameter("switch_steps")
-
     locks, switches, misses = old_pattern_misses(runs, lock, switch)
     return len(misses) if locks else None, (
         f"old lock-on {sum(v is not None and v <= lock for v in locks)}/{len(locks)} within "
