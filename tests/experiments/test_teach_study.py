@@ -212,3 +212,31 @@ def test_the_exam_runs_the_full_form_on_its_own_user_shapes_and_sets():
     # Without an exam the user is drawn from --seed, and no --models means learned here.
     free = study_config(StudyOptions(seed=3))
     assert free.scenario_seed == 103 and free.models is None and not free.shipped
+
+
+def test_models_not_given_are_learned_under_the_demos_names(tmp_path, monkeypatch):
+    """With no directory each learning set's model is learned with its own learning, on the
+    data draw given, and saved under the name the demo gives it — in the pool when given."""
+    from rnnpb.experiments.scenarios import study_models as module
+    from rnnpb.experiments.studies._pool import InProcess
+    from rnnpb.model import TrainConfig
+
+    learned = []
+
+    def learn(name, config, path, seed):
+        learned.append((name, config.iterations, path.name, seed))
+        return str(path)
+
+    monkeypatch.setattr(module, "learn_model", learn)
+
+    def learning(name: str) -> TrainConfig:
+        return TrainConfig.fast(iterations=30 if name == "full" else 20)
+
+    for pool in (None, InProcess()):
+        learned.clear()
+        paths = module.study_models(("2", "full"), None, tmp_path, learning, 5, pool=pool)
+        assert paths == {"2": str(tmp_path / "set2.npz"), "full": str(tmp_path / "full.npz")}
+        assert learned == [("2", 20, "set2.npz", 5), ("full", 30, "full.npz", 5)]
+    # The full forms learn as the demo does: the paper's algorithm, the larger set its own.
+    assert module.paper_training("1").optimizer == "momentum"
+    assert module.paper_training("full", seed=2).seed == 2

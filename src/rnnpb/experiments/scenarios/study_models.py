@@ -46,23 +46,30 @@ def study_models(
     out: Path,
     learning: Callable[[str], TrainConfig],
     data_seed: int = 0,
+    pool=None,
 ) -> dict[str, str]:
     """The path of each learning set's model: ``directory``'s (a clear error when it has
-    none), or, with no directory, learned with ``learning(set)`` into ``out``."""
-    paths = {}
-    for name in learning_sets:
-        names = demo_model_names(name)
-        if directory is not None:
-            found = next(
-                (Path(directory) / n for n in names if (Path(directory) / n).is_file()), None
-            )
-            if found is None:
-                raise ConfigError(
-                    f"{directory}: no model {' or '.join(names)} for learning set {name} (the "
-                    "models `rnnpb demo` learns; run it, or give no --models to learn them here)"
-                )
-            paths[name] = str(found)
-        else:
-            out.mkdir(parents=True, exist_ok=True)
-            paths[name] = learn_model(name, learning(name), out / names[0], data_seed)
-    return paths
+    none), or, with no directory, learned with ``learning(set)`` into ``out`` — in ``pool``'s
+    worker processes when one is given (its ``submit``), else here."""
+    if directory is not None:
+        return {name: _found(Path(directory), name) for name in learning_sets}
+    out.mkdir(parents=True, exist_ok=True)
+    jobs = {
+        name: (learn_model, name, learning(name), out / demo_model_names(name)[0], data_seed)
+        for name in learning_sets
+    }
+    if pool is None:
+        return {name: job[0](*job[1:]) for name, job in jobs.items()}
+    futures = {name: pool.submit(*job) for name, job in jobs.items()}
+    return {name: future.result() for name, future in futures.items()}
+
+
+def _found(directory: Path, learning_set: str) -> str:
+    names = demo_model_names(learning_set)
+    found = next((directory / n for n in names if (directory / n).is_file()), None)
+    if found is None:
+        raise ConfigError(
+            f"{directory}: no model {' or '.join(names)} for learning set {learning_set} (the "
+            "models `rnnpb demo` learns; run it, or give no --models to learn them here)"
+        )
+    return str(found)

@@ -127,11 +127,12 @@ def source_spec(segments: list[tuple[str, int]]) -> str:
     return "scenario:steps:" + ",".join(f"{m}*{n}" for m, n in segments)
 
 
-def starting_models(config: TeachConfig, out: Path) -> dict[str, str]:
+def starting_models(config: TeachConfig, out: Path, pool=None) -> dict[str, str]:
     """The path of each learning set's starting model: the shipped one, ``config.models``'s,
-    or learned into ``out`` with the paper's algorithm as ``rnnpb demo`` learns it."""
+    or learned into ``out`` with the paper's algorithm as ``rnnpb demo`` learns it (in
+    ``pool``'s workers when one is given)."""
     if config.shipped:
         from rnnpb.models import SHIPPED_MODEL
 
         return {"1": str(SHIPPED_MODEL)}
-    return study_models(config.learning_sets, config.models, out, paper_training)
+    return study_models(config.learning_sets, config.models, out, paper_training, pool=pool)

@@ -80,7 +80,6 @@ def run_study(out: Path, config: TeachConfig, log=print, exam: Exam | None = Non
     out = Path(out)
     (out / "figures").mkdir(parents=True, exist_ok=True)
     (out / "runs").mkdir(parents=True, exist_ok=True)
-    starts = starting_models(config, out / "models")
     runs: dict[tuple[str, str], TeachRun] = {}
     before: dict[str, PaperMeasures] = {}
     paced: PacedRun | None = None
@@ -104,7 +103,11 @@ def run_study(out: Path, config: TeachConfig, log=print, exam: Exam | None = Non
 
     total, outcome = job_count(config), StudyOutcome(0.0)
     # One core here too: the jobs may run here, and the consolidations they start inherit it.
+    # Models given are checked before any worker starts; those learned here, in the workers.
+    given = config.shipped or config.models is not None
+    starts = starting_models(config, out / "models") if given else {}
     with study_pool(config.workers, init_here=True) as pool:
+        starts = starts or starting_models(config, out / "models", pool)
         jobs = study_jobs(pool, config, starts, out / "runs")
         for done, result in enumerate(jobs, start=1):
             if isinstance(result, TeachRun):
