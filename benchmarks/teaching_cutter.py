@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
 
 SETS = ("1", "2", "3", "4", "full")
 SHAPES = ("figure-eight", "diagonal", "one-arm", "asymmetric")
@@ -32,18 +33,22 @@ def record(job):
     import numpy as np
 
     from rnnpb.demonstrator import ScenarioSource, learning_set_patterns, make_scenario
-    from rnnpb.experiments.studies.teach import TeachConfig, _segments, _start_models
+    from rnnpb.experiments.scenarios.teaching_scenario import (
+        TeachConfig,
+        segments,
+        starting_models,
+    )
     from rnnpb.interaction import InteractionLoop, LoopConfig
     from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel
 
     config = TeachConfig(models=models, learning_sets=(set_name,))
-    model = TrainedModel.load(_start_models(config)[set_name])
-    segments = _segments(learning_set_patterns(set_name), shape, index, config)
+    model = TrainedModel.load(starting_models(config, Path(models))[set_name])
+    performed = segments(learning_set_patterns(set_name), shape, index, config)
     records = []
-    with ScenarioSource(make_scenario(segments, seed=draw + index)) as source:
+    with ScenarioSource(make_scenario(performed, seed=draw + index)) as source:
         mirror = MirrorSystem(model, OnlineConfig.for_model(model).config)
         InteractionLoop(mirror, source, config=LoopConfig(config.dt)).run(on_step=records.append)
-    labels = [m for m, n in segments for _ in range(n)][: len(records)]
+    labels = [m for m, n in performed for _ in range(n)][: len(records)]
     return (
         set_name,
         shape,
