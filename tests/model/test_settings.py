@@ -214,3 +214,18 @@ def test_interact_takes_a_config_file(tmp_path):
     assert summary["online_config"]["window"] == 30
     assert summary["recognition_config"]["switch_steps"] == 3
     assert summary["recognition_config"]["match_scale"] == RecognitionConfig.fast().match_scale
+
+
+def test_a_config_file_gives_a_job_its_preset_with_the_file_s_values(tmp_path):
+    from rnnpb.commands._config import read_config
+
+    research = tmp_path / "research.toml"
+    research.write_text("[consolidation]\ninput_noise = 0.02\n[teaching]\niterations = 10\n")
+    checked = read_config(str(research), ("consolidation", "teaching"), "consolidate")
+    assert checked is not None
+    preset = checked.preset("fast")
+    assert preset.section("consolidation")["input_noise"] == 0.02
+    assert preset.section("teaching")["iterations"] == 10
+    assert preset.section("consolidation")["iterations"] == 500  # the fast preset's own
+    assert preset.evidence("teaching", "iterations").note == f"set by {research}"
+    assert read_config(None, ("teaching",), "consolidate") is None

@@ -21,9 +21,12 @@ from __future__ import annotations
 import argparse
 from collections.abc import Mapping
 from dataclasses import dataclass, fields, replace
-from typing import Any, ClassVar, Protocol, Self, TypeVar
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol, Self, TypeVar
 
 from rnnpb.errors import ConfigError
+
+if TYPE_CHECKING:
+    from rnnpb.presets import Preset
 
 
 class _Tuned(Protocol):
@@ -69,6 +72,13 @@ class ConfigFile:
         if f"{name}.pb" in self.tables:
             values["pb"] = dict(self.tables[f"{name}.pb"])
         return values
+
+    def preset(self, name: str) -> Preset:
+        """Learning preset ``name`` with this file's values over its own (each overridden
+        value's evidence is this file), for a job that reads a preset's section directly."""
+        from rnnpb.presets import load_preset
+
+        return load_preset(name).overridden(self.tables, self.path)
 
     def apply(self, config: Config, section: str) -> Config:
         """``config`` with section ``section``'s values: its settings by

@@ -25,6 +25,7 @@ from rnnpb.model.recognition import RecognitionConfig
 from rnnpb.presets import Preset, load_preset
 
 _DEFAULT = section_values("paper", "online")
+_USER = ("window", "iterations", "safety_guard")
 
 
 @cache
@@ -36,9 +37,6 @@ def _preset_tuning(preset: Preset | str, section: str) -> Tuning:
     preset = load_preset(preset) if isinstance(preset, str) else preset
     values = section_values(preset, section)
     return Tuning(preset.name, {k: v for k, v in values.items() if k not in _USER})
-
-
-_USER = ("window", "iterations", "safety_guard")
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,7 @@ Every step of the mirror system (:meth:`rnnpb.model.mirror.MirrorSystem.step`) a
   (the hands at rest), or ``""`` while there is not yet evidence (too few seen steps, every
   hand lost).
 
-How it decides (docs/model.md, "Recognition and novelty", measures it):
+How it decides (docs/model.md, "Recognition and novelty"):
 
 1. **Each learned pattern's own dynamics.** In the compiled step, after the regression, the
    window is run again from its regressed onset with each learned pattern's PB in place of
@@ -28,8 +28,7 @@ How it decides (docs/model.md, "Recognition and novelty", measures it):
    ``template_speeds``), each with its mean removed (:func:`taught_distances`). Where the user
    stands and how large the movement is do not count; which hands move, and how together, do:
    one arm of a two-arm pattern is as unlike it as a quarter turn. This is what tells apart
-   two patterns whose dynamics the network learned alike (the paper's algorithm left several
-   such pairs, whose generated predictions lie within 0.005 RMS of each other).
+   two patterns whose dynamics the network learned alike.
 3. **Confidence.** Each pattern's likelihood is
    ``exp(-d_k² / 2σ² - e_k² / 2τ² - m_k² / 2μ²)`` (σ = ``match_scale``, τ = ``pb_scale``,
    μ = ``template_scale``), where ``e_k`` is the distance of the PB, averaged over the last
@@ -56,15 +55,14 @@ How it decides (docs/model.md, "Recognition and novelty", measures it):
    evidence for ``switch_steps`` steps running — ``release_steps`` when a recognised pattern
    would give way to none: the evidence dips for a few steps as a pause begins or ends.
 
-The settings depend on how the model was learned and on what it kept: ``RecognitionConfig()``
-was chosen for models learned by the paper's algorithm, :meth:`RecognitionConfig.fast` for
-``TrainConfig.fast()`` models (their evidence lies at other levels), and
-:meth:`RecognitionConfig.untaught` for models of either kind that kept no taught hands;
-``OnlineConfig.for_model`` picks the one that suits a model, and
-:class:`rnnpb.model.MirrorSystem` uses it unless told otherwise.
+The settings depend on how the model was learned and on what it kept, and are read from the
+learning preset (:mod:`rnnpb.presets`): ``RecognitionConfig()`` for models learned by the
+paper's algorithm, :meth:`RecognitionConfig.fast` for ``TrainConfig.fast()`` models (their
+evidence lies at other levels), and :meth:`RecognitionConfig.untaught` for models of either
+kind that kept no taught hands; ``OnlineConfig.for_model`` picks the one that suits a model,
+and :class:`rnnpb.model.MirrorSystem` uses it unless told otherwise.
 
-:func:`recognise` is pure (state in, state and answer out) and NumPy only: it costs about a
-hundred microseconds a step, about half of it matching the taught stretches. The compiled step
+:func:`recognise` is pure (state in, state and answer out) and NumPy only. The compiled step
 and its NumPy twin compute the same evidence and call the same function, so both give the
 same answer for the same observations.
 """
