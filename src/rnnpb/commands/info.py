@@ -55,6 +55,8 @@ def recorded_preset(meta: dict[str, Any]) -> str:
     if learned is None:
         return "not recorded"
     name, version = learned
+    if version is None and isinstance(meta.get("preset"), dict):
+        return f"{name} (its version not recorded)"
     if version is None:
         return f"{name} (by its optimizer; the file records no preset version)"
     changed = meta["preset"].get("changed")
