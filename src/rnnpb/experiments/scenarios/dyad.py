@@ -246,6 +246,8 @@ def subject_job(
 ) -> dict[str, Any]:
     """One subject session, up to ``n_steps`` steps, a cycle at a time: it ends once every
     learned pattern is found (nothing after that changes what the protocol measures)."""
+    if n_steps < 1:
+        raise ConfigError(f"a subject session needs at least one step, got {n_steps}")
     cpu = time.process_time()
     model, refs = _load(path)
     dyad = robot_and_subject(model, AgentConfig(), SubjectConfig(), seed=seed)
@@ -258,14 +260,14 @@ def subject_job(
             recorder.write(step)
 
     try:
-        while len(steps) < n_steps:
+        while True:  # until every pattern is found or the steps are run (at least once)
             dyad.run(min(CHUNK, n_steps - len(steps)), on_step=keep_step)
             arrays = DyadRun.from_steps(steps).arrays
             found = measures.measure_dyad(
                 arrays["a_shown"], arrays["b_shown"], model.patterns, arrays["a_pb"],
                 references_a=refs,
             )  # fmt: skip
-            if found.found[-1] >= len(model.patterns):
+            if found.found[-1] >= len(model.patterns) or len(steps) >= n_steps:
                 break
     finally:
         if recorder is not None:

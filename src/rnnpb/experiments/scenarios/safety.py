@@ -260,6 +260,7 @@ def learned_job(model_path: str, meta, online, guard: str, seed: int) -> dict[st
         recognised[pattern] = sync.recognized_pattern
         # The motor input is the network's own prediction, so filtering afterwards is what
         # the filter in the loop would have done.
+        assert sync.run is not None  # synchronization keeps its run
         command_filter = CommandFilter(initial=sync.run.motor[0])
         prevented += sum(bool(command_filter(c).filtered) for c in sync.run.motor)
     switch = switching(model, cfg, JOINT_LIMITS, seed=seed, meta=meta).pairs
