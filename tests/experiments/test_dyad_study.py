@@ -38,3 +38,23 @@ def test_the_quick_form_learns_its_models_and_is_judged_by_its_exam(tmp_path, mo
     # The exam's judge gives the same verdicts from the finished results.json.
     assert study.judge_results(results, load_exam("dyad")) == outcome.targets
     assert (tmp_path / "out" / "figures" / "phase_diagram.png").is_file()
+
+
+def test_the_exam_names_its_own_seeds_and_sizes():
+    from rnnpb.experiments.scenarios.dyad import DyadSeeds, DyadStudySize
+
+    exam = load_exam("dyad")
+    seeds = DyadSeeds.from_exam(exam)
+    assert seeds.starts == exam.seed_list("starts") and seeds.training == 7200
+    size = seeds.sized(DyadStudySize.for_options(StudyOptions()))
+    assert (size.start_seeds, size.grid_seeds, size.subject_seeds) == (5, 3, 12)
+    default = DyadSeeds.from_first(size, 0)
+    assert not set(default.starts + default.grid + default.subject) & exam.draws()
+
+
+def test_an_exam_takes_no_seed_and_no_quick_form(tmp_path, capsys):
+    out = str(tmp_path / "out")
+    assert main(["study", "dyad", "--exam", "--seed", "3", "--out", out]) == 2
+    assert "--exam takes no --seed" in capsys.readouterr().err
+    assert main(["study", "dyad", "--exam", "--quick", "--out", out]) == 2
+    assert "--exam and --quick exclude each other" in capsys.readouterr().err
