@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import json
 
+import pytest
+
 from rnnpb.cli import main
 from rnnpb.experiments.exams import load_exam
 from rnnpb.experiments.studies import StudyOptions, load_study, study_names
@@ -26,6 +28,7 @@ def test_models_it_cannot_find_are_named_in_one_line(tmp_path, capsys):
     assert "--models" in error and "\n" not in error
 
 
+@pytest.mark.slow
 def test_the_quick_form_learns_its_models_and_is_judged_by_its_exam(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)  # no results/ of an earlier demo to lean on
     study = load_study("dyad")
