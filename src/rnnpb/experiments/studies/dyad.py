@@ -59,7 +59,7 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
             "starts": list(seeds.starts),
             "grid": list(seeds.grid),
             "subject": list(seeds.subject),
-        },  # fmt: skip
+        },
         "versions": versions(),
     }
     if options.exam is not None:
@@ -83,7 +83,7 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
     results["phase_cells"] = summary_cells
     results["persistence_line"] = line_cells
     results["subject"] = scenario.part_rows(done, "subject")
-    _figures(out, done, size, seeds, summary_cells, hold, shift)
+    _figures(out, done, size, seeds, summary_cells)
     targets = judge_results(results, exam)
     report = [
         *_introduction(options),
@@ -179,7 +179,7 @@ def judge_results(results: dict[str, Any], exam: Exam) -> dict[str, Target]:
 # --- figures and report ------------------------------------------------------------------------
 
 
-def _figures(out, done, size, seeds, summary_cells, hold: float, shift: float) -> None:
+def _figures(out, done, size, seeds, summary_cells) -> None:
     example = scenario.part_figure(done, "starts")
     figures.plot_dyad(
         example["arrays"],
