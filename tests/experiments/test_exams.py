@@ -53,6 +53,7 @@ def test_the_judge_reads_the_definition():
     exam = parse_exam(_exam())
     assert exam.draws() == {7000, 7001} and exam.shapes == ("one-arm",)
     assert exam.target("count").parameter("steps") == 60
+    assert "`s` version 1" in exam.describe() and "user 7000, 7001" in exam.describe()
     assert exam.judge({"share": 0.9, "count": 0}) == {"share": True, "count": True}
     assert exam.judge({"share": 0.89, "count": 1}) == {"share": False, "count": False}
     # A measure that could not be taken is not met.

@@ -87,6 +87,7 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
     targets = judge_results(results, exam)
     report = [
         *_introduction(options),
+        *([exam.describe(), ""] if options.exam is not None else []),
         *_starts_section(results["random_starts"], size, seeds, exam),
         *_phase_section(summary_cells, line_cells, size, seeds, hold, shift),
         *_subject_section(results["subject"], size, seeds, exam),

@@ -100,6 +100,7 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
     plot_roc({n: m["roc"] for n, m in per_set.items()}, figures / "roc.png")
     report = [
         *_introduction(options, seeds, settings, settle),
+        *([exam.describe(), ""] if options.exam is not None else []),
         *_targets_section(targets),
         *_per_set_section(per_set, exam),
         *_taught_section(per_set, overall, without_taught, settings, exam),

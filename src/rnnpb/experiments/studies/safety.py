@@ -66,6 +66,8 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
     if options.exam is not None:
         results["exam"] = exam.to_json()
     report = ["# Safety by experience (paper section 4.1)", ""]
+    if options.exam is not None:
+        report += [exam.describe(), ""]
     worker_init()
     pool = ProcessPoolExecutor(
         max_workers=options.workers,
