@@ -104,7 +104,8 @@ def run_study(
         outputs = results(config, *measured, targets, runtime, (done, total))
         if exam is not None:
             outputs["exam"] = exam.to_json()
-        write_outputs(out, report(config, *measured, targets, runtime, (done, total)), outputs)
+        lines = report(config, *measured, targets, runtime, (done, total), exam)
+        write_outputs(out, lines, outputs)
         return StudyOutcome(runtime, targets)
 
     outcome = StudyOutcome(0.0)
@@ -200,10 +201,13 @@ def _rehearsal(
 # --- the report ------------------------------------------------------------------------------
 
 
-def report(config, before, after, chained, larger, targets, runtime, progress) -> list[str]:
-    """``report.md``, section by section."""
+def report(
+    config, before, after, chained, larger, targets, runtime, progress, on_exam: Exam | None
+) -> list[str]:
+    """``report.md``, section by section (``on_exam``: the exam the run is)."""
     return [
         *_introduction(config, runtime, progress),
+        *([on_exam.describe(), ""] if on_exam is not None else []),
         *_targets_section(targets),
         *_methods_section(config, before, after),
         *_chain_section(config, chained),

@@ -96,7 +96,7 @@ def run_study(out: Path, config: TeachConfig, log=print, exam: Exam | None = Non
             measured["exam"] = exam.to_json()
         write_outputs(
             out,
-            report(config, ordered, before, paced, targets, runtime, progress, definitions),
+            report(config, ordered, before, paced, targets, runtime, progress, definitions, exam),
             measured,
         )
         return StudyOutcome(runtime, targets)
@@ -230,10 +230,13 @@ def _unstructured(runs: list[TeachRun]) -> tuple[float, str]:
 # --- the report ------------------------------------------------------------------------------
 
 
-def report(config, runs, before, paced, targets, runtime, progress, exam: Exam) -> list[str]:
-    """``report.md``, section by section."""
+def report(
+    config, runs, before, paced, targets, runtime, progress, exam: Exam, on_exam: Exam | None
+) -> list[str]:
+    """``report.md``, section by section (``on_exam``: the exam the run is)."""
     return [
         *_introduction(config, runs, runtime, progress, exam.target("follow_within_90s")),
+        *([on_exam.describe(), ""] if on_exam is not None else []),
         *_targets_section(targets),
         *_runs_section(runs),
         *_old_patterns_section(runs, before),
