@@ -157,17 +157,17 @@ def test_a_camera_sources_hands_reach_the_keeper():
 
 
 def test_a_new_version_is_made_ready_off_the_loop_and_a_broken_one_says_why(tmp_path):
-    from rnnpb.interaction.teaching import _PreparedMirror
+    from rnnpb.interaction.background import PreparedMirror
     from rnnpb.model import MirrorSystem
     from rnnpb.models import SHIPPED_MODEL
 
-    prepared = _PreparedMirror(str(SHIPPED_MODEL), MirrorSystem)
+    prepared = PreparedMirror(str(SHIPPED_MODEL), MirrorSystem)
     prepared._thread.join(120)
     assert prepared.done and prepared.error == ""
     assert prepared.mirror is not None and prepared.mirror.steps == 0  # compiled, then reset
     assert prepared.mirror.model.patterns == prepared.model.patterns
     broken = tmp_path / "broken.npz"
     broken.write_bytes(b"not a model")
-    failed = _PreparedMirror(str(broken), MirrorSystem)
+    failed = PreparedMirror(str(broken), MirrorSystem)
     failed._thread.join(60)
     assert failed.mirror is None and failed.error.startswith("ModelFileError")

@@ -14,8 +14,7 @@ Methods:
   rehearsal  (default) the model regenerates each learned pattern in closed loop from its PB,
              without the original data, and learns the new pattern together with them;
              a rehearsed pattern learns the old network's function on its cycle (what the
-             model predicts from noisy inputs near it), or with --rehearsal-target
-             trajectory the cycle's own next steps
+             model predicts from noisy inputs near it)
   finetune   learns the new pattern alone (the old ones are overwritten: for comparison)
   replay     learns the new pattern with the original data (--replay-data)
   scratch    learns the original data and the new pattern anew from random weights
@@ -48,37 +47,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--method",
-        choices=("rehearsal", "finetune", "replay", "scratch"),
         default="rehearsal",
-        help="how to add them (default: rehearsal)",
+        help="how to add them: one of the methods above (default: rehearsal)",
     )
     parser.add_argument(
         "--replay-data",
         nargs="+",
         metavar="FILE_OR_DIR",
         help="the original training data (replay and scratch)",
-    )
-    parser.add_argument(
-        "--hold-old-pb",
-        choices=("off", "all", "first-half"),
-        default="first-half",
-        help="keep the old patterns' PBs at their learned values while the weights learn "
-        "(rehearsal and replay): never, for all of it, or its first half (default: "
-        "first-half)",
-    )
-    parser.add_argument(
-        "--new-pb-start",
-        choices=("centre", "farthest"),
-        default="farthest",
-        help="where the new pattern's PB starts: at 0.5, or at the point of PB space farthest "
-        "from the learned patterns' PBs (default: farthest)",
-    )
-    parser.add_argument(
-        "--rehearsal-target",
-        choices=("function", "trajectory"),
-        default="function",
-        help="what a rehearsed pattern learns towards: the old network's predictions from the "
-        "same noisy inputs, or the rehearsed cycle's next steps (default: function)",
     )
     parser.add_argument("--iterations", type=int, help="learning iterations")
     parser.add_argument("--seed", type=int, help="random seed (default: the model's)")
@@ -106,9 +82,14 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb.commands.train import checkpoint_path_for
     from rnnpb.errors import ConfigError
     from rnnpb.model import TrainedModel
-    from rnnpb.model.consolidation import ConsolidationConfig, consolidate
+    from rnnpb.model.consolidation import (
+        ConsolidationConfig,
+        consolidate,
+        consolidation_config,
+    )
     from rnnpb.sequences import read_sequence_files
 
+    ConsolidationConfig(method=args.method)  # a method it does not know: said before any work
     if args.iterations is not None and args.iterations < 1:
         raise ConfigError(f"--iterations must be >= 1, got {args.iterations}")
     if args.checkpoint_every < 1:
@@ -121,19 +102,11 @@ def run(args: argparse.Namespace) -> int:
             f"--replay-data is for the methods replay and scratch, not "
             f"{args.method} (rehearsal needs no original data)"
         )
-    config = ConsolidationConfig(
-        method=args.method,
-        hold_old_pb=args.hold_old_pb,
-        new_pb_start=args.new_pb_start,
-        rehearsal_target=args.rehearsal_target,
+    config = consolidation_config(
+        model, "add", method=args.method, iterations=args.iterations, seed=args.seed
     )
-    learning = config.learning_for(model)
-    changes = {"iterations": args.iterations, "seed": args.seed}
-    learning = replace(
-        learning,
-        checkpoint_every=args.checkpoint_every,
-        **{k: v for k, v in changes.items() if v is not None},
-    )
+    assert config.train is not None
+    learning = replace(config.train, checkpoint_every=args.checkpoint_every)
     config = replace(config, train=learning)
     added = sorted({s.pattern for s in new})
     print(
