@@ -42,7 +42,7 @@ def test_nearest_patterns_show_the_fall_back():
 def test_session_figure_says_what_it_shows(tmp_path, monkeypatch):
     session, _ = _session()
     captions = []
-    monkeypatch.setattr(figures, "_caption", lambda fig, text: captions.append(text))
+    monkeypatch.setattr(figures.paper, "_caption", lambda fig, text: captions.append(text))
     figures.plot_session(
         session,
         tmp_path / "s.png",

@@ -10,9 +10,13 @@ DESCRIPTION = """\
 Run one study and write OUT/report.md (figures embedded from OUT/figures/) and
 OUT/results.json (every measure, with the config, seeds and versions). --quick is the short
 form, the one the test suite runs; the full form is the one whose figures docs/ quote.
+--exam runs the full form on the study's exam: the draws named in its exam file, never used
+to choose a setting, every target judged by the file's definitions. A study learns the
+models it needs unless --models names a directory that holds them.
 
-Example:
+Examples:
   rnnpb study novelty --quick --out results/novelty
+  rnnpb study dyad --exam --out results/dyad-exam
 """
 
 
@@ -29,27 +33,49 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--workers", type=int, default=2, help="parallel worker processes (default 2)"
     )
-    parser.add_argument("--seed", type=int, default=0, help="the first seed (default 0)")
+    parser.add_argument(
+        "--seed", type=int, default=None, help="the first seed (default 0; not with --exam)"
+    )
+    parser.add_argument(
+        "--exam",
+        action="store_true",
+        help="run the full form on the study's exam draws and judge every target by its exam",
+    )
     parser.add_argument(
         "--models",
         metavar="DIR",
-        help="learned models to start from, for the studies that take them (incremental: "
-        "set1.npz ... set4.npz; teach: those and full.npz or full_seed0.npz; default "
-        "results/demo/models)",
+        help="learned models to start from (set1.npz ... set4.npz, and full.npz or "
+        "full_seed0.npz for the larger set: the layout of `rnnpb demo`'s models); without "
+        "it a study learns those it needs",
     )
 
 
 def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from rnnpb.experiments.studies import StudyOptions, load_study
+    from rnnpb.errors import ConfigError
+    from rnnpb.experiments.exams import load_exam
+    from rnnpb.experiments.studies import StudyOptions, load_study, takes_exam
 
     study = load_study(args.name)
+    exam = None
+    if args.exam:
+        if args.seed is not None:
+            raise ConfigError("an exam names its own seeds: --exam takes no --seed")
+        if not takes_exam(study):
+            raise ConfigError(f"the {args.name} study does not run its exam yet")
+        exam = load_exam(args.name)
     options = StudyOptions(
-        quick=args.quick, workers=args.workers, seed=args.seed, models=args.models
+        quick=args.quick,
+        workers=args.workers,
+        seed=args.seed or 0,
+        models=args.models,
+        exam=exam,
     )
     outcome = study.run(Path(args.out), options)
     print(f"wrote {args.out}/report.md and {args.out}/results.json in {outcome.runtime_s:.0f} s")
+    if exam is not None:
+        print(f"exam {exam.study} version {exam.version}:")
     for key, target in outcome.targets.items():
         print(f"  {key}: {'met' if target.met else 'NOT met'} ({target.detail})")
     return 0

@@ -1,0 +1,149 @@
+"""The learning presets as data: typed values, each with its evidence, and one-line errors."""
+
+from __future__ import annotations
+
+import pytest
+
+from rnnpb.errors import ConfigError
+from rnnpb.presets import PRESET_NAMES, load_preset, read_overrides, read_preset
+from rnnpb.presets import __file__ as presets_init
+
+SECTIONS = (
+    "learning",
+    "online",
+    "recognition",
+    "recognition_untaught",
+    "consolidation",
+    "teaching",
+)
+
+
+@pytest.mark.parametrize("name", PRESET_NAMES)
+def test_every_value_has_evidence_from_a_named_source(name):
+    preset = load_preset(name)
+    assert isinstance(preset.version, int) and not isinstance(preset.version, bool)
+    assert set(SECTIONS) <= set(preset.sections)
+    used = set()
+    for section in preset.sections:
+        assert preset.section(section), section
+        for key in preset.section(section):
+            source = preset.evidence(section, key)
+            assert source.id in preset.sources
+            # A source without a command must say where the choice was made.
+            assert source.command or source.note, (section, key)
+            assert all(isinstance(draw, int) for draw in source.draws)
+            used.add(source.id)
+    assert used == set(preset.sources), f"sources no value names: {set(preset.sources) - used}"
+
+
+@pytest.mark.parametrize("name", PRESET_NAMES)
+def test_values_are_typed(name):
+    preset = load_preset(name)
+    learning = preset.section("learning")
+    assert isinstance(learning["iterations"], int) and isinstance(learning["learning_rate"], float)
+    assert learning["learn_initial_context"] in (True, False)
+    recognition = preset.section("recognition")
+    # Lists come back as tuples: the compiled code hashes its static settings.
+    assert recognition["lags"] == (8, 18)
+    assert all(isinstance(speed, float) for speed in recognition["template_speeds"])
+    assert isinstance(preset.section("online.pb")["integration_length"], int)
+    with pytest.raises(TypeError):
+        preset.section("online")["window"] = 10  # type: ignore[index]
+
+
+def test_the_presets_differ_where_their_learning_does():
+    paper, fast = load_preset("paper"), load_preset("fast")
+    assert paper.section("learning")["optimizer"] == "momentum"
+    assert fast.section("learning")["optimizer"] == "adam"
+    assert paper.section("online")["surprise_gate"] > 0 == fast.section("online")["surprise_gate"]
+    assert "paper_online" in paper.sections
+
+
+def test_loading_is_cached():
+    assert load_preset("paper") is load_preset("paper")
+
+
+def test_an_unknown_preset_is_one_line():
+    with pytest.raises(ConfigError, match="unknown learning preset 'slow'") as error:
+        load_preset("slow")
+    assert "\n" not in str(error.value)
+
+
+def _shipped_text() -> str:
+    from pathlib import Path
+
+    return (Path(presets_init).parent / "paper.toml").read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (lambda t: t.replace("version = 1", 'version = "1"'), "'version' must be a whole number"),
+        (lambda t: t.replace("version = 1", "version = true"), "'version' must be a whole number"),
+        (lambda t: t.replace("[learning]\n", "[learning\n", 1), "not TOML"),
+        (
+            lambda t: t.replace('surprise_gate = "surprise-gate"', ""),
+            r"\[online\] surprise_gate has no evidence",
+        ),
+        (
+            lambda t: t.replace('surprise_gate = "surprise-gate"', 'surprise_gate = "nowhere"'),
+            "names no source",
+        ),
+        (lambda t: t.replace("draws = [100]", 'draws = ["100"]', 1), "draws must be whole"),
+        (lambda t: t + '\n[evidence.online]\nwindw = "paper"\n', "not TOML"),
+        (
+            lambda t: t.replace("[evidence.online]\n", '[evidence.online]\nwindw = "paper"\n'),
+            "evidence for 'windw'",
+        ),
+        (lambda t: t.replace('figure = ""\n', "", 1), "must hold exactly command, draws"),
+    ],
+)
+def test_a_malformed_preset_file_is_one_line(tmp_path, change, message):
+    text = change(_shipped_text())
+    path = tmp_path / "paper.toml"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(ConfigError, match=message) as error:
+        read_preset(path)
+    assert "\n" not in str(error.value)
+    assert str(path) in str(error.value)
+
+
+def test_the_shipped_file_reads_as_it_loads(tmp_path):
+    path = tmp_path / "paper.toml"
+    path.write_text(_shipped_text(), encoding="utf-8")
+    read = read_preset(path)
+    assert read.name == "paper"
+    assert {s: dict(read.section(s)) for s in read.sections} == {
+        s: dict(load_preset("paper").section(s)) for s in read.sections
+    }
+
+
+def test_overrides_replace_values_and_name_their_file(tmp_path):
+    path = tmp_path / "research.toml"
+    path.write_text("[online]\nsurprise_gate = 0\n[online.pb]\nk_nb = 0.1\n", encoding="utf-8")
+    preset = load_preset("paper").overridden(read_overrides(path), str(path))
+    assert preset.section("online")["surprise_gate"] == 0.0
+    assert isinstance(preset.section("online")["surprise_gate"], float)
+    assert preset.section("online.pb")["k_nb"] == 0.1
+    assert preset.evidence("online", "surprise_gate").note == f"set by {path}"
+    assert preset.section("online")["window"] == 30
+    assert load_preset("paper").section("online")["surprise_gate"] == 0.035
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("[online]\nsurprise_gat = 0.0\n", "unknown setting 'surprise_gat' in \\[online\\]"),
+        ("[onlin]\nsurprise_gate = 0.0\n", "unknown setting 'surprise_gate' in \\[onlin\\]"),
+        ('[online]\nwindow = "long"\n', "\\[online\\] window must be a int"),
+        ("[online]\noptimize_onset = 1\n", "\\[online\\] optimize_onset must be a bool"),
+        ("window = 3\n", "unknown setting 'window'"),
+        ("[online\n", "not TOML"),
+    ],
+)
+def test_a_bad_override_is_one_line_naming_file_and_key(tmp_path, text, message):
+    path = tmp_path / "research.toml"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(ConfigError, match=message) as error:
+        load_preset("paper").overridden(read_overrides(path), str(path))
+    assert "\n" not in str(error.value) and str(path) in str(error.value)
