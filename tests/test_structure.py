@@ -56,7 +56,7 @@ def _reference_periodicity(x, max_period=60, tolerance=0.1):
         x = x[:, None]
     max_period = min(max_period, len(x) // 3)
     errors = {p: _reference_return_error(x, p) for p in range(1, max_period + 1)}
-    best_period, best_error = float(min(errors, key=errors.get)), min(errors.values())
+    best_period, best_error = float(min(errors, key=errors.__getitem__)), min(errors.values())
     for p in sorted(errors):
         if not (
             errors[p] <= errors.get(p - 1, math.inf) and errors[p] <= errors.get(p + 1, math.inf)

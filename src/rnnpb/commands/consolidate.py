@@ -22,8 +22,9 @@ Methods:
 
 The new files are sequence CSVs as for `rnnpb train`; their patterns must have names the
 model does not hold. Learning continues from the model's weights (scratch: from random ones)
-with the model's own algorithm (paper or fast preset); --iterations overrides the default
-(paper: 20,000; fast: 500; scratch: the model's first training's). The new model records its
+with the model's own algorithm (paper or fast preset) and its preset's consolidation policy
+(iterations, input noise, how the new PB starts and the old PBs are held); --iterations
+overrides the policy's (scratch: the model's first training's). The new model records its
 history (see `rnnpb info`). The model given is never changed; the new one is written only when
 learning is done, atomically. A checkpoint is written next to it (OUT.checkpoint.npz) every
 --checkpoint-every iterations; after an interruption --resume continues from it.

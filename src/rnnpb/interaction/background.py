@@ -36,7 +36,9 @@ def _consolidation_worker(
         config = consolidation_config(model, "teach", iterations=iterations)
         learned = consolidate(model, sequences, config, parent=model_path, progress=progress)
         learned.save(out_path)
-        rehearsed = rehearse(model)
+        rehearsed = rehearse(
+            model, config.rehearsal_steps, config.rehearsal_transient, config.rehearsal_source
+        )
         seconds = time.perf_counter() - start
         with MemoryStore(memory_path, create=False) as memory:
             memory.add_consolidation(

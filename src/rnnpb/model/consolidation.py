@@ -15,8 +15,9 @@ progress, checkpoints and resume):
     the new sequences and one rehearsed sequence per learned sequence (:func:`rehearse`: by
     default stretches of each pattern's limit cycle, generated from the pattern's PB); by
     default a rehearsed sequence learns the old network's function on it — what the model
-    predicts from the sequence's noisy inputs — rather than its own next steps
-    (:data:`REHEARSAL_TARGET`);
+    predicts from the sequence's noisy inputs — rather than its own next steps (a trajectory
+    target pulls every noisy input back onto the cycle and loses the network's response to a
+    person's version of the pattern, and with it lock-on);
 ``finetune``
     the new sequences alone: what interference looks like;
 ``replay``
@@ -27,10 +28,19 @@ progress, checkpoints and resume):
     model's own full learning: the upper bound.
 
 All but ``scratch`` start from the model's weights ("warm start"); an old sequence starts from
-its learned PB and initial context (by default held there for the first half), a new sequence
-from context 0.5 and, by default, the PB farthest from the learned ones. The old patterns keep
-their names, the new pattern gets PBs of its own, and the result records the step in its
-history (:class:`rnnpb.model.io.HistoryEntry`).
+its learned PB and initial context (held there for the first half when adding patterns), a new
+sequence from context 0.5 and, when adding patterns, the PB farthest from the learned ones (it
+need not push the old patterns' PBs aside). The old patterns keep their names, the new pattern
+gets PBs of its own, and the result records the step in its history
+(:class:`rnnpb.model.io.HistoryEntry`).
+
+**One policy.** What a consolidation does when the caller does not say — its iterations, the
+least input noise, the PB hold, the new PB's start, the rehearsal — is data: the
+``[consolidation]`` section of the model's learning preset (:mod:`rnnpb.presets`, each value
+with its evidence), with its ``[teaching]`` section over it when on-line teaching learns a
+kept episode. :func:`consolidation_config` (``purpose="add"`` or ``"teach"``) is how
+``rnnpb consolidate``, teaching and the studies get it; :class:`ConsolidationConfig`'s fields
+set explicitly win (research: ``--config FILE``).
 
 Unlike the rest of the model this module reads a clock: the time the history records.
 """
@@ -52,6 +62,7 @@ from rnnpb.model.generation import generate
 from rnnpb.model.io import HistoryEntry, TrainedModel
 from rnnpb.model.learning import TrainConfig, WarmStart, prepare_data
 from rnnpb.model.training import TrainingProgress, train
+from rnnpb.presets import Preset, load_preset
 from rnnpb.sequences import Sequence
 
 Method = Literal["rehearsal", "finetune", "replay", "scratch"]
@@ -78,22 +89,12 @@ RehearsalSource = Literal["patterns", "sequences"]
 REHEARSAL_SOURCES: tuple[str, ...] = get_args(RehearsalSource)
 """What :func:`rehearse` runs the closed loop from: each pattern's PB, or each sequence's."""
 
-REHEARSAL_STEPS = 50
-"""Steps of each rehearsed sequence: the length of the paper's demonstrations (2.2)."""
-REHEARSAL_TRANSIENT = 200
-"""Closed-loop steps run before a rehearsed sequence starts: the network falls onto the
-pattern's limit cycle after a transient (paper 3.3), and what it rehearses is that cycle, not
-the transient."""
-REHEARSAL_SOURCE: RehearsalSource = "patterns"
-"""Rehearse from each pattern's PB: the PB generation and recognition use (a pattern's
-sequences' own PBs can lie far apart, and their mean's cycle would not be rehearsed)."""
-
 
 @dataclass(frozen=True)
 class ConsolidationPolicy:
-    """The measured choices of a consolidation of one model for one purpose (the model's
-    learning preset's ``[consolidation]`` section, with its ``[teaching]`` section over it
-    for ``"teach"``).
+    """The measured choices of a consolidation of one model for one purpose: its learning
+    preset's ``[consolidation]`` section, with the ``[teaching]`` section over it for
+    ``"teach"`` (each value's reason is its evidence in the preset file).
 
     Attributes
     ----------
@@ -104,10 +105,12 @@ class ConsolidationPolicy:
         it holds an old pattern's closed loop on its cycle while the weights move for the new
         one (a model learned with more keeps its own).
     function_rehearsal_input_noise : float
-        The same for a rehearsal of the old network's function, learned where the noise
-        brings the inputs: near each cycle, as far as a person's version of it.
-    hold_old_pb, new_pb_start, rehearsal_target : str
-        The defaults of :class:`ConsolidationConfig`'s fields of those names.
+        The same for a rehearsal of the old network's function, which is learned where the
+        noise brings the inputs: near each cycle, as far as a person's version of it.
+    hold_old_pb, new_pb_start, rehearsal_target, rehearsal_source : str
+    rehearsal_steps, rehearsal_transient : int
+        What :class:`ConsolidationConfig`'s fields of those names are when left None, and
+        :func:`rehearse`'s defaults.
     """
 
     iterations: int
@@ -116,6 +119,9 @@ class ConsolidationPolicy:
     hold_old_pb: HoldOldPB
     new_pb_start: NewPBStart
     rehearsal_target: RehearsalTarget
+    rehearsal_source: RehearsalSource
+    rehearsal_steps: int
+    rehearsal_transient: int
 
     def least_input_noise(self, method: str, rehearsal_target: str) -> float:
         """The least input noise of a consolidation by ``method`` (rehearsing towards
@@ -123,16 +129,6 @@ class ConsolidationPolicy:
         if method == "rehearsal" and rehearsal_target == "function":
             return self.function_rehearsal_input_noise
         return self.input_noise
-
-
-_POLICIES: dict[tuple[str, str], ConsolidationPolicy] = {
-    ("add", "momentum"): ConsolidationPolicy(
-        20_000, 0.01, 0.02, "first-half", "farthest", "function"
-    ),
-    ("add", "adam"): ConsolidationPolicy(500, 0.01, 0.02, "first-half", "farthest", "function"),
-    ("teach", "momentum"): ConsolidationPolicy(20_000, 0.03, 0.03, "off", "centre", "function"),
-    ("teach", "adam"): ConsolidationPolicy(1_000, 0.03, 0.03, "off", "centre", "function"),
-}
 
 
 def recorded_learning(model: TrainedModel) -> TrainConfig:
@@ -149,22 +145,48 @@ def recorded_learning(model: TrainedModel) -> TrainConfig:
         ) from None
 
 
-def consolidation_policy(model: TrainedModel, purpose: Purpose = "add") -> ConsolidationPolicy:
-    """How ``model`` is consolidated for ``purpose`` (one of :data:`PURPOSES`), as its learning
-    preset says."""
+def consolidation_policy(
+    model: TrainedModel, purpose: Purpose = "add", preset: Preset | None = None
+) -> ConsolidationPolicy:
+    """How ``model`` is consolidated for ``purpose`` (one of :data:`PURPOSES`): the values of
+    ``preset``, by default the learning preset of the model's recorded learning (Adam: the
+    fast preset, else the paper's).
+
+    Teaching learns a kept episode — three cycles of an imperfect demonstration — into the
+    model while the person goes on: the ``[teaching]`` section sets its own iterations, new PB
+    start and PB hold, and its input noise is a floor over the consolidation's (a person's
+    version of an old pattern can lie further from its cycle than that noise reaches).
+    """
     if purpose not in PURPOSES:
         raise ConfigError(
             f"consolidation purpose must be one of {', '.join(PURPOSES)}, got {purpose!r}"
         )
-    return _POLICIES[purpose, recorded_learning(model).optimizer]
+    if preset is None:
+        preset = load_preset("fast" if recorded_learning(model).optimizer == "adam" else "paper")
+    values = dict(preset.section("consolidation"))
+    if purpose == "teach":
+        teaching = preset.section("teaching")
+        floor = teaching["input_noise"]
+        values.update(
+            iterations=teaching["iterations"],
+            hold_old_pb=teaching["hold_old_pb"],
+            new_pb_start=teaching["new_pb_start"],
+            input_noise=max(values["input_noise"], floor),
+            function_rehearsal_input_noise=max(values["function_rehearsal_input_noise"], floor),
+        )
+    try:
+        return ConsolidationPolicy(**values)
+    except TypeError as error:
+        raise ConfigError(f"preset {preset.name!r}: [consolidation] {error}") from None
 
 
 @dataclass(frozen=True)
 class ConsolidationConfig:
     """How to add patterns to a learned model.
 
-    The fields left None are the model's :func:`consolidation_policy` for ``purpose``
-    (:meth:`resolved`); research sets them to measure the alternatives.
+    The fields left None take the model's :func:`consolidation_policy` for ``purpose``
+    (:meth:`resolved`): a user names the method; research sets the others (``--config FILE``)
+    to measure the alternatives.
 
     Attributes
     ----------
@@ -176,9 +198,9 @@ class ConsolidationConfig:
         The learning. None: the model's own recorded learning (its optimizer, rates and seed)
         with the policy's iterations and at least its input noise — for ``scratch`` the
         model's own full learning, unchanged.
-    rehearsal_steps, rehearsal_transient : int
+    rehearsal_steps, rehearsal_transient : int or None
         Length of each rehearsed sequence, and the closed-loop steps run before it.
-    rehearsal_source : str
+    rehearsal_source : str or None
         What :func:`rehearse` runs the closed loop from (:data:`REHEARSAL_SOURCES`).
     hold_old_pb : str or None
         One of :data:`HOLD_OLD_PB_OPTIONS`: whether the old sequences' PBs stay at their
@@ -198,9 +220,9 @@ class ConsolidationConfig:
     method: Method = "rehearsal"
     purpose: Purpose = "add"
     train: TrainConfig | None = None
-    rehearsal_steps: int = REHEARSAL_STEPS
-    rehearsal_transient: int = REHEARSAL_TRANSIENT
-    rehearsal_source: RehearsalSource = REHEARSAL_SOURCE
+    rehearsal_steps: int | None = None
+    rehearsal_transient: int | None = None
+    rehearsal_source: RehearsalSource | None = None
     hold_old_pb: HoldOldPB | None = None
     new_pb_start: NewPBStart | None = None
     rehearsal_target: RehearsalTarget | None = None
@@ -209,7 +231,7 @@ class ConsolidationConfig:
         for name, value, allowed in (
             ("consolidation method", self.method, CONSOLIDATION_METHODS),
             ("consolidation purpose", self.purpose, PURPOSES),
-            ("rehearsal_source", self.rehearsal_source, REHEARSAL_SOURCES),
+            ("rehearsal_source", self.rehearsal_source, (None, *REHEARSAL_SOURCES)),
             ("new_pb_start", self.new_pb_start, (None, *NEW_PB_STARTS)),
             ("rehearsal_target", self.rehearsal_target, (None, *REHEARSAL_TARGETS)),
             ("hold_old_pb", self.hold_old_pb, (None, *HOLD_OLD_PB_OPTIONS)),
@@ -217,25 +239,32 @@ class ConsolidationConfig:
             if value not in allowed:
                 choices = ", ".join(a for a in allowed if a is not None)
                 raise ConfigError(f"{name} must be one of {choices}, got {value!r}")
-        if self.rehearsal_steps < 2:
+        if self.rehearsal_steps is not None and self.rehearsal_steps < 2:
             raise ConfigError(f"rehearsal_steps must be >= 2, got {self.rehearsal_steps}")
-        if self.rehearsal_transient < 1:
+        if self.rehearsal_transient is not None and self.rehearsal_transient < 1:
             raise ConfigError(f"rehearsal_transient must be >= 1, got {self.rehearsal_transient}")
 
-    def resolved(self, model: TrainedModel) -> ConsolidationConfig:
+    def resolved(self, model: TrainedModel, preset: Preset | None = None) -> ConsolidationConfig:
         """This config with every field left None taken from ``model``'s policy for
-        :attr:`purpose`, and its learning (:meth:`learning_for`)."""
-        policy = consolidation_policy(model, self.purpose)
-        return replace(
-            self,
-            hold_old_pb=self.hold_old_pb or policy.hold_old_pb,
-            new_pb_start=self.new_pb_start or policy.new_pb_start,
-            rehearsal_target=self.rehearsal_target or policy.rehearsal_target,
-            train=self.learning_for(model),
-        )
+        :attr:`purpose` (from ``preset``, by default the model's), and its learning
+        (:meth:`learning_for`)."""
+        policy = consolidation_policy(model, self.purpose, preset)
+        chosen = {
+            name: getattr(policy, name) if getattr(self, name) is None else getattr(self, name)
+            for name in (
+                "hold_old_pb",
+                "new_pb_start",
+                "rehearsal_target",
+                "rehearsal_source",
+                "rehearsal_steps",
+                "rehearsal_transient",
+            )
+        }
+        return replace(self, **chosen, train=self.learning_for(model, preset))
 
-    def learning_for(self, model: TrainedModel) -> TrainConfig:
-        """The :class:`TrainConfig` this consolidation of ``model`` learns with."""
+    def learning_for(self, model: TrainedModel, preset: Preset | None = None) -> TrainConfig:
+        """The :class:`TrainConfig` this consolidation of ``model`` learns with (the policy's
+        from ``preset``, by default the model's)."""
         if self.train is not None:
             return self.train
         own = recorded_learning(model)
@@ -243,7 +272,7 @@ class ConsolidationConfig:
             # The first training's length: a consolidated model records its consolidation's.
             first = model.history[0].train_config.get("iterations")
             return replace(own, iterations=first) if isinstance(first, int) else own
-        policy = consolidation_policy(model, self.purpose)
+        policy = consolidation_policy(model, self.purpose, preset)
         target = self.rehearsal_target or policy.rehearsal_target
         least = policy.least_input_noise(self.method, target)
         return replace(own, iterations=policy.iterations, input_noise=max(own.input_noise, least))
@@ -256,13 +285,15 @@ def consolidation_config(
     method: Method = "rehearsal",
     iterations: int | None = None,
     seed: int | None = None,
+    preset: Preset | None = None,
 ) -> ConsolidationConfig:
     """The consolidation of ``model`` for ``purpose``, every choice made: the one policy
     ``rnnpb consolidate``, on-line teaching and the studies consolidate by.
 
-    ``iterations`` and ``seed``, given, replace the policy's and the model's.
+    ``iterations`` and ``seed``, given, replace the policy's and the model's; ``preset`` (a
+    preset with a ``--config`` file over it) replaces the model's learning preset.
     """
-    config = ConsolidationConfig(method=method, purpose=purpose).resolved(model)
+    config = ConsolidationConfig(method=method, purpose=purpose).resolved(model, preset)
     assert config.train is not None
     changes = {"iterations": iterations, "seed": seed}
     learning = replace(config.train, **{k: v for k, v in changes.items() if v is not None})
@@ -314,12 +345,13 @@ def model_joint_limits(model: TrainedModel) -> np.ndarray:
 
 def rehearse(
     model: TrainedModel,
-    n_steps: int = REHEARSAL_STEPS,
-    transient: int = REHEARSAL_TRANSIENT,
-    source: RehearsalSource = REHEARSAL_SOURCE,
+    n_steps: int | None = None,
+    transient: int | None = None,
+    source: RehearsalSource | None = None,
 ) -> list[Sequence]:
     """Each learned pattern regenerated in closed loop, without the original data: one
-    rehearsed sequence per learned sequence.
+    rehearsed sequence per learned sequence (what is not given: the model's
+    :func:`consolidation_policy`).
 
     ``source="patterns"``: each pattern's closed loop runs from the pattern's PB and initial
     context (what generation and recognition use: :attr:`TrainedModel.pattern_pb`); a
@@ -336,6 +368,11 @@ def rehearse(
         One per learned sequence, in the model's order, each named by its pattern (raw units:
         sensory in [0, 1], motor in radians).
     """
+    if n_steps is None or transient is None or source is None:
+        policy = consolidation_policy(model)
+        n_steps = policy.rehearsal_steps if n_steps is None else n_steps
+        transient = policy.rehearsal_transient if transient is None else transient
+        source = policy.rehearsal_source if source is None else source
     if n_steps < 2 or transient < 1:
         raise ConfigError(
             f"rehearsal needs n_steps >= 2 and transient >= 1, got {n_steps} and {transient}"
