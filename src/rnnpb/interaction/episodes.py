@@ -23,8 +23,8 @@ movement once it has been ``novel`` long enough to be sure and to hold whole cyc
    plane; mirror mapping and inverse kinematics, as in the learning phase).
 3. The cutter then stays *kept* until the run ends, so one performance gives one episode.
 
-It is pure bookkeeping (NumPy only, no clock or I/O): a principal component and an
-autocorrelation of at most ``max_run_steps`` steps, 0.2 ms a step (median) with a full run.
+It is pure bookkeeping (NumPy only, no clock or I/O), bounded per step: a principal component
+and an autocorrelation of at most ``max_run_steps`` steps.
 """
 
 from __future__ import annotations
