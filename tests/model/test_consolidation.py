@@ -303,6 +303,26 @@ def test_one_policy_sets_every_consolidation(two_patterns, purpose, preset, expe
         ConsolidationConfig(purpose="forget")  # type: ignore[arg-type]
 
 
+def test_a_config_file_overrides_the_policy(two_patterns):
+    """Research changes any of the policy's values (a --config file's tables); an unknown
+    key is refused with the file's name."""
+    from rnnpb.model.consolidation import consolidation_config
+
+    model, _ = two_patterns
+    tables = {"consolidation": {"hold_old_pb": "off", "iterations": 7, "rehearsal_steps": 20}}
+    added = consolidation_config(model, "add", overrides=tables, origin="ablation.toml")
+    assert added.train is not None and added.train.iterations == 7
+    assert (added.hold_old_pb, added.rehearsal_steps, added.new_pb_start) == ("off", 20, "farthest")
+    taught = consolidation_config(
+        model, "teach", overrides={"teaching": {"input_noise": 0.05}}, origin="ablation.toml"
+    )
+    assert taught.train is not None and taught.train.input_noise == 0.05
+    with pytest.raises(ConfigError, match="ablation.toml: unknown setting 'hold' in"):
+        consolidation_config(
+            model, overrides={"consolidation": {"hold": "off"}}, origin="ablation.toml"
+        )
+
+
 def test_bad_input_is_refused_clearly(two_patterns):
     from rnnpb.demonstrator import pattern_dataset
 

@@ -49,7 +49,7 @@ from __future__ import annotations
 
 import datetime
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from collections.abc import Sequence as SequenceABC
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -145,6 +145,12 @@ def recorded_learning(model: TrainedModel) -> TrainConfig:
         ) from None
 
 
+def _learning_preset(model: TrainedModel) -> Preset:
+    """The learning preset of the model's recorded learning (Adam: the fast preset, else the
+    paper's)."""
+    return load_preset("fast" if recorded_learning(model).optimizer == "adam" else "paper")
+
+
 def consolidation_policy(
     model: TrainedModel, purpose: Purpose = "add", preset: Preset | None = None
 ) -> ConsolidationPolicy:
@@ -161,8 +167,7 @@ def consolidation_policy(
         raise ConfigError(
             f"consolidation purpose must be one of {', '.join(PURPOSES)}, got {purpose!r}"
         )
-    if preset is None:
-        preset = load_preset("fast" if recorded_learning(model).optimizer == "adam" else "paper")
+    preset = preset or _learning_preset(model)
     values = dict(preset.section("consolidation"))
     if purpose == "teach":
         teaching = preset.section("teaching")
@@ -285,14 +290,19 @@ def consolidation_config(
     method: Method = "rehearsal",
     iterations: int | None = None,
     seed: int | None = None,
-    preset: Preset | None = None,
+    overrides: Mapping[str, Mapping[str, Any]] | None = None,
+    origin: str = "--config",
 ) -> ConsolidationConfig:
     """The consolidation of ``model`` for ``purpose``, every choice made: the one policy
     ``rnnpb consolidate``, on-line teaching and the studies consolidate by.
 
-    ``iterations`` and ``seed``, given, replace the policy's and the model's; ``preset`` (a
-    preset with a ``--config`` file over it) replaces the model's learning preset.
+    ``iterations`` and ``seed``, given, replace the policy's and the model's. ``overrides``
+    (``{"consolidation": {...}, "teaching": {...}}``, a ``--config`` file's tables, named by
+    ``origin``) replace the preset's values; an unknown key is a :class:`ConfigError`.
     """
+    preset = _learning_preset(model)
+    if overrides:
+        preset = preset.overridden(overrides, origin)
     config = ConsolidationConfig(method=method, purpose=purpose).resolved(model, preset)
     assert config.train is not None
     changes = {"iterations": iterations, "seed": seed}
