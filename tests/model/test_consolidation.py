@@ -303,6 +303,15 @@ def test_one_policy_sets_every_consolidation(two_patterns, purpose, preset, expe
         ConsolidationConfig(purpose="forget")  # type: ignore[arg-type]
 
 
+def test_the_methods_are_named_once():
+    """The command, the config and the model file's history know the same methods."""
+    from rnnpb.model.consolidation import CONSOLIDATION_METHODS
+    from rnnpb.model.io import HISTORY_METHODS
+
+    assert CONSOLIDATION_METHODS == ("rehearsal", "finetune", "replay", "scratch")
+    assert HISTORY_METHODS == ("train", *CONSOLIDATION_METHODS)
+
+
 def test_a_config_file_overrides_the_policy(two_patterns):
     """Research changes any of the policy's values (a --config file's tables); an unknown
     key is refused with the file's name."""
