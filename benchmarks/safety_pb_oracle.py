@@ -38,7 +38,7 @@ def main() -> None:
     import jax.numpy as jnp
     import numpy as np
 
-    from rnnpb.experiments.studies.safety import USERS, adversarial_stream
+    from rnnpb.experiments.scenarios.safety import USERS, adversarial_stream
     from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel, window
     from rnnpb.model.mirror import motor_command
     from rnnpb.model.network import logit

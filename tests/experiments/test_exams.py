@@ -53,6 +53,7 @@ def test_the_judge_reads_the_definition():
     exam = parse_exam(_exam())
     assert exam.draws() == {7000, 7001} and exam.shapes == ("one-arm",)
     assert exam.target("count").parameter("steps") == 60
+    assert "`s` version 1" in exam.describe() and "user 7000, 7001" in exam.describe()
     assert exam.judge({"share": 0.9, "count": 0}) == {"share": True, "count": True}
     assert exam.judge({"share": 0.89, "count": 1}) == {"share": False, "count": False}
     # A measure that could not be taken is not met.
@@ -89,3 +90,19 @@ def test_a_malformed_exam_is_one_clear_line(changes, message):
 def test_an_unknown_exam_names_the_known_ones():
     with pytest.raises(ConfigError, match="no exam for study 'nothing' \\(exams: dyad"):
         load_exam("nothing")
+
+
+def test_no_preset_chose_a_setting_on_an_exam_draw():
+    from rnnpb.presets import PRESET_NAMES, load_preset
+
+    exams = {name: load_exam(name).draws() for name in exam_names()}
+    for preset_name in PRESET_NAMES:
+        preset = load_preset(preset_name)
+        assert preset.sources, f"preset {preset_name} names no evidence"
+        for source in preset.sources.values():
+            for study, draws in exams.items():
+                shared = sorted(draws & set(source.draws))
+                assert not shared, (
+                    f"preset {preset_name}'s evidence {source.id!r} was chosen on draws "
+                    f"{shared} of the {study} exam"
+                )

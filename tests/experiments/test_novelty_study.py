@@ -3,8 +3,13 @@
 import numpy as np
 import pytest
 
+from rnnpb.experiments.exams import load_exam
+from rnnpb.experiments.scenarios.novelty import StreamRun, measure
 from rnnpb.experiments.studies import StudyOptions, load_study, study_names
-from rnnpb.experiments.studies.novelty import SETTLE_STEPS, TARGETS, StreamRun, judge, measure
+from rnnpb.experiments.studies.novelty import judge, judge_results
+
+EXAM = load_exam("novelty")
+SETTLE_STEPS = int(EXAM.parameter("settle_steps"))
 
 
 def _run(kind, movement, novelty, recognised, start=0, score=0.05, confidence=None):
@@ -48,7 +53,7 @@ def test_the_measures_count_what_each_step_said():
     late = _run("novel", "one-arm", ["familiar"] * 96, ["1"] * 96, start=36, score=0.02)
     walk = _run("unstructured", "random-walk", ["unstructured"] * n, [None] * n)
     still = _run("still", "pause", ["still"] * n, [None] * n)
-    m = measure([learned, novel, late, walk, still])
+    m = measure([learned, novel, late, walk, still], SETTLE_STEPS, 36)
     assert m["learned_recognised"] == 15 / 20
     assert m["learned_nearest_pb"] == 1.0 and m["learned_called_novel"] == 0.0
     assert m["novel_delay_steps"] == [30, None]
@@ -71,7 +76,7 @@ def test_the_study_is_registered():
 
 
 def test_the_quick_form_meets_every_target_with_the_taught_hands(tmp_path):
-    # Two fast-preset models learned here, one draw of the user (seed 1000, never tuned on),
+    # Two fast-preset models learned here, one draw of the user (seed 1000),
     # two new shapes: the six targets, over all and per model.
     import json
 
@@ -79,8 +84,10 @@ def test_the_quick_form_meets_every_target_with_the_taught_hands(tmp_path):
     assert all(target.met for target in outcome.targets.values()), outcome.targets
     results = json.loads((tmp_path / "results.json").read_text())
     assert set(results["per_set"]) == {"fast-1", "fast-full"}
+    # The exam's judge gives the same verdicts from the finished results.json.
+    assert judge_results(results, EXAM) == outcome.targets
     assert all(settings["taught_hands"] for settings in results["config"]["models"].values())
     # Beside it, the same evidence without the taught hands (what they add).
     assert set(results["without_taught_hands"]) == {"fast-1", "fast-full", "all"}
-    assert set(results["without_taught_hands"]["all"]) == set(TARGETS)
+    assert set(results["without_taught_hands"]["all"]) == set(EXAM.targets)
     assert "## What the hands as taught add" in (tmp_path / "report.md").read_text()

@@ -119,7 +119,7 @@ def test_window_gradients_match_numpy_reference_and_finite_differences(motor_inp
         params = _params64(2)
         length = 10
         state = _window_state(rng, length, n, unseen=[(2, 0), (2, 1), (4, 3)])
-        config = OnlineConfig(window=length, motor_input=motor_input)
+        config = OnlineConfig(window=length).with_tuning(motor_input=motor_input)
         rho = rng.normal(0, 1, (length, NET.pb_size))
         context = rng.normal(0, 1, NET.context_size)
         motor = rng.normal(0, 1, NET.motor_size)

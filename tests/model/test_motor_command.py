@@ -68,7 +68,7 @@ def test_an_integer_beyond_float_range_is_a_config_error(trained, twin):
 @pytest.mark.parametrize("value", [math.nan, math.inf, 10**309])
 def test_on_line_settings_refuse_non_finite_numbers(name, value):
     with pytest.raises(ConfigError, match=name):
-        OnlineConfig(**{name: value})
+        _online(**{name: value})
 
 
 @pytest.mark.parametrize(
@@ -76,7 +76,15 @@ def test_on_line_settings_refuse_non_finite_numbers(name, value):
 )
 def test_on_line_settings_refuse_wrong_types(change):
     with pytest.raises(ConfigError, match=next(iter(change))):
-        OnlineConfig(**change)
+        _online(**change)
+
+
+def _online(**values):
+    """An OnlineConfig with ``values``: settings by the constructor, tuned ones by
+    with_tuning."""
+    settings = {f.name for f in dataclasses.fields(OnlineConfig) if f.init}
+    config = OnlineConfig(**{k: v for k, v in values.items() if k in settings})
+    return config.with_tuning(**{k: v for k, v in values.items() if k not in settings})
 
 
 def test_the_suggested_regression_follows_the_recorded_learning(trained):

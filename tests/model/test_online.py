@@ -133,9 +133,7 @@ def test_packed_outputs_come_back_under_their_names(trained):
 def test_compiled_step_matches_numpy_reference(
     trained, motor_input, optimize_onset, restart_span, surprise_gate, phase
 ):
-    config = OnlineConfig(
-        window=8,
-        iterations=5,
+    config = OnlineConfig(window=8, iterations=5).with_tuning(
         motor_input=motor_input,
         optimize_onset=optimize_onset,
         restart_span=restart_span,
@@ -173,7 +171,7 @@ def test_phase_restart_starts_the_window_over_after_a_switch_not_while_locked(tr
     first, second = make_sequences(n_samples=1, n_steps=45, seed=31, kinds=(0, 2))
     sensory = np.concatenate([first.sensory, second.sensory[:25]])
     motor = np.concatenate([first.motor, second.motor[:25]])
-    mirror = MirrorSystem(trained, OnlineConfig(phase_restarts=3))
+    mirror = MirrorSystem(trained, OnlineConfig().with_tuning(phase_restarts=3))
     lengths, errors = [], []
     for u, m in zip(sensory, motor, strict=True):
         result = mirror.step(u)
@@ -233,7 +231,7 @@ def test_surprise_gate_steadies_the_pb_and_keeps_the_lock(trained):
 )
 def test_bad_surprise_gate_settings_are_refused(change, message):
     with pytest.raises(ConfigError, match=message):
-        OnlineConfig(**change)
+        OnlineConfig().with_tuning(**change)
 
 
 def test_presets_round_trip_and_only_the_default_is_gated():
@@ -262,10 +260,7 @@ def _risk_network(pb_size, seed=0):
 @pytest.mark.parametrize("guard, span", [("barrier", 3), ("barrier", 0), ("projection", 3)])
 def test_the_safety_guard_matches_the_numpy_reference(trained, guard, span):
     meta = _risk_network(trained.network.pb_size)
-    config = OnlineConfig(
-        window=8,
-        iterations=5,
-        safety_guard=guard,
+    config = OnlineConfig(window=8, iterations=5, safety_guard=guard).with_tuning(
         barrier_span=span,
         barrier_weight=0.5,
         phase_restarts=0,

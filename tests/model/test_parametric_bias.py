@@ -62,5 +62,7 @@ def test_update_descends_the_error():
     ],
 )
 def test_bad_coefficients_are_rejected(kwargs):
+    good = dict(learning_rate=1.0, momentum=0.9, k_bp=1.0, k_nb=0.1, integration_length=4)
+    PBUpdateConfig(**good)
     with pytest.raises(ConfigError):
-        PBUpdateConfig(**kwargs)
+        PBUpdateConfig(**{**good, **kwargs})

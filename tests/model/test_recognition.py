@@ -127,14 +127,14 @@ def test_timeline_and_bad_settings():
         {"first": 4, "last": 4, "recognised": None, "novelty": "novel"},
     ]
     with pytest.raises(ConfigError, match="lags"):
-        RecognitionConfig(lags=(10, 5))
+        RecognitionConfig().with_tuning(lags=(10, 5))
     with pytest.raises(ConfigError, match="confidence_level"):
-        RecognitionConfig(confidence_level=0.0)
+        RecognitionConfig().with_tuning(confidence_level=0.0)
     assert RecognitionConfig.from_dict(RecognitionConfig().to_dict()) == RecognitionConfig()
 
 
 def test_each_pattern_s_evidence_is_averaged_over_evidence_steps():
-    config = RecognitionConfig(evidence_steps=4)
+    config = RecognitionConfig().with_tuning(evidence_steps=4)
     names = ("a", "b")
     learned = np.array([[0.2, 0.2], [0.8, 0.8]])
     state = initial_recognition_state(1, 2, config)
@@ -146,7 +146,7 @@ def test_each_pattern_s_evidence_is_averaged_over_evidence_steps():
     assert answer.distances["a"] == pytest.approx(np.sqrt(np.mean([4e-4, 9e-4, 1.6e-3, 2.5e-3])))
     assert answer.distances["b"] == pytest.approx(0.1)
     with pytest.raises(ConfigError, match="evidence_steps"):
-        RecognitionConfig(evidence_steps=0)
+        RecognitionConfig().with_tuning(evidence_steps=0)
 
 
 def test_the_settings_follow_the_model_s_learning(trained):
@@ -155,7 +155,7 @@ def test_the_settings_follow_the_model_s_learning(trained):
     assert OnlineConfig.for_model(trained).recognition == RecognitionConfig.fast()
     assert MirrorSystem(trained).recognition == RecognitionConfig.fast()
     assert ReferenceMirrorSystem(trained).recognition == RecognitionConfig.fast()
-    chosen = RecognitionConfig(switch_steps=2)
+    chosen = RecognitionConfig().with_tuning(switch_steps=2)
     assert MirrorSystem(trained, recognition=chosen).recognition == chosen
     paper = replace(trained, meta={"train_config": {"optimizer": "momentum"}})
     assert OnlineConfig.for_model(paper).recognition == RecognitionConfig()
@@ -222,7 +222,7 @@ def test_the_taught_shape_ignores_the_size_of_the_movement_but_not_a_missing_arm
     # Nor for a pattern taught without moving: it has no shape.
     assert taught_stretches({"0": [np.full((50, 4), 0.5)], "1": [u]}, ("0", "1"), config) is None
     with pytest.raises(ConfigError, match="template"):
-        RecognitionConfig(template_speeds=())
+        RecognitionConfig().with_tuning(template_speeds=())
 
 
 def test_one_hand_swinging_while_the_other_rests_is_movement_not_stillness():

@@ -136,7 +136,7 @@ def test_interact_filters_every_command_and_says_what_guards(model_path, tmp_pat
 
 
 def test_a_study_run_counts_what_was_generated_and_what_reached_the_robot(model_path):
-    from rnnpb.experiments.studies.safety import USERS, _adversarial_job, adversarial_stream
+    from rnnpb.experiments.scenarios.safety import USERS, adversarial_job, adversarial_stream
     from rnnpb.model import TrainedModel
 
     for user in USERS[:-1]:  # the generated users stay in the view, [0, 1]
@@ -144,7 +144,7 @@ def test_a_study_run_counts_what_was_generated_and_what_reached_the_robot(model_
         assert stream.shape == (40, 4) and 0 <= stream.min() <= stream.max() <= 1
     model = TrainedModel.load(model_path)
     meta = _map_around(model, np.array([0.8, 0.8, 0.3, 0.4])).meta
-    row = _adversarial_job(
+    row = adversarial_job(
         str(model_path), meta, OnlineConfig(), "projection", "full_swing", 8, 0, "1"
     )
     assert row["steps"] == 8 and row["guard"] == "projection"

@@ -188,13 +188,12 @@ def test_bad_study_specs_get_one_line(tmp_path, text, message):
         load_spec(_spec(tmp_path, text))
 
 
-def test_a_study_that_fails_is_recorded_and_leaves_no_folder(tmp_path, monkeypatch):
-    # The dyad study refuses to start without its paper-learned models: the run is failed
+def test_a_study_that_fails_is_recorded_and_leaves_no_folder(tmp_path):
+    # The dyad study refuses models it does not find in the folder given: the run is failed
     # with that one line, and neither its output folder nor a half-written one is left.
-    monkeypatch.setenv("RNNPB_DYAD_MODELS", str(tmp_path / "none"))
-    record = execute_run(StudyRunSpec("s", "dyad", 0, True), str(tmp_path))
+    record = execute_run(StudyRunSpec("s", "dyad", 0, True, str(tmp_path / "none")), str(tmp_path))
     assert record.status == "failed" and record.measures == []
-    assert record.error.startswith("ConfigError: the dyad study needs")
+    assert record.error.startswith("ConfigError: the dyad study's --models has no")
     assert not any((tmp_path / "studies").iterdir())
 
 

@@ -160,7 +160,7 @@ def run(args: argparse.Namespace) -> int:
     # both see the same machine: the difference is what phase restarts cost.
     compiled = MIRROR_SYSTEMS["compiled"]
     mirror = compiled(model, online)
-    plain = compiled(model, replace(online, phase_restarts=0))
+    plain = compiled(model, online.with_tuning(phase_restarts=0))
     # The safety-on steps: a risk network of the stored size (its weights do not change the
     # cost) guarding the regression — the barrier on the newest steps (the default span), the
     # barrier on the whole window, the projection — and the command filter before sending.
@@ -169,8 +169,8 @@ def run(args: argparse.Namespace) -> int:
     meta = init_meta(network.pb_size, MetaConfig().hidden, 0)
     guards = {
         "barrier": replace(online, safety_guard="barrier"),
-        "barrier_3_steps": replace(online, safety_guard="barrier", barrier_span=3),
-        "barrier_window": replace(online, safety_guard="barrier", barrier_span=0),
+        "barrier_3_steps": replace(online, safety_guard="barrier").with_tuning(barrier_span=3),
+        "barrier_window": replace(online, safety_guard="barrier").with_tuning(barrier_span=0),
         "projection": replace(online, safety_guard="projection"),
     }
     guarded = {name: compiled(model, cfg, meta=meta) for name, cfg in guards.items()}

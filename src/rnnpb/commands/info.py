@@ -9,9 +9,9 @@ NAME = "info"
 HELP = "show what a model holds: patterns and PBs, sizes, learning, error, history"
 DESCRIPTION = """\
 Show what a model file holds: its learned patterns and their PBs, the network's sizes, the
-training config and its preset (paper or fast) with the on-line regression that suits it,
-the training error, and the model's history (which patterns were learned when, by which
-method, from which model).
+learning preset it was learned with (paper or fast) and that preset's version, the training
+config, the on-line regression that suits it, the training error, and the model's history
+(which patterns were learned when, by which method, from which model).
 
 Example:
   rnnpb info results/demo/models/set1.npz
@@ -32,9 +32,11 @@ def preset_of(train_config: dict[str, Any] | None) -> str:
 
     if not isinstance(train_config, dict):
         return "unknown"
+    from rnnpb.errors import ConfigError
+
     try:
         recorded = TrainConfig.from_dict(train_config).to_dict()
-    except (TypeError, ValueError, KeyError):
+    except (ConfigError, TypeError, ValueError, KeyError):
         return "unknown"
     for name, preset in (("paper", TrainConfig.paper()), ("fast", TrainConfig.fast())):
         wanted = preset.to_dict()
@@ -43,10 +45,30 @@ def preset_of(train_config: dict[str, Any] | None) -> str:
     return "custom"
 
 
+def recorded_preset(meta: dict[str, Any]) -> str:
+    """The learning preset and version a model records (``meta["preset"]``), with the
+    values its learning changed from the preset's; for a file from before presets were
+    recorded, the preset its recorded optimizer implies."""
+    from rnnpb.model.io import learning_preset
+
+    learned = learning_preset(meta)
+    if learned is None:
+        return "not recorded"
+    name, version = learned
+    if version is None and isinstance(meta.get("preset"), dict):
+        return f"{name} (its version not recorded)"
+    if version is None:
+        return f"{name} (by its optimizer; the file records no preset version)"
+    changed = meta["preset"].get("changed")
+    if isinstance(changed, list) and changed:
+        shown = ", ".join(str(key) for key in changed)
+        return f"{name}, version {version}, with other {shown}"
+    return f"{name}, version {version}"
+
+
 def suited_regression(model: Any) -> str:
     """The on-line regression ``rnnpb interact`` and ``serve`` run ``model`` with, and why
-    (:func:`rnnpb.model.online_config.suggested_online_config`; docs/model.md, "Which
-    learning, and why the gate is on")."""
+    (:func:`rnnpb.model.online_config.suggested_online_config`)."""
     from rnnpb.model.online_config import suggested_online_config
 
     choice = suggested_online_config(model)
@@ -80,6 +102,7 @@ def run(args: argparse.Namespace) -> int:
         if len(history) > 1
         else f"{preset_of(config)} preset"
     )
+    print(f"learning preset: {recorded_preset(model.meta)}")
     if isinstance(config, dict):
         print(
             f"learning: {preset}, {config.get('optimizer')}, "

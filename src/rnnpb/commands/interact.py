@@ -5,7 +5,10 @@ from __future__ import annotations
 import argparse
 import contextlib
 
+from rnnpb.commands._config import add_config_argument
+
 NAME = "interact"
+CONFIG_SECTIONS = ("online", "recognition", "recognition_untaught")
 SAFE_POINTS = True  # Ctrl-C stops between steps (rnnpb._interrupt)
 HELP = "run the on-line interaction: a user source drives the robot"
 DESCRIPTION = """\
@@ -37,7 +40,9 @@ Without --model: the first model (by name) in ./models/, else in ./results/demo/
 
 The on-line regression (--online) defaults to the one that suits how the model was learned
 (`auto`): `ungated` for a model learned with the fast preset (Adam), `default` for one
-learned by the paper's algorithm; the choice is printed.
+learned by the paper's algorithm; the choice is printed. --config FILE overrides any of the
+learning preset's [online], [recognition] or [recognition_untaught] values for research
+([online] changes the regression in use, whichever --online chose; docs/model.md).
 
 With --learn the robot learns new movements on-line (docs/teaching.md): when the novelty
 detector has called a structured movement `novel` for a few cycles, four whole cycles of it
@@ -83,7 +88,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         choices=("auto", "default", "paper", "ungated"),
         default="auto",
         help="on-line regression settings (auto, the default: the one that "
-        "suits how the model was learned; default: the best measured for the "
+        "suits how the model was learned; default: the one chosen for the "
         "paper's algorithm; ungated: without the surprise gate, for models "
         "learned with --preset fast; paper: the paper's)",
     )
@@ -121,6 +126,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="no command filter and no PB guard (docs/safety.md)",
     )
+    add_config_argument(parser, CONFIG_SECTIONS)
     parser.add_argument(
         "--no-progress",
         action="store_true",
@@ -137,6 +143,7 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb._atomic import atomic_write
     from rnnpb.analysis.figures import plot_session
     from rnnpb.commands._checks import finite_seconds, step_count
+    from rnnpb.commands._config import read_config
     from rnnpb.commands.progress import progress_bar
     from rnnpb.interaction import (
         InteractionLoop,
@@ -158,6 +165,7 @@ def run(args: argparse.Namespace) -> int:
         from rnnpb.errors import ConfigError
 
         raise ConfigError("--consolidation-iterations needs --learn")
+    overrides = read_config(args.config, CONFIG_SECTIONS, NAME)
     model_path = first_model_file(Path(args.model) if args.model else default_model())
     model = TrainedModel.load(model_path, joint_limits=JOINT_LIMITS)
     if args.online == "auto":
@@ -167,6 +175,18 @@ def run(args: argparse.Namespace) -> int:
     else:
         online_name, online = args.online, OnlineConfig.preset(args.online)
         why = ""
+    if overrides is not None:
+        online = overrides.apply(online, "online")
+        why += f"; values from {overrides.path}"
+
+    def recognition_for(model: TrainedModel):
+        """The recognition settings chosen for ``model``, with the --config file's."""
+        chosen = OnlineConfig.for_model(model).recognition
+        if overrides is None:
+            return chosen
+        taught = model.taught_sensory is not None
+        return overrides.apply(chosen, "recognition" if taught else "recognition_untaught")
+
     loop_config = LoopConfig(dt=args.dt, paced=args.paced, max_steps=args.steps)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -189,7 +209,7 @@ def run(args: argparse.Namespace) -> int:
 
     safety = online_safety(model_path, model, online, enabled=not args.no_safety)
     online = safety.config
-    mirror = MirrorSystem(model, online, meta=safety.meta)
+    mirror = MirrorSystem(model, online, meta=safety.meta, recognition=recognition_for(model))
     with contextlib.ExitStack() as stack:
         # SIGTERM (`kill`, a service manager) ends the run as Ctrl-C does: at the next step,
         # with the recording, the summary and a playable video.
@@ -209,7 +229,9 @@ def run(args: argparse.Namespace) -> int:
             loop.subscribe(video.add)
         teacher = None
         if args.learn:
-            teacher = _start_teaching(stack, loop, model_path, source, args, online)
+            teacher = _start_teaching(
+                stack, loop, model_path, source, args, online, recognition_for
+            )
         # One line, printed just before the first compilation starts.
         print(
             f"interacting: {args.source} -> {model_path} ({online_name} on-line regression"
@@ -348,7 +370,7 @@ def run(args: argparse.Namespace) -> int:
 _TEACHING_LINES = ("kept", "refused", "consolidating", "learned", "failed")
 
 
-def _start_teaching(stack, loop, model_path, source, args, online):
+def _start_teaching(stack, loop, model_path, source, args, online, recognition_for):
     """Open the model's short-term memory and subscribe a Teacher to the loop."""
     from pathlib import Path
 
@@ -375,7 +397,7 @@ def _start_teaching(stack, loop, model_path, source, args, online):
         loop,
         model_path,
         memory,
-        make_mirror=lambda model: MirrorSystem(model, online),
+        make_mirror=lambda model: MirrorSystem(model, online, recognition=recognition_for(model)),
         source=args.source,
         hands_of=tracked_hands(source),
         iterations=args.consolidation_iterations,

@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import argparse
 
+from rnnpb.commands._config import add_config_argument
+
 NAME = "train"
+CONFIG_SECTIONS = ("learning",)
 SAFE_POINTS = True  # Ctrl-C stops between training chunks (rnnpb._interrupt)
 HELP = "learn movement patterns from sequence CSV files"
 DESCRIPTION = """\
@@ -19,7 +22,9 @@ Motor values are normalized by the robot's joint limits (they must lie within th
 
 Presets: `paper` is the paper's algorithm (gradient descent with momentum, 50,000
 iterations); `fast` uses Adam with noise on the inputs and needs about 3,000 iterations.
-Options given explicitly override the preset.
+Options given explicitly override the preset; --config FILE overrides any of its [learning]
+values (the optimizer, the rates, the PB update's coefficients: docs/model.md). The model
+records the preset's name and version (`rnnpb info`).
 
 A checkpoint is written next to the model (MODEL.checkpoint.npz) every
 --checkpoint-every iterations; --resume continues from it. Once the model is written the
@@ -49,15 +54,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="training algorithm preset (default: paper)",
     )
     parser.add_argument("--iterations", type=int, help="learning iterations")
-    parser.add_argument("--optimizer", choices=("momentum", "adam"), help="weight update rule")
-    parser.add_argument("--learning-rate", type=float, help="weight learning rate")
-    parser.add_argument("--pb-learning-rate", type=float, help="PB learning rate (eq. 2's ε)")
-    parser.add_argument(
-        "--integration-length", type=int, help="PB integration length l of eq. 1 (steps)"
-    )
     parser.add_argument(
         "--input-noise", type=float, help="std. dev. of noise on the teacher-forced inputs"
     )
+    add_config_argument(parser, CONFIG_SECTIONS)
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     parser.add_argument("--hidden", type=int, default=40, help="hidden units (default 40)")
     parser.add_argument("--context", type=int, default=30, help="context units (default 30)")
@@ -65,7 +65,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--checkpoint-every",
         type=int,
-        default=5000,
         metavar="N",
         help="write a checkpoint every N iterations (default 5000)",
     )
@@ -102,6 +101,7 @@ def run(args: argparse.Namespace) -> int:
 
     from rnnpb import _interrupt
     from rnnpb.commands._checks import step_count
+    from rnnpb.commands._config import read_config
     from rnnpb.commands.progress import progress_bar
     from rnnpb.model import NetworkConfig, TrainConfig, train
     from rnnpb.robot import JOINT_LIMITS
@@ -111,29 +111,21 @@ def run(args: argparse.Namespace) -> int:
     # Before the data are read: an untrained model written as if it had learned is no result.
     step_count("--iterations", args.iterations, high=10_000_000)
     step_count("--checkpoint-every", args.checkpoint_every, high=10_000_000)
+    overrides = read_config(args.config, CONFIG_SECTIONS, NAME)
     sequences = read_sequence_files(args.data)
-    config = TrainConfig.paper() if args.preset == "paper" else TrainConfig.fast()
+    config = TrainConfig.from_preset(args.preset)
+    if overrides is not None:
+        config = overrides.apply(config, "learning")
     changes = {
         k: v
         for k, v in {
             "iterations": args.iterations,
-            "optimizer": args.optimizer,
-            "learning_rate": args.learning_rate,
             "input_noise": args.input_noise,
+            "checkpoint_every": args.checkpoint_every,
         }.items()
         if v is not None
     }
-    pb_changes = {
-        k: v
-        for k, v in {
-            "learning_rate": args.pb_learning_rate,
-            "integration_length": args.integration_length,
-        }.items()
-        if v is not None
-    }
-    if pb_changes:
-        changes["pb"] = replace(config.pb, **pb_changes)
-    config = replace(config, seed=args.seed, checkpoint_every=args.checkpoint_every, **changes)
+    config = replace(config, seed=args.seed, **changes)
     network = NetworkConfig(
         pb_size=args.pb_size, hidden_size=args.hidden, context_size=args.context
     )

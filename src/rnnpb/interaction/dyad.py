@@ -199,9 +199,8 @@ class AgentConfig:
             return base
         if self.adaptation == 0.0:
             # No regression, and no restarts (they jump the PB to what fits): the PB stays.
-            return replace(base, iterations=0, restart_span=0, phase_restarts=0)
-        return replace(
-            base,
+            return replace(base, iterations=0).with_tuning(restart_span=0, phase_restarts=0)
+        return base.with_tuning(
             pb=replace(base.pb, learning_rate=base.pb.learning_rate * self.adaptation),
             onset_learning_rate=base.onset_learning_rate * self.adaptation,
         )

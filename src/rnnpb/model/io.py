@@ -47,6 +47,7 @@ from rnnpb.model.network import (
     params_from_numpy,
     params_to_numpy,
 )
+from rnnpb.presets import PRESET_NAMES
 from rnnpb.sequences import pattern_name_problem
 from rnnpb.vectors import MOTOR_NAMES
 
@@ -205,6 +206,22 @@ def first_training_entry(meta: dict[str, Any], patterns: tuple[str, ...]) -> His
     )
 
 
+def learning_preset(meta: dict[str, Any]) -> tuple[str, int | None] | None:
+    """The learning preset a model's meta.json records, and its version: ``meta["preset"]``
+    (``{"name": ..., "version": ...}``, written since presets were recorded), else the preset
+    the recorded learning's optimizer implies (Adam: ``fast``, else ``paper``; version None).
+    None when the model records no learning. Never raises: the file is not trusted."""
+    recorded = meta.get("preset")
+    if isinstance(recorded, dict) and recorded.get("name") in PRESET_NAMES:
+        version = recorded.get("version")
+        valid = isinstance(version, int) and not isinstance(version, bool)
+        return str(recorded["name"]), version if valid else None
+    config = meta.get("train_config")
+    if not isinstance(config, dict):
+        return None
+    return ("fast" if config.get("optimizer") == "adam" else "paper"), None
+
+
 @dataclass(frozen=True)
 class TrainedModel:
     """A trained RNNPB with what is needed to use it.
@@ -269,6 +286,12 @@ class TrainedModel:
         for name, hands in zip(self.sequence_patterns, self.taught_sensory, strict=True):
             out[name].append(hands[~np.isnan(hands).any(axis=1)])
         return out
+
+    @property
+    def learning_preset(self) -> tuple[str, int | None] | None:
+        """The learning preset the model was learned with and its version
+        (:func:`learning_preset`)."""
+        return learning_preset(self.meta)
 
     @property
     def mean_initial_context(self) -> np.ndarray:

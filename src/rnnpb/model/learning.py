@@ -18,9 +18,10 @@ from __future__ import annotations
 
 import functools
 import hashlib
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from collections.abc import Sequence as SequenceABC
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import InitVar, asdict, dataclass, field, replace
+from functools import cache
 from typing import Any, Literal, NamedTuple, cast
 
 import jax
@@ -29,37 +30,65 @@ import numpy as np
 import optax
 
 from rnnpb.errors import ConfigError, DataFileError
+from rnnpb.model._tuned import Tuning, section_values, settle, tuning_of
+from rnnpb.model._tuned import with_tuning as _with_tuning
 from rnnpb.model.network import NetworkConfig, Params, init_params, logit_numpy, open_loop
 from rnnpb.model.parametric_bias import PBUpdateConfig, pb_update
+from rnnpb.presets import Preset, load_preset
 from rnnpb.sequences import Sequence
 from rnnpb.vectors import MOTOR_NAMES, SENSORY_NAMES, SENSORY_SIZE
+
+_DEFAULT = section_values("paper", "learning")
+_USER = ("iterations", "input_noise", "seed", "checkpoint_every")
+
+
+@cache
+def _preset_tuning(preset: str) -> Tuning:
+    values = section_values(preset, "learning")
+    return Tuning(preset, {k: v for k, v in values.items() if k not in _USER})
 
 
 @dataclass(frozen=True)
 class TrainConfig:
     """How to learn.
 
-    ``TrainConfig.paper()`` is the paper's algorithm (gradient descent with momentum, no input
-    noise, 50,000 iterations, l = 20). The plain constructor gives the same; options are
-    measured against it (docs/model.md).
+    ``TrainConfig.paper()`` (the plain constructor's) is the paper's algorithm: gradient
+    descent with momentum, no input noise, 50,000 iterations, l = 20. ``TrainConfig.fast()``
+    is the fast preset: Adam with noise on the teacher-forced inputs, 3,000 iterations.
+
+    Settings a user changes
+    -----------------------
+    iterations : int
+        Learning iterations.
+    input_noise : float
+        Standard deviation of the noise on the teacher-forced inputs (normalized units).
+    seed : int
+        The random seed: weights, PBs and noise. A seeded run repeats bit for bit.
+    checkpoint_every : int
+        Iterations between checkpoints (``rnnpb train --resume``).
+
+    Every other field is tuned: read from the learning preset's ``[learning]`` section (its
+    evidence beside it), shown read-only, changed by :meth:`with_tuning`: ``optimizer``
+    (``"momentum"``, the paper's, or ``"adam"``), ``learning_rate`` and ``momentum`` of the
+    weights, ``pb`` (the PB update's coefficients, eqs. 1–2), ``learn_initial_context``
+    (each sequence's initial context learned) and ``chunk_iterations`` (iterations per
+    compiled call, between progress reports).
     """
 
-    iterations: int = 50_000
-    optimizer: Literal["momentum", "adam"] = "momentum"
-    learning_rate: float = 1.0
-    momentum: float = 0.9
-    pb: PBUpdateConfig = field(
-        default_factory=lambda: PBUpdateConfig(
-            learning_rate=2.0, momentum=0.9, k_bp=1.0, k_nb=0.05, integration_length=20
-        )
-    )
-    input_noise: float = 0.0
-    learn_initial_context: bool = True
+    iterations: int = _DEFAULT["iterations"]
+    optimizer: Literal["momentum", "adam"] = field(init=False, repr=False)
+    learning_rate: float = field(init=False, repr=False)
+    momentum: float = field(init=False, repr=False)
+    pb: PBUpdateConfig = field(init=False, repr=False)
+    input_noise: float = _DEFAULT["input_noise"]
+    learn_initial_context: bool = field(init=False, repr=False)
     seed: int = 0
-    chunk_iterations: int = 100
-    checkpoint_every: int = 5_000
+    chunk_iterations: int = field(init=False, repr=False)
+    checkpoint_every: int = _DEFAULT["checkpoint_every"]
+    _tuning: InitVar[Mapping[str, Any] | None] = None
 
-    def __post_init__(self) -> None:
+    def __post_init__(self, _tuning: Mapping[str, Any] | None) -> None:
+        settle(self, _tuning, _preset_tuning("paper"), PBUpdateConfig)
         if self.iterations < 0:
             raise ConfigError(f"iterations must be >= 0, got {self.iterations}")
         if self.optimizer not in ("momentum", "adam"):
@@ -73,26 +102,72 @@ class TrainConfig:
         if self.chunk_iterations < 1 or self.checkpoint_every < 1:
             raise ConfigError("chunk_iterations and checkpoint_every must be >= 1")
 
+    @property
+    def tuning(self) -> Tuning:
+        """The tuned values and the preset they were read from."""
+        return tuning_of(self)
+
+    @property
+    def preset(self) -> str:
+        """The learning preset this learning was made from (``"paper"`` or ``"fast"``)."""
+        return self.tuning.preset
+
+    def with_tuning(self, **changes: Any) -> TrainConfig:
+        """This learning with tuned values changed, for research: e.g.
+        ``TrainConfig.paper().with_tuning(pb={"k_nb": 0.1})``."""
+        return _with_tuning(self, changes)
+
+    @classmethod
+    def from_preset(cls, preset: Preset | str, **changes: Any) -> TrainConfig:
+        """The learning a preset's ``[learning]`` section holds; ``changes``: settings."""
+        loaded = load_preset(preset) if isinstance(preset, str) else preset
+        values = section_values(loaded, "learning")
+        tuning = Tuning(loaded.name, {k: v for k, v in values.items() if k not in _USER})
+        settings = {k: values[k] for k in _USER if k in values}
+        return cls(**{**settings, **changes}, _tuning=tuning)
+
     @classmethod
     def paper(cls, **changes: Any) -> TrainConfig:
-        """The paper's learning: momentum descent, no noise, 50,000 iterations, l = 20."""
-        return replace(cls(), **changes)
+        """The paper's learning: momentum descent, no noise, 50,000 iterations, l = 20.
+        ``changes``: settings a user changes (``iterations``, ``seed``, ...)."""
+        return cls.from_preset("paper", **changes)
 
     @classmethod
     def fast(cls, **changes: Any) -> TrainConfig:
         """Adam with noise on the teacher-forced inputs: reaches the paper's error in far
-        fewer iterations and gives a network that is easier to entrain (docs/model.md)."""
-        base = cls(iterations=3_000, optimizer="adam", learning_rate=0.01, input_noise=0.02)
-        return replace(base, **changes)
+        fewer iterations. ``changes``: settings a user changes."""
+        return cls.from_preset("fast", **changes)
 
     def to_dict(self) -> dict[str, Any]:
+        """Every value, settings and tuned, as one flat record (``pb`` a dict): what a model
+        file records as ``train_config``."""
         return asdict(self)
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> TrainConfig:
+    def from_dict(cls, data: Mapping[str, Any]) -> TrainConfig:
+        """A learning from :meth:`to_dict`'s record. Its preset is the one its optimizer
+        implies (Adam: ``fast``); values the record lacks are that preset's."""
         data = dict(data)
-        data["pb"] = PBUpdateConfig(**data["pb"])
-        return cls(**data)
+        settings = {k: data.pop(k) for k in _USER if k in data}
+        preset = "fast" if data.get("optimizer") == "adam" else "paper"
+        tuning = Tuning(preset, {**_preset_tuning(preset), **data})
+        return cls(**settings, _tuning=tuning)
+
+
+def preset_record(config: TrainConfig) -> dict[str, Any]:
+    """What a model records of its learning preset (``meta["preset"]``): the preset's name and
+    version, and the tuned values its learning changed from the preset's, if any."""
+    preset = load_preset(config.preset)
+    own = _preset_tuning(config.preset)
+    changed = [key for key, value in config.tuning.items() if _plain(value) != _plain(own[key])]
+    record: dict[str, Any] = {"name": preset.name, "version": preset.version}
+    if changed:
+        record["changed"] = changed
+    return record
+
+
+def _plain(value: Any) -> Any:
+    return asdict(value) if isinstance(value, PBUpdateConfig) else value
 
 
 class TrainState(NamedTuple):
@@ -236,9 +311,8 @@ def chunk_runner(config: TrainConfig) -> ChunkRunner:
     (:class:`Teacher`) gives the sequences it flags its predictions as their targets."""
     # Settings that do not enter the compiled update are normalized away so that runs that
     # differ only in them share one compiled function.
-    return _compiled_chunk(
-        replace(config, iterations=0, seed=0, chunk_iterations=1, checkpoint_every=1)
-    )
+    normal = replace(config, iterations=0, seed=0, checkpoint_every=1)
+    return _compiled_chunk(normal.with_tuning(chunk_iterations=1))
 
 
 @functools.lru_cache(maxsize=16)

@@ -30,7 +30,7 @@ the interaction, with the mean of the learned initial contexts. Once the window 
 shifts by one step, the new onset takes the context and motor values the last regression's
 forward pass had at that step. With ``optimize_onset`` (the improved configuration) the onset
 context and motor values are also regressed by gradient descent along with the PB, so the
-window's start state need not be right for the window to fit (docs/model.md measures it).
+window's start state need not be right for the window to fit.
 
 Phase restarts (the default) can start the window over: before the regression, the network
 is also run over the last few steps from states on the learned patterns' cycles; where one of

@@ -1,80 +1,104 @@
 """How the PB is regressed on-line (:mod:`rnnpb.model.online`): the settings and their presets.
 
-``OnlineConfig.paper()`` is the paper's regression (section 2.3); ``OnlineConfig()`` the best
-measured (docs/model.md), ``OnlineConfig.ungated()`` the same without the surprise gate.
+``OnlineConfig.paper()`` is the paper's regression (section 2.3); ``OnlineConfig()`` the one
+chosen for models learned by the paper's algorithm, ``OnlineConfig.ungated()`` the one chosen
+for the fast preset's (the same without the surprise gate). The settings a user changes are
+the constructor's; every other value is read from the learning preset
+(:mod:`rnnpb.presets`, section ``[online]``) and changed only by ``with_tuning``.
 """
 
 from __future__ import annotations
 
 import math
 import numbers
-from dataclasses import asdict, dataclass, field, fields, replace
+from collections.abc import Mapping
+from dataclasses import InitVar, asdict, dataclass, field, fields, replace
+from functools import cache
 from typing import Any, Literal
 
 from rnnpb.errors import ConfigError
+from rnnpb.model._tuned import Tuning, section_values, settle, tuning_of, user_names
+from rnnpb.model._tuned import with_tuning as _with_tuning
+from rnnpb.model.io import learning_preset
 from rnnpb.model.parametric_bias import PBUpdateConfig
 from rnnpb.model.recognition import RecognitionConfig
+from rnnpb.presets import Preset, load_preset
+
+_DEFAULT = section_values("paper", "online")
+_USER = ("window", "iterations", "safety_guard")
+
+
+@cache
+def _default_tuning() -> Tuning:
+    return _preset_tuning("paper", "online")
+
+
+def _preset_tuning(preset: Preset | str, section: str) -> Tuning:
+    preset = load_preset(preset) if isinstance(preset, str) else preset
+    values = section_values(preset, section)
+    return Tuning(preset.name, {k: v for k, v in values.items() if k not in _USER})
 
 
 @dataclass(frozen=True)
 class OnlineConfig:
     """How the PB is regressed on-line.
 
-    ``OnlineConfig.paper()``: L = 30, 100 iterations, l = 20, the onset state carried over and
-    not optimised. ``OnlineConfig()`` (the default) is the best measured with models learned
-    by the paper's algorithm (docs/model.md): the onset state optimised with the PB, l = 4
-    without the low-pass term, restarts — before each regression, the last ``restart_span``
-    steps of the PB profile are also tried at each learned pattern's PB, and the regression
-    starts from the profile that fits best — phase restarts (below) and the surprise gate,
-    which lets the PB settle once the predictions are good. ``OnlineConfig.ungated()`` is the
-    default without the gate, the better choice for models learned with
-    ``TrainConfig.fast()``.
+    Settings a user changes
+    -----------------------
+    window : int
+        L, the steps regressed (paper: 30).
+    iterations : int
+        Iterations of the regression per step (paper: about 100).
+    safety_guard : {"barrier", "projection", "off"}
+        How the safety map (docs/safety.md) keeps the PB out of the learned unsafe region;
+        it acts only where the mirror system has a map.
+
+    Every other field is tuned: read from the learning preset's ``[online]`` section (its
+    evidence beside it), shown read-only, changed by :meth:`with_tuning`. What they do:
+
+    ``pb`` — the PB update's coefficients (eqs. 1–2). ``optimize_onset``,
+    ``onset_learning_rate`` — the window's onset state regressed with the PB. ``restart_span``
+    — before each regression, the last ``restart_span`` steps of the PB profile are also tried
+    at each learned pattern's PB, and the regression starts from the profile that fits best.
+    ``motor_input`` — the window's motor inputs regenerated (``closed_loop``) or as sent
+    (``recorded``). The surprise gate (``surprise_gate`` 0 turns it off): before each
+    regression, the RMS sensory error of the window's last ``gate_steps`` predictions scales
+    the error term of eq. 1 by (error / surprise_gate) ** gate_power, clipped to
+    [gate_floor, 1]. Phase restarts (``phase_restarts`` 0 turns them off): the network is also
+    started ``phase_restarts + 1`` steps back from states on the learned cycles; where one
+    predicts the last ``phase_restarts`` observations better than the window by the factor
+    ``phase_restart_ratio``, and the window is off by more than ``phase_restart_level``
+    there, the window starts over from that state. The guard: ``"barrier"`` adds
+    ``barrier_weight * softplus(risk logit - logit(risk_level))`` per step of the window's
+    newest ``barrier_span`` steps (0: all) to the error of eq. 1; ``"projection"`` moves each
+    regressed PB down the risk gradient (at most ``projection_steps`` steps of
+    ``projection_rate`` in rho) until its risk is below ``risk_level``.
     """
 
-    window: int = 30  # L
-    iterations: int = 100
-    pb: PBUpdateConfig = field(
-        default_factory=lambda: PBUpdateConfig(
-            learning_rate=1.0, momentum=0.9, k_bp=1.0, k_nb=0.0, integration_length=4
-        )
-    )
-    optimize_onset: bool = True
-    onset_learning_rate: float = 0.5
-    restart_span: int = 6
-    motor_input: Literal["closed_loop", "recorded"] = "closed_loop"
-    # The surprise gate (0 turns it off): before each regression, the RMS sensory error of the
-    # window's last ``gate_steps`` predictions scales the error term of eq. 1 by
-    # (error / surprise_gate) ** gate_power, clipped to [gate_floor, 1]: the PB moves at its
-    # full rate while the predictions are poor and all but stops once they are good.
-    surprise_gate: float = 0.035
-    gate_power: float = 4.0
-    gate_floor: float = 0.01
-    gate_steps: int = 4
-    # Phase restarts (0 turns them off): before each regression, the network is also started
-    # ``phase_restarts + 1`` steps back from each of a set of states on the learned patterns'
-    # cycles (with that pattern's PB); where one predicts the last ``phase_restarts``
-    # observations better than the window does, by the factor ``phase_restart_ratio``, and the
-    # window's own prediction error there is above ``phase_restart_level`` (RMS), the window
-    # starts over from that state.
-    phase_restarts: int = 3
-    phase_restart_ratio: float = 0.5
-    phase_restart_level: float = 0.02
-    # The safety guard (docs/safety.md; acts only when the mirror system has a safety map):
-    # "barrier" adds barrier_weight * softplus(risk logit - logit(risk_level)) per window step
-    # to the error of eq. 1 (rnnpb.model.meta); "projection" moves each regressed PB down the
-    # risk gradient (at most projection_steps steps of projection_rate in rho) until its risk
-    # is below risk_level; "off" ignores the map. The default, the barrier on the newest
-    # step (barrier_span 1; 0: the whole window), keeps the PB out of the learned region on
-    # 10^4-step adversarial runs where the projection let it in, for about 0.2 ms a step
-    # (docs/safety.md measures the choices); it acts only where a map is given.
-    safety_guard: Literal["off", "barrier", "projection"] = "barrier"
-    barrier_weight: float = 0.05
-    barrier_span: int = 1
-    risk_level: float = 0.2
-    projection_steps: int = 10
-    projection_rate: float = 0.3
+    window: int = _DEFAULT["window"]  # L
+    iterations: int = _DEFAULT["iterations"]
+    pb: PBUpdateConfig = field(init=False, repr=False)
+    optimize_onset: bool = field(init=False, repr=False)
+    onset_learning_rate: float = field(init=False, repr=False)
+    restart_span: int = field(init=False, repr=False)
+    motor_input: Literal["closed_loop", "recorded"] = field(init=False, repr=False)
+    surprise_gate: float = field(init=False, repr=False)
+    gate_power: float = field(init=False, repr=False)
+    gate_floor: float = field(init=False, repr=False)
+    gate_steps: int = field(init=False, repr=False)
+    phase_restarts: int = field(init=False, repr=False)
+    phase_restart_ratio: float = field(init=False, repr=False)
+    phase_restart_level: float = field(init=False, repr=False)
+    safety_guard: Literal["off", "barrier", "projection"] = _DEFAULT["safety_guard"]
+    barrier_weight: float = field(init=False, repr=False)
+    barrier_span: int = field(init=False, repr=False)
+    risk_level: float = field(init=False, repr=False)
+    projection_steps: int = field(init=False, repr=False)
+    projection_rate: float = field(init=False, repr=False)
+    _tuning: InitVar[Mapping[str, Any] | None] = None
 
-    def __post_init__(self) -> None:
+    def __post_init__(self, _tuning: Mapping[str, Any] | None) -> None:
+        settle(self, _tuning, _default_tuning(), PBUpdateConfig)
         for item in fields(self):
             value = getattr(self, item.name)
             if item.name in ("pb", "motor_input", "safety_guard"):  # checked below
@@ -134,28 +158,36 @@ class OnlineConfig:
                 f"motor_input must be 'closed_loop' or 'recorded', got {self.motor_input!r}"
             )
 
+    @property
+    def tuning(self) -> Tuning:
+        """The tuned values and the preset they were read from."""
+        return tuning_of(self)
+
+    def with_tuning(self, **changes: Any) -> OnlineConfig:
+        """This config with tuned values changed, for research: e.g.
+        ``OnlineConfig().with_tuning(surprise_gate=0.0, pb={"k_nb": 0.1})``."""
+        return _with_tuning(self, changes)
+
+    @classmethod
+    def from_preset(cls, preset: Preset | str, section: str = "online") -> OnlineConfig:
+        """The regression a preset's ``section`` describes (``[online]``, or the paper
+        preset's ``[paper_online]``)."""
+        values = section_values(preset, section)
+        tuning = _preset_tuning(preset, section)
+        return cls(**{k: values[k] for k in _USER}, _tuning=tuning)
+
     @classmethod
     def paper(cls, **changes: Any) -> OnlineConfig:
         """The paper's regression: L = 30, 100 iterations, l = 20, no onset optimisation, no
-        safety guard (the paper proposes the meta-level, section 4.1, but did not run it)."""
-        base = cls(
-            pb=PBUpdateConfig(
-                learning_rate=0.5, momentum=0.9, k_bp=1.0, k_nb=0.2, integration_length=20
-            ),
-            optimize_onset=False,
-            restart_span=0,
-            surprise_gate=0.0,
-            phase_restarts=0,
-            safety_guard="off",
-        )
-        return replace(base, **changes)
+        restarts, gate or safety guard (the paper proposes the meta-level, section 4.1, but
+        did not run it). ``changes``: settings a user changes."""
+        return replace(_paper_online(), **changes)
 
     @classmethod
     def ungated(cls, **changes: Any) -> OnlineConfig:
-        """The default without the surprise gate: the PB keeps fitting every step. Models
-        learned with ``TrainConfig.fast()`` lock on and switch faster with it, though their
-        PB never settles (docs/model.md)."""
-        return replace(cls(surprise_gate=0.0), **changes)
+        """The regression chosen for the fast preset's models: the default without the
+        surprise gate, so the PB keeps fitting every step. ``changes``: settings."""
+        return replace(_ungated(), **changes)
 
     @classmethod
     def preset(cls, name: str) -> OnlineConfig:
@@ -172,13 +204,25 @@ class OnlineConfig:
         return suggested_online_config(model)
 
     def to_dict(self) -> dict[str, Any]:
+        """Every value, settings and tuned, as one flat record (``pb`` a dict)."""
         return asdict(self)
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> OnlineConfig:
+    def from_dict(cls, data: Mapping[str, Any]) -> OnlineConfig:
+        """A config from :meth:`to_dict`'s record."""
         data = dict(data)
-        data["pb"] = PBUpdateConfig(**data["pb"])
-        return cls(**data)
+        user = {k: data.pop(k) for k in user_names(cls) if k in data}
+        return cls(**user, _tuning=data)
+
+
+@cache
+def _paper_online() -> OnlineConfig:
+    return OnlineConfig.from_preset("paper", "paper_online")
+
+
+@cache
+def _ungated() -> OnlineConfig:
+    return OnlineConfig.from_preset("fast")
 
 
 #: The on-line regression presets by name, as ``--online`` takes them.
@@ -209,42 +253,34 @@ class OnlineChoice:
 
 
 def suggested_online_config(model: Any) -> OnlineChoice:
-    """The on-line regression that suits a model's recorded learning.
+    """The on-line regression that suits a model's learning preset.
 
-    A model learned with ``TrainConfig.fast()`` (Adam, noise on the inputs) locks on and
-    switches best without the surprise gate (``OnlineConfig.ungated()``); one learned by the
-    paper's algorithm (momentum descent), or one whose learning is not recorded, takes the
-    default (docs/model.md, "On-line regression"). The recognition settings follow the same
-    way: the fast preset's models give other evidence levels (docs/model.md, "Recognition and
-    novelty"). The model's ``meta["train_config"]`` is
-    what it records of its learning (:class:`rnnpb.model.TrainConfig` as a dict).
+    A model learned with the fast preset (Adam, noise on the inputs) takes the fast preset's
+    regression, ``OnlineConfig.ungated()``; one learned by the paper's algorithm, or one that
+    records no learning, the paper preset's, ``OnlineConfig()`` (docs/model.md, "On-line
+    interaction"). The recognition settings come from the same preset, those for models
+    without taught hands where the model kept none. The preset is the one the model records
+    (:func:`rnnpb.model.io.learning_preset`; a file from before presets were recorded is
+    read by its recorded optimizer).
 
     Parameters
     ----------
     model : TrainedModel
-        Anything with a ``meta`` dict.
+        Anything with a ``meta`` dict (and ``taught_sensory``).
     """
-    meta = getattr(model, "meta", None) or {}
-    learned = meta.get("train_config") if isinstance(meta, dict) else None
+    meta = getattr(model, "meta", None)
+    learned = learning_preset(meta if isinstance(meta, dict) else {})
     # A model that kept its hands as taught is recognised with them, one that did not (a file
     # of format 1 or 2) by the network's evidence alone, each with the settings chosen for it.
     taught = getattr(model, "taught_sensory", None) is not None
-    paper = RecognitionConfig() if taught else RecognitionConfig.untaught()
-    if not isinstance(learned, dict):
-        return OnlineChoice(
-            "default", OnlineConfig(), "the model does not record how it was learned", paper
-        )
-    optimizer = learned.get("optimizer")
-    if optimizer == "adam":
-        return OnlineChoice(
-            "ungated",
-            OnlineConfig.ungated(),
-            "the model was learned with Adam, the fast preset",
-            RecognitionConfig.fast() if taught else RecognitionConfig.untaught(fast=True),
-        )
-    return OnlineChoice(
-        "default",
-        OnlineConfig(),
-        f"the model was learned with {optimizer} descent, the paper's algorithm",
-        paper,
-    )
+    name = learned[0] if learned is not None else "paper"
+    recognition = RecognitionConfig.for_preset(name, taught=taught)
+    if learned is None:
+        reason = "the model does not record how it was learned"
+    elif name == "fast":
+        reason = "the model was learned with Adam, the fast preset"
+    else:
+        reason = "the model was learned with momentum descent, the paper's algorithm"
+    if name == "fast":
+        return OnlineChoice("ungated", OnlineConfig.ungated(), reason, recognition)
+    return OnlineChoice("default", OnlineConfig(), reason, recognition)

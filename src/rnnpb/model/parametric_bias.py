@@ -26,13 +26,14 @@ from rnnpb.errors import ConfigError
 
 @dataclass(frozen=True)
 class PBUpdateConfig:
-    """Coefficients of eqs. 1–2."""
+    """Coefficients of eqs. 1–2. Each preset holds its own (``[learning.pb]`` for learning,
+    ``[online.pb]`` for the on-line regression: :mod:`rnnpb.presets`)."""
 
-    learning_rate: float = 0.1  # ε
-    momentum: float = 0.9  # η
-    k_bp: float = 1.0
-    k_nb: float = 0.1
-    integration_length: int = 20  # l
+    learning_rate: float  # ε
+    momentum: float  # η
+    k_bp: float
+    k_nb: float
+    integration_length: int  # l
 
     def __post_init__(self) -> None:
         if self.learning_rate <= 0:

@@ -11,7 +11,7 @@ Every step of the mirror system (:meth:`rnnpb.model.mirror.MirrorSystem.step`) a
   (the hands at rest), or ``""`` while there is not yet evidence (too few seen steps, every
   hand lost).
 
-How it decides (docs/model.md, "Recognition and novelty", measures it):
+How it decides (docs/model.md, "Recognition and novelty"):
 
 1. **Each learned pattern's own dynamics.** In the compiled step, after the regression, the
    window is run again from its regressed onset with each learned pattern's PB in place of
@@ -28,8 +28,7 @@ How it decides (docs/model.md, "Recognition and novelty", measures it):
    ``template_speeds``), each with its mean removed (:func:`taught_distances`). Where the user
    stands and how large the movement is do not count; which hands move, and how together, do:
    one arm of a two-arm pattern is as unlike it as a quarter turn. This is what tells apart
-   two patterns whose dynamics the network learned alike (the paper's algorithm left several
-   such pairs, whose generated predictions lie within 0.005 RMS of each other).
+   two patterns whose dynamics the network learned alike.
 3. **Confidence.** Each pattern's likelihood is
    ``exp(-d_k² / 2σ² - e_k² / 2τ² - m_k² / 2μ²)`` (σ = ``match_scale``, τ = ``pb_scale``,
    μ = ``template_scale``), where ``e_k`` is the distance of the PB, averaged over the last
@@ -56,27 +55,31 @@ How it decides (docs/model.md, "Recognition and novelty", measures it):
    evidence for ``switch_steps`` steps running — ``release_steps`` when a recognised pattern
    would give way to none: the evidence dips for a few steps as a pause begins or ends.
 
-The settings depend on how the model was learned and on what it kept: ``RecognitionConfig()``
-was chosen for models learned by the paper's algorithm, :meth:`RecognitionConfig.fast` for
-``TrainConfig.fast()`` models (their evidence lies at other levels), and
-:meth:`RecognitionConfig.untaught` for models of either kind that kept no taught hands;
-``OnlineConfig.for_model`` picks the one that suits a model, and
-:class:`rnnpb.model.MirrorSystem` uses it unless told otherwise.
+The settings depend on how the model was learned and on what it kept, and are read from the
+learning preset (:mod:`rnnpb.presets`): ``RecognitionConfig()`` for models learned by the
+paper's algorithm, :meth:`RecognitionConfig.fast` for ``TrainConfig.fast()`` models (their
+evidence lies at other levels), and :meth:`RecognitionConfig.untaught` for models of either
+kind that kept no taught hands; ``OnlineConfig.for_model`` picks the one that suits a model,
+and :class:`rnnpb.model.MirrorSystem` uses it unless told otherwise.
 
-:func:`recognise` is pure (state in, state and answer out) and NumPy only: it costs about a
-hundred microseconds a step, about half of it matching the taught stretches. The compiled step
+:func:`recognise` is pure (state in, state and answer out) and NumPy only. The compiled step
 and its NumPy twin compute the same evidence and call the same function, so both give the
 same answer for the same observations.
 """
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, replace
+from collections.abc import Mapping
+from dataclasses import InitVar, asdict, dataclass, field
+from functools import cache
 from typing import Any, NamedTuple
 
 import numpy as np
 
 from rnnpb.errors import ConfigError
+from rnnpb.model._tuned import Tuning, section_values, settle, tuning_of
+from rnnpb.model._tuned import with_tuning as _with_tuning
+from rnnpb.presets import Preset
 
 NOVELTY_STATES: tuple[str, ...] = ("familiar", "novel", "unstructured", "still")
 """The words of the novelty state (besides ``""``, no evidence yet), as recordings carry them."""
@@ -84,34 +87,55 @@ NOVELTY_STATES: tuple[str, ...] = ("familiar", "novel", "unstructured", "still")
 
 @dataclass(frozen=True)
 class RecognitionConfig:
-    """The detector's settings (see the module doc for how each is used). The defaults were
-    chosen for models learned by the paper's algorithm, by a search over recorded evidence on
-    draws of the user the study then does not measure on (docs/model.md); :meth:`fast` for
-    the fast preset's models."""
+    """The detector's settings (the module doc says how each is used). Every one is tuned:
+    read from the learning preset's ``[recognition]`` section (``[recognition_untaught]`` for
+    a model without taught hands), where its evidence is, and changed only by
+    :meth:`with_tuning`. ``RecognitionConfig()`` is the paper preset's, :meth:`fast` the fast
+    preset's, :meth:`untaught` either's for models that kept no taught hands."""
 
-    recognition_steps: int = 12  # predictions each pattern's evidence is measured on
-    evidence_steps: int = 1  # steps each pattern's evidence is averaged over
-    match_scale: float = 0.016  # σ of the likelihoods, RMS error in normalized units
-    match_level: float = 0.035  # RMS error at which "none learned" is as likely
-    pb_steps: int = 3  # steps the PB is averaged over
-    pb_scale: float = 0.92  # σ of the PB's likelihoods (distance to a learned PB)
-    pb_level: float = 0.032  # PB distance at which "none learned" is as likely
-    confidence_level: float = 0.59
-    structure_steps: int = 12
-    lags: tuple[int, int] = (8, 18)  # smallest and largest lag tried, steps
-    structure_level: float = 0.354
-    still_steps: int = 4
-    still_level: float = 0.012  # largest RMS spread of one value, normalized units
-    hold_steps: int = 10
-    switch_steps: int = 6
-    release_steps: int = 10
+    recognition_steps: int = field(
+        init=False, repr=False
+    )  # predictions each pattern's evidence is on
+    evidence_steps: int = field(
+        init=False, repr=False
+    )  # steps each pattern's evidence is averaged over
+    match_scale: float = field(
+        init=False, repr=False
+    )  # σ of the likelihoods, RMS error, normalized units
+    match_level: float = field(
+        init=False, repr=False
+    )  # RMS error at which "none learned" is as likely
+    pb_steps: int = field(init=False, repr=False)  # steps the PB is averaged over
+    pb_scale: float = field(
+        init=False, repr=False
+    )  # σ of the PB's likelihoods (distance to a learned PB)
+    pb_level: float = field(
+        init=False, repr=False
+    )  # PB distance at which "none learned" is as likely
+    confidence_level: float = field(init=False, repr=False)
+    structure_steps: int = field(init=False, repr=False)
+    lags: tuple[int, int] = field(init=False, repr=False)  # smallest and largest lag tried, steps
+    structure_level: float = field(init=False, repr=False)
+    still_steps: int = field(init=False, repr=False)
+    still_level: float = field(
+        init=False, repr=False
+    )  # largest RMS spread of one value, normalized units
+    hold_steps: int = field(init=False, repr=False)
+    switch_steps: int = field(init=False, repr=False)
+    release_steps: int = field(init=False, repr=False)
     # The hands as taught (3 in the module doc): matched over template_steps, at these speeds.
-    template_steps: int = 12
-    template_speeds: tuple[float, ...] = (0.8, 0.9, 1.0, 1.1, 1.25)
-    template_scale: float = 0.15  # σ of the taught-shape likelihoods (a sine, in [0, 1])
-    template_level: float = 0.43  # taught-shape distance at which "none learned" is as likely
+    template_steps: int = field(init=False, repr=False)
+    template_speeds: tuple[float, ...] = field(init=False, repr=False)
+    template_scale: float = field(
+        init=False, repr=False
+    )  # σ of the taught-shape likelihoods (a sine)
+    template_level: float = field(
+        init=False, repr=False
+    )  # taught-shape distance where none is as likely
+    _tuning: InitVar[Mapping[str, Any] | None] = None
 
-    def __post_init__(self) -> None:
+    def __post_init__(self, _tuning: Mapping[str, Any] | None) -> None:
+        settle(self, _tuning, _preset_tuning("paper", "recognition"), None)
         if self.recognition_steps < 1:
             raise ConfigError(f"recognition_steps must be >= 1, got {self.recognition_steps}")
         if self.evidence_steps < 1:
@@ -138,17 +162,41 @@ class RecognitionConfig:
         if self.template_scale <= 0 or self.template_level <= 0:
             raise ConfigError("template_scale and template_level must be > 0")
 
-    @classmethod
-    def fast(cls, **changes: Any) -> RecognitionConfig:
-        """The settings chosen for models learned with ``TrainConfig.fast()`` (regressed with
-        ``OnlineConfig.ungated()``): their evidence lies at other levels (docs/model.md)."""
-        return replace(cls(**FAST_SETTINGS), **changes)
+    @property
+    def tuning(self) -> Tuning:
+        """The tuned values and the preset they were read from."""
+        return tuning_of(self)
+
+    def with_tuning(self, **changes: Any) -> RecognitionConfig:
+        """These settings with some changed, for research: e.g.
+        ``RecognitionConfig().with_tuning(switch_steps=2)``."""
+        return _with_tuning(self, changes)
 
     @classmethod
-    def untaught(cls, fast: bool = False, **changes: Any) -> RecognitionConfig:
+    def from_preset(cls, preset: Preset | str, section: str = "recognition") -> RecognitionConfig:
+        """The settings a preset's ``section`` holds (``[recognition]`` or
+        ``[recognition_untaught]``)."""
+        name = preset if isinstance(preset, str) else preset.name
+        values = section_values(preset, section)
+        return cls(_tuning=Tuning(name, values))
+
+    @classmethod
+    def for_preset(cls, name: str, taught: bool = True) -> RecognitionConfig:
+        """The settings chosen for models learned with preset ``name``, with or without the
+        hands as taught."""
+        return _preset_config(name, "recognition" if taught else "recognition_untaught")
+
+    @classmethod
+    def fast(cls) -> RecognitionConfig:
+        """The settings chosen for models learned with ``TrainConfig.fast()`` (regressed with
+        ``OnlineConfig.ungated()``): their evidence lies at other levels."""
+        return cls.for_preset("fast")
+
+    @classmethod
+    def untaught(cls, fast: bool = False) -> RecognitionConfig:
         """The settings chosen for a model that kept no hands as taught (a file of format 1
         or 2), which goes by the network's evidence alone; ``fast`` for the fast preset's."""
-        return replace(cls(**(UNTAUGHT_FAST_SETTINGS if fast else UNTAUGHT_SETTINGS)), **changes)
+        return cls.for_preset("fast" if fast else "paper", taught=False)
 
     @property
     def history(self) -> int:
@@ -159,53 +207,23 @@ class RecognitionConfig:
         return asdict(self)
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> RecognitionConfig:
+    def from_dict(cls, data: Mapping[str, Any]) -> RecognitionConfig:
+        """Settings from :meth:`to_dict`'s record (values it lacks: the paper preset's)."""
         data = dict(data)
-        data["lags"] = tuple(data["lags"])
-        if "template_speeds" in data:
-            data["template_speeds"] = tuple(data["template_speeds"])
-        return cls(**data)
+        for key in ("lags", "template_speeds"):
+            if key in data:
+                data[key] = tuple(data[key])
+        return cls(_tuning=data)
 
 
-#: :meth:`RecognitionConfig.fast`'s settings, where they differ from the defaults (chosen by a
-#: search over recorded evidence: docs/model.md, "Recognition and novelty").
-FAST_SETTINGS: dict[str, Any] = {
-    "evidence_steps": 18,
-    "match_scale": 0.041,
-    "match_level": 0.066,
-    "pb_steps": 1,
-    "pb_scale": 0.18,
-    "pb_level": 0.14,
-    "confidence_level": 0.6,
-    "structure_level": 0.33,
-    "switch_steps": 6,
-    "release_steps": 7,
-    "template_scale": 0.18,
-    "template_level": 0.37,
-}
+@cache
+def _preset_tuning(preset: str, section: str) -> Tuning:
+    return Tuning(preset, section_values(preset, section))
 
 
-#: :meth:`RecognitionConfig.untaught`'s settings, where they differ from the defaults: a search
-#: over recorded evidence like the others', made before models kept their taught hands.
-UNTAUGHT_SETTINGS: dict[str, Any] = {
-    "match_scale": 0.0046,
-    "match_level": 0.0435,
-    "confidence_level": 0.645,
-    "switch_steps": 6,
-    "release_steps": 10,
-}
-UNTAUGHT_FAST_SETTINGS: dict[str, Any] = {
-    "evidence_steps": 18,
-    "match_scale": 0.0088,
-    "match_level": 0.0512,
-    "pb_steps": 1,
-    "pb_scale": 0.18,
-    "pb_level": 0.14,
-    "confidence_level": 0.437,
-    "structure_level": 0.581,
-    "switch_steps": 5,
-    "release_steps": 6,
-}
+@cache
+def _preset_config(preset: str, section: str) -> RecognitionConfig:
+    return RecognitionConfig(_tuning=_preset_tuning(preset, section))
 
 
 class Recognition(NamedTuple):

@@ -35,6 +35,7 @@ from rnnpb.model.learning import (
     init_state,
     per_output_mse,
     prepare_data,
+    preset_record,
 )
 from rnnpb.model.network import NetworkConfig
 from rnnpb.sequences import Sequence
@@ -196,6 +197,7 @@ def _finish(
     sequence_pb = (pbs * weights).sum(axis=1) / weights.sum(axis=1)
     meta = {
         "train_config": config.to_dict(),
+        "preset": preset_record(config),
         "training": {
             "iterations": int(state.iteration),
             "mse_per_output": per_output.tolist(),

@@ -308,8 +308,13 @@ def _with_changes(config: Any, changes: dict[str, Any], where: str) -> Any:
             raise ConfigError(f"{where}.{key} must be a value, not a table")
         else:
             updates[key] = tuple(value) if isinstance(value, list) else value
+    # A tuned value (read from the learning preset, not a constructor's setting) changes by
+    # the config's with_tuning.
+    tuned = {k: v for k, v in updates.items() if not known[k].init}
+    settings = {k: v for k, v in updates.items() if known[k].init}
     try:
-        return replace(config, **updates)
+        changed = config.with_tuning(**tuned) if tuned else config
+        return replace(changed, **settings)
     except TypeError as error:
         raise ConfigError(f"{where}: {error}") from None
 

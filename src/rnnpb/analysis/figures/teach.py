@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import itertools
 import os
+from collections.abc import Mapping
 from collections.abc import Sequence as SequenceABC
+from typing import Any
 
 import numpy as np
 from matplotlib import colormaps
@@ -30,7 +32,7 @@ TEACHING_COLORS = {
 }
 
 
-def _strip(ax, values: SequenceABC[str], colors: dict[str, str], name: str) -> None:
+def _strip(ax, values: SequenceABC[str], colors: Mapping[str, Any], name: str) -> None:
     """One row of categories over the steps, a coloured span per run of one value."""
     for start, end, value in _segments([str(v) for v in values]):
         ax.axvspan(start - 0.5, end - 0.5, color=colors[value], lw=0)
@@ -67,7 +69,7 @@ def plot_teaching_timeline(
         for i, m in enumerate(names)
     }
     recognised = [r or "" for r in timeline["recognised"]]
-    recognised_colors = {"": "#f0f0f0"}
+    recognised_colors: dict[str, Any] = {"": "#f0f0f0"}
     taught = timeline.get("taught", {})
     spare = itertools.count(len(names))  # colours after the movements' for the others
     for name in dict.fromkeys(recognised):

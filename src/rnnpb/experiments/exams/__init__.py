@@ -125,6 +125,15 @@ class Exam:
             raise ConfigError(f"the {self.study} exam's targets {missing} were not measured")
         return {name: target.met(values[name]) for name, target in self.targets.items()}
 
+    def describe(self) -> str:
+        """One sentence for a report: which exam judged it, on which draws."""
+        seeds = "; ".join(f"{k} {', '.join(map(str, v))}" for k, v in self.seeds.items())
+        return (
+            f"**Exam** `{self.study}` version {self.version} "
+            f"(`rnnpb/experiments/exams/{self.study}.toml`): draws {seeds}. Every target is "
+            "judged by the exam's definitions."
+        )
+
     def to_json(self) -> dict[str, Any]:
         return {
             "study": self.study,
