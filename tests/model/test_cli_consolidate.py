@@ -81,6 +81,7 @@ def test_the_command_shows_no_ablation_switch_and_names_its_methods(files, capsy
     text = capsys.readouterr().out
     for switch in ("--hold-old-pb", "--new-pb-start", "--rehearsal-target"):
         assert switch not in text
+    assert "--config FILE" in text and "[consolidation]" in text
     for method in ("rehearsal", "finetune", "replay", "scratch"):
         assert f"  {method}  " in text
     args = ["consolidate", "--model", str(files / "m.npz"), "--add", str(files / "new")]
@@ -90,6 +91,25 @@ def test_the_command_shows_no_ablation_switch_and_names_its_methods(files, capsy
     with pytest.raises(SystemExit):
         main([*args, "--out", str(files / "x.npz"), "--hold-old-pb", "all"])
     assert "unrecognized arguments: --hold-old-pb" in capsys.readouterr().err
+
+
+def test_a_config_file_sets_what_the_switches_did(files, capsys):
+    config = files / "ablation.toml"
+    config.write_text('[consolidation]\nhold_old_pb = "off"\nnew_pb_start = "centre"\n')
+    args = ["consolidate", "--model", str(files / "m.npz"), "--add", str(files / "new")]
+    out = files / "c.npz"
+    assert main([*args, "--out", str(out), "--iterations", "20", "--no-progress",
+                 "--config", str(config)]) == 0  # fmt: skip
+    details = TrainedModel.load(out).history[-1].details
+    assert (details["hold_old_pb"], details["new_pb_start"]) == ("off", "centre")
+    capsys.readouterr()
+    config.write_text("[teaching]\niterations = 5\n")
+    assert main([*args, "--out", str(files / "t.npz"), "--config", str(config)]) == 2
+    assert "does not apply to rnnpb consolidate" in capsys.readouterr().err
+    config.write_text("[consolidation]\nhold = 1\n")
+    assert main([*args, "--out", str(files / "t.npz"), "--config", str(config)]) == 2
+    assert "ablation.toml: unknown setting 'hold'" in capsys.readouterr().err
+    assert not (files / "t.npz").exists()
 
 
 def test_replay_takes_the_original_data(files, capsys):

@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import argparse
 
+from rnnpb.commands._config import add_config_argument
+
 NAME = "consolidate"
+CONFIG_SECTIONS = ("consolidation",)
 SAFE_POINTS = True  # Ctrl-C stops between training chunks (rnnpb._interrupt)
 HELP = "add new patterns to a learned model (rehearsal and consolidation)"
 DESCRIPTION = """\
@@ -28,6 +31,14 @@ overrides the policy's (scratch: the model's first training's). The new model re
 history (see `rnnpb info`). The model given is never changed; the new one is written only when
 learning is done, atomically. A checkpoint is written next to it (OUT.checkpoint.npz) every
 --checkpoint-every iterations; after an interruption --resume continues from it.
+
+For research, --config FILE overrides any value of the preset's [consolidation] section, e.g.
+to measure an alternative the policy did not take:
+
+  [consolidation]
+  hold_old_pb = "off"        # or "all"; default "first-half"
+  new_pb_start = "centre"    # default "farthest"
+  rehearsal_target = "trajectory"
 
 Example:
   rnnpb consolidate --model set1.npz --add data/patterns/4_*.csv --out set1+4.npz
@@ -58,6 +69,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="the original training data (replay and scratch)",
     )
     parser.add_argument("--iterations", type=int, help="learning iterations")
+    add_config_argument(parser, CONFIG_SECTIONS)
     parser.add_argument("--seed", type=int, help="random seed (default: the model's)")
     parser.add_argument(
         "--checkpoint-every",
@@ -80,6 +92,7 @@ def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
     from rnnpb import _interrupt
+    from rnnpb.commands._config import read_config
     from rnnpb.commands.train import checkpoint_path_for
     from rnnpb.errors import ConfigError
     from rnnpb.model import TrainedModel
@@ -95,6 +108,7 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(f"--iterations must be >= 1, got {args.iterations}")
     if args.checkpoint_every < 1:
         raise ConfigError(f"--checkpoint-every must be >= 1, got {args.checkpoint_every}")
+    overrides = read_config(args.config, CONFIG_SECTIONS, NAME)
     model = TrainedModel.load(args.model)
     new = read_sequence_files(args.add)
     replay = read_sequence_files(args.replay_data) if args.replay_data else None
@@ -104,7 +118,13 @@ def run(args: argparse.Namespace) -> int:
             f"{args.method} (rehearsal needs no original data)"
         )
     config = consolidation_config(
-        model, "add", method=args.method, iterations=args.iterations, seed=args.seed
+        model,
+        "add",
+        method=args.method,
+        iterations=args.iterations,
+        seed=args.seed,
+        overrides=None if overrides is None else dict(overrides.tables),
+        origin=args.config or "",
     )
     assert config.train is not None
     learning = replace(config.train, checkpoint_every=args.checkpoint_every)

@@ -146,17 +146,17 @@ def recorded_learning(model: TrainedModel) -> TrainConfig:
 
 
 def _learning_preset(model: TrainedModel) -> Preset:
-    """The learning preset of the model's recorded learning (Adam: the fast preset, else the
-    paper's)."""
-    return load_preset("fast" if recorded_learning(model).optimizer == "adam" else "paper")
+    """The learning preset the model was learned with (:attr:`TrainedModel.learning_preset`;
+    the paper's for a model that recorded no learning)."""
+    recorded = model.learning_preset
+    return load_preset(recorded[0] if recorded is not None else "paper")
 
 
 def consolidation_policy(
     model: TrainedModel, purpose: Purpose = "add", preset: Preset | None = None
 ) -> ConsolidationPolicy:
     """How ``model`` is consolidated for ``purpose`` (one of :data:`PURPOSES`): the values of
-    ``preset``, by default the learning preset of the model's recorded learning (Adam: the
-    fast preset, else the paper's).
+    ``preset``, by default the learning preset the model was learned with.
 
     Teaching learns a kept episode — three cycles of an imperfect demonstration — into the
     model while the person goes on: the ``[teaching]`` section sets its own iterations, new PB
