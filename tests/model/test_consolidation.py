@@ -240,7 +240,10 @@ def test_a_warm_consolidation_learns_with_some_input_noise(two_patterns):
 
     model, _ = two_patterns
     paper = TrainConfig.paper(iterations=900)
-    as_paper = replace(model, meta={**model.meta, "train_config": paper.to_dict()})
+    as_paper = replace(
+        model,
+        meta={**model.meta, "train_config": paper.to_dict(), "preset": {"name": "paper"}},
+    )
     policy = consolidation_policy(as_paper, "add")
     least = {
         ConsolidationConfig(): policy.function_rehearsal_input_noise,
@@ -280,7 +283,8 @@ def test_one_policy_sets_every_consolidation(two_patterns, purpose, preset, expe
 
     model, _ = two_patterns
     learned = getattr(TrainConfig, preset)(iterations=900)
-    model = replace(model, meta={**model.meta, "train_config": learned.to_dict()})
+    recorded = {"train_config": learned.to_dict(), "preset": {"name": preset}}
+    model = replace(model, meta={**model.meta, **recorded})
     config = consolidation_config(model, purpose)
     assert config.train is not None
     iterations, noise, hold, start = expected
