@@ -29,13 +29,17 @@ and an autocorrelation of at most ``max_run_steps`` steps.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import InitVar, dataclass, field
+from typing import Any
 
 import numpy as np
 
 from rnnpb.demonstrator import MirrorMapping
 from rnnpb.errors import ConfigError
 from rnnpb.interaction.learning_phase import cycle_bounds
+from rnnpb.model._tuned import Tuning, section_values, settle
+from rnnpb.model._tuned import with_tuning as _with_tuning
 from rnnpb.perception import MOUSE_PLANE_X, hands_on_plane
 from rnnpb.robot.camera import RobotCamera
 
@@ -47,35 +51,42 @@ CUTTER_STATES = (WATCHING, RECORDING, KEPT)
 class TeachingConfig:
     """When a novel movement is kept.
 
+    The settings a user changes are the constructor's; the three found by replaying the cutter
+    over the novelty words of the teach study's script are read from the learning preset's
+    ``[teaching.cutter]`` section (with their evidence) and changed only by
+    :meth:`with_tuning`.
+
     Attributes
     ----------
     confirm_cycles : int
         Whole cycles called ``novel`` before the cutter says it is recording.
-    episode_cycles : int
-        Whole cycles an episode holds.
     tolerance_steps : int
-        Consecutive steps without evidence (``""``) a run survives.
-    interruption_steps : int
-        Consecutive steps called ``familiar``, ``unstructured`` or ``still`` a run survives.
-    min_novel_share : float
-        The share of an episode's steps with evidence that must have been called ``novel``.
+        Consecutive steps without evidence (``""``: a hand lost for a moment) a run survives.
     max_run_steps : int
         The run's oldest steps are dropped beyond this many (bounds the cost per step).
     plane_x : float
         ``x`` (m) of the hands' plane for sources that give no 3-D hands.
+    episode_cycles : int
+        Whole cycles an episode holds (tuned).
+    interruption_steps : int
+        Consecutive steps called ``familiar``, ``unstructured`` or ``still`` a run survives:
+        the detector hesitates at a shape's turning points (tuned).
+    min_novel_share : float
+        The share of an episode's steps with evidence that must have been called ``novel``,
+        so that unstructured movement and learned patterns are never kept (tuned).
     """
 
     confirm_cycles: int = 1
-    # Three cycles, forgiving short hesitations: the detector says `still` for single steps at
-    # a shape's turning points, which broke longer unbroken runs (docs/teaching.md).
-    episode_cycles: int = 3
     tolerance_steps: int = 2
-    interruption_steps: int = 2
-    min_novel_share: float = 0.9
     max_run_steps: int = 200
     plane_x: float = MOUSE_PLANE_X
+    episode_cycles: int = field(init=False)
+    interruption_steps: int = field(init=False)
+    min_novel_share: float = field(init=False)
+    _tuning: InitVar[Mapping[str, Any] | None] = None
 
-    def __post_init__(self) -> None:
+    def __post_init__(self, _tuning: Mapping[str, Any] | None) -> None:
+        settle(self, _tuning, Tuning("paper", section_values("paper", "teaching.cutter")), None)
         if self.episode_cycles < 1:
             raise ConfigError(f"episode_cycles must be >= 1, got {self.episode_cycles}")
         if not 1 <= self.confirm_cycles <= self.episode_cycles:
@@ -90,6 +101,11 @@ class TeachingConfig:
             raise ConfigError(f"min_novel_share must be in [0.5, 1], got {self.min_novel_share}")
         if self.max_run_steps < 16:
             raise ConfigError(f"max_run_steps must be >= 16, got {self.max_run_steps}")
+
+    def with_tuning(self, **changes: Any) -> TeachingConfig:
+        """These settings with some tuned values changed, for research: e.g.
+        ``TeachingConfig().with_tuning(episode_cycles=4)``."""
+        return _with_tuning(self, changes)
 
 
 @dataclass(frozen=True)
