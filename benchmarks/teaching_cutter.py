@@ -113,7 +113,8 @@ def main() -> None:
         k: (float(v) if "." in v or k == "min_novel_share" else int(v))
         for k, v in (item.split("=") for item in args.compare.split(","))
     }
-    for name, config in (("defaults", TeachingConfig()), (args.compare, TeachingConfig(**other))):
+    compared = TeachingConfig().with_tuning(**other)
+    for name, config in (("defaults", TeachingConfig()), (args.compare, compared)):
         print(f"{name}: {replay(runs, config)}", flush=True)
 
 

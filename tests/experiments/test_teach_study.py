@@ -59,29 +59,26 @@ def test_teaching_consolidates_with_its_own_start(study):
     """The taught version was learned by rehearsal of the old network's function from the
     centre with every PB learning (teaching's own start, not the consolidation's defaults),
     with teaching's iterations and noise (more than the fast model's own or the function's)."""
-    from rnnpb.interaction.teaching import (
-        TEACHING_HOLD_OLD_PB,
-        TEACHING_INPUT_NOISE,
-        TEACHING_ITERATIONS,
-        TEACHING_NEW_PB_START,
-    )
-    from rnnpb.model import TrainConfig, TrainedModel
-    from rnnpb.model.consolidation import FUNCTION_REHEARSAL_INPUT_NOISE
+    from rnnpb.model import TrainedModel
+    from rnnpb.model.consolidation import consolidation_config
 
     out, _, _ = study
     versions = sorted(out.glob("runs/*/*.v2.npz"))  # the run's, and the paced run's if done
     assert versions
     for version in versions:
-        last = TrainedModel.load(version).history[-1]
+        grown = TrainedModel.load(version)
+        last = grown.history[-1]
         assert last.method == "rehearsal" and last.added == ("new-1",)
-        assert last.details["hold_old_pb"] == TEACHING_HOLD_OLD_PB == "off"
-        assert last.details["new_pb_start"] == TEACHING_NEW_PB_START == "centre"
+        assert (last.details["hold_old_pb"], last.details["new_pb_start"]) == ("off", "centre")
         assert last.details["rehearsal_target"] == "function"
-        noise = max(
-            TrainConfig.fast().input_noise, FUNCTION_REHEARSAL_INPUT_NOISE, TEACHING_INPUT_NOISE
+        policy = consolidation_config(grown, "teach")
+        assert policy.train is not None
+        assert (last.details["hold_old_pb"], last.details["new_pb_start"]) == (
+            policy.hold_old_pb,
+            policy.new_pb_start,
         )
-        assert last.train_config["input_noise"] == noise
-        assert last.iterations == TEACHING_ITERATIONS["adam"]
+        assert last.train_config["input_noise"] == policy.train.input_noise == 0.03
+        assert last.iterations == policy.train.iterations == 1_000
 
 
 def test_the_paced_run_and_the_files(study):

@@ -26,7 +26,7 @@ def _stream(pattern, steps, seed=0, perfect=False):
 def test_four_whole_cycles_of_a_novel_movement_are_kept_once():
     motion, sensory = _stream("3", 100, perfect=True)
     words = [""] * 10 + ["novel"] * 90
-    cutter = EpisodeCutter(TeachingConfig(episode_cycles=4))
+    cutter = EpisodeCutter(TeachingConfig().with_tuning(episode_cycles=4))
     kept, states = [], []
     for t in range(100):
         episode = cutter.observe(t, sensory[t], words[t])
@@ -88,7 +88,7 @@ def test_a_hesitating_detector_does_not_break_the_run_but_a_pause_does():
     (episode,) = kept(EpisodeCutter(), words)
     assert episode.n_cycles == 3 and episode.first_step <= 15 < episode.last_step
     # the same with the hesitations not forgiven: no run holds three whole cycles
-    assert kept(EpisodeCutter(TeachingConfig(interruption_steps=0)), words) == []
+    assert kept(EpisodeCutter(TeachingConfig().with_tuning(interruption_steps=0)), words) == []
     # a pause (more still steps than a hesitation) ends the run each time
     paused = ((["novel"] * 25 + ["still"] * 3) * 4)[:90]
     assert kept(EpisodeCutter(), paused) == []
@@ -107,9 +107,28 @@ def test_a_moment_without_evidence_does_not_break_the_run_but_a_lost_hand_does()
     assert all(cutter.observe(t, lost[t], "novel") is None for t in range(90))
 
 
-def test_teaching_config_is_validated():
+def test_teaching_config_is_validated_and_its_searched_values_are_the_presets():
+    from rnnpb.model._tuned import user_names
+    from rnnpb.presets import load_preset
+
     with pytest.raises(ConfigError, match="confirm_cycles"):
-        TeachingConfig(confirm_cycles=5, episode_cycles=4)
+        TeachingConfig(confirm_cycles=5)  # more than the episode's 3 cycles
+    with pytest.raises(ConfigError, match="confirm_cycles"):
+        TeachingConfig(confirm_cycles=3).with_tuning(episode_cycles=2)
+    with pytest.raises(ConfigError, match="no tuned setting 'plane_x'"):
+        TeachingConfig().with_tuning(plane_x=0.3)
+    assert user_names(TeachingConfig) == (
+        "confirm_cycles",
+        "tolerance_steps",
+        "max_run_steps",
+        "plane_x",
+    )
+    config = TeachingConfig()
+    for name in ("paper", "fast"):
+        for key, value in load_preset(name).section("teaching.cutter").items():
+            assert getattr(config, key) == value
+    longer = config.with_tuning(episode_cycles=4)
+    assert longer.episode_cycles == 4 and longer.min_novel_share == config.min_novel_share
 
 
 def test_the_keeper_stores_each_novel_movement_once_in_the_memory(tmp_path):
@@ -157,17 +176,17 @@ def test_a_camera_sources_hands_reach_the_keeper():
 
 
 def test_a_new_version_is_made_ready_off_the_loop_and_a_broken_one_says_why(tmp_path):
-    from rnnpb.interaction.teaching import _PreparedMirror
+    from rnnpb.interaction.background import PreparedMirror
     from rnnpb.model import MirrorSystem
     from rnnpb.models import SHIPPED_MODEL
 
-    prepared = _PreparedMirror(str(SHIPPED_MODEL), MirrorSystem)
+    prepared = PreparedMirror(str(SHIPPED_MODEL), MirrorSystem)
     prepared._thread.join(120)
     assert prepared.done and prepared.error == ""
     assert prepared.mirror is not None and prepared.mirror.steps == 0  # compiled, then reset
     assert prepared.mirror.model.patterns == prepared.model.patterns
     broken = tmp_path / "broken.npz"
     broken.write_bytes(b"not a model")
-    failed = _PreparedMirror(str(broken), MirrorSystem)
+    failed = PreparedMirror(str(broken), MirrorSystem)
     failed._thread.join(60)
     assert failed.mirror is None and failed.error.startswith("ModelFileError")

@@ -38,8 +38,6 @@ def test_consolidate_then_info(files, capsys):
                 str(out),
                 "--iterations",
                 "60",
-                "--hold-old-pb",
-                "first-half",
                 "--no-progress",
             ]
         )
@@ -48,7 +46,9 @@ def test_consolidate_then_info(files, capsys):
     assert "patterns 0, 1, 2" in capsys.readouterr().out
     grown = TrainedModel.load(out)
     assert grown.patterns == ("0", "1", "2")
-    assert grown.history[-1].details["hold_old_pb"] == "first-half"
+    # The consolidation policy's choices for adding patterns, recorded.
+    details = grown.history[-1].details
+    assert (details["hold_old_pb"], details["new_pb_start"]) == ("first-half", "farthest")
     assert (
         main(
             [
@@ -73,6 +73,43 @@ def test_consolidate_then_info(files, capsys):
     assert "4 PB, 40 hidden, 30 context" in text
     # The consolidated model keeps the old patterns' taught hands and adds the new one's.
     assert "recognition: with the hands as taught (6 sequence(s)" in text
+
+
+def test_the_command_shows_no_ablation_switch_and_names_its_methods(files, capsys):
+    with pytest.raises(SystemExit):
+        main(["consolidate", "--help"])
+    text = capsys.readouterr().out
+    for switch in ("--hold-old-pb", "--new-pb-start", "--rehearsal-target"):
+        assert switch not in text
+    assert "--config FILE" in text and "[consolidation]" in text
+    for method in ("rehearsal", "finetune", "replay", "scratch"):
+        assert f"  {method}  " in text
+    args = ["consolidate", "--model", str(files / "m.npz"), "--add", str(files / "new")]
+    assert main([*args, "--out", str(files / "x.npz"), "--method", "forget"]) == 2
+    error = capsys.readouterr().err
+    assert "method must be one of rehearsal, finetune, replay, scratch, got 'forget'" in error
+    with pytest.raises(SystemExit):
+        main([*args, "--out", str(files / "x.npz"), "--hold-old-pb", "all"])
+    assert "unrecognized arguments: --hold-old-pb" in capsys.readouterr().err
+
+
+def test_a_config_file_sets_what_the_switches_did(files, capsys):
+    config = files / "ablation.toml"
+    config.write_text('[consolidation]\nhold_old_pb = "off"\nnew_pb_start = "centre"\n')
+    args = ["consolidate", "--model", str(files / "m.npz"), "--add", str(files / "new")]
+    out = files / "c.npz"
+    assert main([*args, "--out", str(out), "--iterations", "20", "--no-progress",
+                 "--config", str(config)]) == 0  # fmt: skip
+    details = TrainedModel.load(out).history[-1].details
+    assert (details["hold_old_pb"], details["new_pb_start"]) == ("off", "centre")
+    capsys.readouterr()
+    config.write_text("[teaching]\niterations = 5\n")
+    assert main([*args, "--out", str(files / "t.npz"), "--config", str(config)]) == 2
+    assert "does not apply to rnnpb consolidate" in capsys.readouterr().err
+    config.write_text("[consolidation]\nhold = 1\n")
+    assert main([*args, "--out", str(files / "t.npz"), "--config", str(config)]) == 2
+    assert "ablation.toml: unknown setting 'hold'" in capsys.readouterr().err
+    assert not (files / "t.npz").exists()
 
 
 def test_replay_takes_the_original_data(files, capsys):

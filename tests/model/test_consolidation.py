@@ -232,31 +232,31 @@ def test_the_alternatives_run_the_same_way(two_patterns):
 
 
 def test_a_warm_consolidation_learns_with_some_input_noise(two_patterns):
-    """Without a learning of its own a warm-started consolidation adds at least
-    CONSOLIDATION_INPUT_NOISE to the teacher-forced inputs (a model of the paper's algorithm
-    has none), a rehearsal of the old function at least FUNCTION_REHEARSAL_INPUT_NOISE; a
-    model with more keeps its own, and learning from scratch is the first's."""
-    from rnnpb.model.consolidation import (
-        CONSOLIDATION_INPUT_NOISE,
-        CONSOLIDATION_ITERATIONS,
-        FUNCTION_REHEARSAL_INPUT_NOISE,
-    )
+    """Without a learning of its own a warm-started consolidation adds at least the policy's
+    input noise to the teacher-forced inputs (a model of the paper's algorithm has none), a
+    rehearsal of the old function at least the policy's noise for it; a model with more keeps
+    its own, and learning from scratch is the first's."""
+    from rnnpb.model.consolidation import consolidation_policy
 
     model, _ = two_patterns
     paper = TrainConfig.paper(iterations=900)
-    as_paper = replace(model, meta={**model.meta, "train_config": paper.to_dict()})
+    as_paper = replace(
+        model,
+        meta={**model.meta, "train_config": paper.to_dict(), "preset": {"name": "paper"}},
+    )
+    policy = consolidation_policy(as_paper, "add")
     least = {
-        ConsolidationConfig(): FUNCTION_REHEARSAL_INPUT_NOISE,
-        ConsolidationConfig(rehearsal_target="trajectory"): CONSOLIDATION_INPUT_NOISE,
-        ConsolidationConfig("finetune"): CONSOLIDATION_INPUT_NOISE,
-        ConsolidationConfig("replay"): CONSOLIDATION_INPUT_NOISE,
+        ConsolidationConfig(): policy.function_rehearsal_input_noise,
+        ConsolidationConfig(rehearsal_target="trajectory"): policy.input_noise,
+        ConsolidationConfig("finetune"): policy.input_noise,
+        ConsolidationConfig("replay"): policy.input_noise,
     }
     for config, noise in least.items():
         learning = config.learning_for(as_paper)
         assert learning.input_noise == noise > 0
         assert (learning.optimizer, learning.learning_rate) == ("momentum", paper.learning_rate)
-        assert learning.iterations == CONSOLIDATION_ITERATIONS["momentum"]
-    assert FUNCTION_REHEARSAL_INPUT_NOISE > CONSOLIDATION_INPUT_NOISE
+        assert learning.iterations == policy.iterations
+    assert policy.function_rehearsal_input_noise > policy.input_noise
     assert ConsolidationConfig("scratch").learning_for(as_paper).input_noise == 0.0
     own = 0.05
     noisy = replace(
@@ -264,6 +264,76 @@ def test_a_warm_consolidation_learns_with_some_input_noise(two_patterns):
         meta={**model.meta, "train_config": {**model.meta["train_config"], "input_noise": own}},
     )
     assert ConsolidationConfig().learning_for(noisy).input_noise == own
+
+
+@pytest.mark.parametrize(
+    ("purpose", "preset", "expected"),
+    [
+        ("add", "paper", (20_000, 0.02, "first-half", "farthest")),
+        ("add", "fast", (500, 0.02, "first-half", "farthest")),
+        ("teach", "paper", (20_000, 0.03, "off", "centre")),
+        ("teach", "fast", (1_000, 0.03, "off", "centre")),
+    ],
+)
+def test_one_policy_sets_every_consolidation(two_patterns, purpose, preset, expected):
+    """`rnnpb consolidate` (adding patterns) and teaching take their iterations, least input
+    noise, PB hold and new PB start from one policy, by purpose and the model's preset; a
+    rehearsal learns the old network's function either way, and a config's own choice wins."""
+    from rnnpb.model.consolidation import consolidation_config
+
+    model, _ = two_patterns
+    learned = getattr(TrainConfig, preset)(iterations=900)
+    recorded = {"train_config": learned.to_dict(), "preset": {"name": preset}}
+    model = replace(model, meta={**model.meta, **recorded})
+    config = consolidation_config(model, purpose)
+    assert config.train is not None
+    iterations, noise, hold, start = expected
+    assert (config.train.iterations, config.train.input_noise) == (
+        iterations,
+        max(noise, learned.input_noise),
+    )
+    assert (config.hold_old_pb, config.new_pb_start, config.rehearsal_target) == (
+        hold,
+        start,
+        "function",
+    )
+    assert config.purpose == purpose and config.method == "rehearsal"
+    assert config.train.optimizer == learned.optimizer and config.train.seed == learned.seed
+    given = consolidation_config(model, purpose, iterations=7, seed=3)
+    assert given.train is not None and (given.train.iterations, given.train.seed) == (7, 3)
+    own = ConsolidationConfig(purpose=purpose, hold_old_pb="all").resolved(model)
+    assert own.hold_old_pb == "all" and own.new_pb_start == start
+    with pytest.raises(ConfigError, match="purpose must be one of add, teach"):
+        ConsolidationConfig(purpose="forget")  # type: ignore[arg-type]
+
+
+def test_the_methods_are_named_once():
+    """The command, the config and the model file's history know the same methods."""
+    from rnnpb.model.consolidation import CONSOLIDATION_METHODS
+    from rnnpb.model.io import HISTORY_METHODS
+
+    assert CONSOLIDATION_METHODS == ("rehearsal", "finetune", "replay", "scratch")
+    assert HISTORY_METHODS == ("train", *CONSOLIDATION_METHODS)
+
+
+def test_a_config_file_overrides_the_policy(two_patterns):
+    """Research changes any of the policy's values (a --config file's tables); an unknown
+    key is refused with the file's name."""
+    from rnnpb.model.consolidation import consolidation_config
+
+    model, _ = two_patterns
+    tables = {"consolidation": {"hold_old_pb": "off", "iterations": 7, "rehearsal_steps": 20}}
+    added = consolidation_config(model, "add", overrides=tables, origin="ablation.toml")
+    assert added.train is not None and added.train.iterations == 7
+    assert (added.hold_old_pb, added.rehearsal_steps, added.new_pb_start) == ("off", 20, "farthest")
+    taught = consolidation_config(
+        model, "teach", overrides={"teaching": {"input_noise": 0.05}}, origin="ablation.toml"
+    )
+    assert taught.train is not None and taught.train.input_noise == 0.05
+    with pytest.raises(ConfigError, match="ablation.toml: unknown setting 'hold' in"):
+        consolidation_config(
+            model, overrides={"consolidation": {"hold": "off"}}, origin="ablation.toml"
+        )
 
 
 def test_bad_input_is_refused_clearly(two_patterns):

@@ -26,6 +26,31 @@ def test_save_load_gives_identical_outputs(trained, tmp_path):
         np.testing.assert_array_equal(a.step(u).motor, b.step(u).motor)
 
 
+def test_history_and_renaming_go_through_the_model(trained, tmp_path):
+    """A model's history is replaced, and a pattern renamed, by methods that leave the model
+    they are called on as it was; both survive a file."""
+    from dataclasses import replace
+
+    first = trained.history[0]
+    step = replace(first, method="rehearsal", parent="a.npz", details={"hold_old_pb": "off"})
+    grown = trained.with_history((first, step))
+    assert [e.method for e in grown.history] == ["train", "rehearsal"]
+    assert [e.method for e in trained.history] == ["train"]
+    old = trained.patterns[0]
+    renamed = grown.renamed(old, "wave").renamed("wave", "swing")
+    assert trained.patterns[0] == old and renamed.patterns[0] == "swing"
+    renamed.save(tmp_path / "m.npz")
+    loaded = TrainedModel.load(tmp_path / "m.npz")
+    last = loaded.history[-1]
+    assert loaded.patterns == renamed.patterns and last.patterns == renamed.patterns
+    assert last.details["hold_old_pb"] == "off" and last.parent == "a.npz"
+    assert [(r["from"], r["to"]) for r in last.details["renamed"]] == [
+        (old, "wave"),
+        ("wave", "swing"),
+    ]
+    assert loaded.history[0] == first
+
+
 def _corrupt(trained, tmp_path, edit):
     path = tmp_path / "model.npz"
     trained.save(path)

@@ -71,10 +71,9 @@ def test_the_demonstrator_performs_the_new_shapes():
 # --- the model's history keeps a rename --------------------------------------------------
 def test_a_rename_is_stored_in_the_model_file_and_its_history(model, tmp_path):
     from rnnpb.errors import ConfigError
-    from rnnpb.interaction.teaching import rename_pattern
     from rnnpb.model import TrainedModel
 
-    renamed = rename_pattern(model, "3", "wave")
+    renamed = model.renamed("3", "wave")
     renamed.save(tmp_path / "m.npz")
     loaded = TrainedModel.load(tmp_path / "m.npz")
     assert loaded.patterns == ("1", "2", "wave")
@@ -84,9 +83,9 @@ def test_a_rename_is_stored_in_the_model_file_and_its_history(model, tmp_path):
     assert [(r["from"], r["to"]) for r in last.details["renamed"]] == [("3", "wave")]
     for bad, words in (("2", "already has"), ("a<b", "holds '<'"), ("", "characters")):
         with pytest.raises(ConfigError, match=words):
-            rename_pattern(model, "1", bad)
+            model.renamed("1", bad)
     with pytest.raises(ConfigError, match="no pattern"):
-        rename_pattern(model, "nope", "wave")
+        model.renamed("nope", "wave")
 
 
 # --- the session (no browser) ------------------------------------------------------------

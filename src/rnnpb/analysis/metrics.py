@@ -33,6 +33,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rnnpb import structure
+from rnnpb.structure import Periodicity as Periodicity
+from rnnpb.structure import return_error as return_error
+
 MOTOR_LOCK_THRESHOLD = 0.05
 SENSORY_LOCK_THRESHOLD = 0.03
 LOCK_HOLD = 6
@@ -140,77 +144,12 @@ def pb_settle_step(
     return None
 
 
-def _shifted(x: np.ndarray, period: float) -> np.ndarray:
-    """``x[t + period]`` for every t it exists, shape (T - ceil(period), D); between steps read
-    off a cubic spline through ``x`` (shape (T, D))."""
-    whole = int(math.floor(period))
-    if period == whole:
-        return x[whole:]
-    from scipy.interpolate import CubicSpline
-
-    n = len(x) - int(math.ceil(period))
-    return CubicSpline(np.arange(len(x)), x, axis=0)(np.arange(n) + period)
-
-
-def return_error(x: np.ndarray, period: float) -> float:
-    """``RMS(x[t+P] − x[t]) / RMS(x − mean)``: 0 for an exactly periodic trajectory; ``P`` may
-    be fractional (see :func:`periodicity`)."""
-    x = np.asarray(x, dtype=np.float64)
-    if x.ndim == 1:
-        x = x[:, None]
-    spread = np.sqrt(np.mean((x - x.mean(axis=0)) ** 2))
-    if spread < 1e-9:
-        return 0.0
-    ahead = _shifted(x, period)
-    return float(np.sqrt(np.mean((ahead - x[: len(ahead)]) ** 2)) / spread)
-
-
-@dataclass(frozen=True)
-class Periodicity:
-    period: float | None  # steps, possibly fractional; None: not periodic within the tolerance
-    return_error: float  # at the best period
-    best_period: float
-
-
-def _refined(errors: dict[int, float], p: int) -> float:
-    """The whole period ``p`` at a local minimum of ``errors``, moved to the vertex of the
-    parabola through its neighbours."""
-    if p - 1 not in errors or p + 1 not in errors:
-        return float(p)
-    left, mid, right = errors[p - 1], errors[p], errors[p + 1]
-    curvature = left - 2 * mid + right
-    if curvature <= 0:
-        return float(p)
-    return p + float(np.clip(0.5 * (left - right) / curvature, -0.5, 0.5))
-
-
 def periodicity(
     x: np.ndarray, max_period: int = MAX_PERIOD, tolerance: float = PERIODIC_TOLERANCE
 ) -> Periodicity:
     """The smallest period, whole or fractional, whose return error is below ``tolerance``
-    (see module doc); shape (T, D) or (T,)."""
-    x = np.asarray(x, dtype=np.float64)
-    if x.ndim == 1:
-        x = x[:, None]
-    max_period = min(max_period, len(x) // 3)
-    errors = {p: return_error(x, p) for p in range(1, max_period + 1)}
-    best_period, best_error = float(min(errors, key=errors.get)), min(errors.values())
-    for p in sorted(errors):
-        at_minimum = errors[p] <= errors.get(p - 1, math.inf) and errors[p] <= errors.get(
-            p + 1, math.inf
-        )
-        if not at_minimum:
-            continue
-        refined = _refined(errors, p)
-        refined_error = return_error(x, refined) if refined != p else errors[p]
-        period, error = (
-            (refined, refined_error) if refined_error < errors[p] else (float(p), errors[p])
-        )
-        if error < best_error:
-            best_period, best_error = period, error
-        if error < tolerance:
-            return Periodicity(period, error, period)
-    return Periodicity(None, best_error, best_period)
+    (see module doc and :func:`rnnpb.structure.periodicity`); shape (T, D) or (T,)."""
+    return structure.periodicity(x, max_period, tolerance)
 
 
 def last_cycle(x: np.ndarray, period: float, n: int = 60) -> np.ndarray:

@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import argparse
 
+from rnnpb.commands._config import add_config_argument
+
 NAME = "consolidate"
+CONFIG_SECTIONS = ("consolidation",)
 SAFE_POINTS = True  # Ctrl-C stops between training chunks (rnnpb._interrupt)
 HELP = "add new patterns to a learned model (rehearsal and consolidation)"
 DESCRIPTION = """\
@@ -14,8 +17,7 @@ Methods:
   rehearsal  (default) the model regenerates each learned pattern in closed loop from its PB,
              without the original data, and learns the new pattern together with them;
              a rehearsed pattern learns the old network's function on its cycle (what the
-             model predicts from noisy inputs near it), or with --rehearsal-target
-             trajectory the cycle's own next steps
+             model predicts from noisy inputs near it)
   finetune   learns the new pattern alone (the old ones are overwritten: for comparison)
   replay     learns the new pattern with the original data (--replay-data)
   scratch    learns the original data and the new pattern anew from random weights
@@ -23,11 +25,20 @@ Methods:
 
 The new files are sequence CSVs as for `rnnpb train`; their patterns must have names the
 model does not hold. Learning continues from the model's weights (scratch: from random ones)
-with the model's own algorithm (paper or fast preset); --iterations overrides the default
-(paper: 20,000; fast: 500; scratch: the model's first training's). The new model records its
+with the model's own algorithm (paper or fast preset) and its preset's consolidation policy
+(iterations, input noise, how the new PB starts and the old PBs are held); --iterations
+overrides the policy's (scratch: the model's first training's). The new model records its
 history (see `rnnpb info`). The model given is never changed; the new one is written only when
 learning is done, atomically. A checkpoint is written next to it (OUT.checkpoint.npz) every
 --checkpoint-every iterations; after an interruption --resume continues from it.
+
+For research, --config FILE overrides any value of the preset's [consolidation] section, e.g.
+to measure an alternative the policy did not take:
+
+  [consolidation]
+  hold_old_pb = "off"        # or "all"; default "first-half"
+  new_pb_start = "centre"    # default "farthest"
+  rehearsal_target = "trajectory"
 
 Example:
   rnnpb consolidate --model set1.npz --add data/patterns/4_*.csv --out set1+4.npz
@@ -48,9 +59,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--method",
-        choices=("rehearsal", "finetune", "replay", "scratch"),
         default="rehearsal",
-        help="how to add them (default: rehearsal)",
+        help="how to add them: one of the methods above (default: rehearsal)",
     )
     parser.add_argument(
         "--replay-data",
@@ -58,29 +68,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="FILE_OR_DIR",
         help="the original training data (replay and scratch)",
     )
-    parser.add_argument(
-        "--hold-old-pb",
-        choices=("off", "all", "first-half"),
-        default="first-half",
-        help="keep the old patterns' PBs at their learned values while the weights learn "
-        "(rehearsal and replay): never, for all of it, or its first half (default: "
-        "first-half)",
-    )
-    parser.add_argument(
-        "--new-pb-start",
-        choices=("centre", "farthest"),
-        default="farthest",
-        help="where the new pattern's PB starts: at 0.5, or at the point of PB space farthest "
-        "from the learned patterns' PBs (default: farthest)",
-    )
-    parser.add_argument(
-        "--rehearsal-target",
-        choices=("function", "trajectory"),
-        default="function",
-        help="what a rehearsed pattern learns towards: the old network's predictions from the "
-        "same noisy inputs, or the rehearsed cycle's next steps (default: function)",
-    )
     parser.add_argument("--iterations", type=int, help="learning iterations")
+    add_config_argument(parser, CONFIG_SECTIONS)
     parser.add_argument("--seed", type=int, help="random seed (default: the model's)")
     parser.add_argument(
         "--checkpoint-every",
@@ -103,16 +92,23 @@ def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
     from rnnpb import _interrupt
+    from rnnpb.commands._config import read_config
     from rnnpb.commands.train import checkpoint_path_for
     from rnnpb.errors import ConfigError
     from rnnpb.model import TrainedModel
-    from rnnpb.model.consolidation import ConsolidationConfig, consolidate
+    from rnnpb.model.consolidation import (
+        ConsolidationConfig,
+        consolidate,
+        consolidation_config,
+    )
     from rnnpb.sequences import read_sequence_files
 
+    ConsolidationConfig(method=args.method)  # a method it does not know: said before any work
     if args.iterations is not None and args.iterations < 1:
         raise ConfigError(f"--iterations must be >= 1, got {args.iterations}")
     if args.checkpoint_every < 1:
         raise ConfigError(f"--checkpoint-every must be >= 1, got {args.checkpoint_every}")
+    overrides = read_config(args.config, CONFIG_SECTIONS, NAME)
     model = TrainedModel.load(args.model)
     new = read_sequence_files(args.add)
     replay = read_sequence_files(args.replay_data) if args.replay_data else None
@@ -121,19 +117,17 @@ def run(args: argparse.Namespace) -> int:
             f"--replay-data is for the methods replay and scratch, not "
             f"{args.method} (rehearsal needs no original data)"
         )
-    config = ConsolidationConfig(
+    config = consolidation_config(
+        model,
+        "add",
         method=args.method,
-        hold_old_pb=args.hold_old_pb,
-        new_pb_start=args.new_pb_start,
-        rehearsal_target=args.rehearsal_target,
+        iterations=args.iterations,
+        seed=args.seed,
+        overrides=None if overrides is None else dict(overrides.tables),
+        origin=args.config or "",
     )
-    learning = config.learning_for(model)
-    changes = {"iterations": args.iterations, "seed": args.seed}
-    learning = replace(
-        learning,
-        checkpoint_every=args.checkpoint_every,
-        **{k: v for k, v in changes.items() if v is not None},
-    )
+    assert config.train is not None
+    learning = replace(config.train, checkpoint_every=args.checkpoint_every)
     config = replace(config, train=learning)
     added = sorted({s.pattern for s in new})
     print(

@@ -11,8 +11,9 @@ measured (the network is taught what the camera sees, as in the paper).
 Cutting (:func:`cycle_bounds`): the first principal component of the sensory values, lightly
 smoothed, crosses its mean upwards once per cycle of any of the paper's patterns; cycles are
 the stretches between successive upward crossings at least half the dominant period apart (the
-period from the autocorrelation's first peak). A sequence is then ``cycles_per_sequence`` whole
-cycles (``mode="cycles"``) or consecutive windows of ``length`` steps (``mode="length"``);
+period from the autocorrelation's first peak, :func:`rnnpb.structure.first_period`). A
+sequence is then ``cycles_per_sequence`` whole cycles (``mode="cycles"``) or consecutive
+windows of ``length`` steps (``mode="length"``);
 steps where a hand could not be recovered (lost longer than the gap filling covers) split the
 recording, and a sequence never spans them.
 """
@@ -35,6 +36,7 @@ from rnnpb.perception import (
 from rnnpb.robot.camera import RobotCamera
 from rnnpb.sequences import Sequence
 from rnnpb.sources import FrameStepSource, UserSource
+from rnnpb.structure import first_period
 
 CUT_MODES = ("cycles", "length")
 MIN_PERIOD = 4
@@ -153,34 +155,10 @@ def dominant_period(
     signal: np.ndarray, min_period: int = MIN_PERIOD, max_period: int = MAX_PERIOD
 ) -> int | None:
     """The lag of the autocorrelation's first strong peak in [min_period, max_period], or None
-    when the signal does not repeat. ``signal`` shape (n_steps,).
-
-    A peak is a local maximum inside the range, above 0.3 and at least 0.6 above the lowest
-    correlation at a shorter lag: a cycle's autocorrelation falls towards -1 at half its period
-    and comes back, while a drifting, shapeless movement's only decays (with small bumps).
-    """
-    x = np.asarray(signal, dtype=np.float64)
-    x = x - x.mean()
-    energy = float(x @ x)
-    max_period = min(max_period, len(x) // 2)
-    if energy <= 1e-12 or max_period < min_period + 2:
-        return None
-    lags = np.arange(1, max_period + 2)
-    correlation = np.array([x[:-k] @ x[k:] / energy * len(x) / (len(x) - k) for k in lags])
-    peaks = [
-        i
-        for i in range(min_period - 1, len(lags) - 1)
-        if correlation[i] >= correlation[i - 1]
-        and correlation[i] >= correlation[i + 1]
-        and correlation[i] > 0.3
-        and correlation[i] - correlation[:i].min() >= 0.6
-    ]
-    if not peaks:
-        return None
-    # the first strong peak: later peaks are its multiples
-    best = max(correlation[i] for i in peaks)
-    first = next(i for i in peaks if correlation[i] >= 0.8 * best)
-    return int(lags[first])
+    when the signal does not repeat (:func:`rnnpb.structure.first_period`: a peak above 0.3
+    and at least 0.6 above the lowest correlation at a shorter lag, the first within 0.8 of
+    the highest). ``signal`` shape (n_steps,)."""
+    return first_period(signal, min_period, max_period, level=0.3, rise=0.6, share=0.8)
 
 
 def cycle_bounds(sensory: np.ndarray) -> list[tuple[int, int]]:

@@ -9,7 +9,10 @@ docstring: model files (``io.py``), the training driver's checkpoints and clock
 from rnnpb.model.consolidation import (
     CONSOLIDATION_METHODS,
     ConsolidationConfig,
+    ConsolidationPolicy,
     consolidate,
+    consolidation_config,
+    consolidation_policy,
     rehearse,
 )
 from rnnpb.model.generation import Generated, generate
@@ -34,6 +37,7 @@ __all__ = [
     "CONSOLIDATION_METHODS",
     "MIRROR_SYSTEMS",
     "ConsolidationConfig",
+    "ConsolidationPolicy",
     "Generated",
     "HistoryEntry",
     "MirrorSystem",
@@ -48,6 +52,8 @@ __all__ = [
     "TrainingProgress",
     "closed_loop",
     "consolidate",
+    "consolidation_config",
+    "consolidation_policy",
     "generate",
     "init_params",
     "mixed_loop",

@@ -15,8 +15,9 @@ progress, checkpoints and resume):
     the new sequences and one rehearsed sequence per learned sequence (:func:`rehearse`: by
     default stretches of each pattern's limit cycle, generated from the pattern's PB); by
     default a rehearsed sequence learns the old network's function on it — what the model
-    predicts from the sequence's noisy inputs — rather than its own next steps
-    (:data:`REHEARSAL_TARGET`);
+    predicts from the sequence's noisy inputs — rather than its own next steps (a trajectory
+    target pulls every noisy input back onto the cycle and loses the network's response to a
+    person's version of the pattern, and with it lock-on);
 ``finetune``
     the new sequences alone: what interference looks like;
 ``replay``
@@ -27,10 +28,19 @@ progress, checkpoints and resume):
     model's own full learning: the upper bound.
 
 All but ``scratch`` start from the model's weights ("warm start"); an old sequence starts from
-its learned PB and initial context (by default held there for the first half), a new sequence
-from context 0.5 and, by default, the PB farthest from the learned ones. The old patterns keep
-their names, the new pattern gets PBs of its own, and the result records the step in its
-history (:class:`rnnpb.model.io.HistoryEntry`).
+its learned PB and initial context (held there for the first half when adding patterns), a new
+sequence from context 0.5 and, when adding patterns, the PB farthest from the learned ones (it
+need not push the old patterns' PBs aside). The old patterns keep their names, the new pattern
+gets PBs of its own, and the result records the step in its history
+(:class:`rnnpb.model.io.HistoryEntry`).
+
+**One policy.** What a consolidation does when the caller does not say — its iterations, the
+least input noise, the PB hold, the new PB's start, the rehearsal — is data: the
+``[consolidation]`` section of the model's learning preset (:mod:`rnnpb.presets`, each value
+with its evidence), with its ``[teaching]`` section over it when on-line teaching learns a
+kept episode. :func:`consolidation_config` (``purpose="add"`` or ``"teach"``) is how
+``rnnpb consolidate``, teaching and the studies get it; :class:`ConsolidationConfig`'s fields
+set explicitly win (research: ``--config FILE``).
 
 Unlike the rest of the model this module reads a clock: the time the history records.
 """
@@ -39,11 +49,11 @@ from __future__ import annotations
 
 import datetime
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from collections.abc import Sequence as SequenceABC
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, get_args
 
 import numpy as np
 
@@ -52,196 +62,252 @@ from rnnpb.model.generation import generate
 from rnnpb.model.io import HistoryEntry, TrainedModel
 from rnnpb.model.learning import TrainConfig, WarmStart, prepare_data
 from rnnpb.model.training import TrainingProgress, train
+from rnnpb.presets import Preset, load_preset
 from rnnpb.sequences import Sequence
 
-CONSOLIDATION_METHODS = ("rehearsal", "finetune", "replay", "scratch")
+Method = Literal["rehearsal", "finetune", "replay", "scratch"]
+CONSOLIDATION_METHODS: tuple[str, ...] = get_args(Method)
 """The ways :func:`consolidate` adds patterns (see the module)."""
-REHEARSAL_STEPS = 50
-"""Steps of each rehearsed sequence: the length of the paper's demonstrations (2.2)."""
-REHEARSAL_TRANSIENT = 200
-"""Closed-loop steps run before a rehearsed sequence starts: the network falls onto the
-pattern's limit cycle after a transient (paper 3.3), and what it rehearses is that cycle. With
-100 steps what was rehearsed was partly still the transient, and the cycle the model generates
-afterwards moved: learning set 1's pattern 1 by RMS 0.139-0.154 from the original model's; with
-200 (the transient the study's generation measure discards) by 0.010-0.016 (docs/model.md,
-"Consolidation")."""
-# Iterations of a consolidation by each optimizer, when the caller names none. From warm
-# weights, on learning set 1's model (the paper's algorithm) with its left-out pattern added by
-# rehearsal, the mean training error fell from 3.1e-4 after 100 iterations to 4.4e-5 after
-# 5,000 and only to 3.6e-5 after 20,000: a tenth of a first training's 50,000 iterations
-# reaches the error. Rehearsing the old network's function (REHEARSAL_TARGET) needs more: what
-# it learns is that function around each cycle, and with 5,000 iterations set 2's pattern 3
-# moved by 0.065-0.070, with 20,000 by 0.047-0.053 (docs/model.md, "Consolidation"). 20,000
-# take 17-19 s of one core, within the minute a consolidation may take. Adam (the fast preset)
-# needs a tenth of its 3,000, rounded up.
-CONSOLIDATION_ITERATIONS = {"momentum": 20_000, "adam": 500}
-CONSOLIDATION_INPUT_NOISE = 0.01
-"""The least noise (standard deviation, normalized units) on the teacher-forced inputs of a
-warm-started consolidation when the caller names no learning (a rehearsal of the old
-network's function takes :data:`FUNCTION_REHEARSAL_INPUT_NOISE`). Rehearsed sequences are exactly
-what the network already generates, so without noise nothing in the learning holds an old
-pattern's closed loop on its cycle while the weights move for the new one; with this much, on
-the incremental study's measures from the demo's models (the paper's algorithm, no noise of
-its own), the old cycles that stayed within RMS 0.05 of the original model's went from 20 to
-23 of 24 on the two draws of the user and the new pattern's data where it was chosen (against
-0.005, 0.015 and 0.02, with and without holding the old PBs), and from 19 to 23 of 24 on two
-draws not looked at before, where the learning sets followed went from 6 to 7 of 8
-(docs/model.md, "Consolidation"). A model learned with more noise (the fast preset's 0.02)
-keeps its own."""
-FUNCTION_REHEARSAL_INPUT_NOISE = 0.02
-"""The least input noise of a rehearsal that learns the old network's function
-(:data:`REHEARSAL_TARGET`): the noise is where that function is learned — the inputs near each
-cycle a person's version of the pattern brings. With 20,000 iterations on the incremental
-study's two draws, 0.02 followed 8 of 8 learning sets, 0.015 and 0.01 7 of 8 (docs/model.md,
-"Consolidation")."""
-
-HOLD_OLD_PB_OPTIONS = ("off", "all", "first-half")
+Purpose = Literal["add", "teach"]
+PURPOSES: tuple[str, ...] = get_args(Purpose)
+"""What a consolidation is for: adding recorded patterns (``rnnpb consolidate``, the
+incremental study), or learning an episode kept on-line by teaching."""
+HoldOldPB = Literal["off", "all", "first-half"]
+HOLD_OLD_PB_OPTIONS: tuple[str, ...] = get_args(HoldOldPB)
 """How long a consolidation keeps the old sequences' PBs at their learned values:
 never (they learn by eqs. 1–2 with the new ones), for all of it, or for its first half."""
-HOLD_OLD_PB = "first-half"
-"""The default: the old PBs stay for the first half, while the new pattern's error is largest,
-and learn in the second. Together with a new PB that starts away from the old ones
-(:data:`NEW_PB_START`) and the input noise, it followed 20 of 24 learning sets over six draws
-of the user and the new pattern's data (the old PBs learning from the centre: 17) and kept 70
-of 72 old cycles within RMS 0.05 (68); chosen on draws 0 and 1, checked on 4 and 5: 8 of 8 sets
-against 4 (docs/model.md, "Consolidation")."""
-
-NEW_PB_STARTS = ("centre", "farthest")
+NewPBStart = Literal["centre", "farthest"]
+NEW_PB_STARTS: tuple[str, ...] = get_args(NewPBStart)
 """Where a new sequence's PB starts: at 0.5 like a first training's, or at the point of a grid
 of PB space farthest from the learned patterns' PBs (:func:`farthest_pb`)."""
-NEW_PB_START = "farthest"
-"""The default: the new pattern starts where no old pattern is, so that learning it need not
-push the old patterns' PBs aside (from the centre, with the old PBs held, the new pattern had
-to grow out of the middle of them: docs/model.md, "Consolidation")."""
-
-REHEARSAL_TARGETS = ("function", "trajectory")
+RehearsalTarget = Literal["function", "trajectory"]
+REHEARSAL_TARGETS: tuple[str, ...] = get_args(RehearsalTarget)
 """What a rehearsed sequence learns towards: the old network's *function* — what the model,
 from the pattern's PB and the stretch's context, predicts for the same noisy teacher-forced
 inputs — or the rehearsed *trajectory*'s own next steps."""
-REHEARSAL_TARGET = "function"
-"""The default. A trajectory target teaches the network to pull every noisy input back onto
-the rehearsed cycle: the cycle stays, but the network's response to hands near it (a person's
-version of the pattern, which the original model learned) is lost, and its sensory prediction
-error for the person rises towards the lock-on threshold (on learning set 4's model, pattern 1:
-median 0.013 before, 0.020 after). The function target keeps that response, and with it
-lock-on (docs/model.md, "Consolidation")."""
-
-Method = Literal["rehearsal", "finetune", "replay", "scratch"]
-HoldOldPB = Literal["off", "all", "first-half"]
-NewPBStart = Literal["centre", "farthest"]
-RehearsalTarget = Literal["function", "trajectory"]
 RehearsalSource = Literal["patterns", "sequences"]
-REHEARSAL_SOURCES = ("patterns", "sequences")
+REHEARSAL_SOURCES: tuple[str, ...] = get_args(RehearsalSource)
 """What :func:`rehearse` runs the closed loop from: each pattern's PB, or each sequence's."""
-REHEARSAL_SOURCE: RehearsalSource = "patterns"
-"""Rehearse from each pattern's PB: that is the PB generation and recognition use; a
-pattern's sequences' own PBs can lie far apart, and their mean's cycle was not rehearsed (on
-learning set 4's model, rehearsing each sequence's left pattern 1 locking on after 50 steps,
-rehearsing the pattern's PB after 13)."""
+
+
+@dataclass(frozen=True)
+class ConsolidationPolicy:
+    """The measured choices of a consolidation of one model for one purpose: its learning
+    preset's ``[consolidation]`` section, with the ``[teaching]`` section over it for
+    ``"teach"`` (each value's reason is its evidence in the preset file).
+
+    Attributes
+    ----------
+    iterations : int
+        Learning iterations from the model's weights.
+    input_noise : float
+        The least noise (standard deviation, normalized units) on the teacher-forced inputs:
+        it holds an old pattern's closed loop on its cycle while the weights move for the new
+        one (a model learned with more keeps its own).
+    function_rehearsal_input_noise : float
+        The same for a rehearsal of the old network's function, which is learned where the
+        noise brings the inputs: near each cycle, as far as a person's version of it.
+    hold_old_pb, new_pb_start, rehearsal_target, rehearsal_source : str
+    rehearsal_steps, rehearsal_transient : int
+        What :class:`ConsolidationConfig`'s fields of those names are when left None, and
+        :func:`rehearse`'s defaults.
+    """
+
+    iterations: int
+    input_noise: float
+    function_rehearsal_input_noise: float
+    hold_old_pb: HoldOldPB
+    new_pb_start: NewPBStart
+    rehearsal_target: RehearsalTarget
+    rehearsal_source: RehearsalSource
+    rehearsal_steps: int
+    rehearsal_transient: int
+
+    def least_input_noise(self, method: str, rehearsal_target: str) -> float:
+        """The least input noise of a consolidation by ``method`` (rehearsing towards
+        ``rehearsal_target``)."""
+        if method == "rehearsal" and rehearsal_target == "function":
+            return self.function_rehearsal_input_noise
+        return self.input_noise
+
+
+def recorded_learning(model: TrainedModel) -> TrainConfig:
+    """The learning ``model`` recorded (the paper's algorithm for a model that recorded none)."""
+    recorded = model.meta.get("train_config")
+    try:
+        return (
+            TrainConfig.from_dict(recorded) if isinstance(recorded, dict) else TrainConfig.paper()
+        )
+    except (TypeError, ValueError, KeyError) as error:
+        raise ConfigError(
+            f"the model's recorded training config is not usable ({error}); "
+            "give the consolidation's learning explicitly"
+        ) from None
+
+
+def _learning_preset(model: TrainedModel) -> Preset:
+    """The learning preset the model was learned with (:attr:`TrainedModel.learning_preset`;
+    the paper's for a model that recorded no learning)."""
+    recorded = model.learning_preset
+    return load_preset(recorded[0] if recorded is not None else "paper")
+
+
+def consolidation_policy(
+    model: TrainedModel, purpose: Purpose = "add", preset: Preset | None = None
+) -> ConsolidationPolicy:
+    """How ``model`` is consolidated for ``purpose`` (one of :data:`PURPOSES`): the values of
+    ``preset``, by default the learning preset the model was learned with.
+
+    Teaching learns a kept episode — three cycles of an imperfect demonstration — into the
+    model while the person goes on: the ``[teaching]`` section sets its own iterations, new PB
+    start and PB hold, and its input noise is a floor over the consolidation's (a person's
+    version of an old pattern can lie further from its cycle than that noise reaches).
+    """
+    if purpose not in PURPOSES:
+        raise ConfigError(
+            f"consolidation purpose must be one of {', '.join(PURPOSES)}, got {purpose!r}"
+        )
+    preset = preset or _learning_preset(model)
+    values = dict(preset.section("consolidation"))
+    if purpose == "teach":
+        teaching = preset.section("teaching")
+        floor = teaching["input_noise"]
+        values.update(
+            iterations=teaching["iterations"],
+            hold_old_pb=teaching["hold_old_pb"],
+            new_pb_start=teaching["new_pb_start"],
+            input_noise=max(values["input_noise"], floor),
+            function_rehearsal_input_noise=max(values["function_rehearsal_input_noise"], floor),
+        )
+    try:
+        return ConsolidationPolicy(**values)
+    except TypeError as error:
+        raise ConfigError(f"preset {preset.name!r}: [consolidation] {error}") from None
 
 
 @dataclass(frozen=True)
 class ConsolidationConfig:
     """How to add patterns to a learned model.
 
+    The fields left None take the model's :func:`consolidation_policy` for ``purpose``
+    (:meth:`resolved`): a user names the method; research sets the others (``--config FILE``)
+    to measure the alternatives.
+
     Attributes
     ----------
     method : str
         One of :data:`CONSOLIDATION_METHODS`.
+    purpose : str
+        One of :data:`PURPOSES`: whose measured choices the fields left None take.
     train : TrainConfig or None
         The learning. None: the model's own recorded learning (its optimizer, rates and seed)
-        with :data:`CONSOLIDATION_ITERATIONS` iterations and at least
-        :data:`CONSOLIDATION_INPUT_NOISE` on the inputs (a rehearsal of the old network's
-        function: :data:`FUNCTION_REHEARSAL_INPUT_NOISE`) — for ``scratch`` the model's own
-        full learning, unchanged.
-    rehearsal_steps, rehearsal_transient : int
+        with the policy's iterations and at least its input noise — for ``scratch`` the
+        model's own full learning, unchanged.
+    rehearsal_steps, rehearsal_transient : int or None
         Length of each rehearsed sequence, and the closed-loop steps run before it.
-    rehearsal_source : str
+    rehearsal_source : str or None
         What :func:`rehearse` runs the closed loop from (:data:`REHEARSAL_SOURCES`).
-    hold_old_pb : str
+    hold_old_pb : str or None
         One of :data:`HOLD_OLD_PB_OPTIONS`: whether the old sequences' PBs stay at their
         learned values while the weights learn the new pattern — ``"all"`` of the
         consolidation, its ``"first-half"`` (while the new pattern's error is largest), or
         ``"off"``. The new sequences' PBs always learn. For ``rehearsal`` and ``replay``, the
         methods that learn old sequences from their learned PBs; ``finetune`` learns no old
         sequence and ``scratch`` has no learned PB to hold, so neither uses it.
-    new_pb_start : str
+    new_pb_start : str or None
         One of :data:`NEW_PB_STARTS`: where the new sequences' PBs start (every warm-started
         method; ``scratch`` starts everything anew).
-    rehearsal_target : str
+    rehearsal_target : str or None
         One of :data:`REHEARSAL_TARGETS`: what ``rehearsal``'s rehearsed sequences learn
         towards.
     """
 
     method: Method = "rehearsal"
+    purpose: Purpose = "add"
     train: TrainConfig | None = None
-    rehearsal_steps: int = REHEARSAL_STEPS
-    rehearsal_transient: int = REHEARSAL_TRANSIENT
-    rehearsal_source: RehearsalSource = REHEARSAL_SOURCE
-    hold_old_pb: HoldOldPB = HOLD_OLD_PB
-    new_pb_start: NewPBStart = NEW_PB_START
-    rehearsal_target: RehearsalTarget = REHEARSAL_TARGET
+    rehearsal_steps: int | None = None
+    rehearsal_transient: int | None = None
+    rehearsal_source: RehearsalSource | None = None
+    hold_old_pb: HoldOldPB | None = None
+    new_pb_start: NewPBStart | None = None
+    rehearsal_target: RehearsalTarget | None = None
 
     def __post_init__(self) -> None:
-        if self.method not in CONSOLIDATION_METHODS:
-            raise ConfigError(
-                f"consolidation method must be one of "
-                f"{', '.join(CONSOLIDATION_METHODS)}, got {self.method!r}"
-            )
-        if self.rehearsal_steps < 2:
+        for name, value, allowed in (
+            ("consolidation method", self.method, CONSOLIDATION_METHODS),
+            ("consolidation purpose", self.purpose, PURPOSES),
+            ("rehearsal_source", self.rehearsal_source, (None, *REHEARSAL_SOURCES)),
+            ("new_pb_start", self.new_pb_start, (None, *NEW_PB_STARTS)),
+            ("rehearsal_target", self.rehearsal_target, (None, *REHEARSAL_TARGETS)),
+            ("hold_old_pb", self.hold_old_pb, (None, *HOLD_OLD_PB_OPTIONS)),
+        ):
+            if value not in allowed:
+                choices = ", ".join(a for a in allowed if a is not None)
+                raise ConfigError(f"{name} must be one of {choices}, got {value!r}")
+        if self.rehearsal_steps is not None and self.rehearsal_steps < 2:
             raise ConfigError(f"rehearsal_steps must be >= 2, got {self.rehearsal_steps}")
-        if self.rehearsal_transient < 1:
+        if self.rehearsal_transient is not None and self.rehearsal_transient < 1:
             raise ConfigError(f"rehearsal_transient must be >= 1, got {self.rehearsal_transient}")
-        if self.rehearsal_source not in REHEARSAL_SOURCES:
-            raise ConfigError(
-                f"rehearsal_source must be one of {', '.join(REHEARSAL_SOURCES)}, "
-                f"got {self.rehearsal_source!r}"
-            )
-        if self.new_pb_start not in NEW_PB_STARTS:
-            raise ConfigError(
-                f"new_pb_start must be one of {', '.join(NEW_PB_STARTS)}, got {self.new_pb_start!r}"
-            )
-        if self.rehearsal_target not in REHEARSAL_TARGETS:
-            raise ConfigError(
-                f"rehearsal_target must be one of {', '.join(REHEARSAL_TARGETS)}, "
-                f"got {self.rehearsal_target!r}"
-            )
-        if self.hold_old_pb not in HOLD_OLD_PB_OPTIONS:
-            raise ConfigError(
-                f"hold_old_pb must be one of {', '.join(HOLD_OLD_PB_OPTIONS)}, "
-                f"got {self.hold_old_pb!r}"
-            )
 
-    def learning_for(self, model: TrainedModel) -> TrainConfig:
-        """The :class:`TrainConfig` this consolidation of ``model`` learns with."""
+    def resolved(self, model: TrainedModel, preset: Preset | None = None) -> ConsolidationConfig:
+        """This config with every field left None taken from ``model``'s policy for
+        :attr:`purpose` (from ``preset``, by default the model's), and its learning
+        (:meth:`learning_for`)."""
+        policy = consolidation_policy(model, self.purpose, preset)
+        chosen = {
+            name: getattr(policy, name) if getattr(self, name) is None else getattr(self, name)
+            for name in (
+                "hold_old_pb",
+                "new_pb_start",
+                "rehearsal_target",
+                "rehearsal_source",
+                "rehearsal_steps",
+                "rehearsal_transient",
+            )
+        }
+        return replace(self, **chosen, train=self.learning_for(model, preset))
+
+    def learning_for(self, model: TrainedModel, preset: Preset | None = None) -> TrainConfig:
+        """The :class:`TrainConfig` this consolidation of ``model`` learns with (the policy's
+        from ``preset``, by default the model's)."""
         if self.train is not None:
             return self.train
-        recorded = model.meta.get("train_config")
-        try:
-            own = (
-                TrainConfig.from_dict(recorded)
-                if isinstance(recorded, dict)
-                else TrainConfig.paper()
-            )
-        except (TypeError, ValueError, KeyError) as error:
-            raise ConfigError(
-                f"the model's recorded training config is not usable ({error}); "
-                "give the consolidation's learning explicitly"
-            ) from None
+        own = recorded_learning(model)
         if self.method == "scratch":
             # The first training's length: a consolidated model records its consolidation's.
             first = model.history[0].train_config.get("iterations")
             return replace(own, iterations=first) if isinstance(first, int) else own
-        least = (
-            FUNCTION_REHEARSAL_INPUT_NOISE
-            if self.method == "rehearsal" and self.rehearsal_target == "function"
-            else CONSOLIDATION_INPUT_NOISE
-        )
-        return replace(
-            own,
-            iterations=CONSOLIDATION_ITERATIONS[own.optimizer],
-            input_noise=max(own.input_noise, least),
-        )
+        policy = consolidation_policy(model, self.purpose, preset)
+        target = self.rehearsal_target or policy.rehearsal_target
+        least = policy.least_input_noise(self.method, target)
+        return replace(own, iterations=policy.iterations, input_noise=max(own.input_noise, least))
+
+
+def consolidation_config(
+    model: TrainedModel,
+    purpose: Purpose = "add",
+    *,
+    method: Method = "rehearsal",
+    iterations: int | None = None,
+    seed: int | None = None,
+    overrides: Mapping[str, Mapping[str, Any]] | None = None,
+    origin: str = "--config",
+) -> ConsolidationConfig:
+    """The consolidation of ``model`` for ``purpose``, every choice made: the one policy
+    ``rnnpb consolidate``, on-line teaching and the studies consolidate by.
+
+    ``iterations`` and ``seed``, given, replace the policy's and the model's. ``overrides``
+    (``{"consolidation": {...}, "teaching": {...}}``, a ``--config`` file's tables, named by
+    ``origin``) replace the preset's values; an unknown key is a :class:`ConfigError`.
+    """
+    preset = _learning_preset(model)
+    if overrides:
+        preset = preset.overridden(overrides, origin)
+    config = ConsolidationConfig(method=method, purpose=purpose).resolved(model, preset)
+    assert config.train is not None
+    changes = {"iterations": iterations, "seed": seed}
+    learning = replace(config.train, **{k: v for k, v in changes.items() if v is not None})
+    return replace(config, train=learning)
 
 
 def _taught(model: TrainedModel, learned: TrainedModel, n_new: int) -> np.ndarray | None:
@@ -289,12 +355,13 @@ def model_joint_limits(model: TrainedModel) -> np.ndarray:
 
 def rehearse(
     model: TrainedModel,
-    n_steps: int = REHEARSAL_STEPS,
-    transient: int = REHEARSAL_TRANSIENT,
-    source: RehearsalSource = REHEARSAL_SOURCE,
+    n_steps: int | None = None,
+    transient: int | None = None,
+    source: RehearsalSource | None = None,
 ) -> list[Sequence]:
     """Each learned pattern regenerated in closed loop, without the original data: one
-    rehearsed sequence per learned sequence.
+    rehearsed sequence per learned sequence (what is not given: the model's
+    :func:`consolidation_policy`).
 
     ``source="patterns"``: each pattern's closed loop runs from the pattern's PB and initial
     context (what generation and recognition use: :attr:`TrainedModel.pattern_pb`); a
@@ -311,6 +378,11 @@ def rehearse(
         One per learned sequence, in the model's order, each named by its pattern (raw units:
         sensory in [0, 1], motor in radians).
     """
+    if n_steps is None or transient is None or source is None:
+        policy = consolidation_policy(model)
+        n_steps = policy.rehearsal_steps if n_steps is None else n_steps
+        transient = policy.rehearsal_transient if transient is None else transient
+        source = policy.rehearsal_source if source is None else source
     if n_steps < 2 or transient < 1:
         raise ConfigError(
             f"rehearsal needs n_steps >= 2 and transient >= 1, got {n_steps} and {transient}"
@@ -459,8 +531,8 @@ def consolidate(
         The old sequences (rehearsed, replayed or, for finetune, as they were), then the new;
         ``meta["history"]`` is the model's history with this step appended.
     """
-    config = config or ConsolidationConfig()
     _check_new(model, new_sequences)
+    config = (config or ConsolidationConfig()).resolved(model)
     learning = config.learning_for(model)
     limits = model_joint_limits(model)
     new = list(new_sequences)
@@ -562,5 +634,4 @@ def consolidate(
         created=datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         details=details,
     )
-    meta = {**learned.meta, "history": [e.to_json() for e in (*model.history, entry)]}
-    return replace(learned, meta=meta)
+    return learned.with_history((*model.history, entry))

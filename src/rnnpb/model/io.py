@@ -309,6 +309,53 @@ class TrainedModel:
             return (first_training_entry(self.meta, self.patterns),)
         return tuple(HistoryEntry.from_json("model", entry) for entry in recorded)
 
+    def with_history(self, history: tuple[HistoryEntry, ...]) -> TrainedModel:
+        """This model with ``history`` (oldest first) as its recorded history."""
+        import dataclasses
+
+        meta = {**self.meta, "history": [entry.to_json() for entry in history]}
+        return dataclasses.replace(self, meta=meta)
+
+    def renamed(self, pattern: str, name: str) -> TrainedModel:
+        """This model with its pattern ``pattern`` called ``name``: the sequences' names and
+        the history's last entry (its ``added`` and ``patterns``; ``details["renamed"]``
+        records ``{"from", "to", "created"}``), so the file says what the pattern was learned
+        as.
+
+        Raises :class:`ConfigError` for a pattern the model does not hold, a name that is not
+        a pattern name, or one the model already holds.
+        """
+        import dataclasses
+        import datetime
+
+        from rnnpb.errors import ConfigError
+
+        if pattern not in self.patterns:
+            raise ConfigError(f"the model has no pattern {pattern!r}")
+        problem = pattern_name_problem(name)
+        if problem:
+            raise ConfigError(f"pattern name {name!r} {problem}")
+        if name in self.patterns:
+            raise ConfigError(f"the model already has a pattern {name!r}")
+
+        def renamed(names: tuple[str, ...]) -> tuple[str, ...]:
+            return tuple(name if n == pattern else n for n in names)
+
+        *older, last = self.history
+        record = {
+            "from": pattern,
+            "to": name,
+            "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        }
+        last = dataclasses.replace(
+            last,
+            added=renamed(last.added),
+            patterns=renamed(last.patterns),
+            details={**last.details, "renamed": [*last.details.get("renamed", []), record]},
+        )
+        model = dataclasses.replace(self, sequence_patterns=renamed(self.sequence_patterns))
+        return model.with_history((*older, last))
+
     @property
     def fingerprint(self) -> str:
         """SHA-256 of what the model computes with: network sizes, weights, PBs, initial

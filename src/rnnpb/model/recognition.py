@@ -366,11 +366,14 @@ def taught_distances(window: np.ndarray, taught: TaughtStretches) -> np.ndarray:
 
 
 def _structure(history: np.ndarray, config: RecognitionConfig) -> tuple[float, bool]:
-    """The smallest self-difference of the recent observations over the lags, relative to
-    twice their variance: near 0 for a repeating movement, about 1 for one that does not
-    repeat (NaN while no lag can be measured yet); and whether every lag was measured.
+    """The smallest self-difference (:func:`rnnpb.structure.recent_self_differences`) of the
+    recent observations over the lags, relative to twice their variance: near 0 for a
+    repeating movement, about 1 for one that does not repeat (NaN while no lag can be measured
+    yet); and whether every lag was measured.
 
     The lags are tried from the smallest up, as far as the history has no gap (NaN)."""
+    from rnnpb.structure import recent_self_differences
+
     recent = config.structure_steps
     low, high = config.lags
     size = len(history)
@@ -385,8 +388,7 @@ def _structure(history: np.ndarray, config: RecognitionConfig) -> tuple[float, b
     count = int(measured.sum())
     if count == 0:
         return float("nan"), False
-    before = history[rows[:count]]  # (lags measured, recent, S)
-    best = float(np.min(np.mean((history[size - recent :][None] - before) ** 2, axis=(1, 2))))
+    best = float(np.min(recent_self_differences(history, lags[:count], recent)))
     variance = float(np.var(history[size - recent - int(lags[count - 1]) :], axis=0).mean())
     if not variance > 0:
         return float("nan"), False

@@ -46,8 +46,8 @@ class TeachingSettings:
         when the person presses Confirm; ``auto``: consolidated as soon as one is kept;
         ``off``: nothing is kept. The page can change it.
     iterations : int, optional
-        Learning iterations of each consolidation (default: teaching's own,
-        :data:`rnnpb.interaction.teaching.TEACHING_ITERATIONS`).
+        Learning iterations of each consolidation (default: the consolidation policy's for
+        teaching, :func:`rnnpb.model.consolidation.consolidation_config`).
     folder : path, optional
         Where a model shipped inside the package is copied to learn from (its memory and new
         versions beside the copy). Default: the session's folder, ``WORKDIR/taught`` (a

@@ -173,8 +173,13 @@ def _introduction(options, seeds, settings, settle: int) -> list[str]:
         "# Study: novelty — does the robot know what it sees?",
         "",
         f"{'Quick form' if options.quick else 'Full form'}; draws of the user (scenario "
-        f"seeds) {seeds}, none of them the draws the detector's settings were chosen on. "
-        f"Steps judged: from {settle} steps after a movement starts. Each model runs "
+        f"seeds) {seeds}"
+        + (
+            f", the exam's (version {options.exam.version}), never used to choose a setting. "
+            if options.exam is not None
+            else ": development draws; the targets are judged on the exam (`--exam`). "
+        )
+        + f"Steps judged: from {settle} steps after a movement starts. Each model runs "
         "with the on-line regression and recognition settings chosen for its learning "
         "(`OnlineConfig.for_model`): "
         + ", ".join(f"{n}: {s['online_preset']}" for n, s in settings.items())

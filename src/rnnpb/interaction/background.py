@@ -1,0 +1,212 @@
+"""Teaching's work off the loop's thread: a consolidation in a spawned process
+(:class:`BackgroundConsolidation`) and a new model version's mirror system built and compiled
+in a thread (:class:`PreparedMirror`), so that a paced loop keeps its deadlines."""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+
+def _consolidation_worker(
+    model_path: str,
+    memory_path: str,
+    episode_ids: list[int],
+    out_path: str,
+    queue,
+    iterations: int | None = None,
+) -> None:
+    """In a spawned process: consolidate the episodes into the model, write the new version,
+    record the consolidation in the memory; report progress and the outcome on ``queue``."""
+    start = time.perf_counter()
+    try:
+        from rnnpb.memory import MemoryStore
+        from rnnpb.model import TrainedModel, consolidate, consolidation_config, rehearse
+
+        model = TrainedModel.load(model_path)
+        with MemoryStore(memory_path, create=False) as memory:
+            sequences = [memory.episode(i).sequence() for i in episode_ids]
+
+        def progress(p) -> None:
+            queue.put(("progress", int(p.iteration), int(p.total), float(p.mse)))
+
+        config = consolidation_config(model, "teach", iterations=iterations)
+        learned = consolidate(model, sequences, config, parent=model_path, progress=progress)
+        learned.save(out_path)
+        rehearsed = rehearse(
+            model, config.rehearsal_steps, config.rehearsal_transient, config.rehearsal_source
+        )
+        seconds = time.perf_counter() - start
+        with MemoryStore(memory_path, create=False) as memory:
+            memory.add_consolidation(
+                model_before=model_path,
+                model_after=out_path,
+                episode_ids=episode_ids,
+                rehearsed=[*rehearsed, *sequences],
+                seconds=seconds,
+            )
+        queue.put(("done", out_path, seconds))
+    except BaseException as error:  # the parent keeps its model and says why
+        message = (
+            f"{type(error).__name__}: {error}" if not str(error).startswith("rnnpb") else str(error)
+        )
+        try:
+            from rnnpb.memory import MemoryStore
+
+            with MemoryStore(memory_path, create=False) as memory:
+                memory.add_consolidation(
+                    model_before=model_path,
+                    model_after="",
+                    episode_ids=episode_ids,
+                    rehearsed=[],
+                    status="failed",
+                    message=message[:500],
+                    seconds=time.perf_counter() - start,
+                )
+        except BaseException:  # noqa: BLE001 - the message to the parent matters more
+            pass
+        queue.put(("failed", message))
+
+
+@dataclass(frozen=True)
+class ConsolidationState:
+    """Where a background consolidation is: ``running`` (``iteration`` of ``total``),
+    ``done`` (``model_path`` of the new version, ``seconds``) or ``failed`` (``message``)."""
+
+    state: str
+    iteration: int = 0
+    total: int = 0
+    model_path: str = ""
+    seconds: float = 0.0
+    message: str = ""
+
+    def describe(self) -> str:
+        if self.state == "running":
+            share = f" {100 * self.iteration / self.total:.0f} %" if self.total else ""
+            return f"consolidating{share}"
+        if self.state == "done":
+            return f"consolidated in {self.seconds:.0f} s"
+        return f"consolidation failed: {self.message}"
+
+
+class BackgroundConsolidation:
+    """A consolidation in a spawned process, so that the loop keeps its pace.
+
+    The process loads the model, reads the episodes from the memory, runs
+    :func:`rnnpb.model.consolidate` (rehearsal), writes the new version beside the model and
+    records the consolidation in the memory; :meth:`poll` never blocks, :meth:`wait` does.
+    """
+
+    def __init__(
+        self,
+        model_path: str | os.PathLike[str],
+        memory_path: str | os.PathLike[str],
+        episode_ids: list[int],
+        out_path: str | os.PathLike[str],
+        iterations: int | None = None,
+    ) -> None:
+        import multiprocessing
+
+        context = multiprocessing.get_context("spawn")
+        self._queue = context.Queue()
+        self.out_path = str(out_path)
+        self._process = context.Process(
+            target=_consolidation_worker,
+            daemon=True,
+            args=(
+                str(model_path),
+                str(memory_path),
+                list(episode_ids),
+                self.out_path,
+                self._queue,
+                iterations,
+            ),
+        )
+        self.state = ConsolidationState("running")
+        self._process.start()
+
+    def poll(self) -> ConsolidationState:
+        """The latest state, reading what the process reported so far (never blocks)."""
+        import queue as queues
+
+        while self.state.state == "running":
+            try:
+                message = self._queue.get_nowait()
+            except queues.Empty:
+                if not self._process.is_alive() and self._queue.empty():
+                    code = self._process.exitcode
+                    self.state = ConsolidationState(
+                        "failed", message=f"the consolidation process ended (exit code {code})"
+                    )
+                break
+            self._take(message)
+        return self.state
+
+    def wait(self, timeout_s: float | None = None) -> ConsolidationState:
+        """Block until the consolidation has finished (or ``timeout_s``), and its process
+        has ended (up to 5 s more)."""
+        deadline = None if timeout_s is None else time.perf_counter() + timeout_s
+        while self.poll().state == "running":
+            if deadline is not None and time.perf_counter() > deadline:
+                break
+            self._process.join(0.05)
+        if self.state.state != "running":
+            self._process.join(5.0)
+        return self.state
+
+    def _take(self, message: tuple) -> None:
+        kind = message[0]
+        if kind == "progress":
+            self.state = ConsolidationState("running", message[1], message[2])
+        elif kind == "done":
+            # Not joined here: the process takes a moment to end after it reported (its
+            # interpreter and JAX shut down), and poll() must never hold up a paced loop.
+            # ``ended`` tells when it has; ``wait`` and ``cancel`` join it.
+            self.state = ConsolidationState("done", model_path=message[1], seconds=message[2])
+        else:
+            self.state = ConsolidationState("failed", message=message[1])
+
+    @property
+    def ended(self) -> bool:
+        """Whether the process has exited (and been reaped); never blocks."""
+        return not self._process.is_alive()
+
+    def cancel(self) -> None:
+        if self._process.is_alive():
+            self._process.terminate()
+            self._process.join(5.0)
+
+
+class PreparedMirror:
+    """A new model version's mirror system, built and its first step compiled in a thread of
+    its own (``mirror`` None when that failed: the swap then builds it, and says why)."""
+
+    def __init__(self, path: str, make_mirror) -> None:
+        import threading
+
+        self.path = path
+        self.model = None
+        self.mirror = None
+        self.error = ""
+        self._make_mirror = make_mirror
+        self._thread = threading.Thread(target=self._run, name="rnnpb-prepare", daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        from rnnpb.model import TrainedModel
+
+        try:
+            model = TrainedModel.load(self.path)
+            mirror = self._make_mirror(model)
+            mirror.step(np.full(model.network.sensory_size, 0.5))  # compiles the step
+            mirror.reset()
+            self.model, self.mirror = model, mirror
+        except Exception as error:  # noqa: BLE001 - the swap builds it on the loop's thread
+            self.error = f"{type(error).__name__}: {error}"
+
+    @property
+    def done(self) -> bool:
+        return not self._thread.is_alive()

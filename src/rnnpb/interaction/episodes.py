@@ -1,0 +1,246 @@
+"""The episode cutter: a new movement cut out of the interaction's stream.
+
+The novelty detector (each on-line step's ``novelty``: ``familiar``, ``novel``,
+``unstructured``, ``still`` or ``""``) says when the person performs a structured movement no
+learned pattern fits. :class:`EpisodeCutter` watches those words step by step and keeps the
+movement once it has been ``novel`` long enough to be sure and to hold whole cycles:
+
+1. A *run* starts on a step called ``novel`` and goes on while the detector keeps calling
+   the movement ``novel``: up to ``tolerance_steps`` consecutive steps without evidence
+   (``""`` — the detector says nothing while a hand is lost for a moment, but the hand
+   positions must be seen) and up to ``interruption_steps`` consecutive steps called
+   ``familiar``, ``unstructured`` or ``still`` (the detector hesitates now and then on a new
+   movement, and says ``still`` for a step where the hands turn) are forgiven. Anything
+   longer (a pause, another movement) or a hand lost ends the run and throws it away.
+   An episode is kept only when at least ``min_novel_share`` of its own steps were called
+   ``novel``, so ``unstructured`` movement — which the detector calls ``novel`` on almost no
+   step — is never kept, nor a learned pattern the detector calls ``familiar``.
+2. The whole cycles of the run are counted with :func:`rnnpb.interaction.learning_phase.
+   cycle_bounds`. From ``confirm_cycles`` whole cycles on the cutter is *recording* ("cycle
+   k of ``episode_cycles``"); when the run holds ``episode_cycles`` whole cycles, the last
+   ``episode_cycles`` of them are the episode: their sensory values as seen and the robot's
+   joint angles for them (3-D hands from the source when it gives them, else on the fixed
+   plane; mirror mapping and inverse kinematics, as in the learning phase).
+3. The cutter then stays *kept* until the run ends, so one performance gives one episode.
+
+It is pure bookkeeping (NumPy only, no clock or I/O), bounded per step: a principal component
+and an autocorrelation of at most ``max_run_steps`` steps.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import InitVar, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from rnnpb.demonstrator import MirrorMapping
+from rnnpb.errors import ConfigError
+from rnnpb.interaction.learning_phase import cycle_bounds
+from rnnpb.model._tuned import Tuning, section_values, settle
+from rnnpb.model._tuned import with_tuning as _with_tuning
+from rnnpb.perception import MOUSE_PLANE_X, hands_on_plane
+from rnnpb.robot.camera import RobotCamera
+
+WATCHING, RECORDING, KEPT = "watching", "recording", "kept"
+CUTTER_STATES = (WATCHING, RECORDING, KEPT)
+
+
+@dataclass(frozen=True)
+class TeachingConfig:
+    """When a novel movement is kept.
+
+    The settings a user changes are the constructor's; the three found by replaying the cutter
+    over the novelty words of the teach study's script are read from the learning preset's
+    ``[teaching.cutter]`` section (with their evidence) and changed only by
+    :meth:`with_tuning`.
+
+    Attributes
+    ----------
+    confirm_cycles : int
+        Whole cycles called ``novel`` before the cutter says it is recording.
+    tolerance_steps : int
+        Consecutive steps without evidence (``""``: a hand lost for a moment) a run survives.
+    max_run_steps : int
+        The run's oldest steps are dropped beyond this many (bounds the cost per step).
+    plane_x : float
+        ``x`` (m) of the hands' plane for sources that give no 3-D hands.
+    episode_cycles : int
+        Whole cycles an episode holds (tuned).
+    interruption_steps : int
+        Consecutive steps called ``familiar``, ``unstructured`` or ``still`` a run survives:
+        the detector hesitates at a shape's turning points (tuned).
+    min_novel_share : float
+        The share of an episode's steps with evidence that must have been called ``novel``,
+        so that unstructured movement and learned patterns are never kept (tuned).
+    """
+
+    confirm_cycles: int = 1
+    tolerance_steps: int = 2
+    max_run_steps: int = 200
+    plane_x: float = MOUSE_PLANE_X
+    episode_cycles: int = field(init=False)
+    interruption_steps: int = field(init=False)
+    min_novel_share: float = field(init=False)
+    _tuning: InitVar[Mapping[str, Any] | None] = None
+
+    def __post_init__(self, _tuning: Mapping[str, Any] | None) -> None:
+        settle(self, _tuning, Tuning("paper", section_values("paper", "teaching.cutter")), None)
+        if self.episode_cycles < 1:
+            raise ConfigError(f"episode_cycles must be >= 1, got {self.episode_cycles}")
+        if not 1 <= self.confirm_cycles <= self.episode_cycles:
+            raise ConfigError(
+                f"confirm_cycles must be in [1, episode_cycles], got {self.confirm_cycles}"
+            )
+        if self.tolerance_steps < 0:
+            raise ConfigError(f"tolerance_steps must be >= 0, got {self.tolerance_steps}")
+        if self.interruption_steps < 0:
+            raise ConfigError(f"interruption_steps must be >= 0, got {self.interruption_steps}")
+        if not 0.5 <= self.min_novel_share <= 1.0:
+            raise ConfigError(f"min_novel_share must be in [0.5, 1], got {self.min_novel_share}")
+        if self.max_run_steps < 16:
+            raise ConfigError(f"max_run_steps must be >= 16, got {self.max_run_steps}")
+
+    def with_tuning(self, **changes: Any) -> TeachingConfig:
+        """These settings with some tuned values changed, for research: e.g.
+        ``TeachingConfig().with_tuning(episode_cycles=4)``."""
+        return _with_tuning(self, changes)
+
+
+@dataclass(frozen=True)
+class KeptMovement:
+    """Whole cycles of a new movement, cut out of the stream.
+
+    Attributes
+    ----------
+    sensory : array, shape (n_steps, 4)
+    motor : array, shape (n_steps, 8)
+        The robot's joint angles for the person's hands, radians.
+    n_cycles : int
+    first_step, last_step : int
+        The loop steps it spans (inclusive).
+    """
+
+    sensory: np.ndarray
+    motor: np.ndarray
+    n_cycles: int
+    first_step: int
+    last_step: int
+
+
+@dataclass(frozen=True)
+class CutterStatus:
+    """What the cutter is doing, for the dashboard and the log."""
+
+    state: str
+    cycles: int
+    episode_cycles: int
+
+    def describe(self) -> str:
+        if self.state == RECORDING:
+            return (
+                f"recording a new movement (cycle {min(self.cycles + 1, self.episode_cycles)}"
+                f" of {self.episode_cycles})"
+            )
+        if self.state == KEPT:
+            return "new movement kept"
+        return ""
+
+
+class EpisodeCutter:
+    """Watches each step's novelty and keeps whole cycles of a novel movement (module doc).
+
+    Parameters
+    ----------
+    config : TeachingConfig, optional
+    mapping : MirrorMapping, optional
+    camera : RobotCamera, optional
+    """
+
+    def __init__(
+        self,
+        config: TeachingConfig | None = None,
+        mapping: MirrorMapping | None = None,
+        camera: RobotCamera | None = None,
+    ) -> None:
+        self.config = config or TeachingConfig()
+        self.mapping = mapping or MirrorMapping()
+        self.camera = camera or RobotCamera()
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the current run."""
+        self._steps: list[int] = []
+        self._sensory: list[np.ndarray] = []
+        self._hands: list[np.ndarray] = []
+        self._novel: list[float] = []  # 1 novel, 0 familiar or unstructured, nan no evidence
+        self._quiet = 0
+        self._interrupted = 0
+        self._cycles = 0
+        self._kept = False
+
+    @property
+    def status(self) -> CutterStatus:
+        config = self.config
+        if self._kept:
+            state = KEPT
+        elif self._cycles >= config.confirm_cycles:
+            state = RECORDING
+        else:
+            state = WATCHING
+        return CutterStatus(state, self._cycles, config.episode_cycles)
+
+    def observe(
+        self, step: int, observed: np.ndarray, novelty: str, hands: np.ndarray | None = None
+    ) -> KeptMovement | None:
+        """One step: the hands seen (4,), the step's novelty word, optionally the 3-D hands
+        (2, 3); returns the episode on the step it is complete, else None."""
+        observed = np.asarray(observed, dtype=np.float64).reshape(4)
+        seen = bool(np.isfinite(observed).all())
+        config = self.config
+        going = bool(self._steps) and seen
+        if novelty == "novel" and seen:
+            self._quiet = self._interrupted = 0
+        elif novelty == "" and going and self._quiet < config.tolerance_steps:
+            self._quiet += 1  # no evidence for a moment: the run goes on
+        elif (
+            novelty in ("familiar", "unstructured", "still")
+            and going
+            and self._interrupted < config.interruption_steps
+        ):
+            self._interrupted += 1  # the detector hesitates: the run goes on
+        else:
+            self.reset()
+            return None
+        if self._kept:
+            return None
+        self._steps.append(int(step))
+        self._novel.append(np.nan if novelty == "" else float(novelty == "novel"))
+        self._sensory.append(observed)
+        self._hands.append(
+            np.full((2, 3), np.nan)
+            if hands is None
+            else np.asarray(hands, dtype=np.float64).reshape(2, 3)
+        )
+        if len(self._steps) > config.max_run_steps:
+            del self._steps[0], self._sensory[0], self._hands[0], self._novel[0]
+        cycles = cycle_bounds(np.array(self._sensory))
+        self._cycles = len(cycles)
+        if self._cycles < config.episode_cycles:
+            return None
+        start, stop = cycles[-config.episode_cycles][0], cycles[-1][1]
+        said = np.array(self._novel[start:stop])
+        said = said[np.isfinite(said)]
+        if not said.size or said.mean() < config.min_novel_share:
+            return None  # not novel enough yet: the run goes on, its window slides
+        sensory = np.array(self._sensory[start:stop])
+        hands = np.array(self._hands[start:stop])
+        missing = ~np.isfinite(hands).all(axis=(1, 2))
+        if missing.any():
+            hands[missing] = hands_on_plane(sensory[missing], self.camera, config.plane_x)
+        motor = self.mapping.motor_from_hands(hands)
+        self._kept = True
+        return KeptMovement(
+            sensory, motor, config.episode_cycles, self._steps[start], self._steps[stop - 1]
+        )

@@ -1,0 +1,168 @@
+"""The memory keeper: a loop subscriber that stores each novel movement the
+:class:`~rnnpb.interaction.episodes.EpisodeCutter` cuts as an episode of the short-term memory,
+and the notes those episodes carry."""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+
+from rnnpb.demonstrator import MirrorMapping
+from rnnpb.errors import RnnpbError
+from rnnpb.interaction.episodes import RECORDING, EpisodeCutter, TeachingConfig
+
+
+@dataclass(frozen=True)
+class TeachingEvent:
+    """Something the teacher did, for the dashboard and the log.
+
+    ``kind`` is ``recording`` (a novel movement is being recorded; ``text`` says which cycle),
+    ``kept`` (an episode was stored; ``episode_id``, ``pattern``) or ``refused`` (the memory
+    would not take it; ``text`` says why).
+    """
+
+    step: int
+    kind: str
+    text: str
+    episode_id: int | None = None
+    pattern: str = ""
+
+
+SHOWN_STEPS = 2000  # steps of a source's own account kept (an episode is far shorter)
+SHOWN_AS = "shown as "  # in an episode's note: what a scripted source said it performed
+
+
+def episode_steps(note: str) -> tuple[int, int] | None:
+    """The loop steps an episode's note says it was cut from, (first, last), or None."""
+    part = note.split("; ")[0]
+    if not part.startswith("steps "):
+        return None
+    try:
+        first, last = (int(v) for v in part.removeprefix("steps ").split("-"))
+    except ValueError:
+        return None
+    return first, last
+
+
+def shown_as(note: str) -> str:
+    """The pattern an episode's note says a scripted source performed, or ""."""
+    for part in note.split("; "):
+        if part.startswith(SHOWN_AS):
+            return part[len(SHOWN_AS) :]
+    return ""
+
+
+class EpisodeKeeper:
+    """A loop subscriber: cuts novel movements with an :class:`EpisodeCutter` and stores each
+    as an episode in the short-term memory, under the next free name ``new-1``, ``new-2`` ….
+
+    Parameters
+    ----------
+    memory : rnnpb.memory.MemoryStore
+        Open store (the keeper does not close it).
+    model : str
+        The running model's file (which model saw the movement).
+    source : str
+        The source's description (where the movement came from).
+    config : TeachingConfig, optional
+    hands_of : callable, optional
+        ``hands_of(record) -> array (2, 3) or None``: the 3-D hands of a step when the source
+        gives them (a camera's depth from size); else they lie on the fixed plane.
+
+    ``events`` lists what happened, newest last; ``kept`` the stored episodes' ids.
+    """
+
+    def __init__(
+        self,
+        memory,
+        model: str,
+        source: str,
+        config: TeachingConfig | None = None,
+        hands_of=None,
+        mapping: MirrorMapping | None = None,
+    ) -> None:
+        self.memory = memory
+        self.model = str(model)
+        self.source = str(source)
+        self.cutter = EpisodeCutter(config, mapping)
+        self.hands_of = hands_of
+        self.events: list[TeachingEvent] = []
+        self.kept: list[int] = []
+        self._last_text = ""
+        # What a scripted source says it performed, per recent step (a demonstrator's
+        # pattern): only written into an episode's note, for the person; never used to learn.
+        self._shown: deque[tuple[int, str]] = deque(maxlen=SHOWN_STEPS)  # (step, pattern)
+
+    def next_pattern_name(self) -> str:
+        """``new-N`` for the smallest N no episode of the memory is named yet."""
+        taken = {e.pattern for e in self.memory.episodes()}
+        n = 1
+        while f"new-{n}" in taken:
+            n += 1
+        return f"new-{n}"
+
+    def _shown_as(self, first: int, last: int) -> str:
+        """The pattern the source said it performed over most of steps first..last, or ""."""
+        said = dict(self._shown)  # only when an episode is cut: rare
+        names = [said.get(step, "") for step in range(first, last + 1)]
+        best = max(set(names), key=names.count) if names else ""
+        return best if best and names.count(best) * 2 > len(names) else ""
+
+    def __call__(self, record) -> None:
+        truth = getattr(record, "truth", None)
+        shown = truth.get("pattern", "") if isinstance(truth, dict) else ""
+        if shown:
+            self._shown.append((record.step, str(shown)))  # the oldest fall off the end
+        hands = self.hands_of(record) if self.hands_of is not None else None
+        episode = self.cutter.observe(
+            record.step, record.observed, getattr(record, "novelty", ""), hands
+        )
+        text = self.cutter.status.describe()
+        if episode is None:
+            if text != self._last_text and self.cutter.status.state == RECORDING:
+                self.events.append(TeachingEvent(record.step, "recording", text))
+            self._last_text = text
+            return
+        self._last_text = text
+        pattern = self.next_pattern_name()
+        shown_as = self._shown_as(episode.first_step, episode.last_step)
+        try:
+            episode_id = self.memory.add_episode(
+                episode.sensory,
+                episode.motor,
+                source=self.source,
+                model=self.model,
+                pattern=pattern,
+                n_cycles=episode.n_cycles,
+                note=f"steps {episode.first_step}-{episode.last_step}"
+                + (f"; {SHOWN_AS}{shown_as}" if shown_as else ""),
+            )
+        except RnnpbError as error:
+            self.events.append(TeachingEvent(record.step, "refused", str(error)))
+            return
+        self.kept.append(episode_id)
+        self.events.append(
+            TeachingEvent(
+                record.step,
+                "kept",
+                f"kept a new movement as {pattern} ({episode.n_cycles} cycles, "
+                f"{len(episode.sensory)} steps)",
+                episode_id,
+                pattern,
+            )
+        )
+
+
+def tracked_hands(source):
+    """For :class:`EpisodeKeeper`'s ``hands_of``: the 3-D hands a camera source's tracker found
+    for the step just read (depth from the balls' size, unfiltered: on-line there is no later
+    frame to filter with), or None when ``source`` has no tracker."""
+    inner = getattr(source, "inner", source)  # a FrameStepSource keeps the camera inside
+
+    def hands_of(record) -> np.ndarray | None:
+        result = getattr(inner, "last_result", None)
+        return None if result is None else result.hands_3d
+
+    return hands_of

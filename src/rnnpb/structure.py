@@ -1,0 +1,180 @@
+"""Whether a movement repeats, and with which period: one measure for recording, recognition
+and the metrics.
+
+The measure is the **self-difference** of a trajectory ``x`` (shape (T, D) or (T,)) at a lag
+``k``: the mean squared difference between each step and the step ``k`` earlier,
+
+    d(k) = mean_t |x[t] − x[t−k]|²,
+
+over every step that has such a partner, or over the last ``steps`` steps only (what a
+detector that looks at the recent past compares). It is 0 at the period of an exactly
+periodic trajectory and about twice the variance where the movement does not repeat. Its
+uses, each with its caller's thresholds:
+
+* :func:`periodicity` (the metrics' periodicity, the attractor analysis): the smallest period,
+  whole or fractional, whose return error ``sqrt(d(P)) / RMS(x − mean)`` is below a tolerance;
+* :func:`first_period` (cutting a recording into cycles): the first strong peak of the
+  autocorrelation of a centred signal, read off the self-difference through
+  ``x[t]·x[t−k] = (x[t]² + x[t−k]² − (x[t] − x[t−k])²) / 2``;
+* on-line novelty (:mod:`rnnpb.model.recognition`): the smallest self-difference of the last
+  steps over a range of lags, relative to twice their variance.
+
+NumPy (and SciPy's cubic spline for a fractional lag) only; nothing here knows a model.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+def _as_steps(x: np.ndarray) -> np.ndarray:
+    x = np.asarray(x, dtype=np.float64)
+    return x[:, None] if x.ndim == 1 else x
+
+
+def shifted(x: np.ndarray, lag: float) -> np.ndarray:
+    """``x[t + lag]`` for every t it exists, shape (T - ceil(lag), D); between steps read off a
+    cubic spline through ``x`` (shape (T, D))."""
+    whole = int(math.floor(lag))
+    if lag == whole:
+        return x[whole:]
+    from scipy.interpolate import CubicSpline
+
+    n = len(x) - int(math.ceil(lag))
+    return CubicSpline(np.arange(len(x)), x, axis=0)(np.arange(n) + lag)
+
+
+def self_difference(x: np.ndarray, lag: float) -> float:
+    """``d(lag)`` over every step that has a partner ``lag`` steps earlier; ``lag`` may be
+    fractional (the partner read off a cubic spline). ``x`` shape (T, D) or (T,)."""
+    x = _as_steps(x)
+    ahead = shifted(x, lag)
+    return float(np.mean((ahead - x[: len(ahead)]) ** 2))
+
+
+def recent_self_differences(x: np.ndarray, lags: np.ndarray, steps: int) -> np.ndarray:
+    """``d(k)`` of the last ``steps`` steps of ``x`` against the ``steps`` steps ``k`` earlier,
+    for each whole lag in ``lags`` (every lag + steps <= T); shape (len(lags),)."""
+    x = _as_steps(x)
+    size = len(x)
+    rows = (size - steps - np.asarray(lags))[:, None] + np.arange(steps)[None]
+    return np.mean((x[size - steps :][None] - x[rows]) ** 2, axis=(1, 2))
+
+
+def autocorrelation(signal: np.ndarray, lags: np.ndarray) -> np.ndarray:
+    """The autocorrelation of the centred 1-D ``signal`` at each whole lag ``k`` in ``lags``:
+    ``Σ x[t]·x[t−k] / Σ x²``, scaled by ``T / (T − k)`` for the pairs a lag leaves, each sum of
+    products taken from the self-difference ``d(k)`` (module doc). NaN for a flat signal."""
+    x = np.asarray(signal, dtype=np.float64)
+    x = x - x.mean()
+    n = len(x)
+    energy = float(x @ x)
+    squares = np.concatenate([[0.0], np.cumsum(x * x)])
+    out = np.empty(len(lags))
+    for i, k in enumerate(np.asarray(lags, dtype=int)):
+        pairs = n - k
+        head, tail = squares[pairs], squares[n] - squares[k]
+        products = (head + tail - pairs * self_difference(x, k)) / 2
+        out[i] = products / energy * n / pairs if energy > 0 else np.nan
+    return out
+
+
+def first_period(
+    signal: np.ndarray,
+    min_period: int,
+    max_period: int,
+    *,
+    level: float = 0.3,
+    rise: float = 0.6,
+    share: float = 0.8,
+) -> int | None:
+    """The lag of the autocorrelation's first strong peak in [min_period, max_period], or None
+    when the 1-D ``signal`` does not repeat.
+
+    A peak is a local maximum inside the range, above ``level`` and at least ``rise`` above the
+    lowest correlation at a shorter lag (a cycle's autocorrelation falls towards −1 at half
+    its period and comes back, a drifting, shapeless movement's only decays); the first peak
+    within ``share`` of the highest is taken, since later peaks are its multiples.
+    """
+    x = np.asarray(signal, dtype=np.float64)
+    x = x - x.mean()
+    energy = float(x @ x)
+    max_period = min(max_period, len(x) // 2)
+    if energy <= 1e-12 or max_period < min_period + 2:
+        return None
+    lags = np.arange(1, max_period + 2)
+    correlation = autocorrelation(x, lags)
+    peaks = [
+        i
+        for i in range(min_period - 1, len(lags) - 1)
+        if correlation[i] >= correlation[i - 1]
+        and correlation[i] >= correlation[i + 1]
+        and correlation[i] > level
+        and correlation[i] - correlation[:i].min() >= rise
+    ]
+    if not peaks:
+        return None
+    best = max(correlation[i] for i in peaks)
+    first = next(i for i in peaks if correlation[i] >= share * best)
+    return int(lags[first])
+
+
+def return_error(x: np.ndarray, period: float) -> float:
+    """``RMS(x[t+P] − x[t]) / RMS(x − mean)``, that is ``sqrt(d(P))`` relative to the
+    trajectory's spread: 0 for an exactly periodic trajectory; ``P`` may be fractional."""
+    x = _as_steps(x)
+    spread = np.sqrt(np.mean((x - x.mean(axis=0)) ** 2))
+    if spread < 1e-9:
+        return 0.0
+    return float(np.sqrt(self_difference(x, period)) / spread)
+
+
+@dataclass(frozen=True)
+class Periodicity:
+    period: float | None  # steps, possibly fractional; None: not periodic within the tolerance
+    return_error: float  # at the best period
+    best_period: float
+
+
+def _refined(errors: dict[int, float], p: int) -> float:
+    """The whole period ``p`` at a local minimum of ``errors``, moved to the vertex of the
+    parabola through its neighbours."""
+    if p - 1 not in errors or p + 1 not in errors:
+        return float(p)
+    left, mid, right = errors[p - 1], errors[p], errors[p + 1]
+    curvature = left - 2 * mid + right
+    if curvature <= 0:
+        return float(p)
+    return p + float(np.clip(0.5 * (left - right) / curvature, -0.5, 0.5))
+
+
+def periodicity(x: np.ndarray, max_period: int, tolerance: float) -> Periodicity:
+    """The smallest period P ≤ ``max_period`` (and ≤ a third of the trajectory), whole or
+    fractional, whose :func:`return_error` is below ``tolerance``; shape (T, D) or (T,).
+
+    At each local minimum of the return error over whole periods, the period is refined by
+    parabolic interpolation (a cycle of 11.5 steps returns only every 23 whole steps).
+    """
+    x = _as_steps(x)
+    max_period = min(max_period, len(x) // 3)
+    errors = {p: return_error(x, p) for p in range(1, max_period + 1)}
+    best_period, best_error = float(min(errors, key=errors.__getitem__)), min(errors.values())
+    for p in sorted(errors):
+        at_minimum = errors[p] <= errors.get(p - 1, math.inf) and errors[p] <= errors.get(
+            p + 1, math.inf
+        )
+        if not at_minimum:
+            continue
+        refined = _refined(errors, p)
+        refined_error = return_error(x, refined) if refined != p else errors[p]
+        period, error = (
+            (refined, refined_error) if refined_error < errors[p] else (float(p), errors[p])
+        )
+        if error < best_error:
+            best_period, best_error = period, error
+        if error < tolerance:
+            return Periodicity(period, error, period)
+    return Periodicity(None, best_error, best_period)
