@@ -10,13 +10,13 @@ set's model (the paper's four patterns).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from rnnpb.errors import ConfigError
 from rnnpb.experiments.scenarios.study_models import study_models
 from rnnpb.model import OnlineConfig, TrainConfig, TrainedModel
-from rnnpb.model.consolidation import CONSOLIDATION_METHODS, ConsolidationConfig, consolidate
+from rnnpb.model.consolidation import CONSOLIDATION_METHODS, consolidate, consolidation_config
 
 
 @dataclass(frozen=True)
@@ -35,7 +35,7 @@ class IncrementalConfig:
     learning_sets: tuple[str, ...] = ("1", "2", "3", "4")
     methods: tuple[str, ...] = CONSOLIDATION_METHODS
     start_train: TrainConfig = field(default_factory=TrainConfig.paper)
-    # None: each method's own learning (ConsolidationConfig.learning_for).
+    # None: the consolidation policy's learning for the model (consolidation_config).
     consolidation_train: TrainConfig | None = None
     # From scratch: 20,000 of the paper's iterations, enough for four patterns to be followed
     # in less time than the first learning's 50,000 (docs/experiments.md).
@@ -118,10 +118,13 @@ def add_patterns(
     parent: str,
     replay_data=None,
 ) -> tuple[TrainedModel, float]:
-    """``model`` with the demonstrations ``new`` added by ``method`` (scratch: with
-    ``scratch_train``, the others with ``consolidation_train``), and the CPU seconds it took."""
+    """``model`` with the demonstrations ``new`` added by ``method`` under the consolidation
+    policy (:func:`rnnpb.model.consolidation.consolidation_config`), learning with the study's
+    ``scratch_train`` (scratch) or ``consolidation_train`` (the others) where it names one, and
+    the CPU seconds it took."""
     learning = config.scratch_train if method == "scratch" else config.consolidation_train
-    policy = ConsolidationConfig(method=method, train=learning)  # type: ignore[arg-type]
+    policy = consolidation_config(model, "add", method=method)  # type: ignore[arg-type]
+    policy = replace(policy, train=learning) if learning is not None else policy
     cpu = time.process_time()
     grown = consolidate(model, new, policy, replay_data=replay_data, parent=parent)
     return grown, time.process_time() - cpu
