@@ -154,8 +154,8 @@ def test_interrupted_consolidation_resumes_to_the_same_model(two_patterns, tmp_p
 def test_held_old_pbs_stay_where_they_were_learned(two_patterns, tmp_path):
     model, new = two_patterns
     config = ConsolidationConfig(
-        train=TrainConfig.fast(iterations=200, checkpoint_every=100), hold_old_pb="all"
-    )
+        train=TrainConfig.fast(iterations=200, checkpoint_every=100)
+    ).with_tuning(hold_old_pb="all")
     held = consolidate(model, new, config)
     # Rehearsed from each pattern's PB: every old sequence starts, and stays, there.
     n_old = len(model.sequence_patterns)
@@ -168,11 +168,11 @@ def test_held_old_pbs_stay_where_they_were_learned(two_patterns, tmp_path):
     # The option is in the history, through a file.
     held.save(tmp_path / "held.npz")
     assert TrainedModel.load(tmp_path / "held.npz").history[-1].details["hold_old_pb"] == "all"
-    free = consolidate(model, new, replace(config, hold_old_pb="off"))
+    free = consolidate(model, new, config.with_tuning(hold_old_pb="off"))
     assert free.history[-1].details["hold_old_pb"] == "off"
     assert not np.array_equal(free.sequence_pb[0], model.pattern_pb["1"])
     # Held for the first half: the chunk ends where the PBs are let go, and they then move.
-    half = consolidate(model, new, replace(config, hold_old_pb="first-half"))
+    half = consolidate(model, new, config.with_tuning(hold_old_pb="first-half"))
     assert [i for i, _ in half.meta["training"]["history"]] == [0, 100, 200]
     assert not np.array_equal(half.sequence_pb[0], model.pattern_pb["1"])
 
@@ -187,14 +187,14 @@ def test_held_old_pbs_stay_where_they_were_learned(two_patterns, tmp_path):
             consolidate(
                 model,
                 new,
-                replace(config, hold_old_pb=other),
+                config.with_tuning(hold_old_pb=other),
                 checkpoint_path=tmp_path / "c.npz",
                 resume=True,
             )
     resumed = consolidate(model, new, config, checkpoint_path=tmp_path / "c.npz", resume=True)
     assert resumed.fingerprint == held.fingerprint
     with pytest.raises(ConfigError, match="hold_old_pb must be one of"):
-        ConsolidationConfig(hold_old_pb="half")  # type: ignore[arg-type]
+        ConsolidationConfig().with_tuning(hold_old_pb="half")
 
 
 def test_the_alternatives_run_the_same_way(two_patterns):
@@ -247,7 +247,7 @@ def test_a_warm_consolidation_learns_with_some_input_noise(two_patterns):
     policy = consolidation_policy(as_paper, "add")
     least = {
         ConsolidationConfig(): policy.function_rehearsal_input_noise,
-        ConsolidationConfig(rehearsal_target="trajectory"): policy.input_noise,
+        ConsolidationConfig().with_tuning(rehearsal_target="trajectory"): policy.input_noise,
         ConsolidationConfig("finetune"): policy.input_noise,
         ConsolidationConfig("replay"): policy.input_noise,
     }
@@ -301,7 +301,7 @@ def test_one_policy_sets_every_consolidation(two_patterns, purpose, preset, expe
     assert config.train.optimizer == learned.optimizer and config.train.seed == learned.seed
     given = consolidation_config(model, purpose, iterations=7, seed=3)
     assert given.train is not None and (given.train.iterations, given.train.seed) == (7, 3)
-    own = ConsolidationConfig(purpose=purpose, hold_old_pb="all").resolved(model)
+    own = ConsolidationConfig(purpose=purpose).with_tuning(hold_old_pb="all").resolved(model)
     assert own.hold_old_pb == "all" and own.new_pb_start == start
     with pytest.raises(ConfigError, match="purpose must be one of add, teach"):
         ConsolidationConfig(purpose="forget")  # type: ignore[arg-type]
@@ -351,7 +351,7 @@ def test_bad_input_is_refused_clearly(two_patterns):
     with pytest.raises(ConfigError, match="method must be one of"):
         ConsolidationConfig("forget")  # type: ignore[arg-type]
     with pytest.raises(ConfigError, match="rehearsal_source must be one of"):
-        ConsolidationConfig(rehearsal_source="data")  # type: ignore[arg-type]
+        ConsolidationConfig().with_tuning(rehearsal_source="data")
     # A model of another network size: its sensory-motor vector is not the data's.
     import jax
 
@@ -439,11 +439,13 @@ def test_a_new_pattern_starts_at_the_pb_farthest_from_the_learned_ones(two_patte
     short = TrainConfig.fast(iterations=20)
     grown = consolidate(model, new, ConsolidationConfig(train=short))
     assert grown.history[-1].details["new_pb_start"] == "farthest"
-    centre = consolidate(model, new, ConsolidationConfig(train=short, new_pb_start="centre"))
+    centre = consolidate(
+        model, new, ConsolidationConfig(train=short).with_tuning(new_pb_start="centre")
+    )
     assert centre.history[-1].details["new_pb_start"] == "centre"
     assert not np.allclose(grown.sequence_pb[-1], centre.sequence_pb[-1])
     with pytest.raises(ConfigError, match="new_pb_start must be one of"):
-        ConsolidationConfig(new_pb_start="middle")  # type: ignore[arg-type]
+        ConsolidationConfig().with_tuning(new_pb_start="middle")
 
 
 def _response_change(before: TrainedModel, after: TrainedModel, noise: float) -> float:
@@ -487,7 +489,7 @@ def test_function_rehearsal_keeps_the_old_networks_response_near_its_cycles(two_
     learning = TrainConfig.fast(iterations=1000)  # on this small model: 0.0036 against 0.0052
     function = consolidate(model, new, ConsolidationConfig(train=learning))
     trajectory = consolidate(
-        model, new, ConsolidationConfig(train=learning, rehearsal_target="trajectory")
+        model, new, ConsolidationConfig(train=learning).with_tuning(rehearsal_target="trajectory")
     )
     assert function.history[-1].details["rehearsal_target"] == "function"  # the default
     assert trajectory.history[-1].details["rehearsal_target"] == "trajectory"
@@ -544,6 +546,6 @@ def test_a_checkpoint_of_one_rehearsal_target_never_resumes_the_other(two_patter
             progress=stop,
             checkpoint_path=checkpoint,
         )
-    trajectory = ConsolidationConfig(train=learning, rehearsal_target="trajectory")
+    trajectory = ConsolidationConfig(train=learning).with_tuning(rehearsal_target="trajectory")
     with pytest.raises(ModelFileError, match="another starting model or method"):
         consolidate(model, new, trajectory, checkpoint_path=checkpoint, resume=True)

@@ -1,12 +1,14 @@
 """Eqs. 1-2 as vectorised in JAX equal the step-by-step NumPy version."""
 
+from typing import Any
+
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
 from rnnpb.errors import ConfigError
-from rnnpb.model import PBUpdateConfig, pb_update, reference
-from rnnpb.model.parametric_bias import integrate
+from rnnpb.model import pb_update, reference
+from rnnpb.model.parametric_bias import PBUpdateConfig, integrate
 
 
 def test_integration_sums_the_window_around_each_step():
@@ -62,7 +64,9 @@ def test_update_descends_the_error():
     ],
 )
 def test_bad_coefficients_are_rejected(kwargs):
-    good = dict(learning_rate=1.0, momentum=0.9, k_bp=1.0, k_nb=0.1, integration_length=4)
+    good: dict[str, Any] = dict(
+        learning_rate=1.0, momentum=0.9, k_bp=1.0, k_nb=0.1, integration_length=4
+    )
     PBUpdateConfig(**good)
     with pytest.raises(ConfigError):
         PBUpdateConfig(**{**good, **kwargs})

@@ -12,9 +12,12 @@ import pytest
 
 from rnnpb.cli import main
 from rnnpb.errors import ConfigError
-from rnnpb.model import NetworkConfig, OnlineConfig, PBUpdateConfig, TrainConfig, TrainedModel
+from rnnpb.interaction.episodes import TeachingConfig
+from rnnpb.model import NetworkConfig, OnlineConfig, TrainConfig, TrainedModel
+from rnnpb.model.consolidation import ConsolidationConfig
 from rnnpb.model.io import learning_preset
 from rnnpb.model.learning import preset_record
+from rnnpb.model.parametric_bias import PBUpdateConfig
 from rnnpb.model.recognition import RecognitionConfig
 from rnnpb.models import SHIPPED_MODEL
 from rnnpb.presets import load_preset
@@ -29,16 +32,23 @@ USER_SETTINGS = {
     TrainConfig: ("iterations", "input_noise", "seed", "checkpoint_every"),
     OnlineConfig: ("window", "iterations", "safety_guard"),
     RecognitionConfig: (),
+    ConsolidationConfig: ("method", "purpose", "train"),
+    TeachingConfig: ("confirm_cycles", "tolerance_steps", "max_run_steps", "plane_x"),
 }
+MOST_USER_SETTINGS = 20
+"""What the model-facing configs may take from a user, all together."""
 
 
 def _settings(cls) -> tuple[str, ...]:
-    return tuple(f.name for f in dataclasses.fields(cls) if f.init)
+    return tuple(f.name for f in dataclasses.fields(cls) if f.init and not f.name.startswith("_"))
 
 
 def test_the_configs_take_only_the_settings_a_user_changes():
     assert {cls: _settings(cls) for cls in USER_SETTINGS} == USER_SETTINGS
-    assert sum(len(names) for names in USER_SETTINGS.values()) == 12
+    taken = [f"{cls.__name__}.{name}" for cls in USER_SETTINGS for name in _settings(cls)]
+    assert len(taken) <= MOST_USER_SETTINGS, (
+        f"{len(taken)} user settings, more than {MOST_USER_SETTINGS}: {', '.join(taken)}"
+    )
     # The constructor takes no tuned value: research changes it one way, with_tuning.
     with pytest.raises(TypeError):
         OnlineConfig(surprise_gate=0.0)  # type: ignore[call-arg]
@@ -104,6 +114,30 @@ def test_a_config_round_trips_through_its_record_and_pickle(config):
     assert type(config).from_dict(json.loads(json.dumps(config.to_dict()))) == config
     copy = pickle.loads(pickle.dumps(config))
     assert copy == config and copy.tuning == config.tuning and hash(copy) == hash(config)
+
+
+def test_a_consolidation_s_research_choices_change_only_by_with_tuning():
+    with pytest.raises(TypeError):
+        ConsolidationConfig(hold_old_pb="all")  # type: ignore[call-arg]
+    config = ConsolidationConfig("replay", train=TrainConfig.fast(iterations=7))
+    assert config.hold_old_pb is None  # the model's policy's, once resolved
+    held = config.with_tuning(hold_old_pb="all", rehearsal_steps=40)
+    assert (held.method, held.train, held.hold_old_pb, held.rehearsal_steps) == (
+        "replay",
+        config.train,
+        "all",
+        40,
+    )
+    assert held != config and held.with_tuning(hold_old_pb=None, rehearsal_steps=None) == config
+    # A setting changed by replace keeps the choices; a worker process gets the same config.
+    assert dataclasses.replace(held, method="rehearsal").hold_old_pb == "all"
+    copy = pickle.loads(pickle.dumps(held))
+    assert copy == held and hash(copy) == hash(held)
+    assert dataclasses.asdict(copy)["hold_old_pb"] == "all"
+    with pytest.raises(ConfigError, match="no tuned setting 'hold_old_pbs'"):
+        config.with_tuning(hold_old_pbs="all")
+    with pytest.raises(ConfigError, match="rehearsal_steps must be >= 2"):
+        config.with_tuning(rehearsal_steps=1)
 
 
 def test_a_recorded_learning_reads_back_as_the_preset_its_optimizer_implies():

@@ -20,13 +20,25 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Mapping
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar, Protocol, Self, TypeVar
 
 from rnnpb.errors import ConfigError
 
 if TYPE_CHECKING:
     from rnnpb.presets import Preset
+
+
+RUN_SECTIONS = (
+    "online",
+    "recognition",
+    "recognition_untaught",
+    "teaching",
+    "teaching.cutter",
+    "consolidation",
+)
+"""The tables a run of the interaction reads (``rnnpb interact``, ``rnnpb serve``;
+:mod:`rnnpb.interaction.settings`); ``rnnpb interact`` reads the last three with --learn."""
 
 
 class _Tuned(Protocol):
@@ -68,10 +80,9 @@ class ConfigFile:
     def section(self, name: str) -> dict[str, Any]:
         """Section ``name``'s values, its ``pb`` subsection as a dict under ``"pb"`` (empty
         when the file does not name it)."""
-        values = dict(self.tables.get(name, {}))
-        if f"{name}.pb" in self.tables:
-            values["pb"] = dict(self.tables[f"{name}.pb"])
-        return values
+        from rnnpb.model._tuned import table_values
+
+        return table_values(self.tables, name)
 
     def preset(self, name: str) -> Preset:
         """Learning preset ``name`` with this file's values over its own (each overridden
@@ -83,13 +94,9 @@ class ConfigFile:
     def apply(self, config: Config, section: str) -> Config:
         """``config`` with section ``section``'s values: its settings by
         :func:`dataclasses.replace`, its tuned values by ``with_tuning``."""
-        values = self.section(section)
-        if not values:
-            return config
-        settings = {f.name for f in fields(config) if f.init}
-        tuned = {k: v for k, v in values.items() if k not in settings}
-        changed = config.with_tuning(**tuned) if tuned else config
-        return replace(changed, **{k: v for k, v in values.items() if k in settings})
+        from rnnpb.model._tuned import apply_table
+
+        return apply_table(config, self.tables, section)
 
 
 def read_config(path: str | None, uses: tuple[str, ...], command: str) -> ConfigFile | None:

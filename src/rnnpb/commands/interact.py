@@ -5,10 +5,10 @@ from __future__ import annotations
 import argparse
 import contextlib
 
-from rnnpb.commands._config import add_config_argument
+from rnnpb.commands._config import RUN_SECTIONS, add_config_argument
 
 NAME = "interact"
-CONFIG_SECTIONS = ("online", "recognition", "recognition_untaught")
+CONFIG_SECTIONS = RUN_SECTIONS
 SAFE_POINTS = True  # Ctrl-C stops between steps (rnnpb._interrupt)
 HELP = "run the on-line interaction: a user source drives the robot"
 DESCRIPTION = """\
@@ -42,7 +42,8 @@ The on-line regression (--online) defaults to the one that suits how the model w
 (`auto`): `ungated` for a model learned with the fast preset (Adam), `default` for one
 learned by the paper's algorithm; the choice is printed. --config FILE overrides any of the
 learning preset's [online], [recognition] or [recognition_untaught] values for research
-([online] changes the regression in use, whichever --online chose; docs/model.md).
+([online] changes the regression in use, whichever --online chose; docs/model.md), and with
+--learn its [teaching.cutter], [teaching] and [consolidation] values.
 
 With --learn the robot learns new movements on-line (docs/teaching.md): when the novelty
 detector has called a structured movement `novel` for a few cycles, four whole cycles of it
@@ -152,6 +153,7 @@ def run(args: argparse.Namespace) -> int:
         open_source,
         read_session,
     )
+    from rnnpb.interaction.settings import ConfigTables
     from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel
     from rnnpb.model.recognition import describe_answer, recognition_timeline
     from rnnpb.models import default_model, first_model_file
@@ -166,6 +168,13 @@ def run(args: argparse.Namespace) -> int:
 
         raise ConfigError("--consolidation-iterations needs --learn")
     overrides = read_config(args.config, CONFIG_SECTIONS, NAME)
+    tables = ConfigTables() if overrides is None else ConfigTables(overrides.tables, overrides.path)
+    if tables.teaches and not args.learn:
+        from rnnpb.errors import ConfigError
+
+        raise ConfigError(
+            f"{tables.origin}: [teaching], [teaching.cutter] and [consolidation] apply with --learn"
+        )
     model_path = first_model_file(Path(args.model) if args.model else default_model())
     model = TrainedModel.load(model_path, joint_limits=JOINT_LIMITS)
     if args.online == "auto":
@@ -176,16 +185,8 @@ def run(args: argparse.Namespace) -> int:
         online_name, online = args.online, OnlineConfig.preset(args.online)
         why = ""
     if overrides is not None:
-        online = overrides.apply(online, "online")
+        online = tables.online(online)
         why += f"; values from {overrides.path}"
-
-    def recognition_for(model: TrainedModel):
-        """The recognition settings chosen for ``model``, with the --config file's."""
-        chosen = OnlineConfig.for_model(model).recognition
-        if overrides is None:
-            return chosen
-        taught = model.taught_sensory is not None
-        return overrides.apply(chosen, "recognition" if taught else "recognition_untaught")
 
     loop_config = LoopConfig(dt=args.dt, paced=args.paced, max_steps=args.steps)
     out = Path(args.out)
@@ -209,7 +210,9 @@ def run(args: argparse.Namespace) -> int:
 
     safety = online_safety(model_path, model, online, enabled=not args.no_safety)
     online = safety.config
-    mirror = MirrorSystem(model, online, meta=safety.meta, recognition=recognition_for(model))
+    mirror = MirrorSystem(
+        model, online, meta=safety.meta, recognition=tables.recognition_for(model)
+    )
     with contextlib.ExitStack() as stack:
         # SIGTERM (`kill`, a service manager) ends the run as Ctrl-C does: at the next step,
         # with the recording, the summary and a playable video.
@@ -229,9 +232,7 @@ def run(args: argparse.Namespace) -> int:
             loop.subscribe(video.add)
         teacher = None
         if args.learn:
-            teacher = _start_teaching(
-                stack, loop, model_path, source, args, online, recognition_for
-            )
+            teacher = _start_teaching(stack, loop, model_path, source, args, online, tables)
         # One line, printed just before the first compilation starts.
         print(
             f"interacting: {args.source} -> {model_path} ({online_name} on-line regression"
@@ -370,8 +371,9 @@ def run(args: argparse.Namespace) -> int:
 _TEACHING_LINES = ("kept", "refused", "consolidating", "learned", "failed")
 
 
-def _start_teaching(stack, loop, model_path, source, args, online, recognition_for):
-    """Open the model's short-term memory and subscribe a Teacher to the loop."""
+def _start_teaching(stack, loop, model_path, source, args, online, tables):
+    """Open the model's short-term memory and subscribe a Teacher to the loop (with the
+    --config file's ``tables``)."""
     from pathlib import Path
 
     import rnnpb.models
@@ -397,10 +399,13 @@ def _start_teaching(stack, loop, model_path, source, args, online, recognition_f
         loop,
         model_path,
         memory,
-        make_mirror=lambda model: MirrorSystem(model, online, recognition=recognition_for(model)),
+        make_mirror=lambda model: MirrorSystem(
+            model, online, recognition=tables.recognition_for(model)
+        ),
         source=args.source,
         hands_of=tracked_hands(source),
         iterations=args.consolidation_iterations,
+        tables=tables,
     )
     stack.callback(lambda: teacher.job.cancel() if teacher.job is not None else None)
     print(

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from rnnpb.commands._config import RUN_SECTIONS, add_config_argument
+
 NAME = "serve"
 HELP = "open the live dashboard: watch the robot imitate the demonstrator, your mouse or webcam"
 DESCRIPTION = """\
@@ -21,6 +23,10 @@ address, and its WebSocket only accepts its own page, so that other web sites op
 browser can neither drive the robot nor see the camera. To reach it from other machines
 under a name, list the name with --allow-host (the page served under it is then its own);
 a page at another origin (a proxy) needs --allow-origin.
+
+--config FILE overrides the learning preset's [online], [recognition],
+[recognition_untaught], [teaching.cutter], [teaching] and [consolidation] values for
+research, for every model the page chooses (docs/model.md, "Settings").
 
 Without --model: the models in ./models/, else in ./results/demo/models/ (what `make demo`
 writes), else the small model shipped with rnnpb (learning set 1 — patterns 1, 2, 3 —
@@ -102,6 +108,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="where a shipped model is copied to learn from, with its memory and new "
         "versions (default: a temporary folder deleted when the server stops)",
     )
+    add_config_argument(parser, RUN_SECTIONS)
     parser.add_argument(
         "--log-level",
         default="warning",
@@ -130,10 +137,13 @@ def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from rnnpb.commands._checks import step_count
+    from rnnpb.commands._config import read_config
+    from rnnpb.interaction.settings import ConfigTables
     from rnnpb.models import default_model
     from rnnpb.web import TeachingSettings
 
     step_count("--consolidation-iterations", args.consolidation_iterations)
+    overrides = read_config(args.config, RUN_SECTIONS, NAME)
     teaching = TeachingSettings(
         mode=args.teach,
         iterations=args.consolidation_iterations,
@@ -151,6 +161,8 @@ def run(args: argparse.Namespace) -> int:
         teaching=teaching,
     )
     server.session.safety_enabled = not args.no_safety  # read when a model loads
+    if overrides is not None:  # read when a model loads, and by teaching
+        server.session.config_tables = ConfigTables(overrides.tables, overrides.path)
     server.start()
     print(
         f"rnnpb dashboard: {server.url}  (models: {', '.join(models)}; Ctrl-C to stop)", flush=True
@@ -161,6 +173,8 @@ def run(args: argparse.Namespace) -> int:
         flush=True,
     )
     _print_safety(models, args.no_safety)
+    if overrides is not None:
+        print(f"values from {overrides.path} over the learning preset's", flush=True)
     try:
         server.wait()
     finally:

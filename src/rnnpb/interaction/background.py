@@ -6,9 +6,32 @@ from __future__ import annotations
 
 import os
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from rnnpb.model import TrainedModel
+    from rnnpb.model.consolidation import ConsolidationConfig
+
+
+def teaching_consolidation(
+    model: TrainedModel,
+    iterations: int | None = None,
+    overrides: Mapping[str, Mapping[str, Any]] | None = None,
+    origin: str = "--config",
+) -> ConsolidationConfig:
+    """The consolidation teaching runs on ``model``: the policy for ``"teach"``
+    (:func:`rnnpb.model.consolidation.consolidation_config`), with ``iterations`` when given
+    and a ``--config`` file's ``[teaching]`` and ``[consolidation]`` tables (``overrides``,
+    from ``origin``) over the preset's."""
+    from rnnpb.model import consolidation_config
+
+    return consolidation_config(
+        model, "teach", iterations=iterations, overrides=overrides, origin=origin
+    )
 
 
 def _consolidation_worker(
@@ -18,13 +41,15 @@ def _consolidation_worker(
     out_path: str,
     queue,
     iterations: int | None = None,
+    overrides: Mapping[str, Mapping[str, Any]] | None = None,
+    origin: str = "--config",
 ) -> None:
     """In a spawned process: consolidate the episodes into the model, write the new version,
     record the consolidation in the memory; report progress and the outcome on ``queue``."""
     start = time.perf_counter()
     try:
         from rnnpb.memory import MemoryStore
-        from rnnpb.model import TrainedModel, consolidate, consolidation_config, rehearse
+        from rnnpb.model import TrainedModel, consolidate, rehearse
 
         model = TrainedModel.load(model_path)
         with MemoryStore(memory_path, create=False) as memory:
@@ -33,7 +58,7 @@ def _consolidation_worker(
         def progress(p) -> None:
             queue.put(("progress", int(p.iteration), int(p.total), float(p.mse)))
 
-        config = consolidation_config(model, "teach", iterations=iterations)
+        config = teaching_consolidation(model, iterations, overrides, origin)
         learned = consolidate(model, sequences, config, parent=model_path, progress=progress)
         learned.save(out_path)
         rehearsed = rehearse(
@@ -98,6 +123,8 @@ class BackgroundConsolidation:
     The process loads the model, reads the episodes from the memory, runs
     :func:`rnnpb.model.consolidate` (rehearsal), writes the new version beside the model and
     records the consolidation in the memory; :meth:`poll` never blocks, :meth:`wait` does.
+    The consolidation is :func:`teaching_consolidation`'s (``iterations``, ``overrides`` and
+    ``origin`` are its).
     """
 
     def __init__(
@@ -107,6 +134,8 @@ class BackgroundConsolidation:
         episode_ids: list[int],
         out_path: str | os.PathLike[str],
         iterations: int | None = None,
+        overrides: Mapping[str, Mapping[str, Any]] | None = None,
+        origin: str = "--config",
     ) -> None:
         import multiprocessing
 
@@ -123,6 +152,8 @@ class BackgroundConsolidation:
                 self.out_path,
                 self._queue,
                 iterations,
+                None if overrides is None else {k: dict(v) for k, v in overrides.items()},
+                origin,
             ),
         )
         self.state = ConsolidationState("running")

@@ -12,7 +12,9 @@ It composes parts of one job each:
   (:class:`BackgroundConsolidation`, with the policy
   :func:`rnnpb.model.consolidation_config` for ``"teach"``) and the new version's mirror
   system compiled in a thread (:class:`PreparedMirror`);
-- the model file's renaming: :meth:`rnnpb.model.TrainedModel.renamed`.
+- the model file's renaming: :meth:`rnnpb.model.TrainedModel.renamed`;
+- :mod:`rnnpb.interaction.settings`: a ``--config`` file's tables over the cutter's and the
+  consolidation policy's values (:class:`ConfigTables`).
 """
 
 from __future__ import annotations
@@ -21,12 +23,14 @@ import os
 import re
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from rnnpb.errors import ConfigError
 from rnnpb.interaction.background import (
     BackgroundConsolidation,
     ConsolidationState,
     PreparedMirror,
+    teaching_consolidation,
 )
 from rnnpb.interaction.episodes import (
     CUTTER_STATES,
@@ -46,6 +50,10 @@ from rnnpb.interaction.keeper import (
     shown_as,
     tracked_hands,
 )
+from rnnpb.interaction.settings import ConfigTables
+
+if TYPE_CHECKING:
+    from rnnpb.model.consolidation import ConsolidationConfig
 
 __all__ = [
     "CUTTER_STATES",
@@ -89,6 +97,11 @@ class Teacher:
     scripted run repeats; paced it never waits, and with ``prepare`` (paced: the default) the
     new version's mirror system is built and its step compiled in a thread before the swap,
     so the swap itself costs no deadline.
+
+    ``config`` (default ``TeachingConfig()``) says when a movement is kept; ``iterations``
+    (default: the policy's) how long each consolidation learns; ``tables``, a ``--config``
+    file's, changes both: ``[teaching.cutter]`` the config's tuned values, ``[teaching]`` and
+    ``[consolidation]`` the policy each consolidation takes (:meth:`consolidation`).
     """
 
     def __init__(
@@ -105,8 +118,11 @@ class Teacher:
         hands_of=None,
         iterations: int | None = None,
         prepare: bool | None = None,
+        tables: ConfigTables | None = None,
     ) -> None:
         self.iterations = iterations
+        self.tables = tables or ConfigTables()
+        config = self.tables.teaching(config or TeachingConfig())
         self.loop = loop
         self.memory = memory
         self.make_mirror = make_mirror
@@ -137,6 +153,12 @@ class Teacher:
         if self.auto and self.pending and self.job is None:
             self.confirm()
 
+    def consolidation(self, model) -> ConsolidationConfig:
+        """The consolidation a confirmed episode of ``model`` runs (in its own process)."""
+        return teaching_consolidation(
+            model, self.iterations, self.tables.consolidation, self.tables.origin
+        )
+
     def confirm(self) -> None:
         """Start consolidating the pending episodes (the person said yes)."""
         if self.job is not None or not self.pending:
@@ -148,7 +170,13 @@ class Teacher:
             out = version_path(self.model_path, number)
         ids, self.pending = self.pending, []
         self.job = BackgroundConsolidation(
-            self.model_path, self.memory.path, ids, out, self.iterations
+            self.model_path,
+            self.memory.path,
+            ids,
+            out,
+            self.iterations,
+            self.tables.consolidation,
+            self.tables.origin,
         )
         self.events.append(
             TeachingEvent(

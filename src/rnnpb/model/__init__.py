@@ -29,7 +29,7 @@ from rnnpb.model.network import (
     step,
 )
 from rnnpb.model.online_config import OnlineConfig
-from rnnpb.model.parametric_bias import PBUpdateConfig, pb_update
+from rnnpb.model.parametric_bias import pb_update
 from rnnpb.model.reference import MIRROR_SYSTEMS, ReferenceMirrorSystem
 from rnnpb.model.training import TrainingProgress, train
 
@@ -43,7 +43,6 @@ __all__ = [
     "MirrorSystem",
     "NetworkConfig",
     "OnlineConfig",
-    "PBUpdateConfig",
     "Params",
     "ReferenceMirrorSystem",
     "StepResult",

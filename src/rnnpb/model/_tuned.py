@@ -140,3 +140,24 @@ def with_tuning(config: Config, changes: Mapping[str, Any]) -> Config:
         values[key] = value
     user = {name: getattr(config, name) for name in user_names(type(config))}
     return type(config)(**user, _tuning=Tuning(current.preset, values))  # type: ignore[call-arg]
+
+
+def table_values(tables: Mapping[str, Mapping[str, Any]], section: str) -> dict[str, Any]:
+    """Table ``section`` of a ``--config`` file's ``tables`` (dotted names), its ``pb`` table
+    (``section.pb``) as a dict under ``"pb"``; empty when the file does not name it."""
+    values = dict(tables.get(section, {}))
+    if f"{section}.pb" in tables:
+        values["pb"] = dict(tables[f"{section}.pb"])
+    return values
+
+
+def apply_table(config: Config, tables: Mapping[str, Mapping[str, Any]], section: str) -> Config:
+    """``config`` with table ``section`` of ``tables``: its settings by
+    :func:`dataclasses.replace`, its tuned values by ``with_tuning``."""
+    values = table_values(tables, section)
+    if not values:
+        return config
+    settings = set(user_names(type(config)))
+    tuned = {k: v for k, v in values.items() if k not in settings}
+    changed = config.with_tuning(**tuned) if tuned else config  # type: ignore[attr-defined]
+    return replace(changed, **{k: v for k, v in values.items() if k in settings})  # type: ignore[type-var]

@@ -39,8 +39,9 @@ least input noise, the PB hold, the new PB's start, the rehearsal — is data: t
 ``[consolidation]`` section of the model's learning preset (:mod:`rnnpb.presets`, each value
 with its evidence), with its ``[teaching]`` section over it when on-line teaching learns a
 kept episode. :func:`consolidation_config` (``purpose="add"`` or ``"teach"``) is how
-``rnnpb consolidate``, teaching and the studies get it; :class:`ConsolidationConfig`'s fields
-set explicitly win (research: ``--config FILE``).
+``rnnpb consolidate``, teaching and the studies get it. For research, ``--config FILE``
+changes the preset's values, and a choice set by :meth:`ConsolidationConfig.with_tuning` wins
+over the policy's.
 
 Unlike the rest of the model this module reads a clock: the time the history records.
 """
@@ -51,13 +52,15 @@ import datetime
 import os
 from collections.abc import Callable, Mapping
 from collections.abc import Sequence as SequenceABC
-from dataclasses import dataclass, replace
+from dataclasses import InitVar, dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal, get_args
 
 import numpy as np
 
 from rnnpb.errors import ConfigError, DataFileError
+from rnnpb.model._tuned import Tuning, settle, tuned_names
+from rnnpb.model._tuned import with_tuning as _with_tuning
 from rnnpb.model.generation import generate
 from rnnpb.model.io import HistoryEntry, TrainedModel
 from rnnpb.model.learning import TrainConfig, WarmStart, prepare_data
@@ -185,13 +188,34 @@ def consolidation_policy(
         raise ConfigError(f"preset {preset.name!r}: [consolidation] {error}") from None
 
 
+_UNRESOLVED = Tuning(
+    "model",
+    dict.fromkeys(
+        (
+            "rehearsal_steps",
+            "rehearsal_transient",
+            "rehearsal_source",
+            "hold_old_pb",
+            "new_pb_start",
+            "rehearsal_target",
+        )
+    ),
+)
+"""A :class:`ConsolidationConfig`'s tuned values before :meth:`~ConsolidationConfig.resolved`:
+each None, the model's policy's."""
+
+
 @dataclass(frozen=True)
 class ConsolidationConfig:
     """How to add patterns to a learned model.
 
-    The fields left None take the model's :func:`consolidation_policy` for ``purpose``
-    (:meth:`resolved`): a user names the method; research sets the others (``--config FILE``)
-    to measure the alternatives.
+    A user names the method (and, if not the model's own, the learning). The rest — the
+    rehearsal, the PB hold, the new PB's start — is the model's :func:`consolidation_policy`
+    for ``purpose``: those fields are read-only (``init=False``), None until :meth:`resolved`
+    takes them from the policy, and changed only by :meth:`with_tuning`, for research:
+    ``ConsolidationConfig().with_tuning(hold_old_pb="all")`` holds the old PBs whatever the
+    policy says (``--config FILE``'s ``[consolidation]`` table changes the policy itself:
+    :func:`consolidation_config`).
 
     Attributes
     ----------
@@ -204,35 +228,37 @@ class ConsolidationConfig:
         with the policy's iterations and at least its input noise — for ``scratch`` the
         model's own full learning, unchanged.
     rehearsal_steps, rehearsal_transient : int or None
-        Length of each rehearsed sequence, and the closed-loop steps run before it.
+        Length of each rehearsed sequence, and the closed-loop steps run before it (tuned).
     rehearsal_source : str or None
-        What :func:`rehearse` runs the closed loop from (:data:`REHEARSAL_SOURCES`).
+        What :func:`rehearse` runs the closed loop from (:data:`REHEARSAL_SOURCES`; tuned).
     hold_old_pb : str or None
         One of :data:`HOLD_OLD_PB_OPTIONS`: whether the old sequences' PBs stay at their
         learned values while the weights learn the new pattern — ``"all"`` of the
         consolidation, its ``"first-half"`` (while the new pattern's error is largest), or
         ``"off"``. The new sequences' PBs always learn. For ``rehearsal`` and ``replay``, the
         methods that learn old sequences from their learned PBs; ``finetune`` learns no old
-        sequence and ``scratch`` has no learned PB to hold, so neither uses it.
+        sequence and ``scratch`` has no learned PB to hold, so neither uses it (tuned).
     new_pb_start : str or None
         One of :data:`NEW_PB_STARTS`: where the new sequences' PBs start (every warm-started
-        method; ``scratch`` starts everything anew).
+        method; ``scratch`` starts everything anew; tuned).
     rehearsal_target : str or None
         One of :data:`REHEARSAL_TARGETS`: what ``rehearsal``'s rehearsed sequences learn
-        towards.
+        towards (tuned).
     """
 
     method: Method = "rehearsal"
     purpose: Purpose = "add"
     train: TrainConfig | None = None
-    rehearsal_steps: int | None = None
-    rehearsal_transient: int | None = None
-    rehearsal_source: RehearsalSource | None = None
-    hold_old_pb: HoldOldPB | None = None
-    new_pb_start: NewPBStart | None = None
-    rehearsal_target: RehearsalTarget | None = None
+    rehearsal_steps: int | None = field(default=None, init=False)
+    rehearsal_transient: int | None = field(default=None, init=False)
+    rehearsal_source: RehearsalSource | None = field(default=None, init=False)
+    hold_old_pb: HoldOldPB | None = field(default=None, init=False)
+    new_pb_start: NewPBStart | None = field(default=None, init=False)
+    rehearsal_target: RehearsalTarget | None = field(default=None, init=False)
+    _tuning: InitVar[Mapping[str, Any] | None] = None
 
-    def __post_init__(self) -> None:
+    def __post_init__(self, _tuning: Mapping[str, Any] | None) -> None:
+        settle(self, _tuning, _UNRESOLVED, None)
         for name, value, allowed in (
             ("consolidation method", self.method, CONSOLIDATION_METHODS),
             ("consolidation purpose", self.purpose, PURPOSES),
@@ -249,6 +275,12 @@ class ConsolidationConfig:
         if self.rehearsal_transient is not None and self.rehearsal_transient < 1:
             raise ConfigError(f"rehearsal_transient must be >= 1, got {self.rehearsal_transient}")
 
+    def with_tuning(self, **changes: Any) -> ConsolidationConfig:
+        """This config with some of the policy's choices made here, for research: e.g.
+        ``ConsolidationConfig().with_tuning(hold_old_pb="all")`` (None gives one back to
+        the policy)."""
+        return _with_tuning(self, changes)
+
     def resolved(self, model: TrainedModel, preset: Preset | None = None) -> ConsolidationConfig:
         """This config with every field left None taken from ``model``'s policy for
         :attr:`purpose` (from ``preset``, by default the model's), and its learning
@@ -256,16 +288,9 @@ class ConsolidationConfig:
         policy = consolidation_policy(model, self.purpose, preset)
         chosen = {
             name: getattr(policy, name) if getattr(self, name) is None else getattr(self, name)
-            for name in (
-                "hold_old_pb",
-                "new_pb_start",
-                "rehearsal_target",
-                "rehearsal_source",
-                "rehearsal_steps",
-                "rehearsal_transient",
-            )
+            for name in tuned_names(ConsolidationConfig)
         }
-        return replace(self, **chosen, train=self.learning_for(model, preset))
+        return replace(self.with_tuning(**chosen), train=self.learning_for(model, preset))
 
     def learning_for(self, model: TrainedModel, preset: Preset | None = None) -> TrainConfig:
         """The :class:`TrainConfig` this consolidation of ``model`` learns with (the policy's

@@ -40,6 +40,7 @@ from typing import Any
 import numpy as np
 
 from rnnpb.errors import ConfigError, RnnpbError
+from rnnpb.interaction.settings import ConfigTables
 from rnnpb.sources import UserSource
 from rnnpb.web._sources import PAUSE, DemonstratorSource, PointerSource, SwitchableSource
 from rnnpb.web._teaching import SessionTeaching, TeachingSettings
@@ -235,6 +236,10 @@ class Session:
     teaching : TeachingSettings, optional
         Teaching by showing (docs/dashboard.md, "Teaching"); by default new movements are
         kept and consolidated when the person confirms.
+    config_tables : ConfigTables, optional
+        A ``--config`` file's tables (``rnnpb serve --config``), put over the on-line
+        regression and recognition chosen for each model and over teaching's settings
+        (:mod:`rnnpb.interaction.settings`); read when a model loads.
     """
 
     def __init__(
@@ -245,6 +250,7 @@ class Session:
         recording_limits: RecordingLimits | None = None,
         max_queued_commands: int = MAX_QUEUED_COMMANDS,
         teaching: TeachingSettings | None = None,
+        config_tables: ConfigTables | None = None,
     ) -> None:
         if not models:
             raise ConfigError("the dashboard needs at least one model")
@@ -288,6 +294,7 @@ class Session:
         self.safety_enabled = True
         self.safety = None  # rnnpb.safety.OnlineSafety of the loaded model
         self._risk_views: dict[str, Any] = {}
+        self.config_tables = config_tables or ConfigTables()
         self.teaching = SessionTeaching(self, teaching or TeachingSettings())
 
     # --- life cycle -----------------------------------------------------------------------
@@ -568,7 +575,7 @@ class Session:
     def _load_model(self, name: str) -> None:
         """Load and compile model ``name``; a running robot goes on running with it. A model
         that fails leaves the previous one (if any) in place, with the reason."""
-        from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel
+        from rnnpb.model import MirrorSystem, TrainedModel
 
         if name not in self.models:
             raise ConfigError(f"no model {name!r} (this server offers: {', '.join(self.models)})")
@@ -582,10 +589,12 @@ class Session:
 
             model = TrainedModel.load(self.models[name], joint_limits=JOINT_LIMITS)
             # The regression that suits the model's learning (docs/model.md, "Which on-line
-            # regression"), as `rnnpb interact` picks it.
-            choice = OnlineConfig.for_model(model)
+            # regression"), with a --config file's values, as `rnnpb interact` picks it.
+            choice = self.config_tables.choice_for(model)
             safety, risk = self._load_safety(self.models[name], model, choice.config)
-            mirror = MirrorSystem(model, safety.config, meta=safety.meta)
+            mirror = MirrorSystem(
+                model, safety.config, meta=safety.meta, recognition=choice.recognition
+            )
             started = time.perf_counter()
             mirror.step(np.full(model.network.sensory_size, 0.5))  # compiles the step
             mirror.reset()

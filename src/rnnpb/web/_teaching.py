@@ -116,13 +116,15 @@ class _Prepared:
 
     def _run(self) -> None:
         try:
-            from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel
+            from rnnpb.model import MirrorSystem, TrainedModel
             from rnnpb.robot import JOINT_LIMITS
 
             model = TrainedModel.load(self.path, joint_limits=JOINT_LIMITS)
-            choice = OnlineConfig.for_model(model)
+            choice = self._session.config_tables.choice_for(model)
             safety, risk = self._session._load_safety(Path(self.path), model, choice.config)
-            mirror = MirrorSystem(model, safety.config, meta=safety.meta)
+            mirror = MirrorSystem(
+                model, safety.config, meta=safety.meta, recognition=choice.recognition
+            )
             started = time.perf_counter()
             mirror.step(np.full(model.network.sensory_size, 0.5))  # compiles the step
             mirror.reset()
@@ -203,6 +205,7 @@ class SessionTeaching:
             hands_of=self._hands_of,
             iterations=self.settings.iterations,
             prepare=False,  # made ready here (`_Prepared`), with the session's safety map
+            tables=self.session.config_tables,
         )
         self._refresh()
         log.info("teaching: short-term memory %s (%s)", self.memory.path, self.mode)
@@ -257,7 +260,8 @@ class SessionTeaching:
             return known[1]
         online = self.session.safety.config if self.session.safety is not None else None
         meta = self.session.safety.meta if self.session.safety is not None else None
-        mirror = MirrorSystem(model, online, meta=meta)
+        recognition = self.session.config_tables.recognition_for(model)
+        mirror = MirrorSystem(model, online, meta=meta, recognition=recognition)
         self._mirrors[model.fingerprint] = (model, mirror, self.session.safety, None)
         self._pending_use = self._mirrors[model.fingerprint]
         return mirror
