@@ -581,8 +581,8 @@ class Session:
             from rnnpb.robot import JOINT_LIMITS
 
             model = TrainedModel.load(self.models[name], joint_limits=JOINT_LIMITS)
-            # The regression that suits the model's learning (docs/model.md, "Which on-line
-            # regression"), as `rnnpb interact` picks it.
+            # The regression that suits the model's learning (docs/model.md, "On-line
+            # interaction"), as `rnnpb interact` picks it.
             choice = OnlineConfig.for_model(model)
             safety, risk = self._load_safety(self.models[name], model, choice.config)
             mirror = MirrorSystem(model, safety.config, meta=safety.meta)
