@@ -36,3 +36,32 @@ def set1_model(set1_model_dir):
     from rnnpb.model import TrainedModel
 
     return TrainedModel.load(set1_model_dir / "set1.npz")
+
+
+# `make test` hands whole files to its two workers, one at a time in collection order
+# (`--dist loadfile --no-loadscope-reorder`), so that a file's shared fixtures (a learned
+# model, a running server, a demo run) are made once. The files that take longest go first, so
+# that the workers end together rather than one waiting on a long file begun last.
+STARTED_FIRST = (
+    "experiments/test_demo.py",
+    "sweeps/test_sweep.py",
+    "experiments/test_incremental_study.py",
+    "experiments/test_jobs.py",
+    "model/test_online.py",
+    "safety/test_safety.py",
+    "safety/test_online.py",
+    "model/test_cli.py",
+    "robustness/test_interrupted_runs.py",
+    "web/test_teaching.py",
+    "web/test_browser.py",
+    "test_import.py",
+    "experiments/test_novelty_study.py",
+)
+
+
+def pytest_collection_modifyitems(items):
+    def rank(item):
+        path = item.nodeid.split("::")[0].removeprefix("tests/")
+        return STARTED_FIRST.index(path) if path in STARTED_FIRST else len(STARTED_FIRST)
+
+    items.sort(key=rank)
