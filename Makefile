@@ -8,9 +8,12 @@ setup:
 demo: setup
 	MUJOCO_GL=$${MUJOCO_GL:-egl} .venv/bin/rnnpb demo $(ARGS)
 
+# Two workers, each given whole test files (a file's shared fixtures are made once), the
+# longest first (tests/conftest.py, STARTED_FIRST).
 test:
 	WITH_BROWSER=1 bash scripts/setup.sh
-	MUJOCO_GL=$${MUJOCO_GL:-egl} MPLBACKEND=Agg .venv/bin/python -m pytest -n 2 $(ARGS)
+	MUJOCO_GL=$${MUJOCO_GL:-egl} MPLBACKEND=Agg .venv/bin/python -m pytest -n 2 --dist loadfile \
+		--no-loadscope-reorder $(ARGS)
 
 bench: setup
 	.venv/bin/rnnpb bench

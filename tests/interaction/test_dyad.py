@@ -22,14 +22,13 @@ from rnnpb.interaction.dyad import (
     robot_to_person_scale,
 )
 from rnnpb.interaction.recorder import DyadRecorder, dyad_columns, read_dyad_session
-from rnnpb.model import OnlineConfig, TrainConfig, train
-from rnnpb.robot import JOINT_LIMITS
+from rnnpb.model import OnlineConfig
 from rnnpb.robot.camera import RobotCamera
 
 
 @pytest.fixture(scope="module")
-def model():
-    return train(learning_set("1"), JOINT_LIMITS, config=TrainConfig.fast(iterations=1500))
+def model(set1_model):
+    return set1_model
 
 
 def test_a_robot_is_seen_as_the_person_it_imitates():

@@ -1,6 +1,7 @@
 """The interaction loop and `rnnpb interact`: recordings, lost hands, timings, sources."""
 
 import json
+import shutil
 import time
 
 import numpy as np
@@ -19,7 +20,7 @@ from rnnpb.interaction import (
     parse_source_spec,
     read_session,
 )
-from rnnpb.model import MirrorSystem, OnlineConfig, TrainConfig, train
+from rnnpb.model import MirrorSystem, OnlineConfig
 from rnnpb.robot import JOINT_LIMITS, KinematicRobot
 from rnnpb.sequences import write_sensory_stream
 from rnnpb.sources import ArraySensorySource, FrameStepSource
@@ -27,9 +28,11 @@ from rnnpb.vectors import MOTOR_NAMES, SENSORY_NAMES
 
 
 @pytest.fixture(scope="module")
-def model_path(tmp_path_factory):
+def model_path(set1_model_dir, tmp_path_factory):
+    """Learning set 1's fast-preset model, in a folder of this module's own (a command writes
+    beside it)."""
     path = tmp_path_factory.mktemp("model") / "set1.npz"
-    train(learning_set("1"), JOINT_LIMITS, config=TrainConfig.fast(iterations=1500)).save(path)
+    shutil.copy(set1_model_dir / "set1.npz", path)
     return path
 
 

@@ -5,16 +5,16 @@ import numpy as np
 import pytest
 
 from rnnpb.analysis import metrics
-from rnnpb.demonstrator import held_scenario, learning_set
+from rnnpb.demonstrator import held_scenario
 from rnnpb.interaction import open_source
-from rnnpb.model import MirrorSystem, TrainConfig, train
+from rnnpb.model import MirrorSystem
 from rnnpb.perception import SceneConfig, SyntheticCamera, VideoWriter
 from rnnpb.robot import JOINT_LIMITS
 
 
 @pytest.fixture(scope="module")
-def model():
-    return train(learning_set("1"), JOINT_LIMITS, config=TrainConfig.fast(iterations=2500))
+def model(set1_model):
+    return set1_model
 
 
 def _drive(model, observations, truth_motor):

@@ -1,4 +1,5 @@
-"""Fixtures of the dashboard tests: one small trained model and one running server."""
+"""Fixtures of the dashboard tests: one small learned model (the shipped one) and one running
+server."""
 
 from __future__ import annotations
 
@@ -9,14 +10,13 @@ TEST_DT = 0.05
 
 
 @pytest.fixture(scope="session")
-def model_dir(tmp_path_factory):
-    from rnnpb.demonstrator import learning_set
-    from rnnpb.model import TrainConfig, train
-    from rnnpb.robot import JOINT_LIMITS
+def model_dir(set1_model_dir, tmp_path_factory):
+    """Learning set 1 learned with the fast preset (``TrainConfig.fast()``, seed 0), in a
+    folder of the dashboard tests' own: they put files beside it."""
+    import shutil
 
     folder = tmp_path_factory.mktemp("models")
-    model = train(learning_set("1"), JOINT_LIMITS, config=TrainConfig.fast())
-    model.save(folder / "set1.npz")
+    shutil.copy(set1_model_dir / "set1.npz", folder / "set1.npz")
     return folder
 
 

@@ -53,7 +53,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-#: Minutes the run took on the 2-core reference machine with 2 workers (docs/experiments.md).
+#: Minutes the run takes on 2 cores with 2 workers (the measured runs: notes/2026-12-03-history.md).
 MEASURED_MINUTES = {"full": 13.0, "quick": 3.0}
 
 

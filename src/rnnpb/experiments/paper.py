@@ -44,11 +44,9 @@ class ExperimentConfig:
 
     quick: bool = False
     # The paper's learning: its networks entrain better than those of the fast preset, and the
-    # surprise gate lets their PB settle (docs/model.md, "Which learning, and why the gate
-    # is on").
+    # surprise gate lets their PB settle (docs/model.md, "Learning").
     train: TrainConfig = field(default_factory=TrainConfig.paper)
-    # The larger set (3.4): 30,000 iterations followed best over five draws of the user
-    # (20,000: 45/50 seed-runs, 30,000: 47/50, 50,000: 26/30 over three draws).
+    # The larger set (3.4): learned longer, it follows worse (docs/experiments.md).
     larger_train: TrainConfig = field(default_factory=lambda: TrainConfig.paper(iterations=30_000))
     online: OnlineConfig = field(default_factory=OnlineConfig)
     # The comparison: the paper's on-line regression, on the same models.

@@ -588,8 +588,8 @@ class Session:
             from rnnpb.robot import JOINT_LIMITS
 
             model = TrainedModel.load(self.models[name], joint_limits=JOINT_LIMITS)
-            # The regression that suits the model's learning (docs/model.md, "Which on-line
-            # regression"), with a --config file's values, as `rnnpb interact` picks it.
+            # The regression that suits the model's learning (docs/model.md, "On-line
+            # interaction"), with a --config file's values, as `rnnpb interact` picks it.
             choice = self.config_tables.choice_for(model)
             safety, risk = self._load_safety(self.models[name], model, choice.config)
             mirror = MirrorSystem(
