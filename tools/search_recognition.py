@@ -233,6 +233,7 @@ def fragment(
     draws: Sequence[int],
     result: Mapping[str, Any],
     trials: int,
+    about: str = "",
 ) -> str:
     """The best values as the preset's section and their evidence, in the preset files'
     form."""
@@ -244,6 +245,7 @@ def fragment(
     note = (
         "random search over recorded evidence replayed by "
         "rnnpb.experiments.scenarios.novelty.replay (tools/search_recognition.py)"
+        + (f", {about}" if about else "")
     )
     lines += [
         f"[sources.{source}]",
