@@ -133,6 +133,7 @@ def record(
             raise SearchError(f"model {path} was learned with preset {learned!r}, not {preset!r}")
         _, _, runs, _ = model_job(name, set_name, str(path), list(draws), steps, tuple(shapes))
         recorded.append((model, runs))
+        print(f"recorded {name}: {len(runs)} streams", file=sys.stderr, flush=True)
     return recorded
 
 
@@ -222,6 +223,8 @@ def search(
         values = candidate(rng, base.tuning, keys)
         result = score(recorded, base.with_tuning(**values), use_taught)
         results.append({"trial": trial, "values": values, **result})
+        if (trial + 1) % 10 == 0 or trial + 1 == trials:
+            print(f"trial {trial + 1} of {trials}", file=sys.stderr, flush=True)
     return baseline, results
 
 
