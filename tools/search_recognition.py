@@ -48,7 +48,7 @@ import numpy as np
 SECTIONS = ("recognition", "recognition_untaught")
 DEFAULT_DRAWS = (0, 1)  # the novelty exam's excluded development draws (settings chosen there)
 DEFAULT_TRIALS = 30  # a few minutes on one core with the fast preset's models
-#: The targets' measures, each with the sign that makes higher better.
+#: Whether a larger measure is better, by the target's comparison with its limit.
 HIGHER_IS_BETTER = {">=": True, "<=": False}
 
 
@@ -97,7 +97,7 @@ def find_models(
 
     fast = preset == "fast"
     if directory is not None and fast:
-        wanted = {n: s for n, (s, f) in QUICK_MODELS.items() if not sets or s in sets}
+        wanted = {n: s for n, (s, _) in QUICK_MODELS.items() if not sets or s in sets}
         models = {n: (s, Path(directory) / model_file(n)) for n, s in wanted.items()}
         missing = [str(p) for _, p in models.values() if not p.is_file()]
         if missing:
@@ -306,9 +306,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     command = shlex.join(
         ["python", "tools/search_recognition.py", *(sys.argv[1:] if argv is None else argv)]
     )
+    from rnnpb.errors import ConfigError
+
     try:
         return _run(args, command)
-    except SearchError as error:
+    except (SearchError, ConfigError) as error:
         print(f"search_recognition: {error}", file=sys.stderr)
         return 2
 
