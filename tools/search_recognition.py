@@ -16,7 +16,8 @@ its draws). A candidate's score is the number of targets met (of six: learned pa
 recognised, learned not called novel, novel called novel within three cycles and after,
 unstructured not called novel, still called still) plus the mean of those six shares, each
 turned so that higher is better (a share below 1 breaks ties between candidates meeting the
-same targets). The best candidate is printed against the current values.
+same targets). The values picked (``--pick best``: the best-scored trial; ``median``: each
+value's median over the trials meeting every target) are printed against the current values.
 
 Draws: ``--draws`` are user draws (scenario seeds) for development; one that is any study's
 exam draw is refused. Models: ``--models DIR``, else the novelty study's own, learned with
@@ -24,7 +25,7 @@ seed 0 into ``OUT/models`` (the fast preset's in a minute or two; the paper pres
 paper's algorithm, slow: 50,000 iterations a model).
 
 Writes ``OUT/search.json`` (every trial's values and measures, the current values' score, the
-draws, the preset and the command line) and ``OUT/preset_fragment.toml`` (the best values as
+draws, the preset and the command line) and ``OUT/preset_fragment.toml`` (the values picked as
 the preset's section and an evidence ``[sources.<id>]`` entry, to paste into a preset file; no
 preset file is changed)::
 
@@ -228,6 +229,28 @@ def search(
     return baseline, results
 
 
+def median_of_passing(
+    recorded: Sequence[tuple[Any, list[Any]]],
+    preset: str,
+    section: str,
+    trials: Sequence[Mapping[str, Any]],
+) -> dict[str, Any] | None:
+    """Each searched value's median over the trials that met every target (a count of steps
+    rounded), scored like a trial; None when no trial met every target."""
+    from rnnpb.model.recognition import RecognitionConfig
+
+    passing = [t for t in trials if t["met"] == t["of"]]
+    if not passing:
+        return None
+    values: dict[str, Any] = {}
+    for key, first in passing[0]["values"].items():
+        middle = float(np.median([t["values"][key] for t in passing]))
+        values[key] = int(round(middle)) if isinstance(first, int) else float(f"{middle:.3g}")
+    config = RecognitionConfig.from_preset(preset, section).with_tuning(**values)
+    result = score(recorded, config, section == "recognition")
+    return {"trial": "median", "passing": len(passing), "values": values, **result}
+
+
 def fragment(
     section: str,
     values: Mapping[str, Any],
@@ -238,13 +261,17 @@ def fragment(
     trials: int,
     about: str = "",
 ) -> str:
-    """The best values as the preset's section and their evidence, in the preset files'
+    """The chosen values as the preset's section and their evidence, in the preset files'
     form."""
     lines = [f"[{section}]", *(f"{k} = {_toml(v)}" for k, v in values.items()), ""]
-    figure = (
-        f"the best of {trials} random settings met {result['met']} of {result['of']} novelty "
-        f"targets on the chosen draws (score {result['score']:.4f})"
-    )
+    met = f"met {result['met']} of {result['of']} novelty targets on the chosen draws"
+    if "passing" in result:
+        figure = (
+            f"{result['passing']} of {trials} random settings met every novelty target; each "
+            f"value is the median over them, which {met} (score {result['score']:.4f})"
+        )
+    else:
+        figure = f"the best of {trials} random settings {met} (score {result['score']:.4f})"
     note = (
         "random search over recorded evidence replayed by "
         "rnnpb.experiments.scenarios.novelty.replay (tools/search_recognition.py)"
@@ -293,6 +320,13 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--sets", default="", help="learning sets, e.g. 1,full (default: all)")
     p.add_argument("--trials", type=int, default=DEFAULT_TRIALS)
     p.add_argument("--seed", type=int, default=0, help="the search's random seed")
+    p.add_argument(
+        "--pick",
+        choices=("best", "median"),
+        default="best",
+        help="the values written: the best-scored trial, or each value's median over the "
+        "trials meeting every target (the best trial if none does)",
+    )
     p.add_argument("--steps", type=int, default=72, help="steps of each stream (the quick study's)")
     p.add_argument(
         "--shapes", type=int, default=2, help="new shapes as novel movements (the quick study's 2)"
@@ -333,7 +367,10 @@ def _run(args: argparse.Namespace, command: str) -> int:
     recorded = record(models, args.preset, args.draws, args.steps, shapes)
     recorded_s = time.perf_counter() - started
     baseline, trials = search(recorded, args.preset, args.section, args.trials, args.seed)
-    best = max(trials, key=lambda t: t["score"])
+    best = max(trials, key=lambda t: t["score"])  # the first of equal scores
+    chosen = best
+    if args.pick == "median":
+        chosen = median_of_passing(recorded, args.preset, args.section, trials) or best
     preset = load_preset(args.preset)
     source = source_id(args.preset, args.section)
     results = {
@@ -347,33 +384,41 @@ def _run(args: argparse.Namespace, command: str) -> int:
         "seed": args.seed,
         "objective": "targets met + mean of the six target shares turned higher-is-better",
         "current": baseline,
+        "pick": args.pick,
         "best": best,
+        "chosen": chosen,
         "trials": trials,
         "runtime_s": {"record": recorded_s, "total": time.perf_counter() - started},
     }
     (out / "search.json").write_text(json.dumps(results, indent=1) + "\n", encoding="utf-8")
-    text = fragment(args.section, best["values"], source, command, args.draws, best, args.trials)
+    about = f"preset {preset.name} version {preset.version}, models {', '.join(models)}"
+    if args.pick == "median" and chosen is best:
+        print("no trial met every target: the best trial is written", file=sys.stderr)
+    text = fragment(
+        args.section, chosen["values"], source, command, args.draws, chosen, args.trials, about
+    )
     (out / "preset_fragment.toml").write_text(text, encoding="utf-8")
-    print(report(baseline, best, args, preset.version, len(trials)))
+    print(report(baseline, chosen, args, preset.version, len(trials)))
     print(f"wrote {out / 'search.json'} and {out / 'preset_fragment.toml'}")
     return 0
 
 
 def report(baseline: Mapping, best: Mapping, args: argparse.Namespace, version: int, n: int) -> str:
-    """The best candidate against the current values, one line each, and every value."""
+    """The chosen candidate (``best``: the best trial or the median) against the current
+    values, one line each, and every value."""
     keys = list(baseline["measures"])
     width = max(len(k) for k in keys)
     lines = [
         f"preset {args.preset} v{version} [{args.section}], draws {list(args.draws)}, "
         f"{n} trials (seed {args.seed})",
-        f"{'':{width}}  {'current':>9}  {'best':>9}",
+        f"{'':{width}}  {'current':>9}  {args.pick:>9}",
         *(f"{k:{width}}  {baseline['measures'][k]:9.4f}  {best['measures'][k]:9.4f}" for k in keys),
         f"{'targets met':{width}}  {baseline['met']:>9}  {best['met']:>9}",
         f"{'score':{width}}  {baseline['score']:9.4f}  {best['score']:9.4f}",
         "the search "
         + ("beats" if best["score"] > baseline["score"] else "does not beat")
         + " the current values on these draws",
-        "values (current -> best): "
+        f"values (current -> {args.pick}): "
         + ", ".join(f"{k} {baseline['values'][k]} -> {v}" for k, v in best["values"].items()),
     ]
     return "\n".join(lines)

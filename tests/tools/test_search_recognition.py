@@ -63,10 +63,11 @@ def test_a_tiny_search_writes_its_trials_and_a_fragment_to_paste(tool, tmp_path,
     # Each trial changed the searched values, and the best is the best-scored trial.
     assert all(set(t["values"]) == keys for t in results["trials"])
     assert results["best"]["score"] == max(t["score"] for t in results["trials"])
+    assert results["pick"] == "best" and results["chosen"] == results["best"]
 
     fragment = tomllib.loads((out / "preset_fragment.toml").read_text())
     assert set(fragment["recognition"]) <= set(RecognitionConfig().tuning)  # the tuned names
-    assert fragment["recognition"] == results["best"]["values"]
+    assert fragment["recognition"] == results["chosen"]["values"]
     source = fragment["sources"]["recognition-search-fast"]
     assert source["draws"] == [3]
     assert source["command"] == results["command"]
