@@ -21,6 +21,6 @@ bench: setup
 # The type checker reads pyproject.toml's [tool.basedpyright]; --pythonpath points it at the
 # project's environment, where the dependencies' types are.
 lint: setup
-	.venv/bin/ruff check src tests benchmarks
-	.venv/bin/ruff format --check src tests benchmarks
+	.venv/bin/ruff check src tests benchmarks tools
+	.venv/bin/ruff format --check src tests benchmarks tools
 	.venv/bin/basedpyright --project pyproject.toml --pythonpath .venv/bin/python
