@@ -28,8 +28,9 @@ class TeachConfig:
     ``models``: the directory of the starting models (:func:`starting_models`; None: learned
     with the paper's algorithm); ``shipped``: teach the shipped fast-preset model of learning
     set 1 instead (the quick form). ``consolidation_iterations``: None keeps
-    the consolidation's own default (:data:`rnnpb.model.consolidation.CONSOLIDATION_ITERATIONS`),
-    so that what improves there is what this study measures. The scripted user: ``lead_steps``
+    teaching's policy (the model's preset's ``[teaching]`` ``iterations``:
+    :func:`rnnpb.model.consolidation.consolidation_config` with ``purpose="teach"``), so that
+    what improves there is what this study measures. The scripted user: ``lead_steps``
     of a learned pattern, ``new_steps`` of the new shape, ``other_steps`` of each other
     learned pattern, ``unstructured_steps`` of each unstructured movement, ``again_steps`` of
     the new shape again. ``paced``: the (learning set, shape) whose kept episode is

@@ -61,7 +61,7 @@ def study_config(options: StudyOptions) -> IncrementalConfig:
         config = replace(config, learning_sets=exam.learning_sets or config.learning_sets)
     else:
         config = IncrementalConfig(
-            # The demo's models learned the draw-0 data, which replay and scratch take again;
+            # The starting models learned the draw-0 data, which replay and scratch take again;
             # --seed draws the new pattern's demonstrations and the user.
             new_data_seed=options.seed,
             scenario_seed=100 + options.seed,
