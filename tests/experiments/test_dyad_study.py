@@ -24,8 +24,8 @@ def test_models_it_cannot_find_are_named_in_one_line(tmp_path, capsys):
         main(["study", "dyad", "--quick", "--models", models, "--out", str(tmp_path / "out")]) == 2
     )
     error = capsys.readouterr().err.strip()
-    assert error.startswith("rnnpb: error:") and "set1.npz" in error
-    assert "--models" in error and "\n" not in error
+    assert error.startswith("rnnpb: error:") and "\n" not in error
+    assert f"{models}: no model set1.npz for learning set 1" in error and "--models" in error
 
 
 @pytest.mark.slow

@@ -7,6 +7,7 @@ from rnnpb.experiments.exams import load_exam
 from rnnpb.experiments.scenarios.novelty import StreamRun, measure
 from rnnpb.experiments.studies import StudyOptions, load_study, study_names
 from rnnpb.experiments.studies.novelty import judge, judge_results
+from rnnpb.model import TrainConfig
 
 EXAM = load_exam("novelty")
 SETTLE_STEPS = int(EXAM.parameter("settle_steps"))
@@ -73,6 +74,55 @@ def test_the_measures_count_what_each_step_said():
 def test_the_study_is_registered():
     assert "novelty" in study_names()
     assert load_study("novelty").NAME == "novelty"
+
+
+def test_its_own_models_are_learned_under_its_names_and_kept(tmp_path, monkeypatch):
+    """With no directory each model is learned on the draw of the seed given, the paper's
+    learning or the fast preset, into ``OUT/models`` under the study's own names; a model
+    already there is taken as it is."""
+    from rnnpb.experiments.scenarios import novelty
+    from rnnpb.experiments.scenarios import study_models as shared
+
+    learned = []
+
+    def learn(name, config, path, seed):
+        learned.append((name, config, path.name, seed))
+        path.write_bytes(b"")
+        return str(path)
+
+    monkeypatch.setattr(shared, "learn_model", learn)
+    models = novelty.study_models(tmp_path, None, True, seed=3)
+    folder = tmp_path / "models"
+    assert models == {
+        "fast-1": ("1", folder / "fast_set1.npz"),
+        "fast-full": ("full", folder / "fast_full.npz"),
+    }
+    fast = TrainConfig.fast(seed=3)
+    assert learned == [("1", fast, "fast_set1.npz", 3), ("full", fast, "fast_full.npz", 3)]
+    learned.clear()
+    models = novelty.study_models(tmp_path, None, False, seed=3, learning_sets=("2", "full"))
+    assert list(models) == ["2", "full", "fast-full"]  # fast_full.npz is kept
+    paper = TrainConfig(seed=3)
+    assert learned == [("2", paper, "set2.npz", 3), ("full", paper, "full.npz", 3)]
+
+
+def test_a_directorys_models_are_named_by_their_learning_set(tmp_path):
+    import shutil
+
+    from rnnpb.errors import ConfigError
+    from rnnpb.experiments.scenarios import novelty
+    from rnnpb.models import SHIPPED_MODEL
+
+    shutil.copyfile(SHIPPED_MODEL, tmp_path / "set1.npz")
+    shutil.copyfile(SHIPPED_MODEL, tmp_path / "full_seed0.npz")
+    models = novelty.study_models(tmp_path / "out", str(tmp_path), True)
+    assert models == {
+        "1": ("1", tmp_path / "set1.npz"),
+        "full": ("full", tmp_path / "full_seed0.npz"),
+    }
+    with pytest.raises(ConfigError, match=f"{tmp_path}: no model set2.npz for learning set 2"):
+        novelty.study_models(tmp_path / "out", str(tmp_path), False)
+    assert not (tmp_path / "out" / "models").exists()  # nothing learned
 
 
 def test_the_quick_form_meets_every_target_with_the_taught_hands(tmp_path):

@@ -91,4 +91,5 @@ def test_models_it_cannot_find_are_named_in_one_line(tmp_path, capsys):
     out = str(tmp_path / "out")
     assert main(["study", "safety", "--quick", "--models", str(tmp_path), "--out", out]) == 2
     error = capsys.readouterr().err.strip()
-    assert error.startswith("rnnpb: error:") and "set1.npz" in error and "\n" not in error
+    assert error.startswith("rnnpb: error:") and "\n" not in error
+    assert f"{tmp_path}: no model set1.npz for learning set 1" in error

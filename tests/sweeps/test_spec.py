@@ -193,7 +193,7 @@ def test_a_study_that_fails_is_recorded_and_leaves_no_folder(tmp_path):
     # with that one line, and neither its output folder nor a half-written one is left.
     record = execute_run(StudyRunSpec("s", "dyad", 0, True, str(tmp_path / "none")), str(tmp_path))
     assert record.status == "failed" and record.measures == []
-    assert record.error.startswith("ConfigError: the dyad study's --models has no")
+    assert record.error.startswith(f"ConfigError: {tmp_path / 'none'}: no model set1.npz")
     assert not any((tmp_path / "studies").iterdir())
 
 

@@ -20,6 +20,7 @@ import numpy as np
 from rnnpb.analysis import dyad as measures
 from rnnpb.errors import ConfigError
 from rnnpb.experiments.exams import Exam
+from rnnpb.experiments.scenarios import study_models as shared
 from rnnpb.experiments.studies import StudyOptions
 from rnnpb.experiments.studies._pool import study_pool
 from rnnpb.interaction.dyad import (
@@ -148,33 +149,18 @@ def study_config(
 def model_paths(
     directory: str | None, needed: tuple[str, ...], out: Path, quick: bool, seed: int
 ) -> dict[str, str]:
-    """The model file of each needed learning set: ``directory/setK.npz`` (a missing one is a
-    clear error), or, without a directory, learned into ``out/models``: the paper's algorithm
-    on the demo's data (the demo's models), the quick form the fast preset."""
-    from rnnpb.demonstrator import learning_set
-    from rnnpb.model import TrainConfig, train
-    from rnnpb.robot import JOINT_LIMITS
+    """The model file of each needed learning set (``setK``): ``directory``'s ``setK.npz`` (a
+    missing one is a clear error), or, without a directory, learned into ``out/models``: the
+    paper's algorithm on the demo's data (the demo's models), the quick form the fast preset."""
+    from rnnpb.model import TrainConfig
 
+    config = TrainConfig.fast(iterations=1500, seed=seed) if quick else TrainConfig.paper(seed=seed)
+    sets = [name.removeprefix("set") for name in needed]
+    paths = shared.study_models(sets, directory, out / "models", lambda _: config, seed)
     if directory is not None:
-        paths = {name: Path(directory) / f"{name}.npz" for name in needed}
-        missing = [str(path) for path in paths.values() if not path.is_file()]
-        if missing:
-            raise ConfigError(
-                f"the dyad study's --models has no {', '.join(missing)} (it takes "
-                "setK.npz of learning set K, as `rnnpb demo` writes them)"
-            )
         for path in paths.values():
             TrainedModel.load(path)  # a model that does not load fails here, once
-        return {name: str(path) for name, path in paths.items()}
-    folder = out / "models"
-    folder.mkdir(parents=True, exist_ok=True)
-    config = TrainConfig.fast(iterations=1500, seed=seed) if quick else TrainConfig.paper(seed=seed)
-    paths = {}
-    for name in needed:
-        data = learning_set(name.removeprefix("set"), seed=seed)
-        paths[name] = str(folder / f"{name}.npz")
-        train(data, JOINT_LIMITS, config=config).save(paths[name])
-    return paths
+    return {f"set{name}": path for name, path in paths.items()}
 
 
 _LOADED: dict[str, tuple[TrainedModel, dict[str, np.ndarray]]] = {}

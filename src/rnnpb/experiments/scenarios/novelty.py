@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from rnnpb.errors import ConfigError
+from rnnpb.experiments.scenarios import study_models as shared
 
 STATES = ("familiar", "novel", "unstructured", "still", "")
 LEAD_STEPS = 36  # a learned pattern before each novel movement (three cycles)
@@ -162,43 +162,25 @@ def study_models(
     ``out/models``, learned there if absent (demonstrations and weights of ``seed``).
     ``learning_sets``: only those (empty: all).
     """
-    from rnnpb.experiments.studies import demo_model_names
+    from rnnpb.model import TrainConfig
 
     wanted = QUICK_MODELS if quick else FULL_MODELS
     if learning_sets:
         wanted = {n: v for n, v in wanted.items() if v[0] in learning_sets}
-    if directory is None:
-        return _learned_models(out, wanted, seed)
-    models = {}
-    for set_name in dict.fromkeys(s for s, _ in wanted.values()):
-        files = [Path(directory) / f for f in demo_model_names(set_name)]
-        found = [f for f in files if f.is_file()]
-        if not found:
-            raise ConfigError(
-                f"the novelty study's --models has no {' or '.join(map(str, files))} (it "
-                "takes the models of `rnnpb demo`)"
-            )
-        models[set_name] = (set_name, found[0])
-    return models
 
-
-def _learned_models(
-    out: Path, wanted: dict[str, tuple[str, bool]], seed: int
-) -> dict[str, tuple[str, Path]]:
-    from rnnpb.demonstrator import learning_set
-    from rnnpb.model import TrainConfig, train
-    from rnnpb.robot import JOINT_LIMITS
+    def learning(name: str) -> TrainConfig:
+        return TrainConfig.fast(seed=seed) if wanted[name][1] else TrainConfig(seed=seed)
 
     folder = out / "models"
-    folder.mkdir(parents=True, exist_ok=True)
-    paths = {}
-    for name, (set_name, fast) in wanted.items():
-        path = folder / model_file(name)
-        if not path.exists():
-            config = TrainConfig.fast(seed=seed) if fast else TrainConfig(seed=seed)
-            train(learning_set(set_name, seed=seed), JOINT_LIMITS, config=config).save(path)
-        paths[name] = (set_name, path)
-    return paths
+    if directory is not None:
+        sets = tuple(dict.fromkeys(set_name for set_name, _ in wanted.values()))
+        found = shared.study_models(sets, directory, folder, learning)
+        return {set_name: (set_name, Path(path)) for set_name, path in found.items()}
+    models = {name: set_name for name, (set_name, _) in wanted.items()}
+    learned = shared.study_models(
+        models, None, folder, learning, seed, file_name=model_file, reuse=True
+    )
+    return {name: (models[name], Path(path)) for name, path in learned.items()}
 
 
 def model_job(

@@ -28,6 +28,7 @@ import numpy as np
 
 from rnnpb.errors import ConfigError
 from rnnpb.experiments.exams import Exam
+from rnnpb.experiments.scenarios import study_models as shared
 from rnnpb.experiments.studies import StudyOptions
 
 USERS = ("random_walk", "jerky_targets", "fast_scribbles", "full_swing", "novel_pattern")
@@ -118,34 +119,22 @@ class SafetySeeds:
         )
 
 
-def study_models(directory: str | None, config: SafetyStudyConfig, seed: int) -> dict[str, Any]:
-    """Each learning set's model and where it came from: ``directory/setK.npz`` (a missing one
-    is a clear error), or learned here (the paper's algorithm; quick: the fast preset)."""
-    from rnnpb.demonstrator import learning_set
-    from rnnpb.model import TrainConfig, TrainedModel, train
-    from rnnpb.robot import JOINT_LIMITS
+def study_models(
+    directory: str | None, config: SafetyStudyConfig, seed: int, out: Path
+) -> dict[str, Any]:
+    """Each learning set's model and where it came from: ``directory``'s ``setK.npz`` (a
+    missing one is a clear error), or learned into ``out`` (the paper's algorithm; quick: the
+    fast preset)."""
+    from rnnpb.model import TrainConfig, TrainedModel
 
-    models = {}
-    for name in config.sets:
-        if directory is not None:
-            path = Path(directory) / f"set{name}.npz"
-            if not path.is_file():
-                raise ConfigError(
-                    f"the safety study's --models has no {path} (it takes setK.npz of "
-                    "learning set K, as `rnnpb demo` writes them)"
-                )
-            models[name] = (TrainedModel.load(path), str(path))
-        else:
-            train_config = (
-                TrainConfig.fast(iterations=1500, seed=seed)
-                if config.quick
-                else TrainConfig.paper(seed=seed)
-            )
-            models[name] = (
-                train(learning_set(name, seed=seed), JOINT_LIMITS, config=train_config),
-                f"learned here ({train_config.optimizer})",
-            )
-    return models
+    train_config = (
+        TrainConfig.fast(iterations=1500, seed=seed)
+        if config.quick
+        else TrainConfig.paper(seed=seed)
+    )
+    paths = shared.study_models(config.sets, directory, out, lambda _: train_config, seed)
+    source = None if directory is not None else f"learned here ({train_config.optimizer})"
+    return {name: (TrainedModel.load(path), source or path) for name, path in paths.items()}
 
 
 def _interact(model, online, meta, sensory, truth=None) -> dict[str, np.ndarray]:

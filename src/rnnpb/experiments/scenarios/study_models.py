@@ -3,14 +3,14 @@
 ``rnnpb demo`` writes a learning set's model as ``setK.npz`` and the larger set's as
 ``full.npz`` (or its first seed's ``full_seed0.npz``): :func:`study_models` reads those names
 from a directory, and where no directory is given learns each model on the learning set's
-draw of the demonstrator and saves it under the same name, so that a study runs on a fresh
-checkout. :func:`paper_training` is how the demo learns each set (the full forms' models);
-the quick forms pass a short fast-preset learning of their own.
+draw of the demonstrator and saves it under the same name (or a study's own name for it), so
+that a study runs on a fresh checkout. :func:`paper_training` is how the demo learns each set
+(the full forms' models); the quick forms pass a short fast-preset learning of their own.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import replace
 from pathlib import Path
 
@@ -41,27 +41,41 @@ def learn_model(learning_set: str, train_config: TrainConfig, path: Path, data_s
 
 
 def study_models(
-    learning_sets: Iterable[str],
+    models: Iterable[str] | Mapping[str, str],
     directory: str | Path | None,
     out: Path,
     learning: Callable[[str], TrainConfig],
     data_seed: int = 0,
     pool=None,
+    file_name: Callable[[str], str] | None = None,
+    reuse: bool = False,
 ) -> dict[str, str]:
-    """The path of each learning set's model: ``directory``'s (a clear error when it has
-    none), or, with no directory, learned with ``learning(set)`` into ``out`` — in ``pool``'s
-    worker processes when one is given (its ``submit``), else here."""
+    """The path of each model: ``directory``'s (a clear error when it has none), or, with no
+    directory, learned with ``learning(name)`` into ``out`` — in ``pool``'s worker processes
+    when one is given (its ``submit``), else here.
+
+    ``models``: learning sets (each model named by its set), or model names to their learning
+    sets (a study that learns two models of one set). ``file_name(name)``: the learned model's
+    file in ``out`` (None: the demo's, ``setK.npz``); ``reuse``: a model already at its file
+    is taken, not learned again.
+    """
+    sets = dict(models) if isinstance(models, Mapping) else {name: name for name in models}
     if directory is not None:
-        return {name: _found(Path(directory), name) for name in learning_sets}
+        return {name: _found(Path(directory), set_name) for name, set_name in sets.items()}
     out.mkdir(parents=True, exist_ok=True)
+    named = file_name or (lambda name: demo_model_names(sets[name])[0])
+    paths = {name: out / named(name) for name in sets}
     jobs = {
-        name: (learn_model, name, learning(name), out / demo_model_names(name)[0], data_seed)
-        for name in learning_sets
+        name: (learn_model, sets[name], learning(name), path, data_seed)
+        for name, path in paths.items()
+        if not (reuse and path.exists())
     }
     if pool is None:
-        return {name: job[0](*job[1:]) for name, job in jobs.items()}
-    futures = {name: pool.submit(*job) for name, job in jobs.items()}
-    return {name: future.result() for name, future in futures.items()}
+        learned = {name: job[0](*job[1:]) for name, job in jobs.items()}
+    else:
+        futures = {name: pool.submit(*job) for name, job in jobs.items()}
+        learned = {name: future.result() for name, future in futures.items()}
+    return {name: learned.get(name, str(path)) for name, path in paths.items()}
 
 
 def _found(directory: Path, learning_set: str) -> str:

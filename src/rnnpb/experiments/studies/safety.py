@@ -75,7 +75,7 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
         initializer=worker_init,
     )
     with pool:
-        models = scenario.study_models(options.models, config, seeds.model)
+        models = scenario.study_models(options.models, config, seeds.model, out / "models")
         for set_name, (model, source) in models.items():
             model_path = out / "models" / f"set{set_name}.npz"
             model_path.parent.mkdir(exist_ok=True)
