@@ -28,7 +28,9 @@ def test_a_new_shape_is_kept_and_random_movement_is_not(model, tmp_path):
         episodes = memory.episodes()
     truth = [r.truth.get("pattern", "") for r in records]
     assert len(episodes) == 1, [e.note for e in episodes]
-    first, last = episode_steps(episodes[0].note)
+    steps = episode_steps(episodes[0].note)
+    assert steps is not None, episodes[0].note
+    first, last = steps
     assert shown_as(episodes[0].note) == "figure-eight"  # what the scenario said it performed
     # whole cycles of the new shape only: nothing of the learned pattern before it, nothing
     # of the random walk after it
