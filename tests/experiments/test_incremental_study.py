@@ -1,4 +1,7 @@
-"""`rnnpb study incremental --quick`: every method, the chain, the report and its figure."""
+"""`rnnpb study incremental`: the quick form end to end (every method, the chain, the larger
+set, the report and its figure), the judge on measures made here, and the exam's
+configuration. Whether the study meets its targets (and how much fine-tuning forgets) is judged
+by `rnnpb study incremental --exam`, not here."""
 
 import json
 from dataclasses import replace
@@ -9,7 +12,7 @@ from rnnpb.experiments.studies import StudyOptions, load_study
 
 
 @pytest.mark.slow
-def test_quick_study_writes_its_measures_and_shows_forgetting(tmp_path):
+def test_quick_study_writes_its_measures_report_and_verdicts(tmp_path):
     study = load_study("incremental")
     outcome = study.run(tmp_path, StudyOptions(quick=True, workers=1))
     results = json.loads((tmp_path / "results.json").read_text())
@@ -36,8 +39,10 @@ def test_quick_study_writes_its_measures_and_shows_forgetting(tmp_path):
         for name, p in measured["pattern"].items():
             assert p["nearest_pb"] in measured["patterns"], (method, name)
             assert p["recognized"] is None or p["recognized"] in measured["patterns"]
-    # Fine-tuning on the new pattern alone moves the old patterns more than rehearsal does.
-    assert worst_old("finetune") > worst_old("rehearsal")
+    # Every method measures how far the old patterns moved; the new one has no "before".
+    for method, measured in after.items():
+        moved = [p["generation_vs_before"] for p in measured["pattern"].values()]
+        assert None in moved and worst_old(method) >= 0, (method, moved)
     assert results["config"]["quick"] is True and results["versions"]["jax"]
     assert [m["patterns"] for m in results["chain"]] == [["1"], ["1", "2"]]
     # The larger set (learned here: the quick form has no demo models) and a new shape added.

