@@ -65,18 +65,19 @@ def demonstration(
     """One demonstration of a pattern as a paired sensory/motor :class:`Sequence`.
 
     The sensory values are the measured hands as the robot camera sees them; the motor values
-    are the robot's joint angles (radians) from the mirror mapping and the inverse kinematics
-    of the same measured hands, as in the paper. ``meta`` holds ``hands`` (n_steps, 2, 3),
-    ``measured`` (n_steps, 2, 3), ``phase`` (n_steps,) and the IK ``ik_residual`` (n_steps, 2).
+    are the robot's joint angles (radians) from the mirror mapping and the safe retargeting
+    of the same measured hands (the paper's inverse kinematics where it is safe). ``meta``
+    holds ``hands`` (n_steps, 2, 3), ``measured`` (n_steps, 2, 3), ``phase`` (n_steps,) and
+    the retargeting's ``ik_residual`` (n_steps, 2).
     """
     pattern = resolve_pattern(pattern)
     config = config or PatternConfig()
-    mapping = mapping or MirrorMapping(config.body)
+    mapping = mapping or MirrorMapping(config.body, dt=config.dt)
     camera = camera or RobotCamera()
     if n_steps < 2:
         raise ConfigError(f"a demonstration needs at least 2 steps, got {n_steps}")
     motion = perform([(pattern, n_steps)], config, rng)
-    ik = mapping.inverse_kinematics(motion.measured)
+    ik = mapping.retarget(motion.measured)
     return Sequence(
         sensory=camera.sensory_from_hands(motion.measured),
         motor=ik.joints,
@@ -107,7 +108,7 @@ def pattern_dataset(
     if samples_per_pattern < 1:
         raise ConfigError(f"samples_per_pattern must be >= 1, got {samples_per_pattern}")
     config = config or PatternConfig()
-    mapping = MirrorMapping(config.body)
+    mapping = MirrorMapping(config.body, dt=config.dt)
     camera = RobotCamera()
     out = []
     for pattern in (resolve_pattern(p) for p in patterns):

@@ -89,7 +89,7 @@ def make_scenario(
     motion = perform(segments, config, rng, transition_steps=transition_steps)
     labels = motion.labels
     switches = tuple(t for t in range(1, len(labels)) if labels[t] != labels[t - 1])
-    mapping = MirrorMapping(config.body)
+    mapping = MirrorMapping(config.body, dt=config.dt)
     return Scenario(
         name=name or " -> ".join(f"{label} x{n}" for label, n in segments),
         hands=motion.hands,

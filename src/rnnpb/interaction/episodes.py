@@ -239,7 +239,7 @@ class EpisodeCutter:
         missing = ~np.isfinite(hands).all(axis=(1, 2))
         if missing.any():
             hands[missing] = hands_on_plane(sensory[missing], self.camera, config.plane_x)
-        motor = self.mapping.motor_from_hands(hands)
+        motor = self.mapping.motor_from_hands(hands)  # safe by construction (MirrorMapping)
         self._kept = True
         return KeptMovement(
             sensory, motor, config.episode_cycles, self._steps[start], self._steps[stop - 1]

@@ -4,9 +4,9 @@ the robot records the hands and its own joint angles for them, cut into whole cy
 Per step: the hands' 3-D positions — from the colour balls' image centres and apparent sizes
 for a camera source (:func:`rnnpb.perception.hands_from_balls`), on a fixed plane in front of
 the robot for a source without depth (:func:`rnnpb.perception.hands_on_plane`) — then the
-robot's hand targets by the mirror mapping and its joint angles by inverse kinematics
-(:class:`rnnpb.demonstrator.MirrorMapping`). The sensory values are the ones the source
-measured (the network is taught what the camera sees, as in the paper).
+robot's hand targets by the mirror mapping and its joint angles by the safe retargeting
+(:class:`rnnpb.demonstrator.MirrorMapping`, :func:`rnnpb.robot.retarget`). The sensory values
+are the ones the source measured (the network is taught what the camera sees, as in the paper).
 
 Cutting (:func:`cycle_bounds`): the first principal component of the sensory values, lightly
 smoothed, crosses its mean upwards once per cycle of any of the paper's patterns; cycles are
@@ -136,12 +136,9 @@ def record_demonstration(
         )
     else:
         hands = hands_on_plane(sensory_array, camera, plane_x)
-    found = np.isfinite(hands).all(axis=(1, 2))
-    motor = np.full((len(hands), 8), np.nan)
-    residual = np.full((len(hands), 2), np.nan)
-    if found.any():
-        ik = mapping.inverse_kinematics(hands[found])
-        motor[found], residual[found] = ik.joints, ik.residual
+    # Lost hands are NaN rows: their joints are NaN, and the retargeting starts again after.
+    ik = mapping.retarget(hands)
+    motor, residual = ik.joints, ik.residual
     return Demonstration(
         sensory_array, hands, motor, residual, "size" if tracked else "plane", _described(source)
     )

@@ -25,6 +25,7 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from rnnpb.demonstrator import MirrorMapping
 from rnnpb.errors import ConfigError
 from rnnpb.interaction.background import (
     BackgroundConsolidation,
@@ -127,7 +128,9 @@ class Teacher:
         self.memory = memory
         self.make_mirror = make_mirror
         self.versions: list[str] = [str(model_path)]
-        self.keeper = EpisodeKeeper(memory, str(model_path), source, config, hands_of)
+        # Taught joint angles are retargeted at the loop's step time (the servo's speed limit).
+        mapping = MirrorMapping(dt=loop.config.dt)
+        self.keeper = EpisodeKeeper(memory, str(model_path), source, config, hands_of, mapping)
         self.auto = auto
         self.wait = (not loop.config.paced) if wait is None else wait
         # Paced, a new version's mirror system is built and its step compiled in a thread

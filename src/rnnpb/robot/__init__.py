@@ -33,6 +33,7 @@ from rnnpb.robot._kinematics import (
 )
 from rnnpb.robot._mujoco import ROBOT_EYE, MujocoRobot, load_model
 from rnnpb.robot._render import CAMERAS, RobotRenderer, render_pose, write_video
+from rnnpb.robot._retarget import RETARGET_CLEARANCE, Retargeted, Retargeter, retarget
 from rnnpb.robot.camera import RobotCamera
 
 __all__ = [
@@ -55,6 +56,10 @@ __all__ = [
     "CAMERAS",
     "ROBOT_EYE",
     "MujocoRobot",
+    "RETARGET_CLEARANCE",
+    "Retargeted",
+    "Retargeter",
+    "retarget",
     "RobotRenderer",
     "load_model",
     "render_pose",

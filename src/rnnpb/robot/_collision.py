@@ -55,6 +55,10 @@ capsules are the shells' outlines, and a few millimetres of touching (a straight
 against the hip reaches 6 mm) is contact, not a hand inside the torso."""
 
 
+_QUERY_MARGIN = 0.02
+"""Pairs closer than this (metres) are reported by the query model's collision pass."""
+
+
 def collision_pairs() -> tuple[tuple[str, str], ...]:
     """The geom pairs checked: each arm's elbow, forearm and hand against the body, each upper
     arm against the head, and every part of one arm against every part of the other."""
@@ -76,7 +80,7 @@ def _query_xml() -> str:
     root = ET.fromstring(model_xml())
     contact = ET.SubElement(root, "contact")
     for a, b in collision_pairs():
-        ET.SubElement(contact, "pair", {"geom1": a, "geom2": b, "margin": "0.02"})
+        ET.SubElement(contact, "pair", {"geom1": a, "geom2": b, "margin": str(_QUERY_MARGIN)})
     return ET.tostring(root, encoding="unicode")
 
 
@@ -123,6 +127,17 @@ class SelfCollision:
                 )
             )
         return found
+
+    def clearance(self, joints: np.ndarray) -> float:
+        """Smallest distance (metres) between the checked pairs at ``joints`` (8,) radians;
+        negative when two parts are inside each other, and 0.02 (the query margin) when every
+        pair is at least that far apart."""
+        self.data.qpos[self._qadr] = clip_to_limits(as_joint_vector(joints))
+        self._mj.mj_kinematics(self.model, self.data)
+        self._mj.mj_collision(self.model, self.data)
+        if self.data.ncon == 0:
+            return _QUERY_MARGIN
+        return float(min(_QUERY_MARGIN, np.min(self.data.contact.dist[: self.data.ncon])))
 
     def contacts(self, joints: np.ndarray) -> list[Contact]:
         """The pairs passing through each other (deeper than ``depth``) at ``joints``."""
