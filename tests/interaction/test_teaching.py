@@ -190,3 +190,34 @@ def test_a_new_version_is_made_ready_off_the_loop_and_a_broken_one_says_why(tmp_
     failed = PreparedMirror(str(broken), MirrorSystem)
     failed._thread.join(60)
     assert failed.mirror is None and failed.error.startswith("ModelFileError")
+
+
+def test_the_keeper_never_keeps_a_movement_whose_joint_angles_collide(tmp_path):
+    from types import SimpleNamespace
+
+    from rnnpb.interaction.teaching import EpisodeKeeper
+    from rnnpb.memory import MemoryStore
+    from rnnpb.robot import SelfCollision, inverse_kinematics
+
+    class ThroughTheChest(MirrorMapping):
+        """A mapping that bypasses the safe retargeting: the hands go inside the chest."""
+
+        def motor_from_hands(self, hands):
+            inside = np.array([[0.02, 0.03, 0.33], [0.02, -0.03, 0.33]])
+            return np.repeat(inverse_kinematics(inside[None]).joints, len(hands), axis=0)
+
+    assert SelfCollision().collides(ThroughTheChest().motor_from_hands(np.zeros((1, 2, 3)))[0])
+    _, shape = _stream("3", 80, seed=4)
+    with MemoryStore(tmp_path / "m.npz") as memory:
+        keeper = EpisodeKeeper(memory, "m.npz", "test", mapping=ThroughTheChest())
+        for t, row in enumerate(shape):
+            keeper(SimpleNamespace(step=t, observed=row, novelty="novel"))
+        assert memory.episodes() == []
+    refused = [event for event in keeper.events if event.kind == "refused"]
+    assert len(refused) == 1 and "unsafe for the robot (collision:" in refused[0].text
+    # The same stream through the real mapping is kept.
+    with MemoryStore(tmp_path / "n.npz") as memory:
+        keeper = EpisodeKeeper(memory, "m.npz", "test")
+        for t, row in enumerate(shape):
+            keeper(SimpleNamespace(step=t, observed=row, novelty="novel"))
+        assert len(memory.episodes()) == 1

@@ -41,6 +41,7 @@ def test_train_then_generate(data_dir, tmp_path, capsys, monkeypatch):
                 "--iterations",
                 "300",
                 "--no-progress",
+                "--allow-unsafe",  # made-up joint angles, not robot postures
             ]
         )
         == 0
@@ -66,6 +67,7 @@ def test_train_then_generate(data_dir, tmp_path, capsys, monkeypatch):
                 "100",
                 "--no-progress",
                 "--keep-checkpoint",
+                "--allow-unsafe",
             ]
         )
         == 0
@@ -180,3 +182,30 @@ def test_bench_prints_and_writes_its_figures(tmp_path):
     # The compiled step is faster than the plain NumPy one.
     assert figures["online_step_ms_median"] < figures["online_step_reference_numpy_ms_median"]
     assert "on-line step" in result.stdout
+
+
+def test_train_refuses_data_that_would_teach_a_collision(tmp_path, capsys):
+    from rnnpb.demonstrator import learning_set
+    from rnnpb.robot import inverse_kinematics
+    from rnnpb.sequences import Sequence
+
+    data = tmp_path / "data"
+    sequences = learning_set(1, samples_per_pattern=1, n_steps=20)
+    for seq in sequences:
+        write_sequence(data / f"{seq.pattern}_1.csv", seq)
+    # Step 7 of pattern 2 puts both hands inside the robot's chest.
+    chest = inverse_kinematics(np.array([[[0.02, 0.03, 0.33], [0.02, -0.03, 0.33]]])).joints[0]
+    bad = sequences[1]
+    motor = bad.motor.copy()
+    motor[7] = chest
+    write_sequence(data / f"{bad.pattern}_1.csv", Sequence(bad.sensory, motor, bad.pattern))
+    out = tmp_path / "m.npz"
+    assert main(["train", "--data", str(data), "--out", str(out), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert f"{data / (bad.pattern + '_1.csv')} (lines 2-21), step 7: collision:" in err
+    assert "--allow-unsafe" in err and not out.exists()
+    args = ["--preset", "fast", "--iterations", "20", "--no-progress", "--allow-unsafe"]
+    assert main(["train", "--data", str(data), "--out", str(out), *args]) == 0
+    assert "1 colliding" in capsys.readouterr().out  # at the pose (the way back is clear)
+    assert TrainedModel.load(out).meta["data_safety"]["collision"] >= 1

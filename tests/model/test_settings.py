@@ -201,7 +201,9 @@ def test_train_takes_a_config_file_and_info_shows_the_preset(
     research = tmp_path / "research.toml"
     research.write_text("[learning]\nlearning_rate = 0.02\n[learning.pb]\nk_nb = 0\n")
     model_path = tmp_path / "model.npz"
+    # Made-up joint angles, not robot postures: the safety check would refuse them.
     args = ["train", "--data", str(data_dir), "--out", str(model_path), "--preset", "fast"]
+    args.append("--allow-unsafe")
     assert main([*args, "--iterations", "20", "--no-progress", "--config", str(research)]) == 0
     model = TrainedModel.load(model_path)
     assert model.meta["train_config"]["learning_rate"] == 0.02

@@ -26,6 +26,11 @@ Options given explicitly override the preset; --config FILE overrides any of its
 values (the optimizer, the rates, the PB update's coefficients: docs/model.md). The model
 records the preset's name and version (`rnnpb info`).
 
+The robot's own safety checker reads every step of the data first: a step whose joint angles
+put an arm through the body or the other arm, or move a joint faster than its servo can, is
+refused (one line naming the file and the step) unless --allow-unsafe; `rnnpb record`
+retargets safely, so its data pass.
+
 A checkpoint is written next to the model (MODEL.checkpoint.npz) every
 --checkpoint-every iterations; --resume continues from it. Once the model is written the
 checkpoint is removed (--keep-checkpoint keeps it); an interrupted run keeps it.
@@ -54,6 +59,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="training algorithm preset (default: paper)",
     )
     parser.add_argument("--iterations", type=int, help="learning iterations")
+    parser.add_argument(
+        "--allow-unsafe",
+        action="store_true",
+        help="learn data with colliding or too-fast steps (refused by default)",
+    )
     parser.add_argument(
         "--input-noise", type=float, help="std. dev. of noise on the teacher-forced inputs"
     )
@@ -103,8 +113,10 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb.commands._checks import step_count
     from rnnpb.commands._config import read_config
     from rnnpb.commands.progress import progress_bar
+    from rnnpb.errors import DataFileError
     from rnnpb.model import NetworkConfig, TrainConfig, train
     from rnnpb.robot import JOINT_LIMITS
+    from rnnpb.safety import check_data
     from rnnpb.sequences import read_sequence_files
     from rnnpb.vectors import MOTOR_NAMES, SENSORY_NAMES
 
@@ -113,6 +125,12 @@ def run(args: argparse.Namespace) -> int:
     step_count("--checkpoint-every", args.checkpoint_every, high=10_000_000)
     overrides = read_config(args.config, CONFIG_SECTIONS, NAME)
     sequences = read_sequence_files(args.data)
+    safety = check_data(sequences, dt=0.4)
+    if safety.unsafe and not args.allow_unsafe:
+        raise DataFileError(
+            f"{safety.first} ({safety.unsafe} unsafe steps; record with `rnnpb record`, "
+            "which retargets safely, or pass --allow-unsafe)"
+        )
     config = TrainConfig.from_preset(args.preset)
     if overrides is not None:
         config = overrides.apply(config, "learning")
@@ -135,6 +153,7 @@ def run(args: argparse.Namespace) -> int:
         f"{', '.join(patterns)}; {config.iterations} iterations ({args.preset} preset, "
         f"{config.optimizer})"
     )
+    print(f"data safety: {safety.describe()}")
     bar = progress_bar(
         total=config.iterations, unit="it", desc="training", disable=args.no_progress
     )
@@ -159,6 +178,14 @@ def run(args: argparse.Namespace) -> int:
     finally:
         bar.close()
     _interrupt.check()  # interrupted during the last chunk: no model file
+    model.meta["data_safety"] = {
+        "steps": safety.steps,
+        "collision": safety.collision,
+        "speed": safety.speed,
+        "limit": safety.limit,
+        "dt": safety.dt,
+        "allowed_unsafe": bool(safety.unsafe),
+    }
     model.save(args.out)
     if not args.keep_checkpoint:
         # The finished model holds all the checkpoint did; left beside it, it is a second file

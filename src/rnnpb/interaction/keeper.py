@@ -12,6 +12,7 @@ import numpy as np
 from rnnpb.demonstrator import MirrorMapping
 from rnnpb.errors import RnnpbError
 from rnnpb.interaction.episodes import RECORDING, EpisodeCutter, TeachingConfig
+from rnnpb.safety import SafetyChecker, SafetyLimits
 
 
 @dataclass(frozen=True)
@@ -20,7 +21,7 @@ class TeachingEvent:
 
     ``kind`` is ``recording`` (a novel movement is being recorded; ``text`` says which cycle),
     ``kept`` (an episode was stored; ``episode_id``, ``pattern``) or ``refused`` (the memory
-    would not take it; ``text`` says why).
+    would not take it, or its joint angles are unsafe for the robot; ``text`` says why).
     """
 
     step: int
@@ -87,6 +88,7 @@ class EpisodeKeeper:
         self.model = str(model)
         self.source = str(source)
         self.cutter = EpisodeCutter(config, mapping)
+        self._checker: SafetyChecker | None = None  # made at the first episode
         self.hands_of = hands_of
         self.events: list[TeachingEvent] = []
         self.kept: list[int] = []
@@ -126,6 +128,12 @@ class EpisodeKeeper:
             self._last_text = text
             return
         self._last_text = text
+        unsafe = self._unsafe(episode.motor)
+        if unsafe:
+            # Never learned: the network would learn to command it. The retargeting makes safe
+            # angles, so this guards a mapping that was changed or bypassed.
+            self.events.append(TeachingEvent(record.step, "refused", unsafe))
+            return
         pattern = self.next_pattern_name()
         shown_as = self._shown_as(episode.first_step, episode.last_step)
         try:
@@ -152,6 +160,21 @@ class EpisodeKeeper:
                 episode_id,
                 pattern,
             )
+        )
+
+    def _unsafe(self, motor: np.ndarray) -> str:
+        """Why the episode's joint angles must not be learned (a collision or a step faster
+        than the servos, by the robot's own checker), or ""."""
+        if self._checker is None:
+            self._checker = SafetyChecker(SafetyLimits(dt=self.cutter.mapping.dt))
+        result = self._checker.check(motor)
+        refused = result.kinds[:, 0] | result.kinds[:, 1]
+        if not refused.any():
+            return ""
+        k = int(refused.argmax())
+        return (
+            f"not kept: step {k} of the movement is unsafe for the robot ({result.reasons[k]}); "
+            f"{int(refused.sum())} of {len(refused)} steps"
         )
 
 

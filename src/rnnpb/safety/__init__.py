@@ -15,6 +15,7 @@ from rnnpb.safety._check import (
     SequenceSafety,
     unsettled_steps,
 )
+from rnnpb.safety._data import DataSafety, check_data
 from rnnpb.safety._explore import (
     Experience,
     ExplorationConfig,
@@ -44,6 +45,8 @@ __all__ = [
     "SAFETY_FORMAT",
     "SAFETY_FORMAT_VERSION",
     "CommandFilter",
+    "DataSafety",
+    "check_data",
     "Experience",
     "ExplorationConfig",
     "FilterDecision",
