@@ -35,6 +35,7 @@ ALLOWED: dict[str, set[str]] = {
     "demonstrator": {"robot", "sequences", "sources"},
     "safety": {"model", "presets", "robot", "sequences"},
     "perception": {"demonstrator", "robot", "sources", "sequences"},
+    "mocap": {"demonstrator", "robot", "sources", "sequences"},
     "analysis": {"demonstrator", "robot", "sequences", "structure"},
     "interaction": {
         "model",
@@ -88,6 +89,7 @@ ALLOWED: dict[str, set[str]] = {
         "sequences",
     },
     "commands": {
+        "mocap",
         "models",
         "experiments",
         "sweeps",

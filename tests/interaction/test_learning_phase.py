@@ -111,3 +111,28 @@ def test_record_from_a_stream_without_depth_uses_the_plane(tmp_path, capsys):
     assert np.abs(sequences[0].motor - truth[:25]).max() < 1e-4
     assert "fixed plane" in capsys.readouterr().out
     assert main(["record", f"csv:{stream}", "--pattern", "<x>", "--out", str(out)]) == 2
+
+
+def test_a_demonstration_from_3d_hands_keeps_their_depth():
+    from rnnpb.interaction.learning_phase import demonstration_from_hands
+
+    motion = perform([("4", 30)], PatternConfig(), np.random.default_rng(2))
+    hands = motion.hands.copy()
+    hands[:, :, 0] += np.linspace(-0.1, 0.1, len(hands))[:, None]  # towards and away
+    hands[7] = np.nan
+    demonstration = demonstration_from_hands(hands, source="capture")
+    valid = demonstration.valid
+    assert demonstration.depth == "3-d" and not valid[7] and valid.sum() == 29
+    np.testing.assert_allclose(
+        demonstration.sensory[valid], RobotCamera().sensory_from_hands(hands[valid])
+    )
+    # the joint angles come from the 3-D hands, not from hands put back on one plane
+    np.testing.assert_allclose(
+        demonstration.motor[valid], MirrorMapping().motor_from_hands(hands[valid])
+    )
+    flat = hands.copy()
+    flat[:, :, 0] = PatternConfig().body.hand_depth
+    assert (
+        np.abs(demonstration.motor[valid] - MirrorMapping().motor_from_hands(flat)[valid]).max()
+        > 0.05
+    )

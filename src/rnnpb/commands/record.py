@@ -22,11 +22,24 @@ The recording is cut into training sequences, written as DIR/PATTERN_1.csv, PATT
 A hand lost for more than a few steps splits the recording; no sequence spans the gap.
 
 SOURCE is one of webcam:INDEX, video:PATH, images:DIR, synthetic:PATTERN, csv:FILE,
-scenario:held:P (see `rnnpb interact --help`).
+scenario:held:P (see `rnnpb interact --help`), or bvh:FILE[,FILE...] (motion capture).
+
+Motion capture (bvh:FILE,FILE...; docs/motion-capture.md): the files are played in order as one
+stream, each blending into the next over 0.5 s. The hands are found by the joints' names
+(--hands LEFT,RIGHT names them), taken relative to the person's own shoulders and scaled by
+their arm length onto the standard user's body, so people of every size reach the same
+workspace; units and up axis are read from the skeleton (--units, --up-axis give them). The
+stream is resampled to --dt; --time-scale S plays it S times slower. A movement with fewer
+than 4 steps per cycle is refused with the --time-scale or --dt that would work.
+
+Every recording also writes DIR/recording.json: the source, the step time, the body's
+measures and the scaling; `rnnpb train` learns the model at that step time. A folder holds
+data of one step time.
 
 Examples:
   rnnpb record synthetic:3 --steps 120 --pattern three --out data/three
   rnnpb record webcam:0 --steps 150 --colors colors.json --pattern wave --out data/wave
+  rnnpb record bvh:wave1.bvh,wave2.bvh --time-scale 3 --pattern wave --out data/wave
   rnnpb train --data data/three data/wave --out model.npz --preset fast
 """
 
@@ -83,37 +96,91 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="M",
         help="x of the hands' plane for sources without depth (default 0.68)",
     )
-    parser.add_argument("--dt", type=float, default=0.4, help="seconds per step (default 0.4)")
+    parser.add_argument(
+        "--dt",
+        type=float,
+        default=0.4,
+        help="seconds per step the data are recorded (and the model learned) at (default 0.4, "
+        "the paper's)",
+    )
     parser.add_argument("--seed", type=int, default=0, help="seed of a synthetic source")
+    parser.add_argument(
+        "--time-scale",
+        type=float,
+        default=1.0,
+        metavar="S",
+        help="bvh: play the capture S times slower (0.5: twice as fast; default 1)",
+    )
+    parser.add_argument(
+        "--hands",
+        metavar="LEFT,RIGHT",
+        help="bvh: the joints of the left and right hand (default: found by their names)",
+    )
+    parser.add_argument(
+        "--units",
+        choices=("m", "cm", "mm", "in"),
+        help="bvh: the file's length unit (default: the one in which the arms are a person's)",
+    )
+    parser.add_argument(
+        "--up-axis",
+        choices=("x", "y", "z", "-x", "-y", "-z"),
+        help="bvh: the file's up axis (default: the one the shoulders are above the root on)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
+    import datetime
     from pathlib import Path
 
     import numpy as np
 
+    from rnnpb.commands._checks import finite_seconds
+    from rnnpb.commands._recording import check_folder_dt, write_recording
+    from rnnpb.demonstrator import MirrorMapping
     from rnnpb.errors import ConfigError
-    from rnnpb.interaction import open_source
-    from rnnpb.interaction.learning_phase import cut_sequences, record_demonstration
-    from rnnpb.perception import MOUSE_PLANE_X, DepthConfig
+    from rnnpb.interaction.learning_phase import cut_sequences, demonstration_from_hands
     from rnnpb.sequences import pattern_name_problem, write_sequence
 
     problem = pattern_name_problem(args.pattern)
     if problem:
         raise ConfigError(f"--pattern {args.pattern!r} {problem}")
+    finite_seconds("--dt", args.dt)
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise ConfigError(f"--out {out}: exists and is not a directory")
-    source = open_source(
-        args.source, seed=args.seed, dt=args.dt, colors=args.colors, steps=args.steps
-    )
-    with source:
-        demonstration = record_demonstration(
-            source,
-            steps=args.steps,
-            depth=DepthConfig(ball_radius_m=args.ball_radius),
-            plane_x=MOUSE_PLANE_X if args.plane_x is None else args.plane_x,
+    if out.is_dir():
+        check_folder_dt(out, args.dt)
+    kind, _, argument = str(args.source).partition(":")
+    capture = None
+    if kind.strip().lower() == "bvh":
+        from rnnpb.mocap import capture_stream
+
+        files = [f.strip() for f in argument.split(",")]
+        if not argument or not all(files):
+            raise ConfigError(f"source {args.source!r}: expected bvh:FILE[,FILE...]")
+        hands = None
+        if args.hands is not None:
+            names = [n.strip() for n in args.hands.split(",")]
+            if len(names) != 2 or not all(names):
+                raise ConfigError(f"--hands {args.hands!r}: expected LEFT,RIGHT joint names")
+            hands = (names[0], names[1])
+        capture = capture_stream(
+            files,
+            dt=args.dt,
+            time_scale=args.time_scale,
+            hands=hands,
+            units=args.units,
+            up_axis=args.up_axis,
         )
+        hand_steps = capture.hands if args.steps is None else capture.hands[: args.steps]
+        demonstration = demonstration_from_hands(hand_steps, source=args.source)
+    else:
+        for option in ("hands", "units", "up_axis"):
+            if getattr(args, option) is not None:
+                raise ConfigError(f"--{option.replace('_', '-')} applies to bvh: sources")
+        if args.time_scale != 1.0:
+            raise ConfigError("--time-scale applies to bvh: sources")
+        demonstration = _record_from_source(args)
     sequences = cut_sequences(
         demonstration,
         args.pattern,
@@ -122,15 +189,44 @@ def run(args: argparse.Namespace) -> int:
         length=args.length,
     )
     out.mkdir(parents=True, exist_ok=True)
+    names = []
     for i, sequence in enumerate(sequences, 1):
         write_sequence(out / f"{args.pattern}_{i}.csv", sequence)
+        names.append(f"{args.pattern}_{i}.csv")
+    mapping = MirrorMapping()
+    entry = {
+        "source": str(args.source),
+        "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        "dt": args.dt,
+        "steps": demonstration.n_steps,
+        "depth": demonstration.depth,
+        "sequences": names,
+        "mapping": {
+            "user_body": {
+                k: getattr(mapping.body, k)
+                for k in ("distance", "shoulder_height", "shoulder_half_width", "arm_reach")
+            },
+            "scale": round(mapping.effective_scale, 6),
+        },
+        "capture": None if capture is None else capture.to_json(),
+    }
+    write_recording(out, args.pattern, args.dt, entry)
     valid = demonstration.valid
     reach = demonstration.ik_residual[valid]
+    depth = {"size": "ball size", "plane": "a fixed plane", "3-d": "motion capture"}
     print(
         f"recorded {demonstration.n_steps} steps from {demonstration.source} "
-        f"(depth from {'ball size' if demonstration.depth == 'size' else 'a fixed plane'}); "
+        f"(depth from {depth.get(demonstration.depth, demonstration.depth)}); "
         f"{int(valid.sum())} with both hands recovered"
     )
+    if capture is not None:
+        body = capture.takes[0].body
+        print(
+            f"body: arm {body.arm_length_m:.3f} m, shoulders {body.shoulder_width_m:.3f} m apart "
+            f"(units {body.units}, {body.up_axis} up); hands scaled by {body.scale:.3f}; "
+            f"{len(capture.takes)} take(s) at time scale {capture.time_scale:g}, shortest "
+            f"cycle {capture.period:.2f} s = {capture.period / args.dt:.1f} steps of {args.dt:g} s"
+        )
     if len(reach):
         print(f"robot hands within {float(np.max(reach)) * 100:.1f} cm of their targets")
     print(
@@ -138,3 +234,20 @@ def run(args: argparse.Namespace) -> int:
         f"({', '.join(str(s.n_steps) for s in sequences)} steps) -> {out}"
     )
     return 0
+
+
+def _record_from_source(args: argparse.Namespace):
+    from rnnpb.interaction import open_source
+    from rnnpb.interaction.learning_phase import record_demonstration
+    from rnnpb.perception import MOUSE_PLANE_X, DepthConfig
+
+    source = open_source(
+        args.source, seed=args.seed, dt=args.dt, colors=args.colors, steps=args.steps
+    )
+    with source:
+        return record_demonstration(
+            source,
+            steps=args.steps,
+            depth=DepthConfig(ball_radius_m=args.ball_radius),
+            plane_x=MOUSE_PLANE_X if args.plane_x is None else args.plane_x,
+        )

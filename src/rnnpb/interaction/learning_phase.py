@@ -58,7 +58,8 @@ class Demonstration:
     ik_residual : array, shape (n_steps, 2)
         Distance from each robot hand target to where the arm reaches, metres.
     depth : str
-        ``"size"`` (from the balls' apparent size) or ``"plane"`` (the fixed plane).
+        ``"size"`` (from the balls' apparent size), ``"plane"`` (the fixed plane) or ``"3-d"``
+        (given in 3-D: motion capture).
     source : str
         The source's description.
     """
@@ -136,12 +137,40 @@ def record_demonstration(
         )
     else:
         hands = hands_on_plane(sensory_array, camera, plane_x)
-    # Lost hands are NaN rows: their joints are NaN, and the retargeting starts again after.
-    ik = mapping.retarget(hands)
-    motor, residual = ik.joints, ik.residual
+    motor, residual = _motor_for_hands(mapping, hands)
     return Demonstration(
         sensory_array, hands, motor, residual, "size" if tracked else "plane", _described(source)
     )
+
+
+def demonstration_from_hands(
+    hands: np.ndarray,
+    *,
+    mapping: MirrorMapping | None = None,
+    camera: RobotCamera | None = None,
+    source: str = "",
+) -> Demonstration:
+    """A demonstration from the user's 3-D hands (motion capture): the sensory values are
+    what the robot's camera sees of them, the motor values come through the mirror mapping as
+    in :func:`record_demonstration`.
+
+    ``hands`` shape (n_steps, 2, 3), robot frame, metres; NaN where a hand is not known.
+    """
+    hands = np.asarray(hands, dtype=np.float64)
+    if hands.ndim != 3 or hands.shape[1:] != (2, 3) or len(hands) < 2:
+        raise ConfigError(f"a demonstration needs hands of shape (n >= 2, 2, 3), got {hands.shape}")
+    sensory = (camera or RobotCamera()).sensory_from_hands(hands)
+    motor, residual = _motor_for_hands(mapping or MirrorMapping(), hands)
+    return Demonstration(sensory, hands, motor, residual, "3-d", source)
+
+
+def _motor_for_hands(mapping: MirrorMapping, hands: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The robot's joint angles (n, 8) and each hand's reach residual (n, 2) for the user's
+    hands (n, 2, 3); NaN where a hand is not known. Every demonstration's motor values come
+    from here: the safe retargeting (:meth:`MirrorMapping.retarget`), which starts again
+    after a lost hand."""
+    result = mapping.retarget(hands)
+    return result.joints, result.residual
 
 
 def _described(source: UserSource) -> str:

@@ -1,0 +1,103 @@
+"""``recording.json``: what `rnnpb record` wrote into a data folder, and at which step time.
+
+One file per folder, beside the sequence CSVs, with one entry per pattern recorded into it::
+
+    {"format": "rnnpb-recording", "format_version": 1, "dt": 0.4,
+     "recordings": {"wave": {"source": ..., "steps": ..., "sequences": [...], ...}}}
+
+A folder holds data of one step time: recording at another ``dt`` into it is refused, and
+`rnnpb train` learns a model at the ``dt`` its folders' files agree on.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+from rnnpb._atomic import atomic_write
+from rnnpb.errors import ConfigError, DataFileError
+
+RECORDING_FILE = "recording.json"
+RECORDING_FORMAT = "rnnpb-recording"
+RECORDING_FORMAT_VERSION = 1
+MAX_RECORDING_BYTES = 4 * 2**20
+
+
+def read_recording(folder: Path) -> dict[str, Any] | None:
+    """The folder's recording.json, checked; None when there is none."""
+    path = Path(folder) / RECORDING_FILE
+    if not path.exists():
+        return None
+    from rnnpb._reading import open_regular_file
+
+    with open_regular_file(path, DataFileError, "a JSON file", MAX_RECORDING_BYTES) as handle:
+        try:
+            data = json.load(handle)
+        except (json.JSONDecodeError, UnicodeDecodeError) as error:
+            raise DataFileError(f"{path}: not valid JSON ({str(error).splitlines()[0]})") from None
+    if not isinstance(data, dict) or data.get("format") != RECORDING_FORMAT:
+        raise DataFileError(f"{path}: not an rnnpb recording file")
+    if data.get("format_version") != RECORDING_FORMAT_VERSION:
+        raise DataFileError(
+            f"{path}: recording format version {data.get('format_version')!r}; this rnnpb "
+            f"reads {RECORDING_FORMAT_VERSION}"
+        )
+    dt = data.get("dt")
+    if not isinstance(dt, (int, float)) or isinstance(dt, bool) or not math.isfinite(dt) or dt <= 0:
+        raise DataFileError(f"{path}: 'dt' is not a positive number of seconds")
+    if not isinstance(data.get("recordings"), dict):
+        raise DataFileError(f"{path}: 'recordings' is not an object")
+    return data
+
+
+def write_recording(folder: Path, pattern: str, dt: float, entry: dict[str, Any]) -> Path:
+    """Add (or replace) ``pattern``'s entry in the folder's recording.json, atomically."""
+    folder = Path(folder)
+    data = read_recording(folder) or {
+        "format": RECORDING_FORMAT,
+        "format_version": RECORDING_FORMAT_VERSION,
+        "dt": dt,
+        "recordings": {},
+    }
+    check_folder_dt(folder, dt, data)
+    data["recordings"][pattern] = entry
+    path = folder / RECORDING_FILE
+    with atomic_write(path, encoding="utf-8") as handle:
+        json.dump(data, handle, indent=1)
+        handle.write("\n")
+    return path
+
+
+def check_folder_dt(folder: Path, dt: float, data: dict[str, Any] | None = None) -> None:
+    """Refuse recording at ``dt`` into a folder that holds data of another step time."""
+    data = data if data is not None else read_recording(folder)
+    if data is not None and not math.isclose(data["dt"], dt, rel_tol=1e-9):
+        raise ConfigError(
+            f"{Path(folder) / RECORDING_FILE}: the folder holds data recorded at dt "
+            f"{data['dt']:g} s; record at --dt {data['dt']:g} or into another --out folder"
+        )
+
+
+def data_dt(paths: list[str]) -> tuple[float, list[Path]] | None:
+    """The step time the data folders' recording.json files agree on, and those files; None
+    when none has one. A data file's folder is its parent. Disagreeing files raise
+    :class:`ConfigError` naming two of them."""
+    folders = dict.fromkeys(Path(p) if Path(p).is_dir() else Path(p).parent for p in paths)
+    found: list[tuple[float, Path]] = []
+    for folder in folders:
+        data = read_recording(folder)
+        if data is not None:
+            found.append((float(data["dt"]), folder / RECORDING_FILE))
+    if not found:
+        return None
+    dt, first = found[0]
+    for other_dt, other in found[1:]:
+        if not math.isclose(other_dt, dt, rel_tol=1e-9):
+            raise ConfigError(
+                f"the data were recorded at different step times ({first}: dt {dt:g} s, "
+                f"{other}: dt {other_dt:g} s); a model learns at one dt: record them again "
+                "at one --dt"
+            )
+    return dt, [path for _, path in found]
