@@ -48,6 +48,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "full_seed0.npz for the larger set: the layout of `rnnpb demo`'s models); without "
         "it a study learns those it needs",
     )
+    parser.add_argument(
+        "--data",
+        metavar="DIR",
+        help="recordings a study reads (the people study: a folder of motion-capture takes)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -71,6 +76,7 @@ def run(args: argparse.Namespace) -> int:
         seed=args.seed or 0,
         models=args.models,
         exam=exam,
+        data=args.data,
     )
     outcome = study.run(Path(args.out), options)
     print(f"wrote {args.out}/report.md and {args.out}/results.json in {outcome.runtime_s:.0f} s")

@@ -2,7 +2,7 @@
 
 One module per experiment: :mod:`~rnnpb.analysis.figures.paper` (the paper's figures, drawn by
 ``rnnpb demo``), :mod:`~rnnpb.analysis.figures.patterns` (the demonstrations), one per study
-(``novelty``, ``incremental``, ``teach``, ``safety``, ``dyad``) and
+(``novelty``, ``incremental``, ``teach``, ``safety``, ``dyad``, ``people``) and
 :mod:`~rnnpb.analysis.figures.sweeps`; what they share is in ``_common``. Every figure is
 re-exported here.
 
@@ -37,6 +37,7 @@ from rnnpb.analysis.figures.paper import (
     plot_training,
 )
 from rnnpb.analysis.figures.patterns import plot_patterns
+from rnnpb.analysis.figures.people import plot_following
 from rnnpb.analysis.figures.safety import plot_pb_safety_map
 from rnnpb.analysis.figures.sweeps import IntervalLike, plot_distributions
 from rnnpb.analysis.figures.teach import TEACHING_COLORS, plot_teaching_timeline
@@ -64,6 +65,7 @@ __all__ = [
     "plot_dyad",
     "plot_forgetting",
     "plot_novel_responses",
+    "plot_following",
     "plot_patterns",
     "plot_patterns_found",
     "plot_pb_safety_map",

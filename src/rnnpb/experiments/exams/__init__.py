@@ -10,6 +10,7 @@ An exam is a TOML file of this package, ``<study>.toml``, installed with rnnpb::
     user = [7000, 7001]
     shapes = ["one-arm", "figure-eight"]   # optional: the shapes judged
     learning_sets = ["1", "full"]          # optional: the learning sets judged
+    learn_styles = ["normal"]              # optional: any other list of names is a named draw
 
     [parameters]                    # optional: numbers every target's definition shares
     settle_steps = 24
@@ -64,6 +65,12 @@ class ExamTarget:
             return False
         return value >= self.limit if self.compare == ">=" else value <= self.limit
 
+    def name_list(self, name: str) -> tuple[str, ...]:
+        """A draw named by text (a list of names in ``[draws]``: styles, takes …)."""
+        if name not in self.names:
+            raise ConfigError(f"the {self.study} exam names no {name!r} draws")
+        return self.names[name]
+
     def parameter(self, name: str) -> float:
         if name not in self.parameters:
             raise ConfigError(f"exam target {self.name!r} has no parameter {name!r}")
@@ -98,6 +105,7 @@ class Exam:
     excluded: tuple[ExcludedDraws, ...]
     targets: Mapping[str, ExamTarget]
     parameters: Mapping[str, float] = field(default_factory=dict)
+    names: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
 
     def draws(self) -> frozenset[int]:
         """Every seed the exam runs on."""
@@ -127,7 +135,8 @@ class Exam:
 
     def describe(self) -> str:
         """One sentence for a report: which exam judged it, on which draws."""
-        seeds = "; ".join(f"{k} {', '.join(map(str, v))}" for k, v in self.seeds.items())
+        named = {**self.seeds, **self.names}
+        seeds = "; ".join(f"{k} {', '.join(map(str, v))}" for k, v in named.items())
         return (
             f"**Exam** `{self.study}` version {self.version} "
             f"(`rnnpb/experiments/exams/{self.study}.toml`): draws {seeds}. Every target is "
@@ -141,6 +150,7 @@ class Exam:
             "seeds": {k: list(v) for k, v in self.seeds.items()},
             "shapes": list(self.shapes),
             "learning_sets": list(self.learning_sets),
+            **({"names": {k: list(v) for k, v in self.names.items()}} if self.names else {}),
         }
 
 
@@ -187,11 +197,14 @@ def parse_exam(data: Mapping[str, Any]) -> Exam:
     seeds: dict[str, tuple[int, ...]] = {}
     shapes: tuple[str, ...] = ()
     sets: tuple[str, ...] = ()
+    names: dict[str, tuple[str, ...]] = {}
     for key, value in draws.items():
         if key == "shapes":
             shapes = tuple(_text(v, "draws.shapes") for v in _list(value, "draws.shapes"))
         elif key == "learning_sets":
             sets = tuple(_text(v, "draws.learning_sets") for v in _list(value, key))
+        elif _list(value, f"draws.{key}") and all(isinstance(v, str) for v in value):
+            names[key] = tuple(_text(v, f"draws.{key}") for v in value)
         else:
             seeds[key] = tuple(_whole(v, f"draws.{key}") for v in _list(value, f"draws.{key}"))
             if not seeds[key] or min(seeds[key]) < 0:
@@ -247,6 +260,7 @@ def parse_exam(data: Mapping[str, Any]) -> Exam:
         tuple(excluded),
         MappingProxyType(targets),
         MappingProxyType(_parameters(data.get("parameters", {}), "[parameters]")),
+        MappingProxyType(names),
     )
 
 

@@ -36,6 +36,7 @@ STUDY_MODULES: dict[str, str] = {
     "safety": "rnnpb.experiments.studies.safety",
     "dyad": "rnnpb.experiments.studies.dyad",
     "teach": "rnnpb.experiments.studies.teach",
+    "people": "rnnpb.experiments.studies.people",
 }
 
 
@@ -51,13 +52,15 @@ class StudyOptions:
     """What every study takes. ``quick``: the short form (the one the tests run); ``workers``:
     parallel worker processes; ``seed``: the first seed of the study's draws; ``models``: a
     directory of learned models to start from (None: the study learns those it needs);
-    ``exam``: run on the exam's draws instead of ``seed``'s (the full form only)."""
+    ``exam``: run on the exam's draws instead of ``seed``'s (the full form only); ``data``: a
+    directory of recordings the study reads (the people study's motion capture)."""
 
     quick: bool = False
     workers: int = 2
     seed: int = 0
     models: str | None = None
     exam: Exam | None = None
+    data: str | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.workers, int) or isinstance(self.workers, bool) or self.workers < 1:
