@@ -26,6 +26,10 @@ Options given explicitly override the preset; --config FILE overrides any of its
 values (the optimizer, the rates, the PB update's coefficients: docs/model.md). The model
 records the preset's name and version (`rnnpb info`).
 
+Step time: a model is learned at one step time and plays at it only (`rnnpb interact` and
+`serve` refuse another). It is the dt the data folders' recording.json files (written by
+`rnnpb record`) agree on, else --dt, else the paper's 0.4 s; `rnnpb info` shows it.
+
 A checkpoint is written next to the model (MODEL.checkpoint.npz) every
 --checkpoint-every iterations; --resume continues from it. Once the model is written the
 checkpoint is removed (--keep-checkpoint keeps it); an interrupted run keeps it.
@@ -58,6 +62,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--input-noise", type=float, help="std. dev. of noise on the teacher-forced inputs"
     )
     add_config_argument(parser, CONFIG_SECTIONS)
+    parser.add_argument(
+        "--dt",
+        type=float,
+        help="seconds per step the data were recorded at (default: from the data's "
+        "recording.json, else 0.4, the paper's)",
+    )
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     parser.add_argument("--hidden", type=int, default=40, help="hidden units (default 40)")
     parser.add_argument("--context", type=int, default=30, help="context units (default 30)")
@@ -113,6 +123,7 @@ def run(args: argparse.Namespace) -> int:
     step_count("--checkpoint-every", args.checkpoint_every, high=10_000_000)
     overrides = read_config(args.config, CONFIG_SECTIONS, NAME)
     sequences = read_sequence_files(args.data)
+    dt, dt_origin = _step_time(args.dt, args.data)
     config = TrainConfig.from_preset(args.preset)
     if overrides is not None:
         config = overrides.apply(config, "learning")
@@ -159,6 +170,7 @@ def run(args: argparse.Namespace) -> int:
     finally:
         bar.close()
     _interrupt.check()  # interrupted during the last chunk: no model file
+    model = replace(model, meta={**model.meta, "dt": dt})
     model.save(args.out)
     if not args.keep_checkpoint:
         # The finished model holds all the checkpoint did; left beside it, it is a second file
@@ -168,6 +180,7 @@ def run(args: argparse.Namespace) -> int:
     mse = np.asarray(info["mse_per_output"])
     names = (*SENSORY_NAMES, *MOTOR_NAMES)
     print(f"wrote {args.out} after {info['iterations']} iterations in {info['seconds']:.1f} s")
+    print(f"learned at dt {dt:g} s ({dt_origin}); it plays at that step")
     print(
         f"final mean squared error per output: max {mse.max():.2e}, mean {mse.mean():.2e} "
         f"(RMS max {np.sqrt(mse.max()):.2e}); worst output: {names[int(mse.argmax())]}"
@@ -175,3 +188,26 @@ def run(args: argparse.Namespace) -> int:
     for name, pb in model.pattern_pb.items():
         print(f"  pattern {name}: PB = {np.array2string(pb, precision=3)}")
     return 0
+
+
+def _step_time(given: float | None, data: list[str]) -> tuple[float, str]:
+    """The step time to learn at and where it came from (see DESCRIPTION)."""
+    import math
+
+    from rnnpb.commands._checks import finite_seconds
+    from rnnpb.commands._recording import data_dt
+    from rnnpb.errors import ConfigError
+    from rnnpb.model.io import DEFAULT_DT, MAX_DT
+
+    if given is not None:
+        finite_seconds("--dt", given, high=MAX_DT)
+    recorded = data_dt(data)
+    if recorded is None:
+        return (DEFAULT_DT, "the paper's") if given is None else (given, "--dt")
+    dt, files = recorded
+    if given is not None and not math.isclose(given, dt, rel_tol=1e-9):
+        raise ConfigError(
+            f"--dt {given:g}: the data were recorded at dt {dt:g} s ({files[0]}); learn them "
+            f"at --dt {dt:g}, or record them again with --dt {given:g}"
+        )
+    return dt, f"from {files[0]}" + (f" and {len(files) - 1} more" if len(files) > 1 else "")
