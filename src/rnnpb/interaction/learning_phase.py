@@ -154,12 +154,16 @@ def demonstration_from_hands(
     what the robot's camera sees of them, the motor values come through the mirror mapping as
     in :func:`record_demonstration`.
 
-    ``hands`` shape (n_steps, 2, 3), robot frame, metres; NaN where a hand is not known.
+    ``hands`` shape (n_steps, 2, 3), robot frame, metres; NaN where a hand is not known. A
+    hand outside the camera's view is not seen (NaN sensory values), as with a camera.
     """
     hands = np.asarray(hands, dtype=np.float64)
     if hands.ndim != 3 or hands.shape[1:] != (2, 3) or len(hands) < 2:
         raise ConfigError(f"a demonstration needs hands of shape (n >= 2, 2, 3), got {hands.shape}")
-    sensory = (camera or RobotCamera()).sensory_from_hands(hands)
+    sensory = (camera or RobotCamera()).sensory_from_hands(hands).reshape(-1, 2, 2)
+    with np.errstate(invalid="ignore"):
+        sensory[((sensory < 0) | (sensory > 1)).any(axis=2)] = np.nan
+    sensory = sensory.reshape(-1, 4)
     motor, residual = _motor_for_hands(mapping or MirrorMapping(), hands)
     return Demonstration(sensory, hands, motor, residual, "3-d", source)
 
