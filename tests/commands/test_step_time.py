@@ -93,3 +93,15 @@ def test_a_model_file_with_a_bad_step_time_is_refused(tmp_path):
     replace(shipped, meta={**shipped.meta, "dt": -1}).save(path)
     with pytest.raises(ModelFileError, match="step time dt -1 is not a number of seconds"):
         TrainedModel.load(path)
+
+
+def test_serve_refuses_models_of_different_step_times(tmp_path, capsys):
+    shipped = TrainedModel.load(SHIPPED_MODEL)
+    folder = tmp_path / "models"
+    shipped.save(folder / "paper.npz")
+    replace(shipped, meta={**shipped.meta, "dt": 0.1}).save(folder / "fast.npz")
+    assert main(["serve", "--model", str(folder), "--port", "0"]) == 2
+    error = _one_line_error(capsys)
+    assert (
+        "different step times" in error and "fast.npz 0.1 s" in error and "paper.npz 0.4 s" in error
+    )
