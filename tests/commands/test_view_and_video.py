@@ -104,7 +104,15 @@ def test_a_new_video_removes_the_partial_a_killed_run_left(tmp_path):
 
 @pytest.mark.slow
 def test_sigterm_during_a_rendered_run_leaves_a_playable_video(tmp_path):
+    from dataclasses import replace
+
+    from rnnpb.model import TrainedModel
+
     out = tmp_path / "run"
+    # paced at 0.05 s a step: a model learned, as far as its file says, at that step
+    shipped = TrainedModel.load(SHIPPED_MODEL)
+    fast_model = tmp_path / "fast.npz"
+    replace(shipped, meta={**shipped.meta, "dt": 0.05}).save(fast_model)
     env = {
         **os.environ,
         "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl"),
@@ -117,7 +125,7 @@ def test_sigterm_during_a_rendered_run_leaves_a_playable_video(tmp_path):
             "rnnpb.cli",
             "interact",
             "--model",
-            str(SHIPPED_MODEL),
+            str(fast_model),
             "--source",
             "scenario:held:1",
             "--out",

@@ -82,6 +82,26 @@ def test_a_folder_holds_one_step_time(tmp_path, capsys):
     assert "holds data recorded at dt 0.4 s" in capsys.readouterr().err
 
 
+def test_hands_out_of_the_cameras_view_are_not_seen_and_a_distance_is_proposed(
+    tmp_path, capsys
+):
+    times = np.arange(12 * FPS + 1) / FPS
+    raised = demonstrator_hands("2", times, 2.4) + np.array([0.0, 0.0, 0.45])
+    take = write_bvh(tmp_path / "raised.bvh", raised, 1 / FPS)
+    args = ["record", f"bvh:{take}", "--pattern", "up", "--cut", "length", "--length", "20"]
+    assert main([*args, "--out", str(tmp_path / "near")]) == 2
+    error = capsys.readouterr().err.strip()
+    assert "outside the robot camera's view on" in error and "--distance" in error
+    distance = error.split("--distance ")[1].split()[0]
+    assert main([*args, "--out", str(tmp_path / "far"), "--distance", distance]) == 0
+    recording = json.loads((tmp_path / "far" / "recording.json").read_text())
+    assert recording["recordings"]["up"]["mapping"]["user_body"]["distance"] == float(distance)
+    # the robot's joint angles do not depend on where the person stands
+    near = MirrorMapping().motor_from_hands(raised[::12])
+    sequences = read_sequence_files([str(tmp_path / "far")])
+    np.testing.assert_allclose(sequences[0].motor[1:], near[1:20], atol=0.05)
+
+
 @pytest.mark.skipif(not WAVES, reason=f"the real motion-capture takes are not in {MOCAP}")
 def test_real_waving_takes_slowed_to_the_papers_step(tmp_path, capsys):
     spec = "bvh:" + ",".join(str(p) for p in WAVES)
@@ -89,7 +109,10 @@ def test_real_waving_takes_slowed_to_the_papers_step(tmp_path, capsys):
     assert main(["record", spec, "--pattern", "wave", "--out", str(out)]) != 0
     assert "use --time-scale 1.48 or more" in capsys.readouterr().err
     args = ["--pattern", "wave", "--out", str(out), "--cut", "length", "--length", "40"]
-    assert main(["record", spec, "--time-scale", "3", *args]) == 0
+    assert main(["record", spec, "--time-scale", "3", *args]) == 2
+    # waving overhead at 1 m leaves the robot camera's view
+    assert "--distance 1.5 keeps every step in view" in capsys.readouterr().err
+    assert main(["record", spec, "--time-scale", "3", "--distance", "1.5", *args]) == 0
     entry = json.loads((out / "recording.json").read_text())["recordings"]["wave"]
     body = entry["capture"]["takes"][0]["body"]
     assert body["hands"] == ["Hand_L", "Hand_R"] and body["units"] == "cm"

@@ -99,7 +99,7 @@ def test_interact_interrupted_keeps_every_flushed_step(model_file, tmp_path, how
     process = _rnnpb(
         "interact",
         "--model",
-        model_file,
+        _with_step_time(model_file, tmp_path / "fast.npz", 0.02),
         "--source",
         "scenario:held:1",
         "--out",
@@ -203,3 +203,13 @@ def test_ctrl_c_during_the_first_compile_stops_interact_cleanly(model_file, tmp_
         assert summary["loop"]["steps"] == len(steps)
         assert (out / "session.png").exists()
         assert not list(out.glob(".*"))  # no temporary file left
+
+
+def _with_step_time(model_file, path, dt):
+    """A copy of the model learned, as far as its file says, at ``dt`` (a paced run that fast
+    plays only a model of that step)."""
+    from dataclasses import replace
+
+    model = TrainedModel.load(model_file)
+    replace(model, meta={**model.meta, "dt": dt}).save(path)
+    return path

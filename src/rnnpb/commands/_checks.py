@@ -26,3 +26,15 @@ def step_count(option: str, value: int | None, low: int = 1, high: int = MAX_STE
     if value is not None and not low <= value <= high:
         raise ConfigError(f"{option} must be in [{low}, {high:,}], got {value:,}")
     return value
+
+
+def played_dt(model: object, learned: float, given: float | None) -> float:
+    """The step time to play a model at: the one it was learned at; ``given`` (``--dt``) must
+    be it, else :class:`ConfigError` saying how to learn at that step."""
+    if given is None or math.isclose(given, learned, rel_tol=1e-9):
+        return learned
+    raise ConfigError(
+        f"--dt {given:g}: {model} was learned at dt {learned:g} s and plays at that step only; "
+        f"to play at {given:g} s, record its movements with `rnnpb record --dt {given:g}` and "
+        "learn them again (`rnnpb train` takes the step from their recording.json)"
+    )

@@ -9,9 +9,10 @@ NAME = "info"
 HELP = "show what a model holds: patterns and PBs, sizes, learning, error, history"
 DESCRIPTION = """\
 Show what a model file holds: its learned patterns and their PBs, the network's sizes, the
-learning preset it was learned with (paper or fast) and that preset's version, the training
-config, the on-line regression that suits it, the training error, and the model's history
-(which patterns were learned when, by which method, from which model).
+learning preset it was learned with (paper or fast) and that preset's version, the step time
+it was learned at, the training config, the on-line regression that suits it, the training
+error, and the model's history (which patterns were learned when, by which method, from which
+model).
 
 Example:
   rnnpb info results/demo/models/set1.npz
@@ -112,6 +113,11 @@ def run(args: argparse.Namespace) -> int:
         )
     else:
         print("learning: not recorded")
+    recorded_dt = "dt" in model.meta
+    print(
+        f"step time: dt {model.dt:g} s, learned and played at"
+        + ("" if recorded_dt else " (not recorded: the paper's, as every older model file)")
+    )
     print(f"on-line regression: {suited_regression(model)}")
     if model.taught_sensory is None:
         print(

@@ -96,7 +96,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--paced", action="store_true", help="run in real time, one step every --dt seconds"
     )
-    parser.add_argument("--dt", type=float, default=0.4, help="seconds per step (default 0.4)")
+    parser.add_argument(
+        "--dt",
+        type=float,
+        help="seconds per step (default: the model's, the step it was learned at; another "
+        "is refused)",
+    )
     parser.add_argument("--steps", type=int, help="stop after this many steps")
     parser.add_argument("--colors", help="colour config JSON for camera sources")
     parser.add_argument(
@@ -143,7 +148,7 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb import __version__, _interrupt
     from rnnpb._atomic import atomic_write
     from rnnpb.analysis.figures import plot_session
-    from rnnpb.commands._checks import finite_seconds, step_count
+    from rnnpb.commands._checks import finite_seconds, played_dt, step_count
     from rnnpb.commands._config import read_config
     from rnnpb.commands.progress import progress_bar
     from rnnpb.interaction import (
@@ -159,7 +164,8 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb.models import default_model, first_model_file
     from rnnpb.robot import JOINT_LIMITS, KinematicRobot
 
-    finite_seconds("--dt", args.dt)
+    if args.dt is not None:
+        finite_seconds("--dt", args.dt)
     step_count("--steps", args.steps, low=0)
     step_count("--frame-step", args.frame_step)
     step_count("--consolidation-iterations", args.consolidation_iterations)
@@ -177,6 +183,7 @@ def run(args: argparse.Namespace) -> int:
         )
     model_path = first_model_file(Path(args.model) if args.model else default_model())
     model = TrainedModel.load(model_path, joint_limits=JOINT_LIMITS)
+    args.dt = played_dt(model_path, model.dt, args.dt)
     if args.online == "auto":
         choice = OnlineConfig.for_model(model)
         online_name, online = choice.name, choice.config

@@ -30,7 +30,9 @@ stream, each blending into the next over 0.5 s. The hands are found by the joint
 their arm length onto the standard user's body, so people of every size reach the same
 workspace; units and up axis are read from the skeleton (--units, --up-axis give them). The
 stream is resampled to --dt; --time-scale S plays it S times slower. A movement with fewer
-than 4 steps per cycle is refused with the --time-scale or --dt that would work.
+than 4 steps per cycle is refused with the --time-scale or --dt that would work. A hand outside
+the robot camera's view is not seen; --distance M stands the person further from the robot
+(default 1 m), and the command says which distance keeps every step in view.
 
 Every recording also writes DIR/recording.json: the source, the step time, the body's
 measures and the scaling; `rnnpb train` learns the model at that step time. A folder holds
@@ -122,6 +124,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="bvh: the file's length unit (default: the one in which the arms are a person's)",
     )
     parser.add_argument(
+        "--distance",
+        type=float,
+        metavar="M",
+        help="bvh: how far from the robot the person's shoulders are, metres (default 1.0, "
+        "the standard user's; further keeps raised or wide hands in the robot camera's view)",
+    )
+    parser.add_argument(
         "--up-axis",
         choices=("x", "y", "z", "-x", "-y", "-z"),
         help="bvh: the file's up axis (default: the one the shoulders are above the root on)",
@@ -137,8 +146,9 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb.commands._checks import finite_seconds
     from rnnpb.commands._recording import check_folder_dt, write_recording
     from rnnpb.demonstrator import MirrorMapping
-    from rnnpb.errors import ConfigError
+    from rnnpb.errors import ConfigError, RnnpbError
     from rnnpb.interaction.learning_phase import cut_sequences, demonstration_from_hands
+    from rnnpb.safety import check_data
     from rnnpb.sequences import pattern_name_problem, write_sequence
 
     problem = pattern_name_problem(args.pattern)
@@ -152,6 +162,7 @@ def run(args: argparse.Namespace) -> int:
         check_folder_dt(out, args.dt)
     kind, _, argument = str(args.source).partition(":")
     capture = None
+    body = None
     if kind.strip().lower() == "bvh":
         from rnnpb.mocap import capture_stream
 
@@ -164,6 +175,7 @@ def run(args: argparse.Namespace) -> int:
             if len(names) != 2 or not all(names):
                 raise ConfigError(f"--hands {args.hands!r}: expected LEFT,RIGHT joint names")
             hands = (names[0], names[1])
+        body = _placed_body(args.distance)
         capture = capture_stream(
             files,
             dt=args.dt,
@@ -171,29 +183,44 @@ def run(args: argparse.Namespace) -> int:
             hands=hands,
             units=args.units,
             up_axis=args.up_axis,
+            body=body,
         )
         hand_steps = capture.hands if args.steps is None else capture.hands[: args.steps]
-        demonstration = demonstration_from_hands(hand_steps, source=args.source)
+        mapping = MirrorMapping(body=body, dt=args.dt)
+        demonstration = demonstration_from_hands(hand_steps, mapping=mapping, source=args.source)
     else:
-        for option in ("hands", "units", "up_axis"):
+        mapping = MirrorMapping(dt=args.dt)
+        for option in ("hands", "units", "up_axis", "distance"):
             if getattr(args, option) is not None:
                 raise ConfigError(f"--{option.replace('_', '-')} applies to bvh: sources")
         if args.time_scale != 1.0:
             raise ConfigError("--time-scale applies to bvh: sources")
-        demonstration = _record_from_source(args)
-    sequences = cut_sequences(
-        demonstration,
-        args.pattern,
-        mode=args.cut,
-        cycles_per_sequence=args.cycles,
-        length=args.length,
-    )
+        demonstration = _record_from_source(args, mapping)
+    out_of_view = ""
+    if capture is not None and not demonstration.valid.all():
+        out_of_view = (
+            f"a hand was outside the robot camera's view on {int((~demonstration.valid).sum())} "
+            f"of {demonstration.n_steps} steps (not seen: they split the recording); "
+            + _distance_in_view(demonstration.hands, body)
+        )
+    try:
+        sequences = cut_sequences(
+            demonstration,
+            args.pattern,
+            mode=args.cut,
+            cycles_per_sequence=args.cycles,
+            length=args.length,
+        )
+    except RnnpbError as error:
+        if not out_of_view:
+            raise
+        raise RnnpbError(f"{error}; {out_of_view}") from None
+    safety = check_data(sequences, dt=args.dt)
     out.mkdir(parents=True, exist_ok=True)
     names = []
     for i, sequence in enumerate(sequences, 1):
         write_sequence(out / f"{args.pattern}_{i}.csv", sequence)
         names.append(f"{args.pattern}_{i}.csv")
-    mapping = MirrorMapping()
     entry = {
         "source": str(args.source),
         "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
@@ -209,6 +236,13 @@ def run(args: argparse.Namespace) -> int:
             "scale": round(mapping.effective_scale, 6),
         },
         "capture": None if capture is None else capture.to_json(),
+        "safety": {
+            "steps": safety.steps,
+            "collision": safety.collision,
+            "speed": safety.speed,
+            "limit": safety.limit,
+            "adjusted": int(np.sum(demonstration.adjusted)),
+        },
     }
     write_recording(out, args.pattern, args.dt, entry)
     valid = demonstration.valid
@@ -219,6 +253,8 @@ def run(args: argparse.Namespace) -> int:
         f"(depth from {depth.get(demonstration.depth, demonstration.depth)}); "
         f"{int(valid.sum())} with both hands recovered"
     )
+    if out_of_view:
+        print(out_of_view)
     if capture is not None:
         body = capture.takes[0].body
         print(
@@ -228,7 +264,12 @@ def run(args: argparse.Namespace) -> int:
             f"cycle {capture.period:.2f} s = {capture.period / args.dt:.1f} steps of {args.dt:g} s"
         )
     if len(reach):
-        print(f"robot hands within {float(np.max(reach)) * 100:.1f} cm of their targets")
+        print(
+            f"robot hands within {float(np.max(reach)) * 100:.1f} cm of their targets (median "
+            f"{float(np.median(reach)) * 100:.1f} cm); {int(np.sum(demonstration.adjusted))} "
+            "steps moved to a safe posture near the one asked for"
+        )
+    print(f"safety of the written data: {safety.describe()}")
     print(
         f"{len(sequences)} sequences of pattern {args.pattern!r} "
         f"({', '.join(str(s.n_steps) for s in sequences)} steps) -> {out}"
@@ -236,7 +277,34 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _record_from_source(args: argparse.Namespace):
+def _placed_body(distance: float | None):
+    """The standard user, at ``distance`` metres from the robot when given."""
+    from rnnpb.demonstrator import UserBody
+    from rnnpb.errors import ConfigError
+
+    if distance is None:
+        return UserBody()
+    if not 0.5 <= distance <= 3.0:
+        raise ConfigError(f"--distance must be from 0.5 to 3 m, got {distance}")
+    return UserBody(distance=distance, hand_depth=min(UserBody().hand_depth, 0.9 * distance))
+
+
+def _distance_in_view(hands, body) -> str:
+    """Which --distance would keep every hand in the robot camera's view."""
+    import numpy as np
+
+    from rnnpb.robot.camera import RobotCamera
+
+    camera = RobotCamera()
+    for distance in np.arange(0.5, 3.001, 0.1):
+        moved = hands + np.array([distance - body.distance, 0.0, 0.0])
+        seen = camera.sensory_from_hands(moved)
+        if np.all((seen >= 0) & (seen <= 1)):
+            return f"--distance {distance:.1f} keeps every step in view"
+    return "no --distance up to 3 m keeps every step in view"
+
+
+def _record_from_source(args: argparse.Namespace, mapping):
     from rnnpb.interaction import open_source
     from rnnpb.interaction.learning_phase import record_demonstration
     from rnnpb.perception import MOUSE_PLANE_X, DepthConfig
@@ -248,6 +316,7 @@ def _record_from_source(args: argparse.Namespace):
         return record_demonstration(
             source,
             steps=args.steps,
+            mapping=mapping,
             depth=DepthConfig(ball_radius_m=args.ball_radius),
             plane_x=MOUSE_PLANE_X if args.plane_x is None else args.plane_x,
         )

@@ -35,7 +35,7 @@ learned with the fast preset).
 Examples:
   rnnpb serve
   rnnpb serve --model models/set1.npz
-  rnnpb serve --model models/ --port 9000 --dt 0.2
+  rnnpb serve --model models/ --port 9000
   rnnpb serve --model models/ --host 192.168.1.20   # reachable as http://192.168.1.20:8765
   rnnpb serve --model models/ --host 0.0.0.0 --allow-host robot.lab
   rnnpb serve --model models/ --host 0.0.0.0 --allow-host robot.lab \\
@@ -60,8 +60,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--dt",
         type=float,
-        default=0.4,
-        help="seconds per network step (default 0.4, as in the paper; changeable on the page)",
+        help="seconds per network step (default: the models', the step they were learned at; "
+        "another is refused)",
     )
     parser.add_argument(
         "--allow-host",
@@ -129,7 +129,7 @@ def run(args: argparse.Namespace) -> int:
     _check_port_free(args.host, args.port)
     from rnnpb.web import MAX_DT, MIN_DT, AccessPolicy, DashboardServer, find_models
 
-    if not MIN_DT <= args.dt <= MAX_DT:
+    if args.dt is not None and not MIN_DT <= args.dt <= MAX_DT:
         raise ConfigError(f"--dt must be in [{MIN_DT}, {MAX_DT}] seconds, got {args.dt}")
     # Checked before anything starts, so a mistyped name is one clear error line.
     access = AccessPolicy.for_address(args.host, args.allow_host, args.allow_origin)
@@ -150,6 +150,7 @@ def run(args: argparse.Namespace) -> int:
         folder=Path(args.teach_dir) if args.teach_dir else None,
     )
     models = find_models(args.model if args.model is not None else default_model())
+    args.dt = _models_dt(models, args.dt)
     server = DashboardServer(
         models,
         host=args.host,
@@ -180,6 +181,27 @@ def run(args: argparse.Namespace) -> int:
     finally:
         server.stop()
     return 0
+
+
+def _models_dt(models: dict, given: float | None) -> float:
+    """The step time the models were learned at (all must agree); ``given`` must be it."""
+    from rnnpb.commands._checks import played_dt
+    from rnnpb.errors import ConfigError
+    from rnnpb.model import TrainedModel
+
+    steps = {name: TrainedModel.load(path).dt for name, path in models.items()}
+    if not steps:
+        from rnnpb.model.io import DEFAULT_DT
+
+        return DEFAULT_DT if given is None else given
+    if len(set(steps.values())) > 1:
+        shown = ", ".join(f"{name} {dt:g} s" for name, dt in steps.items())
+        raise ConfigError(
+            f"the models were learned at different step times ({shown}); a page plays at one: "
+            "serve the models of one step time (--model FILE or a folder of them)"
+        )
+    name, learned = next(iter(steps.items()))
+    return played_dt(models[name], learned, given)
 
 
 def _check_port_free(host: str, port: int) -> None:

@@ -31,6 +31,10 @@ put an arm through the body or the other arm, or move a joint faster than its se
 refused (one line naming the file and the step) unless --allow-unsafe; `rnnpb record`
 retargets safely, so its data pass.
 
+Step time: a model is learned at one step time and plays at it only (`rnnpb interact` and
+`serve` refuse another). It is the dt the data folders' recording.json files (written by
+`rnnpb record`) agree on, else --dt, else the paper's 0.4 s; `rnnpb info` shows it.
+
 A checkpoint is written next to the model (MODEL.checkpoint.npz) every
 --checkpoint-every iterations; --resume continues from it. Once the model is written the
 checkpoint is removed (--keep-checkpoint keeps it); an interrupted run keeps it.
@@ -68,6 +72,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--input-noise", type=float, help="std. dev. of noise on the teacher-forced inputs"
     )
     add_config_argument(parser, CONFIG_SECTIONS)
+    parser.add_argument(
+        "--dt",
+        type=float,
+        help="seconds per step the data were recorded at (default: from the data's "
+        "recording.json, else 0.4, the paper's)",
+    )
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     parser.add_argument("--hidden", type=int, default=40, help="hidden units (default 40)")
     parser.add_argument("--context", type=int, default=30, help="context units (default 30)")
@@ -125,7 +135,8 @@ def run(args: argparse.Namespace) -> int:
     step_count("--checkpoint-every", args.checkpoint_every, high=10_000_000)
     overrides = read_config(args.config, CONFIG_SECTIONS, NAME)
     sequences = read_sequence_files(args.data)
-    safety = check_data(sequences, dt=0.4)
+    dt, dt_origin = _step_time(args.dt, args.data)
+    safety = check_data(sequences, dt=dt)
     if safety.unsafe and not args.allow_unsafe:
         raise DataFileError(
             f"{safety.first} ({safety.unsafe} unsafe steps; record with `rnnpb record`, "
@@ -178,6 +189,7 @@ def run(args: argparse.Namespace) -> int:
     finally:
         bar.close()
     _interrupt.check()  # interrupted during the last chunk: no model file
+    model = replace(model, meta={**model.meta, "dt": dt})
     model.meta["data_safety"] = {
         "steps": safety.steps,
         "collision": safety.collision,
@@ -195,6 +207,7 @@ def run(args: argparse.Namespace) -> int:
     mse = np.asarray(info["mse_per_output"])
     names = (*SENSORY_NAMES, *MOTOR_NAMES)
     print(f"wrote {args.out} after {info['iterations']} iterations in {info['seconds']:.1f} s")
+    print(f"learned at dt {dt:g} s ({dt_origin}); it plays at that step")
     print(
         f"final mean squared error per output: max {mse.max():.2e}, mean {mse.mean():.2e} "
         f"(RMS max {np.sqrt(mse.max()):.2e}); worst output: {names[int(mse.argmax())]}"
@@ -202,3 +215,26 @@ def run(args: argparse.Namespace) -> int:
     for name, pb in model.pattern_pb.items():
         print(f"  pattern {name}: PB = {np.array2string(pb, precision=3)}")
     return 0
+
+
+def _step_time(given: float | None, data: list[str]) -> tuple[float, str]:
+    """The step time to learn at and where it came from (see DESCRIPTION)."""
+    import math
+
+    from rnnpb.commands._checks import finite_seconds
+    from rnnpb.commands._recording import data_dt
+    from rnnpb.errors import ConfigError
+    from rnnpb.model.io import DEFAULT_DT, MAX_DT
+
+    if given is not None:
+        finite_seconds("--dt", given, high=MAX_DT)
+    recorded = data_dt(data)
+    if recorded is None:
+        return (DEFAULT_DT, "the paper's") if given is None else (given, "--dt")
+    dt, files = recorded
+    if given is not None and not math.isclose(given, dt, rel_tol=1e-9):
+        raise ConfigError(
+            f"--dt {given:g}: the data were recorded at dt {dt:g} s ({files[0]}); learn them "
+            f"at --dt {dt:g}, or record them again with --dt {given:g}"
+        )
+    return dt, f"from {files[0]}" + (f" and {len(files) - 1} more" if len(files) > 1 else "")

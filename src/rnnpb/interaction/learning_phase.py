@@ -62,6 +62,9 @@ class Demonstration:
         (given in 3-D: motion capture).
     source : str
         The source's description.
+    adjusted : array of bool, shape (n_steps,)
+        Steps where the paper's inverse kinematics was unsafe and the safe retargeting moved
+        the arms to the closest safe posture.
     """
 
     sensory: np.ndarray
@@ -71,6 +74,7 @@ class Demonstration:
     depth: str
     source: str = ""
     truth: dict = field(default_factory=dict, compare=False)
+    adjusted: np.ndarray = field(default_factory=lambda: np.zeros(0, bool), compare=False)
 
     @property
     def n_steps(self) -> int:
@@ -137,9 +141,10 @@ def record_demonstration(
         )
     else:
         hands = hands_on_plane(sensory_array, camera, plane_x)
-    motor, residual = _motor_for_hands(mapping, hands)
+    motor, residual, adjusted = _motor_for_hands(mapping, hands)
+    depth_kind = "size" if tracked else "plane"
     return Demonstration(
-        sensory_array, hands, motor, residual, "size" if tracked else "plane", _described(source)
+        sensory_array, hands, motor, residual, depth_kind, _described(source), adjusted=adjusted
     )
 
 
@@ -154,23 +159,30 @@ def demonstration_from_hands(
     what the robot's camera sees of them, the motor values come through the mirror mapping as
     in :func:`record_demonstration`.
 
-    ``hands`` shape (n_steps, 2, 3), robot frame, metres; NaN where a hand is not known.
+    ``hands`` shape (n_steps, 2, 3), robot frame, metres; NaN where a hand is not known. A
+    hand outside the camera's view is not seen (NaN sensory values), as with a camera.
     """
     hands = np.asarray(hands, dtype=np.float64)
     if hands.ndim != 3 or hands.shape[1:] != (2, 3) or len(hands) < 2:
         raise ConfigError(f"a demonstration needs hands of shape (n >= 2, 2, 3), got {hands.shape}")
-    sensory = (camera or RobotCamera()).sensory_from_hands(hands)
-    motor, residual = _motor_for_hands(mapping or MirrorMapping(), hands)
-    return Demonstration(sensory, hands, motor, residual, "3-d", source)
+    sensory = (camera or RobotCamera()).sensory_from_hands(hands).reshape(-1, 2, 2)
+    with np.errstate(invalid="ignore"):
+        sensory[((sensory < 0) | (sensory > 1)).any(axis=2)] = np.nan
+    sensory = sensory.reshape(-1, 4)
+    motor, residual, adjusted = _motor_for_hands(mapping or MirrorMapping(), hands)
+    return Demonstration(sensory, hands, motor, residual, "3-d", source, adjusted=adjusted)
 
 
-def _motor_for_hands(mapping: MirrorMapping, hands: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The robot's joint angles (n, 8) and each hand's reach residual (n, 2) for the user's
-    hands (n, 2, 3); NaN where a hand is not known. Every demonstration's motor values come
+def _motor_for_hands(
+    mapping: MirrorMapping, hands: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The robot's joint angles (n, 8), each hand's reach residual (n, 2) and the steps the
+    retargeting moved to a safe posture (n,) for the user's hands (n, 2, 3); NaN where a hand
+    is not known. Every demonstration's motor values come
     from here: the safe retargeting (:meth:`MirrorMapping.retarget`), which starts again
     after a lost hand."""
     result = mapping.retarget(hands)
-    return result.joints, result.residual
+    return result.joints, result.residual, result.adjusted
 
 
 def _described(source: UserSource) -> str:

@@ -659,4 +659,6 @@ def consolidate(
         created=datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         details=details,
     )
+    if "dt" in model.meta:  # the new version plays at the step its data were taught at
+        learned = replace(learned, meta={**learned.meta, "dt": model.meta["dt"]})
     return learned.with_history((*model.history, entry))

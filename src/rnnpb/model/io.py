@@ -12,6 +12,9 @@ record implies (one ``train`` entry, time unknown). Format 3 added the hands as 
 (``taught_sensory``, what recognition matches against); a file of format 1 or 2 loads without
 them.
 
+A model records the step time it was learned at (``meta["dt"]``, seconds; it plays at that step
+only); a file without it was learned at the paper's 0.4 s (:data:`DEFAULT_DT`).
+
 Reading trusts nothing in the file. Before an array is decompressed the zip's central directory
 is checked: only the members the format names (``meta.json`` and, for a model, exactly the
 arrays its recorded network sizes imply), each no larger than those sizes allow, all together
@@ -78,6 +81,9 @@ NETWORK_DTYPE = np.float32
 """The dtype the network computes in: every stored value must be finite in it."""
 JOINT_LIMIT_TOLERANCE = 1e-9
 """Radians a motor normalization bound may lie outside the robot's joint limit (rounding)."""
+DEFAULT_DT = 0.4
+"""Seconds per step of a model that records none: the paper's step, all older files' step."""
+MAX_DT = 60.0
 _NPY_MAGIC = b"\x93NUMPY"
 
 
@@ -206,6 +212,23 @@ def first_training_entry(meta: dict[str, Any], patterns: tuple[str, ...]) -> His
     )
 
 
+def model_dt(meta: dict[str, Any]) -> float:
+    """The step time a model was learned at, seconds: ``meta["dt"]``, or :data:`DEFAULT_DT`
+    for a file from before models recorded it."""
+    dt = meta.get("dt")
+    return DEFAULT_DT if dt is None else float(dt)
+
+
+def dt_problem(dt: object) -> str | None:
+    """Why ``dt`` is no model step time (a number of seconds in (0, :data:`MAX_DT`]), or
+    None."""
+    if isinstance(dt, bool) or not isinstance(dt, (int, float)):
+        return f"is {type(dt).__name__}, not a number of seconds"
+    if not math.isfinite(dt) or not 0 < dt <= MAX_DT:
+        return f"{dt!r} is not a number of seconds in (0, {MAX_DT:g}]"
+    return None
+
+
 def learning_preset(meta: dict[str, Any]) -> tuple[str, int | None] | None:
     """The learning preset a model's meta.json records, and its version: ``meta["preset"]``
     (``{"name": ..., "version": ...}``, written since presets were recorded), else the preset
@@ -292,6 +315,11 @@ class TrainedModel:
         """The learning preset the model was learned with and its version
         (:func:`learning_preset`)."""
         return learning_preset(self.meta)
+
+    @property
+    def dt(self) -> float:
+        """Seconds per step the model was learned at, and plays at (:func:`model_dt`)."""
+        return model_dt(self.meta)
 
     @property
     def mean_initial_context(self) -> np.ndarray:
@@ -435,6 +463,8 @@ class TrainedModel:
         meta, arrays = load_archive(path, MODEL_FORMAT, READABLE_MODEL_FORMAT_VERSIONS)
         network, patterns, expected = _model_layout(path, meta)
         history = _checked_history(path, meta)
+        if "dt" in meta and (problem := dt_problem(meta["dt"])):
+            raise ModelFileError(f"{path}: meta.json's step time dt {problem}")
         for name in expected:
             if name != "taught_sensory":
                 check_numeric(path, name, arrays[name])
