@@ -19,8 +19,9 @@ channel, unbalanced braces and a repeated joint name are each refused.
 Why a reader of our own: of the BVH packages on PyPI, ``bvh`` (2017) and ``bvhtoolbox`` (2020,
 built on it) are no longer kept, and ``bvhio`` (kept) pins exact versions of PyGLM and
 spatial-transform, builds each frame's pose joint by joint in Python objects, ignores extra
-values in a frame, fails on missing ones with an IndexError, and takes NaN without a word. Reading the format strictly and its forward kinematics in
-NumPy, vectorised over frames, is short.
+values in a frame, fails on missing ones with an IndexError, and takes NaN without a word.
+Reading the format strictly and its forward kinematics in NumPy, vectorised over frames, is
+short.
 """
 
 from __future__ import annotations
