@@ -7,7 +7,9 @@ set 1 learned with the fast preset. That is the model shipped with the package
 (``rnnpb.models.SHIPPED_MODEL``, ``scripts/train_shipped_model.py``), so no test process
 learns it again."""
 
+import os
 import shutil
+from pathlib import Path
 
 import pytest
 
@@ -16,6 +18,23 @@ from rnnpb import _xla
 
 rnnpb.configure_xla()
 _xla.compilation_cache()
+
+
+# The real motion-capture takes: test data under a non-commercial licence, read where they are
+# (RNNPB_MOCAP_DIR, else ../shared/data/mocap beside the checkout), never copied into the project.
+MOCAP = Path(
+    os.environ.get(
+        "RNNPB_MOCAP_DIR", Path(__file__).resolve().parents[1].parent / "shared/data/mocap"
+    )
+)
+
+
+@pytest.fixture(scope="session")
+def mocap_dir() -> Path:
+    """The folder of real motion-capture takes; the test skips where there is none."""
+    if not MOCAP.is_dir():
+        pytest.skip(f"no real motion-capture takes at {MOCAP} (set RNNPB_MOCAP_DIR)")
+    return MOCAP
 
 
 @pytest.fixture(scope="session")

@@ -51,6 +51,7 @@ ALLOWED: dict[str, set[str]] = {
     },
     "experiments": {
         "analysis",
+        "mocap",
         "interaction",
         "model",
         "presets",

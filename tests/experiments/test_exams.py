@@ -60,6 +60,13 @@ def test_the_judge_reads_the_definition():
     assert exam.judge({"share": math.nan, "count": None}) == {"share": False, "count": False}
     with pytest.raises(ConfigError, match="not measured"):
         exam.judge({"share": 1.0})
+    # Draws named by text (styles of a recording, takes …) besides the seeds.
+    named = parse_exam(_exam(draws={"user": [7000], "styles": ["active", "elderly"]}))
+    assert named.name_list("styles") == ("active", "elderly") and named.draws() == {7000}
+    assert "styles active, elderly" in named.describe()
+    assert named.to_json()["names"] == {"styles": ["active", "elderly"]}
+    with pytest.raises(ConfigError, match="names no 'takes' draws"):
+        named.name_list("takes")
 
 
 @pytest.mark.parametrize(

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,9 +15,6 @@ from rnnpb.sequences import read_sequence_files
 from .bvh_files import demonstrator_hands, write_bvh
 
 FPS = 30
-MOCAP = Path(__file__).resolve().parents[3] / "shared" / "data" / "mocap"
-MOCAP = MOCAP if MOCAP.is_dir() else Path("/work/shared/data/mocap")
-WAVES = sorted(MOCAP.glob("*wave-both-hands*.bvh"))
 
 
 def _take(folder, name, period, seconds, **variant):
@@ -82,9 +78,7 @@ def test_a_folder_holds_one_step_time(tmp_path, capsys):
     assert "holds data recorded at dt 0.4 s" in capsys.readouterr().err
 
 
-def test_hands_out_of_the_cameras_view_are_not_seen_and_a_distance_is_proposed(
-    tmp_path, capsys
-):
+def test_hands_out_of_the_cameras_view_are_not_seen_and_a_distance_is_proposed(tmp_path, capsys):
     times = np.arange(12 * FPS + 1) / FPS
     raised = demonstrator_hands("2", times, 2.4) + np.array([0.0, 0.0, 0.45])
     take = write_bvh(tmp_path / "raised.bvh", raised, 1 / FPS)
@@ -102,9 +96,9 @@ def test_hands_out_of_the_cameras_view_are_not_seen_and_a_distance_is_proposed(
     np.testing.assert_allclose(sequences[0].motor[1:], near[1:20], atol=0.05)
 
 
-@pytest.mark.skipif(not WAVES, reason=f"the real motion-capture takes are not in {MOCAP}")
-def test_real_waving_takes_slowed_to_the_papers_step(tmp_path, capsys):
-    spec = "bvh:" + ",".join(str(p) for p in WAVES)
+def test_real_waving_takes_slowed_to_the_papers_step(tmp_path, capsys, mocap_dir):
+    waves = sorted(mocap_dir.glob("*wave-both-hands*.bvh"))
+    spec = "bvh:" + ",".join(str(p) for p in waves)
     out = tmp_path / "wave"
     assert main(["record", spec, "--pattern", "wave", "--out", str(out)]) != 0
     assert "use --time-scale 1.48 or more" in capsys.readouterr().err

@@ -58,6 +58,25 @@ def test_a_known_pattern_is_recognised_and_stays_recognised_through_a_pause(mirr
     assert max(shares, key=shares.get) == str(kind) and sum(shares.values()) <= 1 + 1e-9
 
 
+def test_a_pattern_with_rests_in_every_cycle_is_recognised(mirror):
+    # A person's gesture (raise, hold, lower, rest): half a cycle of movement, then the hands
+    # at rest for 4 steps, twice a cycle, so that no stretch of movement is as long as the
+    # taught shapes' window. The rests are called still and left out of the shape: the
+    # pattern is recognised within three cycles and held through every rest.
+    u = _cycle(0, 96, seed=45)
+    half, rest = PERIOD // 2, 4
+    rows = []
+    for start in range(0, 96, half):
+        rows += list(u[start : start + half])
+        rows += [u[start + half - 1]] * rest
+    results = _answers(mirror, np.array(rows))
+    names = [r.recognised for r in results]
+    assert "0" in names and names.index("0") <= 3 * (PERIOD + 2 * rest), names
+    first = names.index("0")
+    assert names[first:] == ["0"] * (len(names) - first), names
+    assert [r.novelty for r in results[first:]].count("still") >= 4
+
+
 def test_a_novel_shape_is_called_novel_and_not_recognised(mirror):
     # Both hands circling half a cycle apart: none of the three learned patterns.
     rng = np.random.default_rng(7)

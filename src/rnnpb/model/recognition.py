@@ -50,7 +50,9 @@ How it decides (docs/model.md, "Recognition and novelty"):
 5. **Stillness.** The hands are ``still`` when no observed value's spread over the last
    ``still_steps`` observations reaches ``still_level``. Through a short pause
    (``hold_steps``) the last recognised pattern stays recognised: the robot keeps generating
-   it, as in the paper's section 3.1.
+   it, as in the paper's section 3.1. Such a pause is a rest inside the movement (people rest
+   between the cycles of a gesture): its steps are left out of the window matched against the
+   taught hands, and the taught hands' own rests (:func:`paused_steps`) out of theirs.
 6. **Hysteresis.** A new answer replaces the current one only after it has been the step's
    evidence for ``switch_steps`` steps running — ``release_steps`` when a recognised pattern
    would give way to none: the evidence dips for a few steps as a pause begins or ends.
@@ -263,7 +265,8 @@ class RecognitionState(NamedTuple):
     candidate: str | None  # the answer the evidence gives, waiting for switch_steps
     candidate_run: int
     novelty: str
-    moving_run: int = 0  # steps since the hands were last still (or nothing was seen)
+    moving_run: int = 0  # moving steps since the hands were last still longer than hold_steps
+    still: np.ndarray | None = None  # (H,) bool: the observation was a step of a pause
 
 
 def initial_recognition_state(
@@ -302,6 +305,21 @@ class TaughtStretches(NamedTuple):
     directions: np.ndarray
 
 
+def paused_steps(values: np.ndarray, config: RecognitionConfig) -> np.ndarray:
+    """(T,) bool: the steps of ``values`` (T, S) the detector calls still — the largest
+    spread of one coordinate over the ``still_steps`` observations up to the step is below
+    ``still_level`` — as :func:`recognise` decides it step by step."""
+    values = np.asarray(values, dtype=np.float64)
+    paused = np.zeros(len(values), bool)
+    n = config.still_steps
+    if len(values) < n:
+        return paused
+    windows = np.lib.stride_tricks.sliding_window_view(values, n, axis=0)  # (T-n+1, S, n)
+    spread = np.sqrt(np.var(windows, axis=-1).max(axis=-1))
+    paused[n - 1 :] = spread < config.still_level
+    return paused
+
+
 def taught_stretches(
     taught: dict[str, list[np.ndarray]], names: tuple[str, ...], config: RecognitionConfig
 ) -> TaughtStretches | None:
@@ -323,6 +341,7 @@ def taught_stretches(
         for sequence in taught.get(name, []):
             values = np.asarray(sequence, dtype=np.float64)
             values = values[~np.isnan(values).any(axis=1)]  # the padding after its end
+            values = values[~paused_steps(values, config)]  # rests: left out as on-line
             length = len(values)
             for speed in config.template_speeds:
                 span = speed * (steps - 1)  # the stretch covers this many taught steps
@@ -449,6 +468,10 @@ def recognise(
         empty = initial_recognition_state(len(u), len(pbs[0]), config)
         empty = empty._replace(observed=observed, pb=pbs)
         return empty, Recognition(None, 0.0, "", none, no_distance, float("nan"))
+    # Which observations were steps of a pause, this one not yet known (False).
+    paused = np.zeros(len(observed), bool) if state.still is None else state.still
+    paused = np.concatenate([paused[1:], [False]])
+    state = state._replace(still=paused)
     # Fill unseen values from the last seen ones, so a hand lost for a step does not end the
     # evidence; the steps before the first seen one stay NaN.
     filled = _forward_fill(observed)
@@ -464,8 +487,14 @@ def recognise(
         still_run = state.still_run + 1
         keep = state.recognised if still_run <= config.hold_steps else None
         confidence = state.confidence if keep is not None else 1.0
+        # A pause of at most hold_steps is a rest inside the movement (a person rests between
+        # the cycles of a gesture): the moving steps before it still count toward the taught
+        # shapes' window, which leaves the paused steps out. A longer pause ends the movement.
+        moving = state.moving_run if still_run <= config.hold_steps else 0
+        paused = paused.copy()
+        paused[-1] = True
         new = RecognitionState(
-            observed, pbs, history, keep, confidence, still_run, keep, 0, "still", 0
+            observed, pbs, history, keep, confidence, still_run, keep, 0, "still", moving, paused
         )
         return new, Recognition(keep, confidence, "still", none, no_distance, float("nan"))
 
@@ -474,12 +503,16 @@ def recognise(
     d = np.sqrt(np.maximum(history[~np.isnan(history).any(axis=1)].mean(axis=0), 0.0))
     recent_pb = pbs[~np.isnan(pbs).any(axis=1)]
     e = np.linalg.norm(np.asarray(learned_pb) - recent_pb.mean(axis=0)[None], axis=1)
-    # The taught shapes are matched once the window holds movement alone: a pause inside it
-    # (the hands at rest, then moving on) is a shape no pattern was taught with. Until then
-    # the last answer stands (undecided at the start; after a pause, the pattern it held).
+    # The taught shapes are matched on the last template_steps moving observations: the steps
+    # of a short pause are left out (the hands at rest, then moving on, is a shape no pattern
+    # was taught with), and after a longer pause the window waits for movement alone. Until
+    # then the last answer stands (undecided at the start; after a pause, the pattern it held).
     moving_run = state.moving_run + 1
-    window = filled[-config.template_steps :]
-    if taught is not None and (moving_run < config.template_steps or np.isnan(window).any()):
+    window = filled[~paused][-config.template_steps :]
+    short = len(window) < config.template_steps
+    if taught is not None and (
+        moving_run < config.template_steps or short or np.isnan(window).any()
+    ):
         novelty = "familiar" if state.recognised is not None else ""
         waiting = state._replace(observed=observed, still_run=0, moving_run=moving_run)
         waiting = waiting._replace(novelty=novelty)
@@ -540,7 +573,17 @@ def recognise(
         else:
             confidence, novelty = float(unknown / total), state.novelty
     new = RecognitionState(
-        observed, pbs, history, answer, confidence, 0, candidate, candidate_run, novelty, moving_run
+        observed,
+        pbs,
+        history,
+        answer,
+        confidence,
+        0,
+        candidate,
+        candidate_run,
+        novelty,
+        moving_run,
+        paused,
     )
     return new, Recognition(
         answer,

@@ -65,12 +65,6 @@ class ExamTarget:
             return False
         return value >= self.limit if self.compare == ">=" else value <= self.limit
 
-    def name_list(self, name: str) -> tuple[str, ...]:
-        """A draw named by text (a list of names in ``[draws]``: styles, takes …)."""
-        if name not in self.names:
-            raise ConfigError(f"the {self.study} exam names no {name!r} draws")
-        return self.names[name]
-
     def parameter(self, name: str) -> float:
         if name not in self.parameters:
             raise ConfigError(f"exam target {self.name!r} has no parameter {name!r}")
@@ -110,6 +104,12 @@ class Exam:
     def draws(self) -> frozenset[int]:
         """Every seed the exam runs on."""
         return frozenset(s for seeds in self.seeds.values() for s in seeds)
+
+    def name_list(self, name: str) -> tuple[str, ...]:
+        """A draw named by text (a list of names in ``[draws]``: styles, takes …)."""
+        if name not in self.names:
+            raise ConfigError(f"the {self.study} exam names no {name!r} draws")
+        return self.names[name]
 
     def seed_list(self, name: str) -> tuple[int, ...]:
         if name not in self.seeds:

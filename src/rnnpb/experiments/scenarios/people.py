@@ -28,11 +28,14 @@ _NAME = re.compile(r"^dataset-2_(?P<content>[a-z-]+)_(?P<style>[a-z]+)_(?P<id>\d
 
 @dataclass(frozen=True)
 class PeopleConfig:
-    """``dt``: seconds per step; ``min_steps``: a stream plays its takes over again until it
+    """``dt``: seconds per step; ``distance``: metres from the robot to the performer's
+    shoulders (as `rnnpb record --distance`: where raised and wide hands stay in the robot
+    camera's view); ``min_steps``: a stream plays its takes over again until it
     has at least this many steps; ``sequence_length``: steps per training sequence;
     ``settle_steps``: steps after a movement starts that are not judged."""
 
     dt: float = 0.4
+    distance: float = 1.5
     min_steps: int = 96
     sequence_length: int = 48
     settle_steps: int = 24
@@ -69,24 +72,36 @@ def time_scale(files: list[Path], dt: float) -> float:
     return float(PERIOD_STEPS * dt / min(periods))
 
 
-def stream_hands(files: list[Path], dt: float, scale: float, min_steps: int):
-    """The takes played in order, over again until the stream has ``min_steps`` steps,
-    resampled to ``dt`` (a :class:`rnnpb.mocap.CaptureStream`)."""
+def placed_body(distance: float):
+    """The standard user with the shoulders ``distance`` metres from the robot."""
+    from rnnpb.demonstrator import UserBody
+
+    return UserBody(distance=distance, hand_depth=min(UserBody().hand_depth, 0.9 * distance))
+
+
+def stream_hands(files: list[Path], config: PeopleConfig, scale: float):
+    """The takes played in order, over again until the stream has ``config.min_steps`` steps,
+    resampled to the step, the performer at ``config.distance`` (a
+    :class:`rnnpb.mocap.CaptureStream`)."""
     from rnnpb.mocap import capture_stream
 
-    once = capture_stream([str(f) for f in files], dt=dt, time_scale=scale)
-    repeats = max(1, -(-min_steps // max(len(once.hands), 1)))
+    body = placed_body(config.distance)
+    paths = [str(f) for f in files]
+    once = capture_stream(paths, dt=config.dt, time_scale=scale, body=body)
+    repeats = max(1, -(-config.min_steps // max(len(once.hands), 1)))
     if repeats == 1:
         return once
-    return capture_stream([str(f) for f in files] * repeats, dt=dt, time_scale=scale)
+    return capture_stream(paths * repeats, dt=config.dt, time_scale=scale, body=body)
 
 
-def record(hands: np.ndarray, dt: float, name: str):
-    """The learning phase of ``rnnpb record bvh:``: a demonstration from 3-D hands."""
+def record(hands: np.ndarray, config: PeopleConfig, name: str):
+    """The learning phase of ``rnnpb record bvh:``: a demonstration from 3-D hands (a hand
+    outside the camera's view is not seen)."""
     from rnnpb.demonstrator import MirrorMapping
     from rnnpb.interaction.learning_phase import demonstration_from_hands
 
-    return demonstration_from_hands(hands, mapping=MirrorMapping(dt=dt), source=name)
+    mapping = MirrorMapping(placed_body(config.distance), dt=config.dt)
+    return demonstration_from_hands(hands, mapping=mapping, source=name)
 
 
 def path_safety(motor: np.ndarray, dt: float, checker=None) -> dict[str, int]:
@@ -107,13 +122,14 @@ def path_safety(motor: np.ndarray, dt: float, checker=None) -> dict[str, int]:
     }
 
 
-def taught_motor(hands: np.ndarray, sensory: np.ndarray, dt: float) -> list[np.ndarray]:
+def taught_motor(hands: np.ndarray, sensory: np.ndarray, config: PeopleConfig) -> list[np.ndarray]:
     """The teaching path: the episode cutter told every step is novel, cutting the stream's
     episodes as the dashboard's and ``interact --learn``'s teaching does; their joint angles."""
     from rnnpb.demonstrator import MirrorMapping
     from rnnpb.interaction.episodes import EpisodeCutter
 
-    cutter = EpisodeCutter(mapping=MirrorMapping(dt=dt))
+    mapping = MirrorMapping(placed_body(config.distance), dt=config.dt)
+    cutter = EpisodeCutter(mapping=mapping)
     out = []
     for t, (u, h) in enumerate(zip(sensory, hands, strict=True)):
         episode = cutter.observe(t, u, "novel", h)
@@ -135,7 +151,8 @@ def follow(model, sensory: np.ndarray, labels: list[str]) -> dict[str, Any]:
     rest = np.array([0.0, 0.0, 0.0, ELBOW_AT_ZERO_PITCH] * 2)
     records = []
     with ArraySensorySource(sensory) as source:
-        mirror = MirrorSystem(model, OnlineConfig.for_model(model))
+        choice = OnlineConfig.for_model(model)  # as `rnnpb interact` chooses
+        mirror = MirrorSystem(model, choice.config, recognition=choice.recognition)
         InteractionLoop(mirror, source, command_filter=CommandFilter(initial=rest)).run(
             on_step=records.append
         )

@@ -74,7 +74,6 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
     from rnnpb.interaction.learning_phase import cut_sequences
     from rnnpb.model import TrainConfig, train
     from rnnpb.robot import JOINT_LIMITS
-    from rnnpb.robot.camera import RobotCamera
     from rnnpb.safety import SafetyChecker, SafetyLimits
 
     start = time.perf_counter()
@@ -86,18 +85,19 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
     out = Path(out)
     (out / "figures").mkdir(parents=True, exist_ok=True)
     exam = options.exam or load_exam(NAME)
-    config = scenario.PeopleConfig(settle_steps=int(exam.parameter("settle_steps")))
+    config = scenario.PeopleConfig(
+        distance=exam.parameter("distance"), settle_steps=int(exam.parameter("settle_steps"))
+    )
     seed = exam.seed_list("training")[0] if options.exam else options.seed
     plan = _plan(data, options, exam)
     checker = SafetyChecker(SafetyLimits(dt=config.dt))
-    camera = RobotCamera()
     recordings: dict[str, dict[str, int]] = {}
     sequences, scales = [], {}
     for movement in plan["movements"]:
         files = plan["learn"][movement]
         scales[movement] = scenario.time_scale(files, config.dt)
-        stream = scenario.stream_hands(files, config.dt, scales[movement], config.min_steps)
-        demo = scenario.record(stream.hands, config.dt, movement)
+        stream = scenario.stream_hands(files, config, scales[movement])
+        demo = scenario.record(stream.hands, config, movement)
         recordings[f"learn {movement}"] = scenario.path_safety(demo.motor, config.dt, checker)
         sequences += cut_sequences(demo, movement, mode="length", length=config.sequence_length)
     model = train(sequences, JOINT_LIMITS, config=TrainConfig.fast(seed=seed))
@@ -106,18 +106,16 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
     for performer, takes in plan["follow"].items():
         sensory, labels = [], []
         for movement in plan["movements"]:
-            stream = scenario.stream_hands(
-                takes[movement], config.dt, scales[movement], config.min_steps
-            )
-            demo = scenario.record(stream.hands, config.dt, movement)
+            stream = scenario.stream_hands(takes[movement], config, scales[movement])
+            demo = scenario.record(stream.hands, config, movement)
             recordings[f"{performer} {movement}"] = scenario.path_safety(
                 demo.motor, config.dt, checker
             )
-            for k, motor in enumerate(scenario.taught_motor(stream.hands, demo.sensory, config.dt)):
+            for k, motor in enumerate(scenario.taught_motor(stream.hands, demo.sensory, config)):
                 recordings[f"{performer} {movement} taught {k + 1}"] = scenario.path_safety(
                     motor, config.dt, checker
                 )
-            sensory.append(camera.sensory_from_hands(stream.hands))
+            sensory.append(demo.sensory)  # NaN where a hand is out of the camera's view
             labels += [movement] * len(stream.hands)
         runs[performer] = scenario.follow(model, np.concatenate(sensory), labels)
     following = scenario.measure(list(runs.values()), config.settle_steps)
