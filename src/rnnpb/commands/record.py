@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import argparse
 
+from rnnpb.commands._perception import add_perception_argument
+
 NAME = "record"
 HELP = "record a demonstration from a camera or a stream and write sequence CSVs"
 DESCRIPTION = """\
@@ -13,6 +15,9 @@ user's hands in the image and, from their apparent size, their depth; the 3-D ha
 are mirrored onto the robot's hand targets and, by inverse kinematics, its joint angles.
 Sources without depth (a sensory CSV, a scenario) put the hands on the plane x = --plane-x
 metres in front of the robot (default 0.68 m, where the synthetic user's hands move).
+With --perception pose the hands are bare: a pose model finds the wrists and shoulders, the
+hands are scaled by the shoulder span to a standard body, and their depth is the model's wrist
+depth scaled the same way (pip install 'rnnpb[hands]').
 
 The recording is cut into training sequences, written as DIR/PATTERN_1.csv, PATTERN_2.csv …
 (columns step, lhy lhz rhy rhz, lshp … relp, pattern) for `rnnpb train`:
@@ -27,6 +32,7 @@ scenario:held:P (see `rnnpb interact --help`).
 Examples:
   rnnpb record synthetic:3 --steps 120 --pattern three --out data/three
   rnnpb record webcam:0 --steps 150 --colors colors.json --pattern wave --out data/wave
+  rnnpb record webcam:0 --steps 150 --perception pose --pattern wave --out data/wave
   rnnpb train --data data/three data/wave --out model.npz --preset fast
 """
 
@@ -85,6 +91,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--dt", type=float, default=0.4, help="seconds per step (default 0.4)")
     parser.add_argument("--seed", type=int, default=0, help="seed of a synthetic source")
+    add_perception_argument(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -98,6 +105,7 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb.perception import MOUSE_PLANE_X, DepthConfig
     from rnnpb.sequences import pattern_name_problem, write_sequence
 
+    depth_words = {"size": "ball size", "pose": "the pose model", "plane": "a fixed plane"}
     problem = pattern_name_problem(args.pattern)
     if problem:
         raise ConfigError(f"--pattern {args.pattern!r} {problem}")
@@ -105,7 +113,12 @@ def run(args: argparse.Namespace) -> int:
     if out.exists() and not out.is_dir():
         raise ConfigError(f"--out {out}: exists and is not a directory")
     source = open_source(
-        args.source, seed=args.seed, dt=args.dt, colors=args.colors, steps=args.steps
+        args.source,
+        seed=args.seed,
+        dt=args.dt,
+        colors=args.colors,
+        steps=args.steps,
+        perception=args.perception,
     )
     with source:
         demonstration = record_demonstration(
@@ -128,7 +141,7 @@ def run(args: argparse.Namespace) -> int:
     reach = demonstration.ik_residual[valid]
     print(
         f"recorded {demonstration.n_steps} steps from {demonstration.source} "
-        f"(depth from {'ball size' if demonstration.depth == 'size' else 'a fixed plane'}); "
+        f"(depth from {depth_words[demonstration.depth]}); "
         f"{int(valid.sum())} with both hands recovered"
     )
     if len(reach):
