@@ -254,6 +254,7 @@ def test_a_photographed_person_shoulders_found_hands_out_of_view_lost():
 
     photo = _photo(cbook.get_sample_data("grace_hopper.jpg", asfileobj=False))
     result = PoseTracker(static_images=True).track(photo)
+    assert photo.shape == (600, 512, 3)
     # Grace Hopper's portrait, 512x600: her shoulders at the frame's lower corners (labelled
     # by eye: her left on the image's right), her hands out of the picture.
     np.testing.assert_allclose(result.shoulders_px, [[456, 428], [96, 423]], atol=25)

@@ -267,7 +267,9 @@ def run(args: argparse.Namespace) -> int:
             pose = pose_benchmark()
             figures["pose_tracking_ms_median"] = float(pose["median_ms"])
             figures["pose_tracking_ms_p90"] = float(pose["p90_ms"])
+            figures["pose_tracking_cpu_ms_median"] = float(pose["cpu_median_ms"])
             figures["pose_detection_ms_median"] = float(pose["detect_median_ms"])
+            figures["pose_detection_cpu_ms_median"] = float(pose["detect_cpu_median_ms"])
         next_part()
     bar.close()
 
@@ -342,8 +344,10 @@ def run(args: argparse.Namespace) -> int:
             print(
                 f"  bare-hand pose tracking 640x480:         "
                 f"{figures['pose_tracking_ms_median']:8.3f} ms median, "
-                f"{figures['pose_tracking_ms_p90']:.3f} ms p90; "
-                f"{figures['pose_detection_ms_median']:.3f} ms finding the body afresh"
+                f"{figures['pose_tracking_ms_p90']:.3f} ms p90, processor time "
+                f"{figures['pose_tracking_cpu_ms_median']:.3f} ms; finding the body afresh "
+                f"{figures['pose_detection_ms_median']:.3f} ms (processor time "
+                f"{figures['pose_detection_cpu_ms_median']:.3f} ms)"
             )
         else:
             from rnnpb.perception import HANDS_INSTALL
