@@ -184,8 +184,8 @@ def hands_relative_to_body(
     body = config.body
     span_m = 2.0 * body.shoulder_half_width
     # The wrist's depth from the shoulders' plane, in metres of the standard body: towards the
-    # robot (smaller x), at most an arm's reach.
-    # No depth from the model: the plane the standard user's hands move in.
+    # robot (smaller x), at most an arm's reach; without a depth from the model, the plane the
+    # standard user's hands move in. The hand lies on the camera ray of its sensory values.
     wrist_depth = np.where(
         np.isfinite(wrist_depth), wrist_depth, (body.hand_depth - body.distance) / span_m
     )
