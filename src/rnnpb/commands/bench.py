@@ -24,6 +24,8 @@ single-threaded, after warm-up:
   - the same on-line step in a straightforward NumPy implementation (the reference the
     tests hold the compiled one to), and the ratio;
   - colour-ball tracking of 640x480 frames;
+  - bare-hand pose tracking of 640x480 frames of a photographed person, following the body
+    and finding it afresh (with the `rnnpb[hands]` extra; without it, one line says so);
   - two coupled agents (docs/dyad.md): one step of both against one agent's step, one after
     the other and side by side, in a process of their own on up to two cores.
 
@@ -259,6 +261,15 @@ def run(args: argparse.Namespace) -> int:
         figures["tracking_ms_median"] = float(tracking["median_ms"])
         figures["tracking_clean_error_px"] = float(tracking["clean_error_px"])
         figures["tracking_noisy_error_px"] = float(tracking["noisy_error_px"])
+        from rnnpb.perception import pose_available, pose_benchmark
+
+        if pose_available():
+            pose = pose_benchmark()
+            figures["pose_tracking_ms_median"] = float(pose["median_ms"])
+            figures["pose_tracking_ms_p90"] = float(pose["p90_ms"])
+            figures["pose_tracking_cpu_ms_median"] = float(pose["cpu_median_ms"])
+            figures["pose_detection_ms_median"] = float(pose["detect_median_ms"])
+            figures["pose_detection_cpu_ms_median"] = float(pose["detect_cpu_median_ms"])
         next_part()
     bar.close()
 
@@ -329,6 +340,19 @@ def run(args: argparse.Namespace) -> int:
             f"{figures['tracking_clean_error_px']:.2f} px clean, "
             f"{figures['tracking_noisy_error_px']:.2f} px noisy"
         )
+        if "pose_tracking_ms_median" in figures:
+            print(
+                f"  bare-hand pose tracking 640x480:         "
+                f"{figures['pose_tracking_ms_median']:8.3f} ms median, "
+                f"{figures['pose_tracking_ms_p90']:.3f} ms p90, processor time "
+                f"{figures['pose_tracking_cpu_ms_median']:.3f} ms; finding the body afresh "
+                f"{figures['pose_detection_ms_median']:.3f} ms (processor time "
+                f"{figures['pose_detection_cpu_ms_median']:.3f} ms)"
+            )
+        else:
+            from rnnpb.perception import HANDS_INSTALL
+
+            print(f"  bare-hand pose tracking: not measured, no pose model ({HANDS_INSTALL})")
     if args.json:
         document = {
             **figures,

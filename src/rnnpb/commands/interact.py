@@ -6,6 +6,7 @@ import argparse
 import contextlib
 
 from rnnpb.commands._config import RUN_SECTIONS, add_config_argument
+from rnnpb.commands._perception import add_perception_argument
 
 NAME = "interact"
 CONFIG_SECTIONS = RUN_SECTIONS
@@ -104,6 +105,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--steps", type=int, help="stop after this many steps")
     parser.add_argument("--colors", help="colour config JSON for camera sources")
+    add_perception_argument(parser)
     parser.add_argument(
         "--frame-step", type=int, help="use every N-th camera frame (default: video fps x dt)"
     )
@@ -205,6 +207,7 @@ def run(args: argparse.Namespace) -> int:
         frame_step=args.frame_step,
         colors=args.colors,
         steps=args.steps,
+        perception=args.perception,
     )
     if args.robot == "mujoco":
         os.environ.setdefault("MUJOCO_GL", "egl")

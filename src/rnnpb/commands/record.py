@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import argparse
 
+from rnnpb.commands._perception import add_perception_argument
+
 NAME = "record"
 HELP = "record a demonstration from a camera or a stream and write sequence CSVs"
 DESCRIPTION = """\
@@ -13,6 +15,9 @@ user's hands in the image and, from their apparent size, their depth; the 3-D ha
 are mirrored onto the robot's hand targets and, by inverse kinematics, its joint angles.
 Sources without depth (a sensory CSV, a scenario) put the hands on the plane x = --plane-x
 metres in front of the robot (default 0.68 m, where the synthetic user's hands move).
+With --perception pose the hands are bare: a pose model finds the wrists and shoulders, the
+hands are scaled by the shoulder span to a standard body, and their depth is the model's wrist
+depth scaled the same way (pip install 'rnnpb[hands]').
 
 The recording is cut into training sequences, written as DIR/PATTERN_1.csv, PATTERN_2.csv …
 (columns step, lhy lhz rhy rhz, lshp … relp, pattern) for `rnnpb train`:
@@ -42,6 +47,7 @@ Examples:
   rnnpb record synthetic:3 --steps 120 --pattern three --out data/three
   rnnpb record webcam:0 --steps 150 --colors colors.json --pattern wave --out data/wave
   rnnpb record bvh:wave1.bvh,wave2.bvh --time-scale 3 --pattern wave --out data/wave
+  rnnpb record webcam:0 --steps 150 --perception pose --pattern wave --out data/wave
   rnnpb train --data data/three data/wave --out model.npz --preset fast
 """
 
@@ -135,6 +141,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         choices=("x", "y", "z", "-x", "-y", "-z"),
         help="bvh: the file's up axis (default: the one the shoulders are above the root on)",
     )
+    add_perception_argument(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -169,6 +176,8 @@ def run(args: argparse.Namespace) -> int:
         files = [f.strip() for f in argument.split(",")]
         if not argument or not all(files):
             raise ConfigError(f"source {args.source!r}: expected bvh:FILE[,FILE...]")
+        if args.perception != "balls":
+            raise ConfigError("--perception applies to camera sources, not to bvh:")
         hands = None
         if args.hands is not None:
             names = [n.strip() for n in args.hands.split(",")]
@@ -247,10 +256,15 @@ def run(args: argparse.Namespace) -> int:
     write_recording(out, args.pattern, args.dt, entry)
     valid = demonstration.valid
     reach = demonstration.ik_residual[valid]
-    depth = {"size": "ball size", "plane": "a fixed plane", "3-d": "motion capture"}
+    depth_words = {
+        "size": "ball size",
+        "pose": "the pose model",
+        "plane": "a fixed plane",
+        "3-d": "motion capture",
+    }
     print(
         f"recorded {demonstration.n_steps} steps from {demonstration.source} "
-        f"(depth from {depth.get(demonstration.depth, demonstration.depth)}); "
+        f"(depth from {depth_words[demonstration.depth]}); "
         f"{int(valid.sum())} with both hands recovered"
     )
     if out_of_view:
@@ -310,7 +324,12 @@ def _record_from_source(args: argparse.Namespace, mapping):
     from rnnpb.perception import MOUSE_PLANE_X, DepthConfig
 
     source = open_source(
-        args.source, seed=args.seed, dt=args.dt, colors=args.colors, steps=args.steps
+        args.source,
+        seed=args.seed,
+        dt=args.dt,
+        colors=args.colors,
+        steps=args.steps,
+        perception=args.perception,
     )
     with source:
         return record_demonstration(

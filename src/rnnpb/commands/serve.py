@@ -5,13 +5,15 @@ from __future__ import annotations
 import argparse
 
 from rnnpb.commands._config import RUN_SECTIONS, add_config_argument
+from rnnpb.commands._perception import add_perception_argument
 
 NAME = "serve"
 HELP = "open the live dashboard: watch the robot imitate the demonstrator, your mouse or webcam"
 DESCRIPTION = """\
 Start a local web page that shows the simulated humanoid in 3-D, driven live by the synthetic
 demonstrator (patterns 1-4, switch, pause), by you dragging two hand markers with the mouse or
-a touch screen, or by the webcam with the colour-ball tracker. Live plots show the perceived
+a touch screen, or by the webcam (coloured balls on the hands, or bare hands with
+--perception pose; the webcam tab can switch). Live plots show the perceived
 and predicted hands, the joint angles and the parametric bias moving towards the learned
 pattern it recognises. The session can be downloaded as CSV.
 
@@ -36,6 +38,7 @@ Examples:
   rnnpb serve
   rnnpb serve --model models/set1.npz
   rnnpb serve --model models/ --port 9000
+  rnnpb serve --perception pose          # bare hands on the webcam: pip install 'rnnpb[hands]'
   rnnpb serve --model models/ --host 192.168.1.20   # reachable as http://192.168.1.20:8765
   rnnpb serve --model models/ --host 0.0.0.0 --allow-host robot.lab
   rnnpb serve --model models/ --host 0.0.0.0 --allow-host robot.lab \\
@@ -109,6 +112,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "versions (default: a temporary folder deleted when the server stops)",
     )
     add_config_argument(parser, RUN_SECTIONS)
+    add_perception_argument(parser)
     parser.add_argument(
         "--log-level",
         default="warning",
@@ -143,6 +147,10 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb.web import TeachingSettings
 
     step_count("--consolidation-iterations", args.consolidation_iterations)
+    if args.perception == "pose":  # one error line now, not when the webcam tab opens
+        from rnnpb.perception import load_pose_model
+
+        load_pose_model().close()
     overrides = read_config(args.config, RUN_SECTIONS, NAME)
     teaching = TeachingSettings(
         mode=args.teach,
@@ -162,6 +170,7 @@ def run(args: argparse.Namespace) -> int:
         teaching=teaching,
     )
     server.session.safety_enabled = not args.no_safety  # read when a model loads
+    server.session.perception = args.perception  # read when the webcam tab opens
     if overrides is not None:  # read when a model loads, and by teaching
         server.session.config_tables = ConfigTables(overrides.tables, overrides.path)
     server.start()

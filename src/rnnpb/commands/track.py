@@ -1,9 +1,12 @@
-"""``rnnpb track``: track the coloured balls in a camera, video, image folder or synthetic
-render, and write the sensory stream ``lhy lhz rhy rhz`` as CSV."""
+"""``rnnpb track``: track the hands (coloured balls, or bare hands with ``--perception pose``)
+in a camera, video, image folder or synthetic render, and write the sensory stream
+``lhy lhz rhy rhz`` as CSV."""
 
 from __future__ import annotations
 
 import argparse
+
+from rnnpb.commands._perception import add_perception_argument
 
 NAME = "track"
 HELP = "track the balls on the user's hands and write the sensory stream (CSV)"
@@ -21,6 +24,7 @@ SOURCE is one of:
 Examples:
   rnnpb track video:me.mp4 --out me.csv --colors colors.json --render me_tracked.mp4
   rnnpb track synthetic:3 --steps 100 --out pattern3.csv
+  rnnpb track webcam:0 --perception pose --out bare.csv   (bare hands: pip install 'rnnpb[hands]')
 """
 
 
@@ -57,6 +61,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="exponential smoothing of the ball centres in [0, 1) (default 0)",
     )
     parser.add_argument("--seed", type=int, default=0, help="seed of the synthetic source")
+    add_perception_argument(parser)
     parser.add_argument(
         "--no-progress",
         action="store_true",
@@ -93,7 +98,12 @@ def run(args: argparse.Namespace) -> int:
     if args.colors:
         config = replace(config, colors=load_ball_colors(args.colors))
     source = open_camera_source(
-        spec.kind, spec.argument, tracker_config=config, steps=args.steps, seed=args.seed
+        spec.kind,
+        spec.argument,
+        tracker_config=config,
+        steps=args.steps,
+        seed=args.seed,
+        perception=args.perception,
     )
     rows = []
     writer = VideoWriter(args.render, args.fps) if args.render else None
@@ -124,10 +134,13 @@ def run(args: argparse.Namespace) -> int:
     n = len(rows)
     left, right = (int(v) for v in source.lost_frames)
     print(f"tracked {n} frames from {source.description} -> {args.out}")
-    print(
-        f"left ball ({config.colors.left.name}) lost in {left} of {n} frames, "
-        f"right ball ({config.colors.right.name}) lost in {right} of {n} frames"
-    )
+    if args.perception == "pose":
+        print(f"left hand lost in {left} of {n} frames, right hand lost in {right} of {n} frames")
+    else:
+        print(
+            f"left ball ({config.colors.left.name}) lost in {left} of {n} frames, "
+            f"right ball ({config.colors.right.name}) lost in {right} of {n} frames"
+        )
     if writer is not None:
         print(f"marked video -> {args.render}")
     return 0

@@ -31,6 +31,7 @@ from rnnpb.perception import (
     DepthConfig,
     TrackedUserSource,
     hands_from_balls,
+    hands_from_pose,
     hands_on_plane,
 )
 from rnnpb.robot.camera import RobotCamera
@@ -58,8 +59,9 @@ class Demonstration:
     ik_residual : array, shape (n_steps, 2)
         Distance from each robot hand target to where the arm reaches, metres.
     depth : str
-        ``"size"`` (from the balls' apparent size), ``"plane"`` (the fixed plane) or ``"3-d"``
-        (given in 3-D: motion capture).
+        ``"size"`` (from the balls' apparent size), ``"pose"`` (the pose model's wrist depth,
+        scaled by the shoulder span), ``"plane"`` (the fixed plane) or ``"3-d"`` (given in 3-D:
+        motion capture).
     source : str
         The source's description.
     adjusted : array of bool, shape (n_steps,)
@@ -99,8 +101,9 @@ def record_demonstration(
 ) -> Demonstration:
     """Read a connected source to its end (or ``steps``) and turn it into a demonstration.
 
-    A :class:`rnnpb.perception.TrackedUserSource` gives depth from the balls' sizes; every other
-    source puts the hands on the plane ``x = plane_x``.
+    A :class:`rnnpb.perception.TrackedUserSource` gives depth from the balls' sizes (or, with
+    the pose tracker, from the wrists' depth scaled by the shoulder span); every other source
+    puts the hands on the plane ``x = plane_x``.
     """
     if steps is not None and steps < 2:
         raise ConfigError(f"a demonstration needs at least 2 steps, got {steps}")
@@ -113,7 +116,8 @@ def record_demonstration(
     if isinstance(source, FrameStepSource) and isinstance(source.inner, TrackedUserSource):
         reader, frame_step = source.inner, source.frame_step
     tracked = isinstance(reader, TrackedUserSource)
-    sensory, centers, radii, frame_size = [], [], [], None
+    posed = isinstance(reader, TrackedUserSource) and reader.perception == "pose"
+    sensory, centers, radii, posed_hands, frame_size = [], [], [], [], None
     index = -1
     while steps is None or len(sensory) < steps:
         observation = reader.read()
@@ -126,6 +130,7 @@ def record_demonstration(
         if isinstance(reader, TrackedUserSource):
             result = reader.last_result
             assert result is not None
+            posed_hands.append(result.hands_3d)
             centers.append([ball.center_px for ball in result.balls])
             radii.append([ball.radius_px for ball in result.balls])
             if observation.frame is not None:
@@ -135,16 +140,23 @@ def record_demonstration(
             f"{_described(source)}: gave {len(sensory)} steps; a demonstration needs at least 2"
         )
     sensory_array = np.array(sensory)
-    if tracked:
+    if posed:
+        hands = hands_from_pose(np.array(posed_hands), depth)
+    elif tracked:
         hands = hands_from_balls(
             np.array(centers), np.array(radii), camera, depth, image_size=frame_size
         )
     else:
         hands = hands_on_plane(sensory_array, camera, plane_x)
     motor, residual, adjusted = _motor_for_hands(mapping, hands)
-    depth_kind = "size" if tracked else "plane"
     return Demonstration(
-        sensory_array, hands, motor, residual, depth_kind, _described(source), adjusted=adjusted
+        sensory_array,
+        hands,
+        motor,
+        residual,
+        "pose" if posed else "size" if tracked else "plane",
+        _described(source),
+        adjusted=adjusted,
     )
 
 

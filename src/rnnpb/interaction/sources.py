@@ -149,6 +149,7 @@ def open_source(
     frame_step: int | None = None,
     colors: str | None = None,
     steps: int | None = None,
+    perception: str = "balls",
 ) -> UserSource:
     """Open the user source a specification string names (see the module doc).
 
@@ -165,8 +166,16 @@ def open_source(
         Ball colours for camera sources.
     steps : int, optional
         At most this many camera frames (the synthetic camera renders this many).
+    perception : str
+        How a camera's frames become hands: ``"balls"`` (the colour-ball tracker) or
+        ``"pose"`` (bare hands, the pose model of ``rnnpb[hands]``). Camera sources only.
     """
     parsed = parse_source_spec(spec)
+    if perception != "balls" and parsed.kind not in CAMERA_KINDS:
+        raise ConfigError(
+            f"--perception {perception} applies to camera sources "
+            f"({', '.join(CAMERA_KINDS)}), not to {parsed.kind}"
+        )
     if parsed.kind == "scenario":
         from rnnpb.demonstrator import ScenarioSource
 
@@ -175,7 +184,9 @@ def open_source(
         return CsvSensorySource(str(parsed.argument))
     from rnnpb.perception import open_camera_source
 
-    source = open_camera_source(parsed.kind, parsed.argument, colors=colors, steps=steps, seed=seed)
+    source = open_camera_source(
+        parsed.kind, parsed.argument, colors=colors, steps=steps, seed=seed, perception=perception
+    )
     if frame_step is None and parsed.kind == "video":
         frame_step = _video_frame_step(str(parsed.argument), dt)
     if frame_step and frame_step > 1:

@@ -1,5 +1,6 @@
 """Perception: camera sources (webcam, video file, image folder, synthetic render) and the
-colour-ball tracker that turns the user's hands into the sensory vector ``lhy lhz rhy rhz``.
+trackers that turn the user's hands into the sensory vector ``lhy lhz rhy rhz``: the
+colour-ball tracker, and the pose tracker for bare hands (the ``rnnpb[hands]`` extra).
 
 Open a camera with the tracker from its kind and argument (``"webcam", 0``, ``"video",
 "clip.mp4"``, ``"images", "frames/"``, ``"synthetic", "1"``) with :func:`open_camera_source`; it
@@ -44,6 +45,22 @@ from rnnpb.perception._depth import (
     hands_on_plane,
     running_median,
 )
+from rnnpb.perception._pose import (
+    HANDS_INSTALL,
+    PERCEPTIONS,
+    BodyLandmarks,
+    PoseConfig,
+    PoseResult,
+    PoseTracker,
+    hands_from_pose,
+    hands_relative_to_body,
+    load_pose_model,
+    lost_pose,
+    person_frame,
+    pose_available,
+    pose_benchmark,
+    standard_shoulders_px,
+)
 from rnnpb.perception._sources import (
     ArraySource,
     FrameSource,
@@ -74,6 +91,20 @@ from rnnpb.perception._user_source import (
 
 __all__ = [
     "BLUE",
+    "HANDS_INSTALL",
+    "PERCEPTIONS",
+    "BodyLandmarks",
+    "PoseConfig",
+    "PoseResult",
+    "PoseTracker",
+    "hands_from_pose",
+    "hands_relative_to_body",
+    "load_pose_model",
+    "lost_pose",
+    "person_frame",
+    "pose_available",
+    "pose_benchmark",
+    "standard_shoulders_px",
     "MOUSE_PLANE_X",
     "BROAD_BLUE",
     "BROAD_RED",

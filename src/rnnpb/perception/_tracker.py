@@ -751,12 +751,20 @@ def draw_tracking(
     """A copy of ``frame`` with the tracked balls circled and labelled, lost ones listed."""
     out = np.ascontiguousarray(frame).copy()
     marker = ((0, 255, 255), (255, 255, 0))  # yellow for left, cyan for right: both stand out
-    names = [c.name for c in (colors or BallColors()).balls]
+    shoulders = getattr(result, "shoulders_px", None)  # bare hands: the pose tracker's body
+    if shoulders is None:
+        names = [c.name for c in (colors or BallColors()).balls]
+    else:
+        names = ["hand", "hand"]
+        if np.isfinite(shoulders).all():
+            ends = [tuple(int(round(v)) for v in point) for point in shoulders]
+            cv2.line(out, ends[0], ends[1], (255, 255, 255), 2, cv2.LINE_AA)
     for i, ball in enumerate(result.balls):
         label = f"{HAND_NAMES[i][0].upper()} ({names[i]})"
         if ball.tracked:
             c = (int(round(ball.center_px[0] * 4)), int(round(ball.center_px[1] * 4)))
-            r = int(round(max(ball.radius_px, 2.0) * 4))
+            radius = ball.radius_px if math.isfinite(ball.radius_px) else 2.0
+            r = int(round(max(radius, 2.0) * 4))
             cv2.circle(out, c, r + 12, marker[i], 2, cv2.LINE_AA, shift=2)
             cv2.drawMarker(out, (c[0] // 4, c[1] // 4), marker[i], cv2.MARKER_CROSS, 10, 1)
             cv2.putText(

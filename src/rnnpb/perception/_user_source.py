@@ -22,6 +22,7 @@ import numpy as np
 
 from rnnpb.errors import ConfigError, RnnpbError
 from rnnpb.perception._colors import BallColors, load_ball_colors
+from rnnpb.perception._pose import PERCEPTIONS, PoseConfig, PoseTracker
 from rnnpb.perception._sources import (
     FrameSource,
     ImageFolderSource,
@@ -38,16 +39,20 @@ DEFAULT_SYNTHETIC_STEPS = 200
 
 
 class TrackedUserSource(UserSource):
-    """A camera source with the colour-ball tracker: one :class:`Observation` per frame.
+    """A camera source with a tracker: one :class:`Observation` per frame.
 
-    ``Observation.sensory`` is the tracker's ``lhy lhz rhy rhz`` (NaN for a lost ball),
+    The tracker is the colour-ball tracker (default) or the pose tracker
+    (:class:`rnnpb.perception.PoseTracker`, bare hands).
+    ``Observation.sensory`` is the tracker's ``lhy lhz rhy rhz`` (NaN for a lost hand),
     ``Observation.frame`` the camera frame, ``Observation.truth`` the source's ground truth
     (the synthetic camera's; empty for real cameras). The last :class:`TrackingResult` (status,
     radius, depth, 3-D position per ball) is kept in ``last_result``; ``lost_frames`` counts the
     frames each ball (left, right) was lost.
     """
 
-    def __init__(self, frames: FrameSource, tracker: BallTracker | None = None) -> None:
+    def __init__(
+        self, frames: FrameSource, tracker: BallTracker | PoseTracker | None = None
+    ) -> None:
         self.frames = frames
         self.tracker = tracker or BallTracker()
         self.last_result: TrackingResult | None = None
@@ -71,6 +76,11 @@ class TrackedUserSource(UserSource):
         self.n_frames += 1
         self.lost_frames += [not b.tracked for b in result.balls]
         return Observation(result.sensory, frame, dict(self.frames.last_truth))
+
+    @property
+    def perception(self) -> str:
+        """``"pose"`` for the pose tracker, ``"balls"`` for the colour balls."""
+        return "pose" if isinstance(self.tracker, PoseTracker) else "balls"
 
     def close(self) -> None:
         self.frames.close()
@@ -149,9 +159,11 @@ def open_camera_source(
     tracker_config: TrackerConfig | None = None,
     steps: int | None = None,
     seed: int = 0,
+    perception: str = "balls",
+    pose_config: PoseConfig | None = None,
     **synthetic: Any,
 ) -> TrackedUserSource:
-    """A :class:`UserSource` that tracks the balls in the frames of a camera source.
+    """A :class:`UserSource` that tracks the hands in the frames of a camera source.
 
     Parameters
     ----------
@@ -160,6 +172,11 @@ def open_camera_source(
     colors : BallColors or path of a colour file, optional
         Overrides the colours in ``tracker_config``.
     tracker_config : TrackerConfig, optional
+    perception : str
+        ``"balls"`` (the colour-ball tracker) or ``"pose"`` (bare hands through the pose
+        model of the ``rnnpb[hands]`` extra; ``colors`` and ``tracker_config`` do not apply).
+    pose_config : PoseConfig, optional
+        The pose tracker's settings.
     steps, seed, **synthetic
         See :func:`open_frame_source`.
 
@@ -169,6 +186,12 @@ def open_camera_source(
     ...     while (observation := source.read()) is not None:
     ...         print(observation.sensory)
     """
+    if perception not in PERCEPTIONS:
+        raise ConfigError(f"perception must be one of {', '.join(PERCEPTIONS)}, got {perception!r}")
+    if perception == "pose":
+        tracker = PoseTracker(pose_config)  # raises before a camera is opened
+        frames = open_frame_source(kind, argument, steps=steps, seed=seed, **synthetic)
+        return TrackedUserSource(frames, tracker)
     config = tracker_config or TrackerConfig()
     if colors is not None:
         if not isinstance(colors, BallColors):

@@ -21,6 +21,7 @@ MAX_MESSAGE_BYTES = 4096
 MIN_DT, MAX_DT = 0.02, 5.0
 """Range of the loop's step, seconds."""
 MODES = ("demonstrator", "pointer", "webcam")
+PERCEPTIONS = ("balls", "pose")  # as rnnpb.perception.PERCEPTIONS; the webcam's trackers
 ACTIONS = ("start", "stop", "reset")
 PATTERN_CHOICES = (*PATTERNS, *NEW_SHAPES, "pause")
 """What the demonstrator performs: the paper's four patterns, the new shapes, a pause."""
@@ -91,6 +92,8 @@ def parse_client_message(text: str | bytes | None) -> dict[str, Any]:
     ``{"type": "mode", "mode": M}``                ``demonstrator``, ``pointer`` or ``webcam``
     ``{"type": "camera", "index": N}``             webcam index 0-16 (takes effect on the
                                                    next switch to ``webcam``)
+    ``{"type": "perception", "perception": P}``    the webcam's hands: ``balls`` (coloured
+                                                   balls) or ``pose`` (bare hands)
     ``{"type": "pattern", "pattern": P}``          demonstrator: ``"1"``-``"4"``, a new shape
                                                    (``figure-eight`` ...) or ``"pause"``
     ``{"type": "control", "action": A}``           ``start``, ``stop`` or ``reset``
@@ -173,6 +176,14 @@ def parse_client_message(text: str | bytes | None) -> dict[str, Any]:
             "type": "camera",
             "index": _integer(message["index"], "camera index", 0, MAX_CAMERA_INDEX),
         }
+    if kind == "perception":
+        _keys(message, ("perception",))
+        if not isinstance(message["perception"], str) or message["perception"] not in PERCEPTIONS:
+            raise ProtocolError(
+                f"perception must be one of {', '.join(PERCEPTIONS)}, got "
+                f"{_shown(message['perception'])}"
+            )
+        return {"type": "perception", "perception": message["perception"]}
     if kind == "pattern":
         _keys(message, ("pattern",))
         pattern = message["pattern"]

@@ -264,6 +264,7 @@ class Session:
         self.pointer = PointerSource()
         self.demonstrator = DemonstratorSource()
         self.camera_index = 0
+        self.perception = "balls"  # how the webcam's frames become hands: balls or pose
         self.mode = "demonstrator"
         self.running = False
         self.loading = False
@@ -397,6 +398,7 @@ class Session:
             "mode": self.mode,
             "dt": self.dt,
             "camera_index": self.camera_index,
+            "perception": self.perception,
             "demonstrator_pattern": PAUSE
             if self.demonstrator.paused
             else self.demonstrator.pattern,
@@ -556,6 +558,8 @@ class Session:
             self._set_mode(command["mode"])
         elif kind == "camera":
             self.camera_index = command["index"]
+        elif kind == "perception":
+            self._set_perception(command["perception"])
         elif kind == "pattern":
             self.demonstrator.perform(command["pattern"])
         elif kind == "teach_mode":
@@ -686,21 +690,41 @@ class Session:
         if mode == self.mode:
             return
         if mode == "webcam":
-            from rnnpb.perception import open_camera_source
-
-            webcam = open_camera_source("webcam", self.camera_index)
-            try:
-                webcam.connect()
-            except RnnpbError as error:
-                webcam.close()
-                raise RnnpbError(f"no camera: {error}") from None
-            self._close_webcam()
-            self._webcam = webcam
-            self._source.inner = webcam
+            self._open_webcam()
         else:
             self._source.inner = self.pointer if mode == "pointer" else self.demonstrator
             self._close_webcam()
         self.mode = mode
+
+    def _open_webcam(self) -> None:
+        from rnnpb.perception import open_camera_source
+
+        webcam = open_camera_source("webcam", self.camera_index, perception=self.perception)
+        try:
+            webcam.connect()
+        except RnnpbError as error:
+            webcam.close()
+            raise RnnpbError(f"no camera: {error}") from None
+        self._close_webcam()
+        self._webcam = webcam
+        self._source.inner = webcam
+
+    def _set_perception(self, perception: str) -> None:
+        """Balls or bare hands; an open webcam is opened again with the new tracker (and kept
+        as it was when that fails)."""
+        if perception == self.perception:
+            return
+        from rnnpb.perception import HANDS_INSTALL, pose_available
+
+        if perception == "pose" and not pose_available():
+            raise RnnpbError(f"bare hands need the pose model: {HANDS_INSTALL}")
+        previous, self.perception = self.perception, perception
+        if self.mode == "webcam":
+            try:
+                self._open_webcam()
+            except RnnpbError:
+                self.perception = previous
+                raise
 
     def _close_webcam(self) -> None:
         if self._webcam is not None:

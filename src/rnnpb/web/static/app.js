@@ -70,7 +70,7 @@ dash.send = send;
 
 // Every control that sends a command; disabled while there is no connection.
 function setControlsEnabled(enabled) {
-  document.querySelectorAll("#model, #start, #stop, #reset, #dt, .tab, #camera, "
+  document.querySelectorAll("#model, #start, #stop, #reset, #dt, .tab, #camera, #perception, "
     + "#camera-open, #patterns button, #teach-mode, #rename-apply").forEach((node) => {
     node.disabled = !enabled;
   });
@@ -116,6 +116,9 @@ function onState(state) {
   // webcam leaves the webcam panel shown, with the reason.
   if (state.mode !== shownMode.server) { shownMode.server = state.mode; showMode(state.mode); }
   if (state.mode === "webcam") $("camera-message").textContent = "";
+  if (state.perception && document.activeElement !== $("perception")) {
+    $("perception").value = state.perception;
+  }
   $("frame").hidden = state.mode !== "webcam";
   buildPatternButtons(state);
   const pbKey = JSON.stringify(state.pattern_pb);
@@ -1161,6 +1164,7 @@ document.querySelectorAll(".tab").forEach((tab) => {
     send({ type: "mode", mode: tab.dataset.mode });
   };
 });
+$("perception").onchange = () => send({ type: "perception", perception: $("perception").value });
 $("camera-open").onclick = () => {
   const index = parseInt($("camera").value, 10);
   $("camera-message").textContent = "opening the camera…";
