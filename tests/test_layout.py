@@ -28,6 +28,7 @@ ALLOWED: dict[str, set[str]] = {
     "structure": set(),
     "sources": {"sequences"},
     "robot": set(),
+    "bridge": {"robot", "sources"},
     "models": set(),
     "presets": set(),
     "model": {"presets", "sequences", "structure"},
@@ -37,6 +38,7 @@ ALLOWED: dict[str, set[str]] = {
     "perception": {"demonstrator", "robot", "sources", "sequences"},
     "analysis": {"demonstrator", "robot", "sequences", "structure"},
     "interaction": {
+        "bridge",
         "model",
         "presets",
         "memory",
@@ -88,6 +90,7 @@ ALLOWED: dict[str, set[str]] = {
         "sequences",
     },
     "commands": {
+        "bridge",
         "models",
         "experiments",
         "sweeps",
