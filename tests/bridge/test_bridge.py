@@ -158,7 +158,8 @@ def test_the_watchdog_holds_the_pose_when_commands_stop(robot_process):
         assert not tap.last().holding
         assert wait_until(lambda: tap.last().holding, timeout_s=2.0)
         held_after = time.monotonic() - last_command
-        assert 2 * DT < held_after <= 2 * DT + 0.15  # within two steps and a tick
+        # (measured from when this process saw the last answer, a few ms after the robot did)
+        assert 2 * DT - 0.03 < held_after <= 2 * DT + 0.1
         pose = tap.last().position
         time.sleep(3 * DT)
         np.testing.assert_array_equal(tap.last().position, pose)
@@ -184,7 +185,7 @@ def test_the_loop_says_when_the_robot_is_gone_and_resumes_when_it_returns():
             # The restarted robot is at its own rest pose: the late command was not applied.
             np.testing.assert_array_equal(sent, robot.observe())
             assert robot.outages == 1
-            assert "no joint states" in events[0] and "2 steps" in events[0]
+            assert "no joint states" in events[0] and "steps); the loop waits" in events[0]
             assert "back after" in events[1]
             assert waited >= 0.5
             np.testing.assert_array_equal(robot.send(REST), REST)  # and it drives it again

@@ -5,7 +5,7 @@ Each :meth:`ZenohRobot.send` maps the network's eight angles to the robot's join
 waits for the joint state that acknowledges it; it returns the set point the robot applied
 (after its own safeguards), in network angles.
 
-When no joint state arrives for ``lost_after_steps`` steps the robot is gone (killed, cable
+When no joint state arrives for ``lost_after_steps`` steps (1.5) the robot is gone (killed, cable
 out, network down): :meth:`send` says so (``on_event``), and waits for the robot's joint states
 to come back, and says so again; the loop stops meanwhile, since ``send`` is inside its step,
 and carries on with its next step, so that no recorded step is lost. The command of the step
@@ -38,8 +38,10 @@ from rnnpb.errors import RnnpbError
 from rnnpb.robot import Robot, RobotMap, clip_to_limits
 from rnnpb.robot._interface import as_joint_vector
 
-LOST_AFTER_STEPS = 2
-"""Steps without a joint state after which the loop says the robot is gone and waits."""
+LOST_AFTER_STEPS = 1.5
+"""Steps without a joint state after which the loop says the robot is gone and waits: the
+robot publishes one at least every half step, so this is three missed in a row (not jitter),
+and the loop says so within two steps of the robot's end."""
 CONNECT_TIMEOUT_S = 10.0
 """How long :meth:`ZenohRobot.connect` waits for the robot's first joint state: a robot process
 started at the same moment needs a few seconds to come up."""
@@ -80,7 +82,7 @@ class ZenohRobot(Robot):
         on_event: Callable[[str], None] | None = None,
         waiting: Callable[[], None] | None = None,
         connect_timeout_s: float = CONNECT_TIMEOUT_S,
-        lost_after_steps: int = LOST_AFTER_STEPS,
+        lost_after_steps: float = LOST_AFTER_STEPS,
     ) -> None:
         self.prefix = prefix.strip("/")
         self.dt = float(dt)
@@ -89,7 +91,7 @@ class ZenohRobot(Robot):
         self.on_event = on_event or (lambda text: print(text, flush=True))
         self.waiting = waiting
         self.connect_timeout_s = float(connect_timeout_s)
-        self.lost_after_steps = int(lost_after_steps)
+        self.lost_after_steps = float(lost_after_steps)
         self.sender = secrets.token_hex(8)
         self._session: Any = None
         self._publisher: Any = None
@@ -153,14 +155,15 @@ class ZenohRobot(Robot):
         return self.map.to_network(robot)
 
     def _wait_for_state(self, ready: Callable[[], bool], timeout_s: float) -> JointState | None:
-        """Wait until ``ready()`` (under the lock) or the timeout; the latest state or None."""
+        """Wait until ``ready()`` (under the lock; checked on every state and every 10 ms) or
+        the timeout; the latest state or None."""
         deadline = time.monotonic() + timeout_s
         with self._changed:
             while not ready():
                 left = deadline - time.monotonic()
                 if left <= 0:
                     return None
-                self._changed.wait(min(left, 0.05))
+                self._changed.wait(min(left, 0.01))
             return self._state
 
     def observe(self) -> np.ndarray:
@@ -179,10 +182,16 @@ class ZenohRobot(Robot):
         command = JointCommand(seq, time.time(), self.map.names, robot, self.sender)
         self._publisher.put(encode_command(command))
         timeout = self.lost_after_steps * self.dt
-        state = self._wait_for_state(lambda: self._acknowledged(seq), timeout)
+
+        def silent() -> bool:
+            return time.monotonic() - self._received_at > timeout
+
+        self._wait_for_state(lambda: self._acknowledged(seq) or silent(), timeout)
+        with self._changed:
+            state = self._state if self._acknowledged(seq) else None
         if state is not None:
             return self._to_network(state, state.target if state.target is not None else robot)
-        if time.monotonic() - self._received_at <= timeout:
+        if not silent():
             # States keep coming but none acknowledges this command: the robot refused it.
             self.unanswered += 1
             if self.unanswered == 1:
@@ -191,7 +200,7 @@ class ZenohRobot(Robot):
                     "its joint states count why)"
                 )
             return self.observe()
-        return self._wait_for_return(timeout)
+        return self._wait_for_return(time.monotonic() - self._received_at)
 
     def _acknowledged(self, seq: int) -> bool:
         state = self._state
@@ -203,7 +212,7 @@ class ZenohRobot(Robot):
         count = self._states
         self.on_event(
             f"robot on {self.prefix}: no joint states for {silent_s:.2f} s "
-            f"({self.lost_after_steps} steps); the loop waits for the robot"
+            f"({silent_s / self.dt:.1f} steps); the loop waits for the robot"
         )
         while self._wait_for_state(lambda: self._states > count, 0.05) is None:
             if self.waiting is not None:

@@ -3,7 +3,7 @@ served on the bus, with the robot-side safeguards.
 
 :class:`RobotServer` takes joint commands from ``PREFIX/joint_commands`` and publishes joint
 states on ``PREFIX/joint_states``: one after every command it applies (``ack`` = the command's
-``seq``) and at least one per step while no command comes (the heartbeat that tells the loop
+``seq``) and one every half step while no command comes (the heartbeat that tells the loop
 the robot is there). Before a command is applied:
 
 - a message that is not a joint command naming exactly the robot's joints with finite radians
@@ -118,9 +118,10 @@ class RobotServer:
             )
             self.safeguard.reset(self.map.to_robot(self.robot.observe()))
             self._publish()
-            last_published = time.monotonic()
+            last_published = last_moved = time.monotonic()
             self.ready.set()
-            tick = self.dt / 10  # the watchdog's and the heartbeat's resolution
+            tick = min(self.dt / 20, 0.005)  # the watchdog's resolution
+            heartbeat = self.dt / 2  # the loop says the robot is gone after 1.5 steps
             try:
                 while not self._stop.is_set():
                     try:
@@ -130,15 +131,18 @@ class RobotServer:
                     now = time.monotonic()
                     if payload is not None and self._apply(payload, now):
                         self._publish()
-                        last_published = now
+                        last_published = last_moved = now
                         continue
                     if self.watchdog.expired(now) and not self.holding:
                         self._hold()
+                        self._publish()
+                        last_published = now
                     held = self.safeguard.set_point
-                    if self.holding and held is not None and now - last_published >= self.dt:
+                    if self.holding and held is not None and now - last_moved >= self.dt:
                         # The robot keeps holding its pose, one step at a time.
                         self.robot.send(self.map.to_network(held))
-                    if time.monotonic() - last_published >= self.dt:
+                        last_moved = now
+                    if time.monotonic() - last_published >= heartbeat:
                         self._publish()
                         last_published = time.monotonic()
             finally:
