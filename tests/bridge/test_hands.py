@@ -8,7 +8,7 @@ import time
 import numpy as np
 import pytest
 
-from rnnpb.bridge import BusConfig, HandsMessage, encode_hands
+from rnnpb.bridge import BusConfig, HandsMessage, ZenohHandsSource, encode_hands
 from rnnpb.errors import ConfigError
 from rnnpb.interaction import open_source
 
@@ -21,6 +21,7 @@ def test_hands_published_on_the_bus_reach_the_loop_and_silence_is_a_lost_hand():
     try:
         publisher = camera.declare_publisher("lab/hands")
         with open_source(f"zenoh:lab/hands@{endpoint}", dt=0.2) as source:
+            assert isinstance(source, ZenohHandsSource)
             assert wait_until(lambda: bool(camera.info.peers_zid()))
             time.sleep(0.1)  # the subscription reaches the camera's peer
             sent = []
@@ -29,10 +30,12 @@ def test_hands_published_on_the_bus_reach_the_loop_and_silence_is_a_lost_hand():
                 publisher.put(encode_hands(HandsMessage(seq, time.time(), values)))
                 sent.append(values)
                 observation = source.read()
+                assert observation is not None
                 np.testing.assert_array_equal(observation.sensory, values)
             publisher.put(b"not hands")
             started = time.monotonic()
             silent = source.read()  # nothing new within a step: not seen
+            assert silent is not None
             assert np.all(np.isnan(silent.sensory))
             assert 0.15 < time.monotonic() - started < 0.6
             assert source.malformed == 1 and source.missed == 1

@@ -84,13 +84,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default="kinematic",
         metavar="ROBOT",
         help="kinematic (default: simulated, instant, no physics), mujoco (simulated with "
-        "physics) or zenoh[:PREFIX][@ENDPOINT] (a robot process on a Zenoh bus, e.g. "
-        "`rnnpb robot serve`; docs/bridge.md)",
+        "physics), zenoh[:PREFIX][@ENDPOINT] (a robot process on a Zenoh bus, e.g. "
+        "`rnnpb robot serve`), ros2dds[:CONTROLLER][@ENDPOINT] (a ROS 2 robot through "
+        "zenoh-bridge-ros2dds) or rclpy[:CONTROLLER] (ROS 2 installed); docs/bridge.md",
     )
     parser.add_argument(
         "--robot-map",
         metavar="FILE",
-        help="with --robot zenoh: the robot's joint names, signs, offsets and limits (TOML; "
+        help="with a robot on a bus: its joint names, signs, offsets and limits (TOML; "
         "default: the simulated humanoid's)",
     )
     parser.add_argument(

@@ -124,8 +124,10 @@ def load_robot_map(path: str | None):
 
 
 def open_robot(spec: str, dt: float, robot_map: str | None = None, waiting=None):
-    """The robot ``--robot`` names: ``kinematic``, ``mujoco`` or ``zenoh[:PREFIX][@ENDPOINT]``
-    (with ``--robot-map FILE``: a robot on the bus only)."""
+    """The robot ``--robot`` names: ``kinematic``, ``mujoco``, ``zenoh[:PREFIX][@ENDPOINT]``
+    (a robot process speaking rnnpb's messages), ``ros2dds[:CONTROLLER][@ENDPOINT]`` (a ROS 2
+    robot through zenoh-bridge-ros2dds) or ``rclpy[:CONTROLLER]`` (through ROS 2's rclpy);
+    ``--robot-map FILE`` maps the joints of the last three."""
     from rnnpb.errors import ConfigError
 
     kind = spec.partition(":")[0].strip().lower()
@@ -136,8 +138,24 @@ def open_robot(spec: str, dt: float, robot_map: str | None = None, waiting=None)
         return ZenohRobot(
             prefix, dt=dt, robot_map=load_robot_map(robot_map), bus=bus, waiting=waiting
         )
+    if kind in ("ros2dds", "rclpy"):
+        from rnnpb.bridge import DEFAULT_CONTROLLER, RclpyRobot, Ros2BridgeRobot
+
+        controller, at, endpoint = spec.partition(":")[2].partition("@")
+        controller = controller.strip().strip("/") or DEFAULT_CONTROLLER
+        mapped = load_robot_map(robot_map)
+        if kind == "rclpy":
+            if at:
+                raise ConfigError("--robot rclpy: ROS 2 finds its peers itself (no @ENDPOINT)")
+            return RclpyRobot(controller, dt=dt, robot_map=mapped)
+        from rnnpb.bridge import BusConfig
+
+        bus = BusConfig(connect=(endpoint.strip(),) if endpoint.strip() else ())
+        return Ros2BridgeRobot(controller, dt=dt, robot_map=mapped, bus=bus, waiting=waiting)
     if robot_map is not None:
-        raise ConfigError("--robot-map maps the joints of a robot on the bus (--robot zenoh:...)")
+        raise ConfigError(
+            "--robot-map maps the joints of a robot on a bus (--robot zenoh, ros2dds or rclpy)"
+        )
     if spec == "mujoco":
         import os
 
@@ -149,4 +167,7 @@ def open_robot(spec: str, dt: float, robot_map: str | None = None, waiting=None)
         from rnnpb.robot import KinematicRobot
 
         return KinematicRobot(dt=dt)
-    raise ConfigError(f"--robot {spec!r}: expected kinematic, mujoco or zenoh[:PREFIX][@ENDPOINT]")
+    raise ConfigError(
+        f"--robot {spec!r}: expected kinematic, mujoco, zenoh[:PREFIX][@ENDPOINT], "
+        "ros2dds[:CONTROLLER][@ENDPOINT] or rclpy[:CONTROLLER]"
+    )

@@ -26,6 +26,7 @@ used; ``send`` should not block longer than one step (``dt``).
 from __future__ import annotations
 
 from collections import deque
+from typing import Self
 
 import numpy as np
 
@@ -75,7 +76,7 @@ class Robot:
         """The earlier name of :meth:`disconnect`."""
         self.disconnect()
 
-    def __enter__(self) -> Robot:
+    def __enter__(self) -> Self:
         self.connect()
         return self
 
