@@ -113,6 +113,10 @@ class ZenohRobot(Robot):
         return self._session is not None
 
     @property
+    def commands_sent(self) -> int:
+        return self._seq
+
+    @property
     def state_key(self) -> str:
         return f"{self.prefix}/{JOINT_STATES}"
 
@@ -215,6 +219,8 @@ class ZenohRobot(Robot):
             f"({silent_s / self.dt:.1f} steps); the loop waits for the robot"
         )
         while self._wait_for_state(lambda: self._states > count, 0.05) is None:
+            if self._session is None:
+                raise RobotUnreachable(f"robot on {self.prefix}: disconnected while waiting")
             if self.waiting is not None:
                 self.waiting()
         self.on_event(

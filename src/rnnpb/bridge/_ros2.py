@@ -296,6 +296,8 @@ class Ros2BridgeRobot(Robot):
         count = self._states
         with self._changed:
             while not self._changed.wait_for(lambda: self._states > count, 0.05):
+                if self._session is None:
+                    raise RnnpbError("ROS 2 robot: disconnected while waiting")
                 if self.waiting is not None:
                     self.waiting()
         self.safeguard.reset(self.map.to_robot(self.observe()))
