@@ -1,7 +1,7 @@
 """The bridge's messages and their encoding: one UTF-8 JSON object per Zenoh sample.
 
 JSON, because a robot-side node in any language can read and write it with its standard
-library, and a step's message is a few hundred bytes (its cost is measured in docs/bridge.md).
+library, and a step's message is a few hundred bytes (benchmarks/bridge.py measures its cost).
 Angles are radians; ``stamp`` is the sender's wall clock (Unix seconds, float); ``seq`` counts
 the sender's messages from 1. Keys under a prefix (default ``rnnpb/robot``):
 
