@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import secrets
+import signal
 import socket
 import subprocess
 import sys
@@ -60,7 +61,7 @@ class RobotProcess:
     def stop(self) -> str:
         """Ctrl-C the robot; its last words."""
         assert self.process is not None
-        self.process.send_signal(2)
+        self.process.send_signal(signal.SIGINT)
         output, _ = self.process.communicate(timeout=10)
         return output
 

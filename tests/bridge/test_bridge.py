@@ -146,6 +146,9 @@ def test_malformed_and_stale_commands_are_refused_and_counted(robot_process):
         np.testing.assert_array_equal(tap.last().position, REST)
     finally:
         tap.close()
+    # Stopped, the robot says what it did.
+    words = robot_process.stop()
+    assert f"1 commands applied; refused {len(malformed)} malformed, 3 stale, 0 overflow" in words
 
 
 def test_the_watchdog_holds_the_pose_when_commands_stop(robot_process):

@@ -48,3 +48,5 @@ def test_a_bus_source_needs_a_plain_key():
         open_source("zenoh:lab/*")
     with pytest.raises(ConfigError, match="an endpoint follows @"):
         open_source("zenoh:lab/hands@")
+    with pytest.raises(ConfigError, match="name the key"):
+        open_source("zenoh:@tcp/127.0.0.1:7447")

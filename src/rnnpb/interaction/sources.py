@@ -179,6 +179,8 @@ def open_source(
         from rnnpb.bridge import ZenohHandsSource, parse_bus_spec
 
         key, bus = parse_bus_spec(spec, "", "source")
+        if not key:
+            raise ConfigError(f"source {spec!r}: name the key the hands are published on")
         return ZenohHandsSource(key, dt=dt, bus=bus)
     from rnnpb.perception import open_camera_source
 
