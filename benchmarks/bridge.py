@@ -125,8 +125,9 @@ def paced(args: argparse.Namespace) -> None:
     from rnnpb.interaction import InteractionLoop, LoopConfig
 
     process = RobotProcess(args.dt, args.sim).start()
+    events: list[str] = []
     try:
-        with _source() as source, process.robot() as robot:
+        with _source() as source, process.robot(on_event=events.append) as robot:
             loop = InteractionLoop(_mirror(), source, robot, config=LoopConfig(args.dt, paced=True))
             loop.config = replace(loop.config, max_steps=5, paced=False)
             loop.run()  # compile, unpaced
@@ -140,8 +141,11 @@ def paced(args: argparse.Namespace) -> None:
     print(
         f"paced at dt {args.dt:g} s over the bridge ({args.sim} robot): {summary.steps - 5} steps "
         f"in {time.monotonic() - started:.0f} s, missed deadlines {summary.missed_deadlines}; "
-        f"act median {act['median']:.3f} ms, p99 {act['p99']:.3f} ms, max {act['max']:.3f} ms"
+        f"act median {act['median']:.3f} ms, p99 {act['p99']:.3f} ms, max {act['max']:.3f} ms; "
+        f"robot silent {robot.outages} times, {robot.unanswered} commands refused"
     )
+    for text in events[:5]:
+        print(f"  {text}")
 
 
 def faults(args: argparse.Namespace) -> None:

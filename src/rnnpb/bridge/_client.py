@@ -5,7 +5,8 @@ Each :meth:`ZenohRobot.send` maps the network's eight angles to the robot's join
 waits for the joint state that acknowledges it; it returns the set point the robot applied
 (after its own safeguards), in network angles.
 
-When no joint state arrives for ``lost_after_steps`` steps (1.5) the robot is gone (killed, cable
+When no joint state arrives for ``lost_after_steps`` steps (1.5, and at least 0.25 s) the
+robot is gone (killed, cable
 out, network down): :meth:`send` says so (``on_event``), and waits for the robot's joint states
 to come back, and says so again; the loop stops meanwhile, since ``send`` is inside its step,
 and carries on with its next step, so that no recorded step is lost. The command of the step
@@ -42,6 +43,9 @@ LOST_AFTER_STEPS = 1.5
 """Steps without a joint state after which the loop says the robot is gone and waits: the
 robot publishes one at least every half step, so this is three missed in a row (not jitter),
 and the loop says so within two steps of the robot's end."""
+LOST_AFTER_S = 0.25
+"""...and never sooner than this (seconds): at a short step a robot process on a busy computer
+can be held up that long by the scheduler without being gone."""
 CONNECT_TIMEOUT_S = 10.0
 """How long :meth:`ZenohRobot.connect` waits for the robot's first joint state: a robot process
 started at the same moment needs a few seconds to come up."""
@@ -185,7 +189,7 @@ class ZenohRobot(Robot):
         seq = self._seq
         command = JointCommand(seq, time.time(), self.map.names, robot, self.sender)
         self._publisher.put(encode_command(command))
-        timeout = self.lost_after_steps * self.dt
+        timeout = max(self.lost_after_steps * self.dt, LOST_AFTER_S)
 
         def silent() -> bool:
             return time.monotonic() - self._received_at > timeout

@@ -44,6 +44,8 @@ JOINT_STATES_TOPIC = "joint_states"
 LOST_AFTER_STEPS = 1.5
 """Steps without a joint state after which the robot is gone (a joint state broadcaster
 publishes far more often than once a step)."""
+LOST_AFTER_S = 0.25
+"""...and never sooner than this (seconds): a busy computer's scheduler is not a lost robot."""
 _ENCAPSULATION = b"\x00\x01\x00\x00"  # CDR, little-endian, no options
 
 
@@ -278,7 +280,7 @@ class Ros2BridgeRobot(Robot):
         if self._publisher is None:
             raise RnnpbError("Ros2BridgeRobot: send() before connect()")
         silent_s = time.monotonic() - self._received_at
-        if silent_s > LOST_AFTER_STEPS * self.dt:
+        if silent_s > max(LOST_AFTER_STEPS * self.dt, LOST_AFTER_S):
             self._wait_for_return(silent_s)
             return self.observe()  # the late command is not sent
         robot = self.safeguard.apply(
