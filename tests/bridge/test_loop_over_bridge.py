@@ -32,6 +32,7 @@ def _interact(model_path, out, robot: str) -> dict:
     return read_session(out / "session.csv")
 
 
+@pytest.mark.slow  # two runs of `rnnpb interact`, 150 steps each (about 8 s)
 def test_switching_gives_the_same_session_over_the_bridge_as_in_process(model_path, tmp_path):
     process = RobotProcess(dt=0.4).start()
     try:
