@@ -14,6 +14,7 @@ PACKAGES = (
     "rnnpb.cli",
     "rnnpb.model",
     "rnnpb.robot",
+    "rnnpb.bridge",
     "rnnpb.interaction",
     "rnnpb.perception",
     "rnnpb.demonstrator",
@@ -133,7 +134,8 @@ def test_the_command_line_lists_its_commands_without_loading_jax():
         import sys
         from rnnpb.cli import build_parser
         build_parser()
-        print(sorted(m for m in ("jax", "mujoco", "cv2", "ray", "pyarrow") if m in sys.modules))
+        heavy = ("jax", "mujoco", "cv2", "ray", "pyarrow", "zenoh")
+        print(sorted(m for m in heavy if m in sys.modules))
     """)
     assert result.stdout.strip().splitlines()[-1] == "[]"
 

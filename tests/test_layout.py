@@ -28,6 +28,7 @@ ALLOWED: dict[str, set[str]] = {
     "structure": set(),
     "sources": {"sequences"},
     "robot": set(),
+    "bridge": {"robot", "sources"},
     "models": set(),
     "presets": set(),
     "model": {"presets", "sequences", "structure"},
@@ -38,6 +39,7 @@ ALLOWED: dict[str, set[str]] = {
     "mocap": {"demonstrator", "robot", "sources", "sequences"},
     "analysis": {"demonstrator", "robot", "sequences", "structure"},
     "interaction": {
+        "bridge",
         "model",
         "presets",
         "memory",
@@ -91,6 +93,7 @@ ALLOWED: dict[str, set[str]] = {
     },
     "commands": {
         "mocap",
+        "bridge",
         "models",
         "experiments",
         "sweeps",

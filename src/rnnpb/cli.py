@@ -31,6 +31,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "rnnpb.commands.info",
     "rnnpb.commands.generate",
     "rnnpb.commands.interact",
+    "rnnpb.commands.robot",
     "rnnpb.commands.data",
     "rnnpb.commands.record",
     "rnnpb.commands.memory",

@@ -22,6 +22,7 @@ Sources (--source):
   scenario:steps:M*N,...   movements (any demonstrator movement or pause), N steps each
   csv:FILE        a sensory stream (step,lhy,lhz,rhy,rhz; empty cell = hand not seen)
   video:FILE | images:DIR | webcam:INDEX | synthetic:P   (through the colour-ball tracker)
+  zenoh:KEY[@ENDPOINT]     hands published on a Zenoh bus by a camera node (docs/bridge.md)
 
 Writes DIR/session.csv (one row per step), DIR/session.png (the paper's Figure 5 layout)
 and DIR/summary.json (timings per section, missed deadlines, config, versions, the
@@ -81,9 +82,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", required=True, metavar="DIR", help="output directory")
     parser.add_argument(
         "--robot",
-        choices=("kinematic", "mujoco"),
         default="kinematic",
-        help="simulated robot (default kinematic: instant, no physics)",
+        metavar="ROBOT",
+        help="kinematic (default: simulated, instant, no physics), mujoco (simulated with "
+        "physics), zenoh[:PREFIX][@ENDPOINT] (a robot process on a Zenoh bus, e.g. "
+        "`rnnpb robot serve`), ros2dds[:CONTROLLER][@ENDPOINT] (a ROS 2 robot through "
+        "zenoh-bridge-ros2dds) or rclpy[:CONTROLLER] (ROS 2 installed); docs/bridge.md",
+    )
+    parser.add_argument(
+        "--robot-map",
+        metavar="FILE",
+        help="with a robot on a bus: its joint names, signs, offsets and limits (TOML; "
+        "default: the simulated humanoid's)",
     )
     parser.add_argument(
         "--online",
@@ -144,7 +154,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     import json
-    import os
     from pathlib import Path
 
     from rnnpb import __version__, _interrupt
@@ -164,7 +173,7 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel
     from rnnpb.model.recognition import describe_answer, recognition_timeline
     from rnnpb.models import default_model, first_model_file
-    from rnnpb.robot import JOINT_LIMITS, KinematicRobot
+    from rnnpb.robot import JOINT_LIMITS
 
     if args.dt is not None:
         finite_seconds("--dt", args.dt)
@@ -209,13 +218,9 @@ def run(args: argparse.Namespace) -> int:
         steps=args.steps,
         perception=args.perception,
     )
-    if args.robot == "mujoco":
-        os.environ.setdefault("MUJOCO_GL", "egl")
-        from rnnpb.robot import MujocoRobot
+    from rnnpb.commands.robot import open_robot
 
-        robot = MujocoRobot(dt=args.dt)
-    else:
-        robot = KinematicRobot(dt=args.dt)
+    robot = open_robot(args.robot, args.dt, args.robot_map, waiting=_interrupt.check)
     from rnnpb.safety import online_safety
 
     safety = online_safety(model_path, model, online, enabled=not args.no_safety)

@@ -111,6 +111,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="where a shipped model is copied to learn from, with its memory and new "
         "versions (default: a temporary folder deleted when the server stops)",
     )
+    parser.add_argument(
+        "--robot",
+        metavar="ROBOT",
+        help="also drive a robot on a bus: zenoh[:PREFIX][@ENDPOINT], "
+        "ros2dds[:CONTROLLER][@ENDPOINT] or rclpy[:CONTROLLER] (docs/bridge.md; default: the "
+        "page's simulated humanoid only)",
+    )
+    parser.add_argument(
+        "--robot-map",
+        metavar="FILE",
+        help="with --robot: the robot's joint names, signs, offsets and limits (TOML)",
+    )
     add_config_argument(parser, RUN_SECTIONS)
     add_perception_argument(parser)
     parser.add_argument(
@@ -159,6 +171,7 @@ def run(args: argparse.Namespace) -> int:
     )
     models = find_models(args.model if args.model is not None else default_model())
     args.dt = _models_dt(models, args.dt)
+    robot = _connect_robot(args)
     server = DashboardServer(
         models,
         host=args.host,
@@ -173,7 +186,13 @@ def run(args: argparse.Namespace) -> int:
     server.session.perception = args.perception  # read when the webcam tab opens
     if overrides is not None:  # read when a model loads, and by teaching
         server.session.config_tables = ConfigTables(overrides.tables, overrides.path)
-    server.start()
+    server.session.robot = robot  # read when a run starts
+    try:
+        server.start()
+    except BaseException:
+        if robot is not None:
+            robot.disconnect()
+        raise
     print(
         f"rnnpb dashboard: {server.url}  (models: {', '.join(models)}; Ctrl-C to stop)", flush=True
     )
@@ -188,6 +207,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         server.wait()
     finally:
+        if robot is not None:
+            robot.disconnect()  # first: a loop waiting for a lost robot stops waiting
         server.stop()
     return 0
 
@@ -211,6 +232,28 @@ def _models_dt(models: dict, given: float | None) -> float:
         )
     name, learned = next(iter(steps.items()))
     return played_dt(models[name], learned, given)
+
+
+def _connect_robot(args: argparse.Namespace):
+    """The robot ``--robot`` names, connected; None without --robot."""
+    if args.robot is None:
+        if args.robot_map is not None:
+            from rnnpb.errors import ConfigError
+
+            raise ConfigError("--robot-map maps the joints of a --robot")
+        return None
+    from rnnpb.commands.robot import open_robot
+    from rnnpb.errors import ConfigError
+
+    if args.robot.partition(":")[0].strip().lower() not in ("zenoh", "ros2dds", "rclpy"):
+        raise ConfigError(
+            f"--robot {args.robot!r}: the page shows the simulated humanoid itself; name a robot "
+            "on a bus: zenoh[:PREFIX][@ENDPOINT], ros2dds[:CONTROLLER][@ENDPOINT] or rclpy"
+        )
+    robot = open_robot(args.robot, args.dt, args.robot_map)
+    robot.connect()
+    print(f"driving the robot on {args.robot} too (docs/bridge.md)", flush=True)
+    return robot
 
 
 def _check_port_free(host: str, port: int) -> None:

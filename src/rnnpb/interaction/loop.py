@@ -151,7 +151,8 @@ class InteractionLoop:
     ----------
     mirror : MirrorSystem
     source : UserSource
-    robot : object with ``send(joints)``, optional
+    robot : rnnpb.robot.Robot, optional
+        Its ``send(joints)`` returns what was actually sent; the recording holds that.
     recorder : SessionRecorder, optional
     command_filter : callable(command) -> FilterDecision, optional
         Checks each command in the act section, before it is sent
@@ -211,7 +212,9 @@ class InteractionLoop:
             self.unsafe_commands += int(bool(unsafe))
             self.prevented_commands += int(bool(filtered))
         if self.robot is not None:
-            self.robot.send(motor)
+            sent = self.robot.send(motor)
+            if sent is not None:  # the robot contract returns what it actually sent
+                motor = np.asarray(sent, dtype=np.float64)
         t3 = time.perf_counter()
         record = StepRecord(
             step=self.steps,

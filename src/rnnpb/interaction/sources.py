@@ -12,6 +12,7 @@
 ``images:DIR``             a folder of images, through the tracker
 ``webcam:INDEX``           a webcam, through the tracker
 ``synthetic:P``            a rendered synthetic camera of pattern ``P``, through the tracker
+``zenoh:KEY[@ENDPOINT]``   hands published on a Zenoh bus by a camera node (docs/bridge.md)
 =========================  ================================================================
 
 This module is the only place a spec string is taken apart: it sits above every kind of
@@ -40,6 +41,7 @@ SOURCE_FORMS = {
     "images": "images:DIR",
     "webcam": "webcam:INDEX",
     "synthetic": "synthetic:PATTERN",
+    "zenoh": "zenoh:KEY[@ENDPOINT]",
 }
 """Every kind of source, with the form of its spec string (for messages)."""
 
@@ -182,6 +184,13 @@ def open_source(
         return ScenarioSource(parse_scenario(str(parsed.argument), seed))
     if parsed.kind == "csv":
         return CsvSensorySource(str(parsed.argument))
+    if parsed.kind == "zenoh":
+        from rnnpb.bridge import ZenohHandsSource, parse_bus_spec
+
+        key, bus = parse_bus_spec(spec, "", "source")
+        if not key:
+            raise ConfigError(f"source {spec!r}: name the key the hands are published on")
+        return ZenohHandsSource(key, dt=dt, bus=bus)
     from rnnpb.perception import open_camera_source
 
     source = open_camera_source(

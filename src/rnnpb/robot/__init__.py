@@ -1,5 +1,6 @@
-"""The simulated humanoid robot: arm kinematics, joint limits, the robot interface and its
-kinematic and MuJoCo implementations, and rendering (see docs/robot-and-demonstrator.md).
+"""The simulated humanoid robot: arm kinematics, joint limits, the robot contract and its
+kinematic and MuJoCo implementations, the robot map and safeguards a real robot needs, and
+rendering (see docs/robot-and-demonstrator.md and docs/bridge.md).
 
 MuJoCo is imported, and its OpenGL chosen, only when a model is first loaded (a
 :class:`MujocoRobot` connects, a :class:`RobotRenderer` is made).
@@ -31,9 +32,11 @@ from rnnpb.robot._kinematics import (
     forward_kinematics,
     inverse_kinematics,
 )
+from rnnpb.robot._map import RobotMap
 from rnnpb.robot._mujoco import ROBOT_EYE, MujocoRobot, load_model
 from rnnpb.robot._render import CAMERAS, RobotRenderer, render_pose, write_video
 from rnnpb.robot._retarget import RETARGET_CLEARANCE, Retargeted, Retargeter, retarget
+from rnnpb.robot._safeguard import WATCHDOG_STEPS, Safeguard, Watchdog
 from rnnpb.robot.camera import RobotCamera
 
 __all__ = [
@@ -66,6 +69,10 @@ __all__ = [
     "write_video",
     "Robot",
     "RobotCamera",
+    "RobotMap",
+    "Safeguard",
+    "WATCHDOG_STEPS",
+    "Watchdog",
     "choose_gl",
     "clip_to_limits",
     "coupled_elbow",

@@ -1,27 +1,38 @@
-"""The robot interface: what the interaction loop drives, simulated or real.
+"""The robot contract: what the interaction loop drives, simulated or real.
 
-A robot is a context manager over ``connect`` / ``send`` / ``read`` / ``close``. ``send`` takes
-the eight joint targets (radians, MOTOR_NAMES order) for one network step and returns when the
-step's motion has been commanded (a simulator runs the step's physics inside ``send``);
-``read`` returns the joint angles the robot has now.
+A robot is a context manager over ``connect`` / ``observe`` / ``send`` / ``disconnect``, the
+shape of LeRobot's ``Robot`` (``connect``, ``get_observation``, ``send_action`` returning the
+action actually sent, ``disconnect``):
 
-Adding a real robot: subclass :class:`Robot`, open the connection in ``connect`` (raise an
-:class:`rnnpb.errors.RnnpbError` subclass when the robot cannot be reached), map the eight
-angles to the robot's own joint names, signs and zero offsets in ``send`` (clip them to the
-robot's limits first: :func:`rnnpb.robot.clip_to_limits` or the robot's own table), read the
-encoders in ``read``, and make ``close`` stop the motors and be safe to call twice. Position
-control is what the paper used; ``send`` should not block longer than one step (``dt``).
+- ``connect()`` opens the robot (starts the simulation, opens the connection to the hardware or
+  the bus) and raises an :class:`rnnpb.errors.RnnpbError` subclass when it cannot be reached;
+- ``observe()`` returns the joint state now: the eight joint angles, radians, shape (8,), in
+  ``MOTOR_NAMES`` order;
+- ``send(joint_targets)`` commands the eight joint targets (radians, ``MOTOR_NAMES`` order) for
+  one network step and returns the targets actually sent, after the robot's own safeguards
+  (joint limits, and on a real robot its speed limit); a simulator runs the step's physics
+  inside ``send``;
+- ``disconnect()`` stops the motors and releases the robot; safe to call twice.
+
+``read()`` and ``close()`` are the earlier names of ``observe()`` and ``disconnect()`` and stay
+as aliases.
+
+Implementations: :class:`KinematicRobot` (no dynamics), :class:`rnnpb.robot.MujocoRobot` (the
+simulated humanoid) and :class:`rnnpb.bridge.ZenohRobot` (a robot process on a Zenoh bus, any
+robot whose joints a :class:`rnnpb.robot.RobotMap` names). Position control is what the paper
+used; ``send`` should not block longer than one step (``dt``).
 """
 
 from __future__ import annotations
 
 from collections import deque
+from typing import Self
 
 import numpy as np
 
 from rnnpb.errors import ConfigError
 from rnnpb.robot._kinematics import JOINT_LIMITS, clip_to_limits
-from rnnpb.vectors import MOTOR_SIZE
+from rnnpb.vectors import MOTOR_NAMES, MOTOR_SIZE
 
 
 def as_joint_vector(joints: np.ndarray, what: str = "joint targets") -> np.ndarray:
@@ -35,30 +46,42 @@ def as_joint_vector(joints: np.ndarray, what: str = "joint targets") -> np.ndarr
 
 
 class Robot:
-    """Base class of robots: a context manager over ``connect``/``send``/``read``/``close``."""
+    """Base class of robots: a context manager over ``connect`` / ``observe`` / ``send`` /
+    ``disconnect`` (see the module doc)."""
 
     dt: float = 0.4
+    joint_names: tuple[str, ...] = MOTOR_NAMES
+    """The joints ``observe`` and ``send`` take, in order (the network's eight)."""
 
     def connect(self) -> None:
-        """Open the robot (start the simulation, connect to the hardware)."""
+        """Open the robot (start the simulation, connect to the hardware or the bus)."""
 
-    def send(self, joint_targets: np.ndarray) -> None:
-        """Command the eight joint angles (radians) for one step; clipped to the limits."""
+    def observe(self) -> np.ndarray:
+        """The joint state now: eight joint angles (radians), shape (8,)."""
         raise NotImplementedError
 
-    def read(self) -> np.ndarray:
-        """The eight joint angles (radians) now, shape (8,)."""
+    def send(self, joint_targets: np.ndarray) -> np.ndarray:
+        """Command the eight joint angles (radians) for one step; returns what was sent,
+        shape (8,), after the robot's safeguards (at least the joint limits)."""
         raise NotImplementedError
 
-    def close(self) -> None:
+    def disconnect(self) -> None:
         """Release the robot. Safe to call twice."""
 
-    def __enter__(self) -> Robot:
+    def read(self) -> np.ndarray:
+        """The earlier name of :meth:`observe`."""
+        return self.observe()
+
+    def close(self) -> None:
+        """The earlier name of :meth:`disconnect`."""
+        self.disconnect()
+
+    def __enter__(self) -> Self:
         self.connect()
         return self
 
     def __exit__(self, *exc_info: object) -> None:
-        self.close()
+        self.disconnect()
 
 
 class KinematicRobot(Robot):
@@ -84,16 +107,21 @@ class KinematicRobot(Robot):
     def connect(self) -> None:
         self._connected = True
 
-    def send(self, joint_targets: np.ndarray) -> None:
+    @property
+    def is_connected(self) -> bool:
+        return self._connected
+
+    def send(self, joint_targets: np.ndarray) -> np.ndarray:
         if not self._connected:
             raise ConfigError("KinematicRobot: send() before connect()")
         self._joints = clip_to_limits(as_joint_vector(joint_targets))
         self._history.append(self._joints.copy())
-
-    def read(self) -> np.ndarray:
         return self._joints.copy()
 
-    def close(self) -> None:
+    def observe(self) -> np.ndarray:
+        return self._joints.copy()
+
+    def disconnect(self) -> None:
         self._connected = False
 
     @property

@@ -151,7 +151,11 @@ class MujocoRobot(Robot):
             raise ConfigError("MujocoRobot: call connect() (or use it in a with block) first")
         return self.model, self.data
 
-    def send(self, joint_targets: np.ndarray) -> None:
+    @property
+    def is_connected(self) -> bool:
+        return self.data is not None
+
+    def send(self, joint_targets: np.ndarray) -> np.ndarray:
         model, data = self._require()
         target = clip_to_limits(as_joint_vector(joint_targets))
         start = self._target
@@ -161,8 +165,9 @@ class MujocoRobot(Robot):
             data.ctrl[self._actuators] = start + w * (target - start)
             self._mujoco.mj_step(model, data)
         self._target = target
+        return target.copy()
 
-    def read(self) -> np.ndarray:
+    def observe(self) -> np.ndarray:
         _, data = self._require()
         return data.qpos[self._qadr].copy()
 
@@ -178,6 +183,6 @@ class MujocoRobot(Robot):
         set_user_hands(model, data, user_hands)
         self._mujoco.mj_kinematics(model, data)
 
-    def close(self) -> None:
+    def disconnect(self) -> None:
         self.model = None
         self.data = None

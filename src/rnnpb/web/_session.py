@@ -35,7 +35,7 @@ from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -44,6 +44,9 @@ from rnnpb.interaction.settings import ConfigTables
 from rnnpb.sources import UserSource
 from rnnpb.web._sources import PAUSE, DemonstratorSource, PointerSource, SwitchableSource
 from rnnpb.web._teaching import SessionTeaching, TeachingSettings
+
+if TYPE_CHECKING:
+    from rnnpb.robot import Robot
 
 log = logging.getLogger("rnnpb.web")
 
@@ -294,6 +297,9 @@ class Session:
         # lies beside it; ``rnnpb serve --no-safety`` sets this False before start().
         self.safety_enabled = True
         self.safety = None  # rnnpb.safety.OnlineSafety of the loaded model
+        # A connected robot the loop also drives (`rnnpb serve --robot`; docs/bridge.md);
+        # None: the page's simulated humanoid only.
+        self.robot: Robot | None = None
         self._risk_views: dict[str, Any] = {}
         self.config_tables = config_tables or ConfigTables()
         self.teaching = SessionTeaching(self, teaching or TeachingSettings())
@@ -655,6 +661,7 @@ class Session:
         self.loop = InteractionLoop(
             self.mirror,
             self._source,
+            robot=self.robot,
             recorder=self.recorder,
             config=LoopConfig(dt=self.dt, paced=True),
             command_filter=command_filter,
