@@ -22,6 +22,10 @@ import numpy as np
 from rnnpb.errors import ConfigError
 
 PERIOD_STEPS = 12
+DEVELOPMENT_LEARNER = "feminine"
+DEVELOPMENT_FOLLOWED = ("exhausted",)
+"""The performers (styles) of the full form without ``--exam``: the shared development takes'
+styles, which the exam excludes."""
 IN_TURN = "raise-up-hands-in-turn"
 _NAME = re.compile(r"^dataset-2_(?P<content>[a-z-]+)_(?P<style>[a-z]+)_(?P<id>\d+)\.bvh$")
 

@@ -13,7 +13,9 @@ retargeting against the paper's inverse kinematics. The scenarios and measures a
 
 ``--data DIR``: a folder of BVH takes named as the Bandai Namco dataset names them. The quick
 form learns each movement in DIR from its first two takes and follows its third (the shared
-development takes: any styles); the full form and the exam follow the exam's styles.
+development takes: any styles); the full form learns from the development performers
+(:data:`~rnnpb.experiments.scenarios.people.DEVELOPMENT_LEARNER` and ``…_FOLLOWED``), the exam
+from the exam's.
 """
 
 from __future__ import annotations
@@ -57,14 +59,18 @@ def _plan(data: Path, options: StudyOptions, exam: Exam) -> dict[str, Any]:
             "follow": {"another take": {m: takes[2:3] for m, takes in movements.items()}},
         }
     count = int(exam.parameter("takes"))
-    (learner,) = exam.name_list("learn_styles")
     movements = list(exam.name_list("movements"))
+    if options.exam is not None:
+        (learner,) = exam.name_list("learn_styles")
+        followed = exam.name_list("follow_styles")
+    else:  # the development performers: never the exam's
+        learner, followed = scenario.DEVELOPMENT_LEARNER, scenario.DEVELOPMENT_FOLLOWED
     return {
         "movements": movements,
         "learn": {m: scenario.takes_of(data, m, learner, count) for m in movements},
         "follow": {
             style: {m: scenario.takes_of(data, m, style, count) for m in movements}
-            for style in exam.name_list("follow_styles")
+            for style in followed
         },
     }
 
