@@ -97,8 +97,13 @@ PLAYER_JS = """
     const step = event.detail;
     if (state.done) return;
     state.steps = step.step + 1;
-    if (step.coherent) { state.together += 1; if (state.firstTogether === null) state.firstTogether = step.step; }
-    for (const f of step.found_at) if (!(f.pattern in state.found)) state.found[f.pattern] = step.step;
+    if (step.coherent) {
+      state.together += 1;
+      if (state.firstTogether === null) state.firstTogether = step.step;
+    }
+    for (const f of step.found_at) {
+      if (!(f.pattern in state.found)) state.found[f.pattern] = step.step;
+    }
     if (!pressed) { press(); return; }
     if (!config.scribble) {
       const current = config.order[state.index];
@@ -130,14 +135,17 @@ REALTIME_JS = """
     return { clientX: rect.left + across * rect.width, clientY: rect.top + (1 - z) * rect.height };
   };
   const fire = (kind, y, z) => canvas.dispatchEvent(new PointerEvent(kind,
-    { pointerId: 9, bubbles: true, isPrimary: true, pointerType: "mouse", buttons: 1, ...point(y, z) }));
+    { pointerId: 9, bubbles: true, isPrimary: true, pointerType: "mouse", buttons: 1,
+      ...point(y, z) }));
   const state = { firstTogether: null, found: {}, steps: 0 };
   window.__player = state;
   window.addEventListener("game-step", (event) => {
     const step = event.detail;
     state.steps = step.step + 1;
     if (step.coherent && state.firstTogether === null) state.firstTogether = step.step;
-    for (const f of step.found_at) if (!(f.pattern in state.found)) state.found[f.pattern] = step.step;
+    for (const f of step.found_at) {
+      if (!(f.pattern in state.found)) state.found[f.pattern] = step.step;
+    }
   });
   fire("pointerdown", config.start[0], config.start[1]);
   const t0 = performance.now();

@@ -163,7 +163,8 @@ canvas.addEventListener("pointerdown", (event) => {
   if (hand === null) return;
   pointers.set(event.pointerId, hand);
   anchors = hands.slice();
-  canvas.setPointerCapture(event.pointerId);
+  // A pointer the browser no longer tracks (it ended meanwhile) cannot be captured.
+  try { canvas.setPointerCapture(event.pointerId); } catch { /* moves still reach the canvas */ }
 });
 canvas.addEventListener("pointermove", (event) => {
   if (!pointers.has(event.pointerId)) return;
