@@ -403,10 +403,23 @@ class DashboardServer:
         self.session.close()
 
     def wait(self) -> None:
-        """Block until the server stops (Ctrl-C stops it)."""
-        if self._thread is not None:
-            while self._thread.is_alive():
-                self._thread.join(timeout=0.5)
+        """Block until the server stops (Ctrl-C stops it; so does SIGTERM, which a service
+        manager sends, when waiting on the main thread: the caller's cleanup then runs)."""
+        import signal
+
+        def terminate(signum: int, frame: object) -> None:
+            raise KeyboardInterrupt
+
+        previous = None
+        if threading.current_thread() is threading.main_thread():
+            previous = signal.signal(signal.SIGTERM, terminate)
+        try:
+            if self._thread is not None:
+                while self._thread.is_alive():
+                    self._thread.join(timeout=0.5)
+        finally:
+            if previous is not None:
+                signal.signal(signal.SIGTERM, previous)
 
     def __enter__(self) -> DashboardServer:
         return self.start()
