@@ -11,7 +11,7 @@ moves the pointer along a random smooth path with a random coupling.
 
 Targets: a player is "together" within 20 s and has found every learned movement within 3
 minutes in >= 90 % of games; a scribbler is "together" on <= 5 % of its steps. Times are game
-time: steps x 0.4 s (the model's step). The game runs at ``--dt`` seconds a step (0.1: four
+time: steps x 0.4 s (the model's step). The game runs at ``--dt`` seconds a step (0.2: twice
 times faster than real time; the player moves in step with the game, so a game is the same
 game); ``--realtime`` plays one game at 0.4 s a step with the player on the wall clock.
 
@@ -104,7 +104,7 @@ PLAYER_JS = """
     for (const f of step.found_at) {
       if (!(f.pattern in state.found)) state.found[f.pattern] = step.step;
     }
-    if (!pressed) { press(); return; }
+    if (!pressed) { state.startStep = step.step; press(); return; }
     if (!config.scribble) {
       const current = config.order[state.index];
       if (current in state.found) {
@@ -209,18 +209,34 @@ def play(page, url: str, config: dict, max_steps: int, realtime: bool) -> dict:
             break
     page.click("#stop")
     page.wait_for_function("document.querySelector('#status').textContent.startsWith('stopped')")
+    table = page.evaluate("() => fetch('/game/log.csv').then((r) => r.text())")
+    state["stalled_share"] = stalled_share(table, state.get("startStep", 0))
     return state
+
+
+def stalled_share(table: str, start: int) -> float:
+    """Of the steps the player moved in, the share on which the robot saw the same hands as
+    the step before (the step came before the player's answer to the last: a game too fast
+    for this machine)."""
+    import csv
+    import io
+
+    rows = [r for r in csv.DictReader(io.StringIO(table)) if int(r["step"]) > start + 1]
+    hands = [(r["page_lhy"], r["page_lhz"]) for r in rows]
+    same = [a == b for a, b in zip(hands, hands[1:], strict=False)]
+    return round(sum(same) / len(same), 3) if same else 0.0
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--draws", type=Path, help="a JSON file naming the seeds to play")
     parser.add_argument("--seeds", type=int, nargs=2, metavar=("FIRST", "COUNT"))
-    parser.add_argument("--dt", type=float, default=0.1, help="seconds a game step takes")
+    parser.add_argument("--dt", type=float, default=0.2, help="seconds a game step takes")
     parser.add_argument("--realtime", action="store_true", help="0.4 s a step, wall clock")
     parser.add_argument("--deaf", action="store_true", help="players ignore the hints")
     parser.add_argument("--scribblers", type=int, default=None, help="scribbler games")
     parser.add_argument("--out", type=Path, default=None, help="write the results as JSON")
+    parser.add_argument("--logs", type=Path, default=None, help="keep the games' logs here")
     args = parser.parse_args(argv)
     if args.draws:
         chosen = json.loads(args.draws.read_text())
@@ -241,7 +257,8 @@ def main(argv: list[str] | None = None) -> int:
     patterns, cycles, couplings = patterns_of_model()
     max_steps = int(round(ALL_FOUND_S / STEP_S))
     games, scribbles = [], []
-    with tempfile.TemporaryDirectory(prefix="rnnpb-game-bench-") as work:
+    with tempfile.TemporaryDirectory(prefix="rnnpb-game-bench-") as temporary:
+        work = args.logs or temporary
         server = DashboardServer(
             find_models(ROOT / "src/rnnpb/models"), host="127.0.0.1", port=0, dt=dt, workdir=work
         )
@@ -274,6 +291,7 @@ def main(argv: list[str] | None = None) -> int:
                             else None
                         ),
                         "hints": state.get("hints", {}),
+                        "stalled_share": state["stalled_share"],
                     }
                     game["won"] = (
                         game["together_s"] is not None

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from rnnpb.analysis import dyad as measures
@@ -224,3 +225,49 @@ def test_every_learned_pattern_played_with_one_pointer_is_found_and_logged(
     finally:
         page.close()
     assert not errors, f"the page raised: {errors}"
+
+
+# --- the game's measures ---------------------------------------------------------------------
+
+
+def test_velocity_agreement_ignores_size_and_place_tolerates_a_lag_and_sees_disagreement():
+    from rnnpb.web._game import velocity_agreement
+
+    templates = measures.movement_templates()
+    cycle = np.tile(templates["3"], (3, 1))  # three cycles of a circle, (36, 4)
+    centre = np.array([0.7, 0.7, 0.3, 0.7])
+    robot = centre + cycle
+    # Smaller, elsewhere and one step behind: still in full agreement.
+    person = np.roll(0.4 + 0.3 * cycle, 1, axis=0)
+    assert velocity_agreement(robot, person) == pytest.approx(1.0, abs=1e-6)
+    assert velocity_agreement(robot, np.roll(person, 1, axis=0)) == pytest.approx(1.0, abs=1e-6)
+    # Half a cycle out of phase, another pattern, or still: no agreement.
+    assert velocity_agreement(robot, centre + np.roll(cycle, 6, axis=0)) < 0.1
+    swing = centre + np.tile(templates["2"], (3, 1))
+    assert velocity_agreement(robot, swing) < 0.5
+    assert velocity_agreement(robot, np.tile(centre, (36, 1))) == 0.0
+
+
+def test_the_player_frame_shows_a_small_movement_off_centre_at_the_taught_size_and_place():
+    from rnnpb.web._game import PlayerFrame, taught_frame
+
+    templates = measures.movement_templates()
+    centre, size = taught_frame()
+    frame = PlayerFrame(centre, size)
+    here = np.array([0.4, 0.4, 0.2, 0.4])
+    seen = []
+    for step in range(48):
+        view = here + 0.5 * templates["1"][step % 12]
+        frame.push(view)
+        seen.append(frame.seen(view))
+    seen = np.asarray(seen[-24:])
+    assert seen.mean(axis=0) == pytest.approx(centre, abs=0.01)
+    # As large as the teachers' movements (half the size here), within a quarter.
+    assert np.sqrt(np.mean((seen - seen.mean(axis=0)) ** 2)) == pytest.approx(size, rel=0.25)
+    assert frame.back(frame.seen(here)) == pytest.approx(here, abs=1e-9)
+    # Still hands stay still: their jitter is not enlarged into a movement.
+    still = PlayerFrame(centre, size)
+    rng = np.random.default_rng(0)
+    for _ in range(24):
+        still.push(here + 0.002 * rng.standard_normal(4))
+    assert still.gain * 0.002 < 0.01

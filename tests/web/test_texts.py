@@ -4,7 +4,7 @@ as one."""
 
 from __future__ import annotations
 
-from .test_browser import browser, page  # noqa: F401 — the fixtures
+from .test_browser import _restyle, _strict_page, _until, browser, page  # noqa: F401
 
 
 def test_an_error_goes_when_the_next_command_works_and_a_refused_dt_is_not_kept(
@@ -46,3 +46,16 @@ def test_only_a_learned_pattern_is_shown_as_recognised(page, server):  # noqa: F
         )
     finally:
         page.click("#stop")
+
+
+def test_a_long_pattern_name_is_written_whole_inside_the_pb_plot(browser, server):  # noqa: F811
+    def rename(state):
+        state["pattern_pb"] = {
+            f"new-{k + 1}": pb for k, pb in enumerate(state["pattern_pb"].values())
+        }
+
+    with _strict_page(browser, server, _restyle(rename)) as shown:
+        _until(shown, "rnnpbDashboard.pbMarkers && rnnpbDashboard.pbMarkers.length === 3")
+        shown.wait_for_timeout(300)
+        for marker in shown.evaluate("rnnpbDashboard.pbMarkers"):
+            assert 0 <= marker["labelLeft"] < marker["labelRight"] <= marker["width"], marker

@@ -50,7 +50,8 @@ AGREEMENT_WINDOW = 12  # steps (one cycle) of velocities the meter compares
 AGREEMENT_LAG = 2  # steps of lag the meter tolerates either way (each sees the other late)
 TEMPOS = (8, 10, 12, 14, 17)  # cycle lengths (steps) a movement is recognised at
 SMALL = 0.35  # below this share of the taught size the game says "bigger"
-TEMPO_SLACK = 1.2  # a cycle this much shorter (longer) than the robot's: "slower" ("faster")
+TEMPO_SLACK = 1.3  # a cycle this much shorter (longer) than the robot's: "slower" ("faster")
+IN_STEP = 0.6  # meter from which the two move in step: no hint, only time is needed
 
 
 def taught_frame(
@@ -66,7 +67,8 @@ def taught_frame(
 
 
 class PlayerFrame:
-    """The person's own frame: the centre and size of their last ``FRAME_STEPS`` steps.
+    """The person's own frame: the centre and size of their last ``FRAME_STEPS`` steps (the
+    mean of each coordinate, and the RMS distance from it over the four coordinates).
 
     ``seen(view)`` places a view of the person's hands (4,) in the taught frame: its offset
     from the person's centre, scaled by the taught size over the person's (at most
@@ -457,10 +459,13 @@ def coupling_name(signs: tuple[int, int]) -> str:
     return "parallel"
 
 
-def hint(raw: np.ndarray, person: np.ndarray, robot: np.ndarray, frame: PlayerFrame) -> str:
+def hint(
+    raw: np.ndarray, person: np.ndarray, robot: np.ndarray, frame: PlayerFrame, meter: float
+) -> str:
     """What the person might try, from their last ``FRAME_STEPS`` steps as the page has them
-    (``raw``), as the robot sees them (``person``) and the robot's (``robot``), (n, 4) each;
-    ``""`` when there is nothing to say."""
+    (``raw``), as the robot sees them (``person``) and the robot's (``robot``), (n, 4) each,
+    and the meter now; ``""`` when there is nothing to say (in step with the robot: the
+    recognition needs a cycle or two)."""
     if len(raw) == 0 or not np.isfinite(raw[-1]).all():
         return "press on a blue hand and move it"
     recent = raw[-FRAME_STEPS:]
@@ -471,6 +476,8 @@ def hint(raw: np.ndarray, person: np.ndarray, robot: np.ndarray, frame: PlayerFr
         return "move: swing or circle a hand"
     if frame.size < SMALL * frame.taught_size:
         return "bigger"
+    if meter >= IN_STEP:
+        return ""
     hands = np.array([np.hypot(spread[0], spread[1]), np.hypot(spread[2], spread[3])])
     if hands.min() < 0.25 * hands.max():
         return "the other hand too (choose how it follows: Other hand)"
@@ -588,7 +595,7 @@ class _Tracker:
         advice = ""
         shown_b = record.shown_b
         if self.mode == "person" and self.frame is not None and raw is not None:
-            advice = "" if coherent else hint(np.asarray(self.raw), b, a, self.frame)
+            advice = "" if coherent else hint(np.asarray(self.raw), b, a, self.frame, meter)
         return {
             "type": "game_step",
             "step": int(record.step),

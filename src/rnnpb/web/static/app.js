@@ -1009,18 +1009,26 @@ function drawPB() {
     if (short) {
       g.fillStyle = "#fff";
       g.fillText(mk.name, mk.lx, mk.ly + 4);
+      mk.labelLeft = mk.lx - SIZE / 2; mk.labelRight = mk.lx + SIZE / 2;
     } else {
+      // Beside the square on the side where it fits whole (right, else left, else inside).
+      const width = g.measureText(mk.name).width;
+      let at = mk.lx + SIZE / 2 + 3;
+      if (at + width > w - 2) at = mk.lx - SIZE / 2 - 3 - width;
+      at = Math.min(Math.max(at, 2), w - 2 - width);
       g.textAlign = "left";
       g.strokeStyle = "rgba(255, 255, 255, 0.85)"; g.lineWidth = 3;
-      g.strokeText(mk.name, mk.lx + SIZE / 2 + 3, mk.ly + 4);
+      g.strokeText(mk.name, at, mk.ly + 4);
       g.fillStyle = mk.name === nearest ? "#127a5a" : "#4a5260";
-      g.fillText(mk.name, mk.lx + SIZE / 2 + 3, mk.ly + 4);
+      g.fillText(mk.name, at, mk.ly + 4);
       g.textAlign = "center";
+      mk.labelLeft = at; mk.labelRight = at + width;
     }
   }
   g.textAlign = "start";
   g.font = "11px system-ui, sans-serif";
-  dash.pbMarkers = markers.map((mk) => ({ name: mk.name, x: mk.lx, y: mk.ly }));
+  dash.pbMarkers = markers.map((mk) => ({ name: mk.name, x: mk.lx, y: mk.ly,
+    labelLeft: mk.labelLeft, labelRight: mk.labelRight, width: w }));
   if (trail.length) {
     // The newest PB: a ring around its point, so that on a learned marker (recognition)
     // the marker's label still shows through.
