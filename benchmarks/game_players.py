@@ -231,7 +231,7 @@ def stalled_share(table: str, start: int) -> float:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(description=(__doc__ or "").split("\n\n")[0])
     parser.add_argument("--draws", type=Path, help="a JSON file naming the seeds to play")
     parser.add_argument("--seeds", type=int, nargs=2, metavar=("FIRST", "COUNT"))
     parser.add_argument("--dt", type=float, default=0.2, help="seconds a game step takes")
