@@ -212,10 +212,23 @@ def create_app(
                 await sending
             log.info("%s disconnected", client)
 
-    game = GameSession(session.models, dt=session.dt)
+    game = GameSession(session.models, dt=session.dt, log_dir=session.workdir / "games")
 
     async def game_page(request: Request) -> Response:
         return FileResponse(STATIC_DIR / "game.html", media_type="text/html")
+
+    async def game_log(request: Request) -> Response:
+        """The log of the last game (``/game/log.json`` or ``/game/log.csv``)."""
+        kind = request.path_params["kind"]
+        current = game.log
+        if current is None or kind not in ("json", "csv"):
+            return PlainTextResponse("no game has been played yet\n", status_code=404)
+        path = current.json_path if kind == "json" else current.csv_path
+        return FileResponse(
+            path,
+            media_type="application/json" if kind == "json" else "text/csv",
+            filename=path.name,
+        )
 
     async def game_socket(ws: WebSocket) -> None:
         """The mirror game's WebSocket: the same origin rule and message checks as ``/ws``."""
@@ -276,6 +289,7 @@ def create_app(
     routes = [
         Route("/", index),
         Route("/game", game_page),
+        Route("/game/log.{kind}", game_log),
         WebSocketRoute("/ws/game", game_socket),
         Route("/api/state", state),
         Route("/api/recording.csv", recording),
@@ -389,10 +403,23 @@ class DashboardServer:
         self.session.close()
 
     def wait(self) -> None:
-        """Block until the server stops (Ctrl-C stops it)."""
-        if self._thread is not None:
-            while self._thread.is_alive():
-                self._thread.join(timeout=0.5)
+        """Block until the server stops (Ctrl-C stops it; so does SIGTERM, which a service
+        manager sends, when waiting on the main thread: the caller's cleanup then runs)."""
+        import signal
+
+        def terminate(signum: int, frame: object) -> None:
+            raise KeyboardInterrupt
+
+        previous = None
+        if threading.current_thread() is threading.main_thread():
+            previous = signal.signal(signal.SIGTERM, terminate)
+        try:
+            if self._thread is not None:
+                while self._thread.is_alive():
+                    self._thread.join(timeout=0.5)
+        finally:
+            if previous is not None:
+                signal.signal(signal.SIGTERM, previous)
 
     def __enter__(self) -> DashboardServer:
         return self.start()

@@ -60,7 +60,12 @@ function connect() {
 // A command sent while disconnected would be lost: say so instead (the controls are
 // disabled then, this covers scripted sends and the moment the connection drops).
 function send(message) {
-  if (ws && ws.readyState === WebSocket.OPEN) { ws.send(JSON.stringify(message)); return true; }
+  if (ws && ws.readyState === WebSocket.OPEN) {
+    // A command's answer is a state (it worked: an old command's error goes) or an error.
+    if (message.type !== "hands" && message.type !== "ping") dash.awaitingAnswer = true;
+    ws.send(JSON.stringify(message));
+    return true;
+  }
   dash.refusedSends += 1;
   if (message.type !== "hands") showError("not connected to the server: not sent, try again "
     + "once reconnected");
@@ -82,6 +87,7 @@ function setControlsEnabled(enabled) {
 // model that cannot be used, a failed step, a recording that stopped) stay until resolved.
 let transientError = null;
 function showError(text) {
+  dash.awaitingAnswer = false;
   dash.errors.push(text);
   transientError = text;
   clearTimeout(showError.timer);
@@ -110,6 +116,7 @@ function onState(state) {
   const first = dash.state === null;
   const previousModel = dash.state && dash.state.model;
   dash.state = state;
+  if (dash.awaitingAnswer) { dash.awaitingAnswer = false; transientError = null; }
   showModels(state);
   if (document.activeElement !== $("dt")) $("dt").value = state.dt;
   // Another tab (or a successful switch) changed the mode: show it. A failed switch to the
@@ -263,7 +270,7 @@ function readout(step) {
     return `${step.recognised}${about ? ` — ${about}` : ""} ` +
       `(${Math.round(100 * step.confidence)} %${still})`;
   }
-  const words = { novel: "new movement", unstructured: "not sure (no repeating pattern)",
+  const words = { novel: "a new movement", unstructured: "not sure (no repeating pattern)",
     still: "hands still", "": "not sure yet" };
   return words[step.novelty] || "not sure";
 }
@@ -317,7 +324,7 @@ function onStep(step) {
 // 4)", the consolidation's progress, the result and its rename, the kept episodes and the
 // model versions, Confirm and Undo (docs/dashboard.md, "Teaching").
 const NOVELTY_WORDS = { familiar: "a learned pattern", novel: "a new movement",
-  unstructured: "no repeating pattern", still: "hands still", "": "not sure yet" };
+  unstructured: "no repeating pattern", still: "hands still" };
 function showTeachingStatus(status, step) {
   const teaching = dash.state && dash.state.teaching;
   if (!status || !teaching) return;
@@ -347,9 +354,15 @@ function showTeachingStatus(status, step) {
     const novelty = step ? step.novelty : "";
     phase = novelty === "novel" ? "novel" : novelty === "familiar" ? "familiar" : "watching";
     badge = "watching";
-    text = step ? `the robot sees ${NOVELTY_WORDS[novelty] || "…"}`
-      + (novelty === "novel" ? " — keep performing it: whole cycles are counted" : "")
-      : "start the robot and perform a movement";
+    // Recording can start only when nothing waits (no kept movement before Confirm, no
+    // learning, no swap of the model) and learning is on.
+    const canRecord = teaching.available && teaching.mode !== "off" && !job
+      && (teaching.pending || 0) === 0 && !(dash.state && dash.state.loading);
+    text = !step ? "start the robot and perform a movement"
+      : NOVELTY_WORDS[novelty] ? `the robot sees ${NOVELTY_WORDS[novelty]}`
+        + (novelty === "novel" && canRecord ? " — keep performing it: whole cycles are counted"
+          : "")
+        : "the robot is not sure yet what it sees";
   }
   const box = $("teach-phase");
   box.dataset.phase = phase;
@@ -412,6 +425,9 @@ function showTeaching(state) {
 function showReadouts(step) {
   $("step").textContent = step.step;
   $("nearest").textContent = readout(step);
+  // Only a learned pattern is shown as one; "hands still", "new movement", "not sure" are not.
+  $("nearest").classList.toggle("unsure", !(step.recognised
+    && (step.novelty === "familiar" || step.novelty === "still")));
   $("nearest-distance").textContent =
     `(nearest learned PB ${step.nearest}, distance ${fmt(step.nearest_distance, 2)})`;
   drawConfidenceBars(step);
@@ -996,18 +1012,26 @@ function drawPB() {
     if (short) {
       g.fillStyle = "#fff";
       g.fillText(mk.name, mk.lx, mk.ly + 4);
+      mk.labelLeft = mk.lx - SIZE / 2; mk.labelRight = mk.lx + SIZE / 2;
     } else {
+      // Beside the square on the side where it fits whole (right, else left, else inside).
+      const width = g.measureText(mk.name).width;
+      let at = mk.lx + SIZE / 2 + 3;
+      if (at + width > w - 2) at = mk.lx - SIZE / 2 - 3 - width;
+      at = Math.min(Math.max(at, 2), w - 2 - width);
       g.textAlign = "left";
       g.strokeStyle = "rgba(255, 255, 255, 0.85)"; g.lineWidth = 3;
-      g.strokeText(mk.name, mk.lx + SIZE / 2 + 3, mk.ly + 4);
+      g.strokeText(mk.name, at, mk.ly + 4);
       g.fillStyle = mk.name === nearest ? "#127a5a" : "#4a5260";
-      g.fillText(mk.name, mk.lx + SIZE / 2 + 3, mk.ly + 4);
+      g.fillText(mk.name, at, mk.ly + 4);
       g.textAlign = "center";
+      mk.labelLeft = at; mk.labelRight = at + width;
     }
   }
   g.textAlign = "start";
   g.font = "11px system-ui, sans-serif";
-  dash.pbMarkers = markers.map((mk) => ({ name: mk.name, x: mk.lx, y: mk.ly }));
+  dash.pbMarkers = markers.map((mk) => ({ name: mk.name, x: mk.lx, y: mk.ly,
+    labelLeft: mk.labelLeft, labelRight: mk.labelRight, width: w }));
   if (trail.length) {
     // The newest PB: a ring around its point, so that on a learned marker (recognition)
     // the marker's label still shows through.
@@ -1144,7 +1168,12 @@ $("model").onchange = (e) => {
 };
 $("dt").onchange = (e) => {
   const dt = parseFloat(e.target.value);
-  if (dt >= 0.02 && dt <= 5) send({ type: "dt", dt }); else showError("dt must be 0.02–5 s");
+  if (dt >= 0.02 && dt <= 5) send({ type: "dt", dt });
+  else {
+    // The field shows the step the session runs at, not a value it refused.
+    if (dash.state) e.target.value = dash.state.dt;
+    showError("dt must be 0.02–5 s");
+  }
 };
 $("pb-projection").onchange = () => drawPlots();
 $("teach-mode").onchange = (e) => send({ type: "teach_mode", mode: e.target.value });

@@ -7,8 +7,10 @@ let hands = REST.slice();
 let robotA = null;
 let robotB = null;
 let mode = "person";
-let dragging = null; // index of the hand being dragged (0 left, 1 right)
+const pointers = new Map(); // pointerId -> index of the hand it drags (0 left, 1 right)
+let anchors = null; // both hands where the single dragging pointer took them
 let ws = null;
+let lastSent = 0;
 
 function connect() {
   ws = new WebSocket(`${location.protocol === "https:" ? "wss" : "ws"}://${location.host}/ws/game`);
@@ -46,16 +48,33 @@ function show(step) {
   const coherent = $("coherent");
   coherent.textContent = step.coherent ? `together on movement ${step.pattern}` : "not together";
   coherent.classList.toggle("on", step.coherent);
+  $("hint").textContent = step.hint ? `try: ${step.hint}` : "";
   $("found").textContent = step.found.length
-    ? `${step.found.length} of ${step.learned}: ${step.found.join(", ")}` : `none yet (of ${step.learned})`;
+    ? `${step.found.length} of ${step.learned}` : `none yet (of ${step.learned})`;
+  const list = $("found-list");
+  if (list.children.length !== step.found_at.length) {
+    list.replaceChildren(...step.found_at.map((f) => {
+      const item = document.createElement("li");
+      item.textContent = `movement ${f.pattern} at ${f.time_s.toFixed(1)} s`
+        + (f.led_by ? `, led by ${f.led_by}` : "");
+      return item;
+    }));
+  }
   $("leader").textContent = step.last_leader || "–";
   $("time").textContent = `${step.time_s.toFixed(1)} s (step ${step.step})`;
   draw();
+  // Scripted players (benchmarks/game_players.py) move in step with the game.
+  window.dispatchEvent(new CustomEvent("game-step", { detail: step }));
 }
 
-function toCanvas(y, z) { return [y * canvas.width, (1 - z) * canvas.height]; }
+// The robot's camera sees your left hand on its right; the mirror view shows it on the left.
+const mirrored = () => $("mirror-view").checked;
+function toCanvas(y, z) {
+  return [(mirrored() ? 1 - y : y) * canvas.width, (1 - z) * canvas.height];
+}
 function fromCanvas(x, y) {
-  return [Math.min(1, Math.max(0, x / canvas.width)), Math.min(1, Math.max(0, 1 - y / canvas.height))];
+  const across = Math.min(1, Math.max(0, x / canvas.width));
+  return [mirrored() ? 1 - across : across, Math.min(1, Math.max(0, 1 - y / canvas.height))];
 }
 
 function dot(values, index, color, label, ring = false) {
@@ -90,16 +109,19 @@ function draw() {
   ctx.font = "12px sans-serif";
   ctx.textAlign = "left";
   ctx.fillText(mode === "robots" ? "robot A (orange), robot B (green)"
-    : "the robot (orange) and you (blue), as the robot's camera sees you", 8, 16);
+    : `the robot (orange) and you (blue), ${mirrored() ? "as in a mirror" : "as the robot's camera sees you"}`, 8, 16);
   for (const i of [0, 1]) dot(robotA, i, "#e8772e", i ? "R" : "L");
   if (mode === "robots") for (const i of [0, 1]) dot(robotB, i, "#2e9e55", i ? "R" : "L", true);
   else for (const i of [0, 1]) dot(hands, i, "#2f6fdf", i ? "R" : "L", true);
 }
 
+// The free hand whose marker is nearest to where the pointer pressed (the one aimed at).
 function nearest(px, py) {
-  let best = 0;
+  const taken = new Set(pointers.values());
+  let best = null;
   let bestDistance = Infinity;
   for (const i of [0, 1]) {
+    if (taken.has(i)) continue;
     const [x, y] = toCanvas(hands[2 * i], hands[2 * i + 1]);
     const d = Math.hypot(x - px, y - py);
     if (d < bestDistance) { best = i; bestDistance = d; }
@@ -107,18 +129,20 @@ function nearest(px, py) {
   return best;
 }
 
+// How the other hand follows the dragged one, per axis of the camera's view (Y across, Z up):
+// mirror reflects left-right, parallel copies, opposite phase is half a turn about the centre.
+const COUPLINGS = { mirror: [-1, 1], parallel: [1, 1], opposite: [-1, -1] };
+
 function moveHand(index, y, z) {
-  const other = 1 - index;
-  const dy = y - hands[2 * index];
-  const dz = z - hands[2 * index + 1];
   hands[2 * index] = y;
   hands[2 * index + 1] = z;
-  const coupling = $("coupling").value;
-  const sign = { together: [1, 1], mirrored: [-1, 1], opposite: [-1, -1] }[coupling];
-  if (sign) {
-    hands[2 * other] = Math.min(1, Math.max(0, hands[2 * other] + sign[0] * dy));
-    hands[2 * other + 1] = Math.min(1, Math.max(0, hands[2 * other + 1] + sign[1] * dz));
-  }
+  const sign = COUPLINGS[$("coupling").value];
+  if (pointers.size !== 1 || !sign || !anchors) return; // two fingers: each its own hand
+  const other = 1 - index;
+  // From where both hands were when the drag began: the other hand does not drift.
+  hands[2 * other] = Math.min(1, Math.max(0, anchors[2 * other] + sign[0] * (y - anchors[2 * index])));
+  hands[2 * other + 1] = Math.min(1, Math.max(0,
+    anchors[2 * other + 1] + sign[1] * (z - anchors[2 * index + 1])));
 }
 
 function position(event) {
@@ -127,21 +151,37 @@ function position(event) {
     (event.clientY - rect.top) * canvas.height / rect.height];
 }
 
+function sendHands() {
+  if (mode !== "person") return;
+  lastSent = performance.now();
+  send({ type: "game_hands", hands: hands.map((v) => +v.toFixed(5)) });
+}
+
 canvas.addEventListener("pointerdown", (event) => {
   const [x, y] = position(event);
-  dragging = nearest(x, y);
-  canvas.setPointerCapture(event.pointerId);
+  const hand = nearest(x, y);
+  if (hand === null) return;
+  pointers.set(event.pointerId, hand);
+  anchors = hands.slice();
+  // A pointer the browser no longer tracks (it ended meanwhile) cannot be captured.
+  try { canvas.setPointerCapture(event.pointerId); } catch { /* moves still reach the canvas */ }
 });
 canvas.addEventListener("pointermove", (event) => {
-  if (dragging === null) return;
+  if (!pointers.has(event.pointerId)) return;
   const [x, y] = position(event);
-  moveHand(dragging, ...fromCanvas(x, y));
+  moveHand(pointers.get(event.pointerId), ...fromCanvas(x, y));
   draw();
+  if (performance.now() - lastSent > 20) sendHands();
 });
-canvas.addEventListener("pointerup", () => { dragging = null; });
+for (const kind of ["pointerup", "pointercancel"]) {
+  canvas.addEventListener(kind, (event) => {
+    pointers.delete(event.pointerId);
+    anchors = hands.slice();
+  });
+}
 
 // The hands go to the robot at a steady rate, moving or not (a still person is seen too).
-setInterval(() => { if (mode === "person") send({ type: "game_hands", hands: hands.map((v) => +v.toFixed(5)) }); }, 100);
+setInterval(() => { if (performance.now() - lastSent > 80) sendHands(); }, 100);
 
 $("start").addEventListener("click", () => {
   mode = $("mode").value;
@@ -150,6 +190,7 @@ $("start").addEventListener("click", () => {
 });
 $("stop").addEventListener("click", () => send({ type: "game", action: "stop", mode, model: null }));
 $("mode").addEventListener("change", () => { mode = $("mode").value; draw(); });
+$("mirror-view").addEventListener("change", draw);
 
 connect();
 draw();
