@@ -96,9 +96,9 @@ def main() -> None:
                 f"{row['residual'][0, 1] * 100:.1f} | {row['clearance'][0] * 100:.1f}"
             )
     if args.bvh:
-        from rnnpb.mocap import read_hands
+        from rnnpb.mocap import capture_stream
 
-        hands = read_hands(args.bvh.split(","), dt=args.dt, time_scale=args.time_scale)
+        hands = capture_stream(args.bvh.split(","), dt=args.dt, time_scale=args.time_scale).hands
         targets = mapping.robot_hand_targets(hands)
         targets = targets[np.isfinite(targets).all(axis=(1, 2))]
         print(f"\n{args.bvh}: {len(targets)} steps at dt {args.dt}")
