@@ -144,10 +144,12 @@ def test_the_specs_shipped_in_the_repository_load():
     assert larger.learning_sets == ("full",) and len(larger.seeds) == 10
     assert larger.training[0].config.iterations == 100_000
     assert larger.training[0].config.optimizer == "momentum"
-    from rnnpb.experiments.studies import study_names
+    from rnnpb.experiments.studies import load_study, study_names
 
-    # The studies' spec sweeps every study there is.
-    assert set(specs["studies_quick"].studies) == set(study_names())
+    # The studies' spec sweeps every study that runs on a fresh clone (the people study reads
+    # motion capture that is not part of rnnpb).
+    runnable = {n for n in study_names() if not getattr(load_study(n), "NEEDS_DATA", False)}
+    assert set(specs["studies_quick"].studies) == runnable and "people" not in runnable
     scaling = specs["scaling"].runs()
     assert len(scaling) == 2 * 5 * 2 and len({r.model_key for r in scaling}) == 10
 

@@ -36,6 +36,7 @@ from rnnpb.experiments.summary import Target
 
 NAME = "people"
 SUMMARY = "real motion capture: safe recordings, and another performer's movements followed"
+NEEDS_DATA = True  # the motion capture is not part of rnnpb: `--data DIR`
 
 _TAKE = re.compile(r"^dataset-2_(?P<content>[a-z-]+)_(?P<style>[a-z]+)_(?P<id>\d+)\.bvh$")
 
