@@ -36,13 +36,16 @@ from __future__ import annotations
 
 import math
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from importlib import resources
 from types import MappingProxyType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rnnpb.errors import ConfigError
+
+if TYPE_CHECKING:
+    from rnnpb.experiments.summary import Target
 
 COMPARISONS = (">=", "<=")
 
@@ -132,6 +135,19 @@ class Exam:
         if missing:
             raise ConfigError(f"the {self.study} exam's targets {missing} were not measured")
         return {name: target.met(values[name]) for name, target in self.targets.items()}
+
+    def verdicts(
+        self, measures: Mapping[str, Any], detail: Callable[[ExamTarget, float], str]
+    ) -> dict[str, Target]:
+        """Each target met or not from ``measures`` (by name), with ``detail(target, value)``
+        saying by how much."""
+        from rnnpb.experiments.summary import Target
+
+        met = self.judge({key: measures[key] for key in self.targets})
+        return {
+            key: Target(met[key], detail(target, measures[key]))
+            for key, target in self.targets.items()
+        }
 
     def describe(self) -> str:
         """One sentence for a report: which exam judged it, on which draws."""

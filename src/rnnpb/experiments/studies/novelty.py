@@ -146,13 +146,9 @@ def _definitions(exam: Exam) -> tuple[int, int]:
 def judge(measures: dict[str, Any], exam: Exam | None = None) -> dict[str, Target]:
     """The targets by ``exam``'s definitions (default: the study's exam) from the measures."""
     exam = exam or load_exam(NAME)
-    met = exam.judge({key: measures[key] for key in exam.targets})
-    out = {}
-    for key, target in exam.targets.items():
-        value = measures[key]
-        detail = f"{100 * value:.1f} % ({target.compare} {100 * target.limit:.0f} %)"
-        out[key] = Target(met[key], detail)
-    return out
+    return exam.verdicts(
+        measures, lambda t, v: f"{100 * v:.1f} % ({t.compare} {100 * t.limit:.0f} %)"
+    )
 
 
 def judge_results(results: dict[str, Any], exam: Exam) -> dict[str, Target]:

@@ -164,20 +164,15 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
 
 
 def judge(measures: dict[str, Any], exam: Exam | None = None) -> dict[str, Target]:
-    """The targets by ``exam``'s definitions (default: the study's exam) from the measures."""
-    exam = exam or load_exam(NAME)
-    met = exam.judge({key: measures[key] for key in exam.targets})
-    out = {}
-    for key, target in exam.targets.items():
-        value = measures[key]
-        shown = f"{value:.4g}" if target.limit > 1 or key.endswith("steps") else f"{value:.2%}"
-        limit = (
-            f"{target.limit:g}"
-            if target.limit > 1 or key.endswith("steps")
-            else (f"{target.limit:.0%}")
-        )
-        out[key] = Target(met[key], f"{shown} ({target.compare} {limit})")
-    return out
+    """The targets by ``exam``'s definitions (default: the study's exam) from the measures:
+    counts and ratios as numbers, shares as percentages."""
+
+    def detail(target, value: float) -> str:
+        if target.limit > 1 or target.name.endswith("steps"):
+            return f"{value:.4g} ({target.compare} {target.limit:g})"
+        return f"{value:.2%} ({target.compare} {target.limit:.0%})"
+
+    return (exam or load_exam(NAME)).verdicts(measures, detail)
 
 
 def judge_results(results: dict[str, Any], exam: Exam) -> dict[str, Target]:
