@@ -4,7 +4,7 @@ as one."""
 
 from __future__ import annotations
 
-from .test_browser import _restyle, _strict_page, _until, browser, page  # noqa: F401
+from .test_browser import _restyle, _set, _strict_page, _until, browser, page  # noqa: F401
 
 
 def test_an_error_goes_when_the_next_command_works_and_a_refused_dt_is_not_kept(
@@ -26,6 +26,16 @@ def test_an_error_goes_when_the_next_command_works_and_a_refused_dt_is_not_kept(
 
 
 def test_only_a_learned_pattern_is_shown_as_recognised(page, server):  # noqa: F811
+    # The server is shared with the other dashboard tests: say what the robot sees (the
+    # demonstrator performing learned pattern 1 of the shipped model) rather than inherit it.
+    loaded = "rnnpbDashboard.state.model === 'set1.npz' && !rnnpbDashboard.state.loading"
+    _set(page, '{type: "model", name: "set1.npz"}', loaded)
+    _set(
+        page, '{type: "mode", mode: "demonstrator"}', "rnnpbDashboard.state.mode === 'demonstrator'"
+    )
+    _set(
+        page, '{type: "pattern", pattern: "1"}', "rnnpbDashboard.state.demonstrator_pattern === '1'"
+    )
     page.click("#reset")
     page.click("#start")
     try:
