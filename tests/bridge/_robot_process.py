@@ -74,7 +74,9 @@ class RobotProcess:
         return f"zenoh:{self.prefix}@{self.endpoint}"
 
 
-def wait_until(condition, timeout_s: float = 5.0) -> bool:
+def wait_until(condition, timeout_s: float = 20.0) -> bool:
+    """Whether ``condition()`` comes true within ``timeout_s``: a bound for a busy machine
+    (a robot process starved of the cores for seconds), not a measure of speed."""
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
         if condition():
