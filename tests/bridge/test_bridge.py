@@ -42,7 +42,12 @@ class Tap:
             f"{process.prefix}/joint_states",
             lambda s: self.states.append(decode_state(bytes(s.payload.to_bytes()))),
         )
-        self.publisher = self.session.declare_publisher(self.command_key)
+        import zenoh
+
+        # Blocking, not dropping, under congestion: every message the tests send arrives.
+        self.publisher = self.session.declare_publisher(
+            self.command_key, congestion_control=zenoh.CongestionControl.BLOCK
+        )
         assert wait_until(lambda: self.states), "the robot process publishes no joint states"
 
     def put(self, payload: bytes) -> None:
@@ -131,17 +136,21 @@ def test_malformed_and_stale_commands_are_refused_and_counted(robot_process):
             b'{"seq": 9, "stamp": 1e999, "names": [], "position": []}',
             b"x" * 70_000,
         ]
-        for payload in malformed:
+        # One at a time, each counted before the next.
+        for count, payload in enumerate(malformed, start=1):
             tap.put(payload)
-        tap.command(np.full(8, 0.5), seq=11, stamp=time.time() - 10 * DT)  # a late one
-        tap.command(np.full(8, 0.5), seq=4)  # older than the last applied
-        tap.command(np.full(8, 0.5), seq=5)  # the same again
-        assert wait_until(
-            lambda: (
-                tap.last().refused["malformed"] == len(malformed)
-                and tap.last().refused["stale"] == 3
-            )
-        )
+            counted = wait_until(lambda n=count: tap.last().refused["malformed"] == n)
+            assert counted, (payload[:40], tap.last().refused, tap.last().ack)
+        stale = [
+            dict(seq=11, stamp=time.time() - 10 * DT),  # a late one
+            dict(seq=4),  # older than the last applied
+            dict(seq=5),  # the same again
+        ]
+        for count, late in enumerate(stale, start=1):
+            tap.command(np.full(8, 0.5), **late)
+            counted = wait_until(lambda n=count: tap.last().refused["stale"] == n)
+            assert counted, (late, tap.last().refused, tap.last().ack)
+        assert tap.last().refused["malformed"] == len(malformed)
         assert tap.last().ack == 5  # none applied
         np.testing.assert_array_equal(tap.last().position, REST)
     finally:
