@@ -55,7 +55,61 @@ class RobotUnreachable(RnnpbError):
     """No robot answers on the bus."""
 
 
-class ZenohRobot(Robot):
+class BusRobot(Robot):
+    """What every robot reached over a bus shares: the joint states arriving on a subscriber
+    thread (the newest position, when it came, how many), the condition the loop waits on,
+    the last position it observed, and closing the session."""
+
+    def __init__(
+        self,
+        dt: float,
+        robot_map: RobotMap | None,
+        bus: BusConfig | None,
+        on_event: Callable[[str], None] | None,
+        waiting: Callable[[], None] | None,
+        connect_timeout_s: float,
+    ) -> None:
+        self.dt = float(dt)
+        self.map = robot_map or RobotMap.humanoid()
+        self.bus = bus or BusConfig()
+        self.on_event = on_event or (lambda text: print(text, flush=True))
+        self.waiting = waiting
+        self.connect_timeout_s = float(connect_timeout_s)
+        self._session: Any = None
+        self._publisher: Any = None
+        self._subscriber: Any = None
+        self._position: np.ndarray | None = None
+        self._received_at = 0.0
+        self._states = 0
+        self._changed = threading.Condition()
+        self.malformed_states = 0
+        self.outages = 0
+        """How many times the robot went silent."""
+
+    state_key: str
+
+    def _arrived(self, position: np.ndarray) -> None:
+        """A joint state's position (network order) arrived: keep it and wake the waiters."""
+        with self._changed:
+            self._position = position
+            self._received_at = time.monotonic()
+            self._states += 1
+            self._changed.notify_all()
+
+    def observe(self) -> np.ndarray:
+        with self._changed:
+            if self._position is None:
+                raise RobotUnreachable(f"no joint state received on {self.state_key} yet")
+            return self._position.copy()
+
+    def disconnect(self) -> None:
+        session, self._session = self._session, None
+        self._publisher = self._subscriber = None
+        if session is not None:
+            session.close()
+
+
+class ZenohRobot(BusRobot):
     """A robot process on a Zenoh bus (``rnnpb robot serve``, or any node that speaks the
     messages of :mod:`rnnpb.bridge._messages`).
 
@@ -88,27 +142,12 @@ class ZenohRobot(Robot):
         connect_timeout_s: float = CONNECT_TIMEOUT_S,
         lost_after_steps: float = LOST_AFTER_STEPS,
     ) -> None:
+        super().__init__(dt, robot_map, bus, on_event, waiting, connect_timeout_s)
         self.prefix = prefix.strip("/")
-        self.dt = float(dt)
-        self.map = robot_map or RobotMap.humanoid()
-        self.bus = bus or BusConfig()
-        self.on_event = on_event or (lambda text: print(text, flush=True))
-        self.waiting = waiting
-        self.connect_timeout_s = float(connect_timeout_s)
         self.lost_after_steps = float(lost_after_steps)
         self.sender = secrets.token_hex(8)
-        self._session: Any = None
-        self._publisher: Any = None
-        self._subscriber: Any = None
         self._state: JointState | None = None
-        self._position = np.zeros(len(self.map.names))
-        self._received_at = 0.0
-        self._states = 0
-        self._changed = threading.Condition()
         self._seq = 0
-        self.malformed_states = 0
-        self.outages = 0
-        """How many times the robot went silent."""
         self.unanswered = 0
         """Commands the robot did not acknowledge while its states kept coming (refused)."""
 
@@ -147,12 +186,9 @@ class ZenohRobot(Robot):
         except MessageError:
             self.malformed_states += 1
             return
-        with self._changed:
+        with self._changed:  # reentrant: _arrived takes it again
             self._state = state
-            self._position = position
-            self._received_at = time.monotonic()
-            self._states += 1
-            self._changed.notify_all()
+            self._arrived(position)
 
     def _to_network(self, state: JointState, values: np.ndarray) -> np.ndarray:
         order = {name: i for i, name in enumerate(state.names)}
@@ -173,12 +209,6 @@ class ZenohRobot(Robot):
                     return None
                 self._changed.wait(min(left, 0.01))
             return self._state
-
-    def observe(self) -> np.ndarray:
-        with self._changed:
-            if self._state is None:
-                raise RobotUnreachable(f"no joint state received on {self.state_key} yet")
-            return self._position.copy()
 
     def send(self, joint_targets: np.ndarray) -> np.ndarray:
         if self._publisher is None:
@@ -232,9 +262,3 @@ class ZenohRobot(Robot):
             "the loop resumes"
         )
         return self.observe()
-
-    def disconnect(self) -> None:
-        session, self._session = self._session, None
-        self._publisher = self._subscriber = None
-        if session is not None:
-            session.close()

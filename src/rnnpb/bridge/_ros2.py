@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from rnnpb.bridge._bus import BusConfig
+from rnnpb.bridge._client import BusRobot
 from rnnpb.bridge._messages import MessageError
 from rnnpb.errors import ConfigError, RnnpbError
 from rnnpb.robot import Robot, RobotMap, Safeguard, clip_to_limits
@@ -205,7 +206,7 @@ def decode_joint_trajectory(payload: bytes) -> tuple[tuple[str, ...], list[np.nd
     return names, points, last
 
 
-class Ros2BridgeRobot(Robot):
+class Ros2BridgeRobot(BusRobot):
     """A ROS 2 robot reached over Zenoh through zenoh-bridge-ros2dds (see the module doc).
 
     Joint states from Zenoh key ``joint_states``; commands to ``CONTROLLER/joint_trajectory``.
@@ -222,24 +223,11 @@ class Ros2BridgeRobot(Robot):
         connect_timeout_s: float = 10.0,
         states_key: str = JOINT_STATES_TOPIC,
     ) -> None:
+        super().__init__(dt, robot_map, bus, on_event, waiting, connect_timeout_s)
         self.controller = controller.strip("/")
-        self.dt = float(dt)
-        self.map = robot_map or RobotMap.humanoid()
-        self.bus = bus or BusConfig()
-        self.on_event = on_event or (lambda text: print(text, flush=True))
-        self.waiting = waiting
-        self.connect_timeout_s = float(connect_timeout_s)
         self.state_key = states_key.strip("/")
         self.command_key = f"{self.controller}/joint_trajectory"
         self.safeguard = Safeguard(self.map.limits, self.dt)
-        self._session: Any = None
-        self._publisher: Any = None
-        self._position: np.ndarray | None = None
-        self._received_at = 0.0
-        self._states = 0
-        self._changed = threading.Condition()
-        self.malformed_states = 0
-        self.outages = 0
 
     def connect(self) -> None:
         self._session = self.bus.open()
@@ -264,17 +252,7 @@ class Ros2BridgeRobot(Robot):
             # A broadcaster may also publish joints the map does not name, or other robots'.
             self.malformed_states += 1
             return
-        with self._changed:
-            self._position = self.map.to_network(robot)
-            self._received_at = time.monotonic()
-            self._states += 1
-            self._changed.notify_all()
-
-    def observe(self) -> np.ndarray:
-        with self._changed:
-            if self._position is None:
-                raise RnnpbError(f"no joint state received on {self.state_key} yet")
-            return self._position.copy()
+        self._arrived(self.map.to_network(robot))
 
     def send(self, joint_targets: np.ndarray) -> np.ndarray:
         if self._publisher is None:
@@ -304,12 +282,6 @@ class Ros2BridgeRobot(Robot):
                     self.waiting()
         self.safeguard.reset(self.map.to_robot(self.observe()))
         self.on_event("ROS 2 robot: joint states again; the loop resumes")
-
-    def disconnect(self) -> None:
-        session, self._session = self._session, None
-        self._publisher = None
-        if session is not None:
-            session.close()
 
 
 def import_rclpy() -> Any:
