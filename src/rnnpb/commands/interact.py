@@ -7,6 +7,7 @@ import contextlib
 
 from rnnpb.commands._config import RUN_SECTIONS, add_config_argument
 from rnnpb.commands._perception import add_perception_argument
+from rnnpb.commands._signals import terminate_as_interrupt
 
 NAME = "interact"
 CONFIG_SECTIONS = RUN_SECTIONS
@@ -231,7 +232,7 @@ def run(args: argparse.Namespace) -> int:
     with contextlib.ExitStack() as stack:
         # SIGTERM (`kill`, a service manager) ends the run as Ctrl-C does: at the next step,
         # with the recording, the summary and a playable video.
-        stack.enter_context(_terminate_as_interrupt())
+        stack.enter_context(terminate_as_interrupt())
         stack.enter_context(source)
         stack.enter_context(robot)
         if safety.command_filter is not None:
@@ -461,30 +462,6 @@ def _teaching_summary(teacher) -> dict:
             if e.kind in _TEACHING_LINES
         ],
     }
-
-
-@contextlib.contextmanager
-def _terminate_as_interrupt():
-    """While inside: SIGTERM is handled as SIGINT is (on the main thread only)."""
-    import signal
-    import threading
-
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-
-    def on_terminate(signum, frame) -> None:
-        handler = signal.getsignal(signal.SIGINT)
-        if callable(handler):
-            handler(signal.SIGINT, frame)
-        else:
-            raise KeyboardInterrupt
-
-    previous = signal.signal(signal.SIGTERM, on_terminate)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
 
 
 def _source_length(source) -> int | None:

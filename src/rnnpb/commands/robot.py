@@ -80,6 +80,7 @@ def run(args: argparse.Namespace) -> int:
 
     from rnnpb.bridge import DEFAULT_PREFIX, BusConfig, RobotServer
     from rnnpb.commands._checks import finite_seconds
+    from rnnpb.commands._signals import terminate_as_interrupt
 
     finite_seconds("--dt", args.dt)
     robot_map = load_robot_map(args.robot_map)
@@ -104,7 +105,8 @@ def run(args: argparse.Namespace) -> int:
     if args.robot_map:
         print(robot_map.describe(), flush=True)
     try:
-        server.run()
+        with terminate_as_interrupt():  # `kill` stops it as Ctrl-C does: the counts print
+            server.run()
     except KeyboardInterrupt:
         pass
     print(

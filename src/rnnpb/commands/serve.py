@@ -6,6 +6,7 @@ import argparse
 
 from rnnpb.commands._config import RUN_SECTIONS, add_config_argument
 from rnnpb.commands._perception import add_perception_argument
+from rnnpb.commands._signals import terminate_as_interrupt
 
 NAME = "serve"
 HELP = "open the live dashboard: watch the robot imitate the demonstrator, your mouse or webcam"
@@ -143,7 +144,7 @@ def run(args: argparse.Namespace) -> int:
     # Before the dashboard's imports and the first model's compilation (seconds): a port in
     # use is one line, at once.
     _check_port_free(args.host, args.port)
-    from rnnpb.web import MAX_DT, MIN_DT, AccessPolicy, DashboardServer, find_models
+    from rnnpb.web import MAX_DT, MIN_DT, AccessPolicy, find_models
 
     if args.dt is not None and not MIN_DT <= args.dt <= MAX_DT:
         raise ConfigError(f"--dt must be in [{MIN_DT}, {MAX_DT}] seconds, got {args.dt}")
@@ -154,7 +155,6 @@ def run(args: argparse.Namespace) -> int:
 
     from rnnpb.commands._checks import step_count
     from rnnpb.commands._config import read_config
-    from rnnpb.interaction.settings import ConfigTables
     from rnnpb.models import default_model
     from rnnpb.web import TeachingSettings
 
@@ -171,45 +171,54 @@ def run(args: argparse.Namespace) -> int:
     )
     models = find_models(args.model if args.model is not None else default_model())
     args.dt = _models_dt(models, args.dt)
+    # SIGTERM ends the serve as Ctrl-C does from here on, even while the banner prints, so the
+    # robot is let go and the working folder removed.
+    with terminate_as_interrupt():
+        return _serve(args, models, access, teaching, overrides)
+
+
+def _serve(args: argparse.Namespace, models: dict, access, teaching, overrides) -> int:
+    """Connect the robot, start the dashboard and wait; let both go however it ends."""
+    from rnnpb.interaction.settings import ConfigTables
+    from rnnpb.web import DashboardServer
+
     robot = _connect_robot(args)
-    server = DashboardServer(
-        models,
-        host=args.host,
-        port=args.port,
-        dt=args.dt,
-        log_level=args.log_level,
-        allow_hosts=access.hosts,
-        allow_origins=access.origins,
-        teaching=teaching,
-    )
-    server.session.safety_enabled = not args.no_safety  # read when a model loads
-    server.session.perception = args.perception  # read when the webcam tab opens
-    if overrides is not None:  # read when a model loads, and by teaching
-        server.session.config_tables = ConfigTables(overrides.tables, overrides.path)
-    server.session.robot = robot  # read when a run starts
+    server = None
     try:
+        server = DashboardServer(
+            models,
+            host=args.host,
+            port=args.port,
+            dt=args.dt,
+            log_level=args.log_level,
+            allow_hosts=access.hosts,
+            allow_origins=access.origins,
+            teaching=teaching,
+        )
+        server.session.safety_enabled = not args.no_safety  # read when a model loads
+        server.session.perception = args.perception  # read when the webcam tab opens
+        if overrides is not None:  # read when a model loads, and by teaching
+            server.session.config_tables = ConfigTables(overrides.tables, overrides.path)
+        server.session.robot = robot  # read when a run starts
         server.start()
-    except BaseException:
-        if robot is not None:
-            robot.disconnect()
-        raise
-    print(
-        f"rnnpb dashboard: {server.url}  (models: {', '.join(models)}; Ctrl-C to stop)", flush=True
-    )
-    print(
-        f"answering for: {', '.join(access.allowed_hosts)}"
-        + (f"; pages from: {', '.join(access.origins)}" if access.origins else ""),
-        flush=True,
-    )
-    _print_safety(models, args.no_safety)
-    if overrides is not None:
-        print(f"values from {overrides.path} over the learning preset's", flush=True)
-    try:
+        print(
+            f"rnnpb dashboard: {server.url}  (models: {', '.join(models)}; Ctrl-C to stop)",
+            flush=True,
+        )
+        print(
+            f"answering for: {', '.join(access.allowed_hosts)}"
+            + (f"; pages from: {', '.join(access.origins)}" if access.origins else ""),
+            flush=True,
+        )
+        _print_safety(models, args.no_safety)
+        if overrides is not None:
+            print(f"values from {overrides.path} over the learning preset's", flush=True)
         server.wait()
     finally:
         if robot is not None:
             robot.disconnect()  # first: a loop waiting for a lost robot stops waiting
-        server.stop()
+        if server is not None:
+            server.stop()
     return 0
 
 
