@@ -277,3 +277,33 @@ def test_the_safety_guard_matches_the_numpy_reference(trained, guard, span):
         np.testing.assert_allclose(result.predicted_hands, expected.predicted_hands, atol=2e-4)
         moved = max(moved, float(np.abs(expected.pb - plain.pb).max()))
     assert moved > 1e-2  # the guard acted: the comparison is not of two unguarded steps
+
+
+def test_a_mirror_swapped_in_goes_on_from_the_running_one(trained):
+    """A new version swapped in while the robot runs (teaching) continues the interaction:
+    without it the first command comes from an empty window and jumps."""
+    demo = make_sequences(n_samples=1, n_steps=60, seed=31, kinds=(1,))[0]
+
+    def jump_at_swap(carry: bool) -> float:
+        running, swapped = MirrorSystem(trained), MirrorSystem(trained)
+        motors = [running.step(u).motor for u in demo.sensory[:40]]
+        if carry:
+            assert swapped.continue_from(running)
+            assert swapped.steps == running.steps
+            np.testing.assert_allclose(swapped.pb, running.pb)
+        motors.append(swapped.step(demo.sensory[40]).motor)
+        steps = np.abs(np.diff(np.array(motors), axis=0)) / SPAN
+        return float(steps[-1].max()) / float(np.percentile(steps[20:-1].max(axis=1), 95))
+
+    assert jump_at_swap(carry=True) < 1.5  # within the movement's own step sizes
+    assert jump_at_swap(carry=False) > 1.5  # the jump it removes
+
+
+def test_a_mirror_of_another_window_starts_afresh(trained):
+    demo = make_sequences(n_samples=1, n_steps=12, seed=5, kinds=(1,))[0]
+    running = MirrorSystem(trained)
+    for u in demo.sensory:
+        running.step(u)
+    other = MirrorSystem(trained, OnlineConfig(window=running.config.window + 5))
+    assert not other.continue_from(running)
+    assert other.steps == 0 and len(other.pb_profile) == 0

@@ -215,10 +215,11 @@ class Teacher:
         assert self.job is not None
         self.job = None
         if prepared is not None and prepared.model is not None and prepared.mirror is not None:
-            model, self.loop.mirror = prepared.model, prepared.mirror
+            model = prepared.model
+            self._use(prepared.mirror)
         else:  # not prepared (or its preparation failed): built here, as fast runs do
             model = TrainedModel.load(state.model_path)
-            self.loop.mirror = self.make_mirror(model)
+            self._use(self.make_mirror(model))
         self.versions.append(state.model_path)
         self.swapped_at.append(self.loop.steps)
         learned = ", ".join(p for p in model.patterns if p.startswith("new-")) or "?"
@@ -231,6 +232,15 @@ class Teacher:
             )
         )
 
+    def _use(self, mirror) -> None:
+        """Swap ``mirror`` in between two steps, continuing the running interaction (its
+        window, PB and what it has seen): the robot's command goes on smoothly."""
+        running = self.loop.mirror
+        carry_on = getattr(mirror, "continue_from", None)  # the NumPy twin starts afresh
+        if running is not None and running is not mirror and carry_on is not None:
+            carry_on(running)
+        self.loop.mirror = mirror
+
     def undo(self) -> None:
         """Go back to the previous model version (the newer file stays on disk)."""
         from rnnpb.model import TrainedModel
@@ -238,7 +248,7 @@ class Teacher:
         if len(self.versions) < 2:
             return
         undone = self.versions.pop()
-        self.loop.mirror = self.make_mirror(TrainedModel.load(self.model_path))
+        self._use(self.make_mirror(TrainedModel.load(self.model_path)))
         # What that version learned is kept again, not learned: a Confirm learns it again
         # (never at once, even with ``auto``: the person has just said no to it).
         again = self.memory.unlearn(undone)
@@ -278,7 +288,7 @@ class Teacher:
         if taught:
             renamed = model.renamed(pattern, name)
             renamed.save(self.model_path)
-            self.loop.mirror = self.make_mirror(renamed)
+            self._use(self.make_mirror(renamed))
         for episode in episodes:
             self.memory.rename(episode.id, name)
         self.events.append(

@@ -279,6 +279,41 @@ class MirrorSystem:
         )
         self.steps = 0
 
+    def continue_from(self, other: MirrorSystem) -> bool:
+        """Take over ``other``'s interaction (a new version of the model swapped in while the
+        robot runs): its window of what was seen and sent, its PB and onset, and its
+        recognition when the patterns are the same. The next step then regresses the new
+        network over the same past, so the robot's command goes on from where it was instead
+        of starting from an empty window (a jump of up to 60 degrees in one step). ``False``,
+        and a fresh start, when the two differ in window or network shape."""
+        mine, theirs = self._state, other._state
+        same_shape = all(
+            np.shape(a) == np.shape(b) for a, b in zip(mine, theirs, strict=True)
+        ) and self.model.network == other.model.network
+        if not same_shape:
+            self.reset()
+            return False
+        self._state = theirs  # immutable device arrays: both may step on from here
+        self._predicted = None if other._predicted is None else other._predicted.copy()
+        fresh = initial_recognition_state(
+            self.model.network.sensory_size, self.model.network.pb_size, self.recognition
+        )
+        seen = other._recognition  # host arrays, never changed in place: shared safely
+        if self.recognition != other.recognition:
+            self._recognition = fresh
+        elif self.patterns == other.patterns:
+            self._recognition = seen
+        else:  # the movement seen so far stays; what was said of the old patterns goes
+            self._recognition = fresh._replace(
+                observed=seen.observed,
+                pb=seen.pb,
+                still_run=seen.still_run,
+                moving_run=seen.moving_run,
+                still=seen.still,
+            )
+        self.steps = other.steps
+        return True
+
     @property
     def pb(self) -> np.ndarray:
         """The current PB, shape (P,)."""

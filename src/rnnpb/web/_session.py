@@ -624,7 +624,7 @@ class Session:
             self.loading = False
             self.loading_model = None
         # Teaching first: whoever sees the new mirror sees its teaching too.
-        self.teaching.open(self.models[name], model, mirror, safety, risk)
+        self.teaching.open(self.models[name], model, mirror, safety, risk, name=name)
         self.model, self.mirror, self.model_name = model, mirror, name
         self.safety, self._risk_views = safety, risk
         self.model_error = None

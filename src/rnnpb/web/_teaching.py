@@ -164,6 +164,7 @@ class SessionTeaching:
         self.folder_note = ""
         self._view = _LoopView(self)
         self._said = 0
+        self._first_name = ""  # the name the first version was chosen under
         self._mirrors: dict[str, tuple] = {}  # model fingerprint -> (model, mirror, safety, risk)
         self._prepared: _Prepared | None = None
         self._version_patterns: dict[str, list[str]] = {}
@@ -173,14 +174,16 @@ class SessionTeaching:
         self._pending_use: tuple | None = None
 
     # --- life cycle -----------------------------------------------------------------------
-    def open(self, model_path: Path, model, mirror, safety, risk) -> None:
-        """Start teaching ``model`` (just loaded from ``model_path``): learn from a copy when
-        the file is the package's own, open its short-term memory. A memory that cannot be
-        opened turns teaching off for this model with the reason; the robot runs on."""
+    def open(self, model_path: Path, model, mirror, safety, risk, name: str = "") -> None:
+        """Start teaching ``model`` (just loaded from ``model_path``, offered as ``name``):
+        learn from a copy when the file is the package's own, open its short-term memory. A
+        memory that cannot be opened turns teaching off for this model with the reason; the
+        robot runs on."""
         from rnnpb.interaction.teaching import Teacher
         from rnnpb.memory import MemoryStore, memory_path_for
 
         self.close()
+        self._first_name = name
         self.unavailable = self.failure = None
         self.result = ""
         self.events = []
@@ -300,6 +303,24 @@ class SessionTeaching:
             self._view.on_step(record)
         self._take_events()
 
+    def _name_running(self) -> None:
+        """The session names the version that runs (the status bar, the model list): the
+        first version by the name it was chosen under, a learned one by its file's name
+        (``set.v2``), offered in the model list from then on (its file stays on disk)."""
+        teacher, session = self.teacher, self.session
+        if teacher is None:
+            return
+        if len(teacher.versions) == 1:
+            session.model_name = self._first_name or session.model_name
+            return
+        path = Path(teacher.model_path)
+        name = path.name.removesuffix(".npz")
+        known = session.models.get(name)
+        if known is not None and Path(known).resolve() != path.resolve():
+            name = f"{name} ({path.parent.name})"  # another folder's file of the same name
+        session.models[name] = path
+        session.model_name = name
+
     def _holding(self) -> bool:
         """Nothing more is kept while a kept movement waits for Confirm or is being learned:
         the same movement, performed on, would otherwise be kept again and again (its run
@@ -358,6 +379,8 @@ class SessionTeaching:
                 log.info("teaching: step %d: %s", event.step, event.text)
             if event.kind in ("learned", "undone"):
                 self.failure = None
+            if event.kind in ("learned", "undone", "renamed"):
+                self._name_running()
                 self.result = event.text
             elif event.kind == "renamed":
                 # "learned as pattern new-1 (…)" goes on naming what the robot learned.
