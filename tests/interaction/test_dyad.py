@@ -202,3 +202,26 @@ def test_a_movement_both_predict_but_neither_knows_runs_out_the_patience(model):
 
     assert initiatives(True)[:9].any()  # within the patience (4 to 8 steps)
     assert not initiatives(False).any()
+
+
+def test_an_unseen_first_step_is_not_being_left_alone_but_stillness_and_absence_are(model):
+    """A person whose page is heard from one step late moves on every step seen after: the
+    robot follows and does not take the initiative; a partner unseen or still all along is
+    left alone."""
+    steps = AgentConfig().alone_steps
+    t = np.arange(3 * steps)
+    moving = 0.5 + 0.1 * np.stack([np.sin(t / 2), np.cos(t / 2), -np.sin(t / 2), np.cos(t / 2)], 1)
+
+    def initiatives(views) -> int:
+        robot = RobotAgent(model, AgentConfig(), name="a")
+        return sum(robot.act(v).initiative for v in views)
+
+    late = moving.copy()
+    late[0] = np.nan
+    assert initiatives(late) == 0
+    assert initiatives(moving) == 0
+    assert initiatives(np.full((steps + 1, 4), np.nan)) == 1
+    assert initiatives(np.full((steps + 1, 4), 0.5)) == 1
+    flicker = moving[: steps + 1].copy()
+    flicker[::2] = np.nan  # seen every other step, moving when seen
+    assert initiatives(flicker) == 0

@@ -305,14 +305,18 @@ class RobotAgent:
         return None if p is None else p + int(self.rng.integers(0, p + 1))
 
     def _left_alone(self) -> bool:
-        """The partner has not moved (or not been seen) for ``alone_steps`` steps."""
+        """The partner has not moved (or not been seen) for ``alone_steps`` steps: the steps
+        it was seen on, if at least two, spread less than ``still_level``. A partner moving
+        whenever seen is not alone: one unseen step (a person's page not yet heard from, a
+        tracker's lost frame) is no reason to take the initiative."""
         n = self.config.alone_steps
         if n is None or len(self._recent) < n:
             return False
         recent = np.asarray(self._recent[-n:])
-        if not np.isfinite(recent).all():
+        seen = recent[np.isfinite(recent).all(axis=1)]
+        if len(seen) < 2:
             return True
-        return bool(np.all(recent.std(axis=0) < self.config.still_level))
+        return bool(np.all(seen.std(axis=0) < self.config.still_level))
 
     def set_config(self, config: AgentConfig) -> None:
         """Change persistence, noise and lead from the next step on (the adaptation is fixed
