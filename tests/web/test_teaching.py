@@ -222,9 +222,9 @@ def test_the_panel_records_consolidates_learns_renames_and_undoes(browser, model
         _until(page, "document.querySelector('#confidence-bars').textContent.includes('new-1')")
         assert "set1.v2.npz" in page.text_content("#teach-versions")
         # The status bar and the model list name the version that runs, not the old one.
-        _until(page, "document.querySelector('#status').textContent.includes('model set1.v2')")
-        assert page.input_value("#model") == "set1.v2"
-        assert page.evaluate("rnnpbDashboard.state.models") == ["set1", "set1.v2"]
+        _until(page, "document.querySelector('#status').textContent.includes('model set1.v2.npz')")
+        assert page.input_value("#model") == "set1.v2.npz"
+        assert page.evaluate("rnnpbDashboard.state.models") == ["set1.npz", "set1.v2.npz"]
         assert page.locator("#teach-undo").is_enabled()
         eight = "#patterns button[data-pattern='figure-eight']"
         _until(page, f"document.querySelector(\"{eight}\").textContent.includes('as new-1')")
@@ -257,8 +257,8 @@ def test_the_panel_records_consolidates_learns_renames_and_undoes(browser, model
         )
         assert page.evaluate("rnnpbDashboard.state.running")
         assert "back to set1.npz" in page.text_content("#teach-result")
-        _until(page, "document.querySelector('#status').textContent.includes('model set1 ')")
-        assert page.input_value("#model") == "set1"
+        _until(page, "document.querySelector('#status').textContent.includes('model set1.npz ')")
+        assert page.input_value("#model") == "set1.npz"
         # The episode the undone version learned is kept again, to learn on a Confirm.
         _until(page, "rnnpbDashboard.state.teaching.pending === 1")
         assert "not learned by this model" in page.text_content(eight)

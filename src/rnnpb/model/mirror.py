@@ -287,9 +287,10 @@ class MirrorSystem:
         of starting from an empty window (a jump of up to 60 degrees in one step). ``False``,
         and a fresh start, when the two differ in window or network shape."""
         mine, theirs = self._state, other._state
-        same_shape = all(
-            np.shape(a) == np.shape(b) for a, b in zip(mine, theirs, strict=True)
-        ) and self.model.network == other.model.network
+        same_shape = (
+            all(np.shape(a) == np.shape(b) for a, b in zip(mine, theirs, strict=True))
+            and self.model.network == other.model.network
+        )
         if not same_shape:
             self.reset()
             return False

@@ -306,7 +306,8 @@ class SessionTeaching:
     def _name_running(self) -> None:
         """The session names the version that runs (the status bar, the model list): the
         first version by the name it was chosen under, a learned one by its file's name
-        (``set.v2``), offered in the model list from then on (its file stays on disk)."""
+        (``set1.v2.npz``, as the model list names files), offered in the model list from
+        then on (its file stays on disk)."""
         teacher, session = self.teacher, self.session
         if teacher is None:
             return
@@ -314,7 +315,7 @@ class SessionTeaching:
             session.model_name = self._first_name or session.model_name
             return
         path = Path(teacher.model_path)
-        name = path.name.removesuffix(".npz")
+        name = path.name
         known = session.models.get(name)
         if known is not None and Path(known).resolve() != path.resolve():
             name = f"{name} ({path.parent.name})"  # another folder's file of the same name
