@@ -222,6 +222,8 @@ def test_every_learned_pattern_played_with_one_pointer_is_found_and_logged(
         table = page.evaluate("() => fetch('/game/log.csv').then((r) => r.text())")
         header, *rows = table.strip().splitlines()
         assert header.split(",")[:2] == ["step", "time_s"] and len(rows) >= log["steps"] - 1
+        # The game's clock starts at its first step, not before the step's compilation.
+        assert rows[0].split(",")[:2] == ["0", "0.0"]
     finally:
         page.close()
     assert not errors, f"the page raised: {errors}"

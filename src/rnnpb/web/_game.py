@@ -280,11 +280,16 @@ class GameSession:
                 self.log = GameLog(self.log_dir, mode=mode, model=name, dt=self.dt)
             self.status = "running"
             self._publish(self.state())
-            started = time.perf_counter()
+            # The game's clock starts with its first step: the compilation before it (seconds,
+            # a minute on a busy machine) is nobody's playing time.
+            started: list[float] = []
 
             def on_step(record: Any) -> None:
+                now = time.perf_counter()
+                if not started:
+                    started.append(now)
                 raw = person.raw if person is not None else None
-                message = tracker.update(record, time.perf_counter() - started, raw)
+                message = tracker.update(record, now - started[0], raw)
                 if self.log is not None:
                     self.log.add(record, message, raw, tracker.found, tracker.last_leader)
                 self._publish(message)
