@@ -131,34 +131,48 @@ def test_teaching_config_is_validated_and_its_searched_values_are_the_presets():
     assert longer.episode_cycles == 4 and longer.min_novel_share == config.min_novel_share
 
 
-def test_the_keeper_stores_each_novel_movement_once_in_the_memory(tmp_path):
+def test_the_keeper_stores_each_novel_movement_once_and_merges_a_repeat(tmp_path):
     from types import SimpleNamespace
 
-    from rnnpb.interaction.teaching import EpisodeKeeper
+    from rnnpb.interaction.teaching import EpisodeKeeper, episode_steps, merged_with
     from rnnpb.memory import MemoryStore
 
     _, shape = _stream("3", 80, seed=4)
+    _, again = _stream("3", 80, seed=9)  # the same shape by another draw of the user
+    _, other = _stream("1", 80, seed=4)
     rng = np.random.default_rng(5)
     walk = np.clip(0.5 + np.cumsum(0.02 * rng.standard_normal((60, 4)), axis=0), 0, 1)
     stream = (
         [(row, "novel") for row in shape]
         + [(row, "unstructured") for row in walk]
-        + [(row, "novel") for row in shape]
+        + [(row, "novel") for row in again]
+        + [(row, "unstructured") for row in walk]
+        + [(row, "novel") for row in other]
     )
     with MemoryStore(tmp_path / "m.npz") as memory:
         keeper = EpisodeKeeper(memory, model="m.npz", source="scenario:held:3")
         for t, (row, word) in enumerate(stream):
             keeper(SimpleNamespace(step=t, observed=row, novelty=word))
         episodes = memory.episodes()
-        assert [e.pattern for e in episodes] == ["new-1", "new-2"]
+        # the repeat joins the first movement; another shape is a movement of its own
+        assert [e.pattern for e in episodes] == ["new-1", "new-1", "new-2"]
+        assert merged_with(episodes[1].note) == episodes[0].id
+        assert merged_with(episodes[0].note) is None and merged_with(episodes[2].note) is None
+        assert memory.group("new-1") == [episodes[0].id, episodes[1].id]
         assert all(e.status == "kept" and e.n_cycles == 3 for e in episodes)
         assert all(e.source == "scenario:held:3" and e.model == "m.npz" for e in episodes)
-        # nothing from the unstructured stretch (steps 80-139)
+        # nothing from the unstructured stretches (steps 80-139 and 220-279)
         for e in episodes:
-            first, last = (int(v) for v in e.note.removeprefix("steps ").split("-"))
-            assert last < 80 or first >= 140
+            steps = episode_steps(e.note)
+            assert steps is not None
+            first, last = steps
+            assert not (first <= 139 and last >= 80) and not (first <= 279 and last >= 220)
     kinds = [event.kind for event in keeper.events]
-    assert kinds.count("kept") == 2 and "recording" in kinds
+    assert kinds.count("kept") == 3 and "recording" in kinds
+    kept = [event for event in keeper.events if event.kind == "kept"]
+    assert [event.repeat_of for event in kept] == [None, episodes[0].id, None]
+    assert [event.performances for event in kept] == [1, 2, 1]
+    assert "seen twice" in kept[1].text
 
 
 def test_a_camera_sources_hands_reach_the_keeper():
