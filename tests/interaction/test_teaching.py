@@ -235,3 +235,65 @@ def test_the_keeper_never_keeps_a_movement_whose_joint_angles_collide(tmp_path):
         for t, row in enumerate(shape):
             keeper(SimpleNamespace(step=t, observed=row, novelty="novel"))
         assert len(memory.episodes()) == 1
+
+
+def _teacher_on(path, memory, **options):
+    """A Teacher subscribed to a stand-in loop: the test feeds it steps by hand."""
+    from types import SimpleNamespace
+
+    from rnnpb.interaction.teaching import Teacher
+
+    subscribers = []
+    loop = SimpleNamespace(
+        config=SimpleNamespace(dt=0.4, paced=False),
+        subscribe=subscribers.append,
+        mirror=None,
+        steps=0,
+    )
+    teacher = Teacher(loop, path, memory, make_mirror=None, auto=False, **options)
+
+    def perform(rows, start):
+        for t, row in enumerate(rows, start):
+            loop.steps = t
+            for subscriber in subscribers:
+                subscriber(SimpleNamespace(step=t, observed=row, novelty="novel"))
+
+    return teacher, perform
+
+
+def test_a_repeat_of_a_taught_pattern_is_more_data_for_it_and_a_new_shape_waits(
+    set1_model, tmp_path
+):
+    from rnnpb.memory import MemoryStore
+
+    path = tmp_path / "m.npz"
+    set1_model.renamed("3", "new-1").save(path)  # as if teaching had learned pattern 3
+    _, taught = _stream("3", 36, seed=1)
+    _, again = _stream("3", 80, seed=7)  # another draw of the user, long after
+    _, other = _stream("1", 80, seed=7)
+    with MemoryStore(path) as memory:
+        learned = memory.add_episode(
+            taught, np.zeros((36, 8)), source="s", model=str(path), pattern="new-1", n_cycles=3
+        )
+        memory.set_status(learned, "learned")
+        teacher, perform = _teacher_on(path, memory)
+        perform(again, 0)
+        (repeat,) = teacher.pending
+        assert memory.episode_summary(repeat).pattern == "new-1"  # never a second pattern
+        # more data for a pattern the running version holds: ready at once
+        assert teacher.ready() == [repeat] and teacher.waiting_for_confirm()
+        perform([np.full(4, np.nan)], 80)  # the run ends
+        perform(other, 81)
+        fresh = teacher.pending[-1]
+        assert memory.episode_summary(fresh).pattern == "new-2"
+        # a new shape seen once waits for its next performance
+        assert teacher.ready() == [repeat]
+        waiting = [e for e in teacher.events if e.kind == "waiting"]
+        assert [e.pattern for e in waiting] == ["new-2"] and "seen once" in waiting[0].text
+    with MemoryStore(path) as memory:
+        # told to learn from one performance, it does not wait
+        teacher, _ = _teacher_on(path, memory, performances=1)
+        teacher.pending = [repeat, fresh]
+        assert teacher.ready() == [repeat, fresh]
+        with pytest.raises(ConfigError, match="performances"):
+            _teacher_on(path, memory, performances=0)
