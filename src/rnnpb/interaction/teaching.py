@@ -170,6 +170,7 @@ class Teacher:
         self._job_patterns: tuple[str, ...] = ()
         self._patterns: dict[str, tuple[str, ...]] = {}  # a version's file -> its patterns
         self.pending: list[int] = []
+        self._look = False  # whether a pending movement may have become ready
         self.events = self.keeper.events
         self.swapped_at: list[int] = []
         loop.subscribe(self._on_step)
@@ -187,10 +188,11 @@ class Teacher:
         self.pending.extend(new)
         if new:
             self._say_waiting()
-        if self.auto and self.job is None and self.pending:
-            ready = self.ready()
-            if ready:
-                self._start(ready)
+            self._look = True
+        # What is ready changes only with a new episode or a new version (reads the memory).
+        if self.auto and self.job is None and self._look:
+            self._look = False
+            self._start(self.ready())
 
     def learned_patterns(self) -> tuple[str, ...]:
         """The patterns of the running version."""
@@ -308,6 +310,7 @@ class Teacher:
                 self.events.append(TeachingEvent(self.loop.steps, "failed", state.describe()))
                 self.job = None
                 self._job_patterns = ()
+                self._look = bool(self.pending)
         rest = wait_s - (time.perf_counter() - start)
         if rest > 0:
             time.sleep(min(rest, 0.02))
@@ -325,6 +328,7 @@ class Teacher:
             self._use(self.make_mirror(model))
         self.versions.append(state.model_path)
         self._patterns[state.model_path] = model.patterns
+        self._look = bool(self.pending)
         self.swapped_at.append(self.loop.steps)
         names = [p for p in self._job_patterns if p in model.patterns]
         learned = ", ".join(names) or "?"
