@@ -297,3 +297,21 @@ def test_a_repeat_of_a_taught_pattern_is_more_data_for_it_and_a_new_shape_waits(
         assert teacher.ready() == [repeat, fresh]
         with pytest.raises(ConfigError, match="performances"):
             _teacher_on(path, memory, performances=0)
+
+
+def test_two_draws_of_a_shape_are_one_movement_and_other_shapes_are_not():
+    from rnnpb.demonstrator import demonstration
+    from rnnpb.interaction.teaching import shape_distance
+    from rnnpb.model.recognition import RecognitionConfig
+
+    def take(pattern, seed):
+        return demonstration(pattern, np.random.default_rng(seed), 36).sensory
+
+    level = RecognitionConfig().template_level
+    eight = take("figure-eight", 1)
+    assert shape_distance(eight, take("figure-eight", 2)) < level
+    # another phase and size of the same draw: the same shape
+    assert shape_distance(eight[5:], 0.5 + 0.6 * (eight - 0.5)) < 0.05
+    for other in ("1", "diagonal", "one-arm", "asymmetric"):
+        far = shape_distance(eight, take(other, 1))
+        assert far > level and far == shape_distance(take(other, 1), eight)

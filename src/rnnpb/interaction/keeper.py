@@ -101,8 +101,9 @@ class EpisodeKeeper:
         gives them (a camera's depth from size); else they lie on the fixed plane.
 
     ``events`` lists what happened, newest last; ``kept`` the stored episodes' ids.
-    ``recognition`` (a :class:`~rnnpb.model.RecognitionConfig`, default the paper preset's)
-    is how shapes are compared: the running mirror system's, set by the teacher.
+    ``recognition`` (a :class:`~rnnpb.model.recognition.RecognitionConfig`, default the
+    paper preset's) is how shapes are compared: the running mirror system's, set by the
+    teacher.
     """
 
     def __init__(

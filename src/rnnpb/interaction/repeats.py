@@ -25,6 +25,9 @@ from rnnpb.model.recognition import RecognitionConfig, taught_distances, taught_
 REPEAT_STATUSES = ("kept", "learned")
 """The episodes a new one may be a repeat of: those waiting to be learned and those learned
 (a discarded episode was refused by the person)."""
+COMPARED_PER_MOVEMENT = 2
+"""Newest episodes of each movement a new one is compared with: two performances show its
+shape, and the cost stays a few milliseconds per movement however often it was performed."""
 
 
 @dataclass(frozen=True)
@@ -65,16 +68,20 @@ def find_repeat(
     memory,
     sensory: np.ndarray,
     config: RecognitionConfig | None = None,
-    *,
-    exclude: int | None = None,
 ) -> Repeat | None:
-    """The memory's episode (kept or learned, not ``exclude``) whose movement ``sensory``
-    repeats — the nearest shape, when it is nearer than ``config.template_level`` — or None."""
+    """The memory's episode (kept or learned; the newest
+    :data:`COMPARED_PER_MOVEMENT` of each movement) whose movement ``sensory`` repeats — the
+    nearest shape, when it is nearer than ``config.template_level`` — or None."""
     config = config or RecognitionConfig()
     best: Repeat | None = None
-    for summary in memory.episodes():
-        if summary.status not in REPEAT_STATUSES or summary.id == exclude:
+    newest: dict[str, list] = {}
+    for summary in reversed(memory.episodes()):
+        if summary.status not in REPEAT_STATUSES:
             continue
+        group = newest.setdefault(summary.pattern, [])
+        if len(group) < COMPARED_PER_MOVEMENT:
+            group.append(summary)
+    for summary in (s for group in newest.values() for s in group):
         distance = shape_distance(sensory, memory.episode(summary.id).sensory, config)
         if distance < config.template_level and (best is None or distance < best.distance):
             best = Repeat(summary.id, summary.pattern, distance)
