@@ -148,9 +148,20 @@ def test_the_scripted_user_leads_with_another_learned_pattern_per_shape():
     config = TeachConfig(quick=True, models=None, shipped=True, paper_measures=False)
     first = segments(("1", "2", "3"), "diagonal", 0, config)
     second = segments(("1", "2", "3"), "one-arm", 1, config)
-    assert [m for m, _ in first] == ["1", "diagonal", "2", "3", "random-walk", "jerky", "diagonal"]
-    assert [m for m, _ in second][:3] == ["2", "one-arm", "1"]
-    assert first[1][1] == config.new_steps and first[-1][1] == config.again_steps
+    # the new shape in two performances (another learned pattern between them), then its next
+    assert [m for m, _ in first] == [
+        "1",
+        "diagonal",
+        "2",
+        "diagonal",
+        "3",
+        "random-walk",
+        "jerky",
+        "diagonal",
+    ]
+    assert [m for m, _ in second][:4] == ["2", "one-arm", "1", "one-arm"]
+    assert first[1][1] == first[3][1] == config.new_steps
+    assert first[-1][1] == config.again_steps
 
 
 def test_the_judge_reads_a_finished_results_file(study):

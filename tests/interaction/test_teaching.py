@@ -131,34 +131,48 @@ def test_teaching_config_is_validated_and_its_searched_values_are_the_presets():
     assert longer.episode_cycles == 4 and longer.min_novel_share == config.min_novel_share
 
 
-def test_the_keeper_stores_each_novel_movement_once_in_the_memory(tmp_path):
+def test_the_keeper_stores_each_novel_movement_once_and_merges_a_repeat(tmp_path):
     from types import SimpleNamespace
 
-    from rnnpb.interaction.teaching import EpisodeKeeper
+    from rnnpb.interaction.teaching import EpisodeKeeper, episode_steps, merged_with
     from rnnpb.memory import MemoryStore
 
     _, shape = _stream("3", 80, seed=4)
+    _, again = _stream("3", 80, seed=9)  # the same shape by another draw of the user
+    _, other = _stream("1", 80, seed=4)
     rng = np.random.default_rng(5)
     walk = np.clip(0.5 + np.cumsum(0.02 * rng.standard_normal((60, 4)), axis=0), 0, 1)
     stream = (
         [(row, "novel") for row in shape]
         + [(row, "unstructured") for row in walk]
-        + [(row, "novel") for row in shape]
+        + [(row, "novel") for row in again]
+        + [(row, "unstructured") for row in walk]
+        + [(row, "novel") for row in other]
     )
     with MemoryStore(tmp_path / "m.npz") as memory:
         keeper = EpisodeKeeper(memory, model="m.npz", source="scenario:held:3")
         for t, (row, word) in enumerate(stream):
             keeper(SimpleNamespace(step=t, observed=row, novelty=word))
         episodes = memory.episodes()
-        assert [e.pattern for e in episodes] == ["new-1", "new-2"]
+        # the repeat joins the first movement; another shape is a movement of its own
+        assert [e.pattern for e in episodes] == ["new-1", "new-1", "new-2"]
+        assert merged_with(episodes[1].note) == episodes[0].id
+        assert merged_with(episodes[0].note) is None and merged_with(episodes[2].note) is None
+        assert memory.group("new-1") == [episodes[0].id, episodes[1].id]
         assert all(e.status == "kept" and e.n_cycles == 3 for e in episodes)
         assert all(e.source == "scenario:held:3" and e.model == "m.npz" for e in episodes)
-        # nothing from the unstructured stretch (steps 80-139)
+        # nothing from the unstructured stretches (steps 80-139 and 220-279)
         for e in episodes:
-            first, last = (int(v) for v in e.note.removeprefix("steps ").split("-"))
-            assert last < 80 or first >= 140
+            steps = episode_steps(e.note)
+            assert steps is not None
+            first, last = steps
+            assert not (first <= 139 and last >= 80) and not (first <= 279 and last >= 220)
     kinds = [event.kind for event in keeper.events]
-    assert kinds.count("kept") == 2 and "recording" in kinds
+    assert kinds.count("kept") == 3 and "recording" in kinds
+    kept = [event for event in keeper.events if event.kind == "kept"]
+    assert [event.repeat_of for event in kept] == [None, episodes[0].id, None]
+    assert [event.performances for event in kept] == [1, 2, 1]
+    assert "seen twice" in kept[1].text
 
 
 def test_a_camera_sources_hands_reach_the_keeper():
@@ -221,3 +235,83 @@ def test_the_keeper_never_keeps_a_movement_whose_joint_angles_collide(tmp_path):
         for t, row in enumerate(shape):
             keeper(SimpleNamespace(step=t, observed=row, novelty="novel"))
         assert len(memory.episodes()) == 1
+
+
+def _teacher_on(path, memory, **options):
+    """A Teacher subscribed to a stand-in loop: the test feeds it steps by hand."""
+    from types import SimpleNamespace
+
+    from rnnpb.interaction.teaching import Teacher
+
+    subscribers = []
+    loop = SimpleNamespace(
+        config=SimpleNamespace(dt=0.4, paced=False),
+        subscribe=subscribers.append,
+        mirror=None,
+        steps=0,
+    )
+    teacher = Teacher(loop, path, memory, make_mirror=None, auto=False, **options)
+
+    def perform(rows, start):
+        for t, row in enumerate(rows, start):
+            loop.steps = t
+            for subscriber in subscribers:
+                subscriber(SimpleNamespace(step=t, observed=row, novelty="novel"))
+
+    return teacher, perform
+
+
+def test_a_repeat_of_a_taught_pattern_is_more_data_for_it_and_a_new_shape_waits(
+    set1_model, tmp_path
+):
+    from rnnpb.memory import MemoryStore
+
+    path = tmp_path / "m.npz"
+    set1_model.renamed("3", "new-1").save(path)  # as if teaching had learned pattern 3
+    _, taught = _stream("3", 36, seed=1)
+    _, again = _stream("3", 80, seed=7)  # another draw of the user, long after
+    _, other = _stream("1", 80, seed=7)
+    with MemoryStore(path) as memory:
+        learned = memory.add_episode(
+            taught, np.zeros((36, 8)), source="s", model=str(path), pattern="new-1", n_cycles=3
+        )
+        memory.set_status(learned, "learned")
+        teacher, perform = _teacher_on(path, memory)
+        perform(again, 0)
+        (repeat,) = teacher.pending
+        assert memory.episode_summary(repeat).pattern == "new-1"  # never a second pattern
+        # more data for a pattern the running version holds: ready at once
+        assert teacher.ready() == [repeat] and teacher.waiting_for_confirm()
+        perform([np.full(4, np.nan)], 80)  # the run ends
+        perform(other, 81)
+        fresh = teacher.pending[-1]
+        assert memory.episode_summary(fresh).pattern == "new-2"
+        # a new shape seen once waits for its next performance
+        assert teacher.ready() == [repeat]
+        waiting = [e for e in teacher.events if e.kind == "waiting"]
+        assert [e.pattern for e in waiting] == ["new-2"] and "seen once" in waiting[0].text
+    with MemoryStore(path) as memory:
+        # told to learn from one performance, it does not wait
+        teacher, _ = _teacher_on(path, memory, performances=1)
+        teacher.pending = [repeat, fresh]
+        assert teacher.ready() == [repeat, fresh]
+        with pytest.raises(ConfigError, match="performances"):
+            _teacher_on(path, memory, performances=0)
+
+
+def test_two_draws_of_a_shape_are_one_movement_and_other_shapes_are_not():
+    from rnnpb.demonstrator import demonstration
+    from rnnpb.interaction.teaching import shape_distance
+    from rnnpb.model.recognition import RecognitionConfig
+
+    def take(pattern, seed):
+        return demonstration(pattern, np.random.default_rng(seed), 36).sensory
+
+    level = RecognitionConfig().template_level
+    eight = take("figure-eight", 1)
+    assert shape_distance(eight, take("figure-eight", 2)) < level
+    # another phase and size of the same draw: the same shape
+    assert shape_distance(eight[5:], 0.5 + 0.6 * (eight - 0.5)) < 0.05
+    for other in ("1", "diagonal", "one-arm", "asymmetric"):
+        far = shape_distance(eight, take(other, 1))
+        assert far > level and far == shape_distance(take(other, 1), eight)

@@ -44,30 +44,41 @@ def test_teaching_consolidates_in_the_background_and_swaps_the_new_version_in(mo
 
     path = tmp_path / "m.npz"
     model.save(path)
-    spec = "scenario:steps:1*30,figure-eight*110"
+    # the new shape in two performances, another pattern between them
+    spec = "scenario:steps:1*30,figure-eight*60,2*30,figure-eight*70"
     with open_source(spec, seed=2) as source, MemoryStore(path) as memory:
-        loop = InteractionLoop(MirrorSystem(model), source, config=LoopConfig(max_steps=140))
+        loop = InteractionLoop(MirrorSystem(model), source, config=LoopConfig(max_steps=190))
         # run as fast as possible: the loop waits for the consolidation, so the run repeats
         teacher = Teacher(loop, path, memory, make_mirror=MirrorSystem, source=spec, iterations=20)
         loop.run(between_steps=teacher.between_steps)
         kinds = [e.kind for e in teacher.events]
-        assert "kept" in kinds and "learned" in kinds, teacher.events
+        assert kinds.count("kept") == 2 and "learned" in kinds, teacher.events
+        # seen once, the teacher waits for the next performance (no consolidation yet)
+        waiting = kinds.index("waiting")
+        assert kinds.index("consolidating") > waiting > kinds.index("kept")
+        assert "new-1 seen once: show it again" in teacher.events[waiting].text
+        # the second performance is merged with the first and both are learned as one pattern
+        first, second = memory.episodes()
+        assert first.pattern == second.pattern == "new-1"
         assert teacher.versions == [str(path), str(version_path(path, 2))]
         assert "new-1" in loop.mirror.model.patterns
-        assert memory.episodes()[0].status == "learned"
+        assert loop.mirror.model.sequence_patterns.count("new-1") == 2
+        assert first.status == second.status == "learned"
         (consolidation,) = memory.consolidations()
-        # every learned sequence rehearsed, and the new one
+        # every learned sequence rehearsed, and both performances
         assert consolidation.status == "done"
-        assert consolidation.n_rehearsed == len(model.sequence_patterns) + 1
+        assert consolidation.episode_ids == (first.id, second.id)
+        assert consolidation.n_rehearsed == len(model.sequence_patterns) + 2
+        assert "learned as pattern new-1 (seen twice" in teacher.events[kinds.index("learned")].text
         # The scenario said what it performed: the episode's note keeps it, for the person.
         assert shown_as(memory.episodes()[0].note) == "figure-eight"
         teacher.undo()
         assert "new-1" not in loop.mirror.model.patterns
         # What the undone version learned is kept again (a Confirm learns it again), and it is
         # not learned again at once: the person has just said no to it.
-        assert memory.episodes()[0].status == "kept"
+        assert [e.status for e in memory.episodes()] == ["kept", "kept"]
         assert teacher.pending == [] and teacher.job is None
-        assert "episode 1 kept again" in teacher.events[-1].text
+        assert "episodes 1, 2 kept again" in teacher.events[-1].text
     assert "new-1" in TrainedModel.load(version_path(path, 2)).patterns  # kept on disk
 
 
@@ -94,6 +105,7 @@ def test_interact_learn_keeps_a_new_shape_writes_a_version_and_nothing_from_rand
                 "--seed",
                 "2",
                 "--learn",
+                "--learn-from-one",  # the person insists: one performance is enough
                 "--consolidation-iterations",
                 "20",
                 "--no-progress",
@@ -142,14 +154,15 @@ def test_interact_learn_keeps_a_new_shape_writes_a_version_and_nothing_from_rand
 def test_consolidation_iterations_need_learn_and_a_positive_count(tmp_path, capsys):
     from rnnpb.cli import main
 
-    for extra in (
-        ["--consolidation-iterations", "20"],
-        ["--learn", "--consolidation-iterations", "0"],
+    for extra, named in (
+        (["--consolidation-iterations", "20"], "--consolidation-iterations"),
+        (["--learn", "--consolidation-iterations", "0"], "--consolidation-iterations"),
+        (["--learn-from-one"], "--learn-from-one"),
     ):
         assert (
             main(["interact", "--source", "scenario:held:1", "--out", str(tmp_path), *extra]) == 2
         )
-        assert "--consolidation-iterations" in capsys.readouterr().err
+        assert named in capsys.readouterr().err
 
 
 def test_learning_from_the_shipped_model_works_on_a_copy_in_the_run_folder(tmp_path, monkeypatch):

@@ -42,3 +42,36 @@ def test_list_show_forget_export(tmp_path, capsys):
     (tmp_path / "x.memory.sqlite").write_text("not a database")
     assert main(["memory", "list", str(tmp_path / "x.memory.sqlite")]) == 2
     assert "not an SQLite database" in capsys.readouterr().err
+
+
+def test_merge_and_split_through_the_command_line(tmp_path, capsys):
+    from rnnpb.demonstrator import demonstration
+
+    model = tmp_path / "m.npz"
+    with MemoryStore(model) as memory:
+        ids = [
+            memory.add_episode(
+                shown.sensory,
+                shown.motor,
+                source="synthetic",
+                model=str(model),
+                pattern=f"new-{k}",
+                n_cycles=3,
+            )
+            for k, shown in enumerate(
+                (demonstration("2", np.random.default_rng(seed), 36) for seed in (1, 2)), 1
+            )
+        ]
+    assert main(["memory", "merge", str(model), str(ids[1]), str(ids[0])]) == 0
+    printed = capsys.readouterr().out
+    # two draws of one shape: near in shape (the keeper merges below 0.43)
+    distance = float(printed.split("shape distance ")[1].rstrip(")\n"))
+    assert distance < 0.3 and "pattern new-1, 2 performances" in printed
+    assert main(["memory", "list", str(model)]) == 0
+    listed = capsys.readouterr().out
+    assert "new-1: 2 performances" in listed and f"merged with episode {ids[0]}" in listed
+    assert main(["memory", "split", str(model), str(ids[1])]) == 0
+    assert f"episode {ids[1]} split from new-1: now pattern new-2" in capsys.readouterr().out
+    assert main(["memory", "list", str(model)]) == 0
+    listed = capsys.readouterr().out
+    assert "new-1: 1 performance\n" in listed and "split from new-1" in listed

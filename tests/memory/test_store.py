@@ -97,6 +97,44 @@ def test_a_consolidation_keeps_its_rehearsals_and_marks_its_episodes_learned(tmp
         assert len(memory.consolidations()) == 1
 
 
+def test_a_merge_joins_an_episode_to_a_movement_and_a_split_undoes_it(tmp_path):
+    with MemoryStore(tmp_path / "m.npz") as memory:
+        ids = [
+            memory.add_episode(
+                *_movement(24, seed),
+                source="webcam:0",
+                model="m.npz",
+                pattern=name,
+                n_cycles=2,
+                note=f"steps {10 * seed}-{10 * seed + 23}",
+            )
+            for seed, name in enumerate(("new-1", "new-2", "new-3"))
+        ]
+        assert memory.merge(ids[1], ids[0], "shape distance 0.12") == "new-1"
+        assert memory.group("new-1") == ids[:2]
+        merged = memory.episode_summary(ids[1])
+        # the note keeps where the episode was cut from and says what it was merged with
+        assert merged.note == f"steps 10-33; merged with episode {ids[0]} (shape distance 0.12)"
+        assert memory.episode(ids[1]).sequence().pattern == "new-1"
+        memory.split(ids[1], "new-2")
+        assert memory.group("new-1") == ids[:1] and memory.group("new-2") == [ids[1]]
+        assert memory.episode_summary(ids[1]).note.endswith("; split from new-1")
+        with pytest.raises(DataFileError, match="taken"):
+            memory.split(ids[1], "new-3")  # another episode's movement
+        # a learned episode belongs to a model version: neither merged nor split
+        memory.set_status(ids[2], "learned")
+        with pytest.raises(DataFileError, match="learned"):
+            memory.merge(ids[2], ids[0])
+        with pytest.raises(DataFileError, match="learned"):
+            memory.split(ids[2], "new-9")
+        # but a kept episode may join a learned movement (more data for it)
+        assert memory.merge(ids[0], ids[2]) == "new-3"
+        assert memory.group("new-3") == [ids[0], ids[2]]
+        assert memory.group("new-3", ("learned",)) == [ids[2]]
+        with pytest.raises(MemoryFileError, match="no episode 99"):
+            memory.merge(99, ids[0])
+
+
 def test_bad_movements_and_names_are_refused_before_anything_is_written(tmp_path):
     sensory, motor = _movement()
     with MemoryStore(tmp_path / "m.npz") as memory:

@@ -216,3 +216,53 @@ def test_an_interrupted_consolidation_leaves_the_model_and_resumes(files, capsys
     # half's end by default) and at the checkpoints (200), and the run at 300.
     assert [i for i, _ in grown.meta["training"]["history"]] == [150, 200, 300]
     assert np.all(np.isfinite(grown.sequence_pb))
+
+
+def _recognised(model, segments, seed=3):
+    """What the mirror system recognises over the last half of each segment of a user's
+    stream (the most frequent answer)."""
+    from rnnpb.demonstrator import make_scenario
+    from rnnpb.model import MirrorSystem
+
+    scenario = make_scenario(segments, seed=seed)
+    mirror = MirrorSystem(model)
+    answers = [mirror.step(row).recognised for row in scenario.sensory]
+    out, start = [], 0
+    for _, n in segments:
+        late = answers[start + n // 2 : start + n]
+        out.append(max(set(late), key=late.count))
+        start += n
+    return out
+
+
+def test_add_to_grows_a_pattern_without_forgetting_the_others(set1_model, tmp_path, capsys):
+    from rnnpb.demonstrator import demonstration
+
+    set1_model.save(tmp_path / "set1.npz")
+    # another draw of pattern 2, in a file that names it otherwise: --add-to says whose it is
+    take = demonstration("2", np.random.default_rng(11), 48)
+    write_sequence(tmp_path / "take.csv", take.__class__(take.sensory, take.motor, "again"))
+    out = tmp_path / "grown.npz"
+    arguments = ["consolidate", "--model", str(tmp_path / "set1.npz"), "--out", str(out)]
+    assert main([*arguments, "--add-to", "2", str(tmp_path / "take.csv"), "--iterations", "60",
+                 "--no-progress"]) == 0  # fmt: skip
+    assert "growing 1 sequence(s) of pattern(s) 2 in" in capsys.readouterr().out
+    grown = TrainedModel.load(out)
+    assert grown.patterns == set1_model.patterns
+    assert grown.sequence_patterns.count("2") == set1_model.sequence_patterns.count("2") + 1
+    entry = grown.history[-1]
+    assert entry.method == "rehearsal" and entry.details["grown"] == ["2"]
+    # the new sequence started where pattern 2 is, and stays near it
+    new_pb = grown.sequence_pb[-1]
+    others = [p for p in grown.patterns if p != "2"]
+    assert np.linalg.norm(new_pb - grown.pattern_pb["2"]) < min(
+        np.linalg.norm(new_pb - grown.pattern_pb[p]) for p in others
+    )
+    # every pattern is still recognised as itself on a user's stream
+    segments = [(p, 30) for p in grown.patterns]
+    assert _recognised(grown, segments) == list(grown.patterns)
+    # a name the model does not hold, or no file: one line, exit 2
+    assert main([*arguments, "--add-to", "9", str(tmp_path / "take.csv")]) == 2
+    assert "holds no pattern '9'" in capsys.readouterr().err
+    assert main([*arguments, "--add-to", "2"]) == 2
+    assert "--add-to needs a pattern name and at least one file" in capsys.readouterr().err

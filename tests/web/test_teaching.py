@@ -145,6 +145,13 @@ def test_the_session_keeps_a_new_shape_and_answers_commands_it_cannot_carry_out(
         )
         # In confirm mode nothing is consolidated until the person says so.
         assert not teaching.get("consolidating")
+        # Seen once: the panel says so and the robot goes on watching for another performance
+        # (Confirm learns it from this one).
+        assert teaching["seen"] == {"new-1": 1} and teaching["performances"] == 2
+        assert teaching["waiting"] is False
+        assert any(
+            e["kind"] == "waiting" and "new-1 seen once" in e["text"] for e in teaching["events"]
+        )
         # A kept movement can be named before it is learned: its episode takes the name.
         session.submit({"type": "rename", "pattern": "new-1", "name": "eight"})
         _wait(

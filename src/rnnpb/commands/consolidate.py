@@ -24,10 +24,17 @@ Methods:
              (--replay-data; the model's own full learning: the upper bound)
 
 The new files are sequence CSVs as for `rnnpb train`; their patterns must have names the
-model does not hold. Learning continues from the model's weights (scratch: from random ones)
-with the model's own algorithm (paper or fast preset) and its preset's consolidation policy
-(iterations, input noise, how the new PB starts and the old PBs are held); --iterations
-overrides the policy's (scratch: the model's first training's). The new model records its
+model does not hold. A pattern is learned from all its files together (give two or more
+performances of it: one short take generalises poorly to the next).
+
+--add-to NAME FILES grows a pattern the model holds instead: every sequence of FILES is more
+data for NAME (whatever pattern the files name), learned from NAME's PB with the same
+rehearsal of every old pattern, NAME's included.
+
+Learning continues from the model's weights (scratch: from random ones) with the model's own
+algorithm (paper or fast preset) and its preset's consolidation policy (iterations, input
+noise, how the new PB starts and the old PBs are held); --iterations overrides the policy's
+(scratch: the model's first training's). The new model records its
 history (see `rnnpb info`). The model given is never changed; the new one is written only when
 learning is done, atomically. A checkpoint is written next to it (OUT.checkpoint.npz) every
 --checkpoint-every iterations; after an interruption --resume continues from it.
@@ -40,19 +47,27 @@ to measure an alternative the policy did not take:
   new_pb_start = "centre"    # default "farthest"
   rehearsal_target = "trajectory"
 
-Example:
+Examples:
   rnnpb consolidate --model set1.npz --add data/patterns/4_*.csv --out set1+4.npz
+  rnnpb consolidate --model set1+4.npz --add-to 4 takes/4_again.csv --out set1+4b.npz
 """
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--model", required=True, metavar="MODEL", help="the learned model")
-    parser.add_argument(
+    what = parser.add_mutually_exclusive_group(required=True)
+    what.add_argument(
         "--add",
         nargs="+",
-        required=True,
         metavar="FILE_OR_DIR",
         help="sequence CSV files (or directories) of the new pattern(s)",
+    )
+    what.add_argument(
+        "--add-to",
+        nargs="+",
+        metavar=("NAME", "FILE_OR_DIR"),
+        help="a pattern the model holds, then sequence CSV files (or directories): more "
+        "data for that pattern",
     )
     parser.add_argument(
         "--out", required=True, metavar="MODEL", help="where to write the new model (.npz)"
@@ -110,7 +125,19 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(f"--checkpoint-every must be >= 1, got {args.checkpoint_every}")
     overrides = read_config(args.config, CONFIG_SECTIONS, NAME)
     model = TrainedModel.load(args.model)
-    new = read_sequence_files(args.add)
+    grow = args.add_to is not None
+    if grow:
+        if len(args.add_to) < 2:
+            raise ConfigError("--add-to needs a pattern name and at least one file")
+        name, *files = args.add_to
+        if name not in model.patterns:
+            raise ConfigError(
+                f"--add-to {name}: the model holds no pattern {name!r} "
+                f"(it holds {', '.join(model.patterns)})"
+            )
+        new = [replace(s, pattern=name) for s in read_sequence_files(files)]
+    else:
+        new = read_sequence_files(args.add)
     replay = read_sequence_files(args.replay_data) if args.replay_data else None
     if replay is not None and args.method not in ("replay", "scratch"):
         raise ConfigError(
@@ -131,7 +158,8 @@ def run(args: argparse.Namespace) -> int:
     config = replace(config, train=learning)
     added = sorted({s.pattern for s in new})
     print(
-        f"adding {len(new)} sequence(s) of pattern(s) {', '.join(added)} to {args.model} "
+        f"{'growing' if grow else 'adding'} {len(new)} sequence(s) of pattern(s) "
+        f"{', '.join(added)} {'in' if grow else 'to'} {args.model} "
         f"({', '.join(model.patterns)}) by {args.method}: {learning.iterations} iterations "
         f"({learning.optimizer})"
     )
@@ -158,6 +186,7 @@ def run(args: argparse.Namespace) -> int:
             progress=after_chunk,
             checkpoint_path=checkpoint_path_for(args.out),
             resume=args.resume,
+            grow=grow,
         )
     finally:
         if bar is not None:

@@ -50,9 +50,13 @@ learning preset's [online], [recognition] or [recognition_untaught] values for r
 
 With --learn the robot learns new movements on-line (docs/teaching.md): when the novelty
 detector has called a structured movement `novel` for a few cycles, four whole cycles of it
-are kept in the model's short-term memory (MODEL.memory.sqlite) as pattern new-1, new-2, ...,
-consolidated into a new model version (MODEL.v2.npz, ...; the old file stays) in a
-background process, and the new version is swapped in between two steps. Run as fast as
+are kept in the model's short-term memory (MODEL.memory.sqlite) as pattern new-1, new-2, ....
+A later performance of the same shape is merged with it (never a second pattern); once a
+movement has been seen twice ("new-1 seen twice") it is consolidated, from both performances,
+into a new model version (MODEL.v2.npz, ...; the old file stays) in a background process, and
+the new version is swapped in between two steps (--learn-from-one: from its first
+performance). A performance of a pattern learned this way that is kept again is more data for
+it: the pattern grows with use. Run as fast as
 possible (a file or scenario source, no --paced) the loop waits for each consolidation, so a
 scripted run repeats; paced it never waits. A failed consolidation keeps the running model
 and says why. One line is printed for each episode kept and each consolidation's start and
@@ -141,6 +145,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "docs/teaching.md)",
     )
     parser.add_argument(
+        "--learn-from-one",
+        action="store_true",
+        help="with --learn: learn a new movement from its first performance instead of "
+        "waiting for a second one (a pattern learned from one generalises less)",
+    )
+    parser.add_argument(
         "--no-safety",
         action="store_true",
         help="no command filter and no PB guard (docs/safety.md)",
@@ -185,6 +195,10 @@ def run(args: argparse.Namespace) -> int:
         from rnnpb.errors import ConfigError
 
         raise ConfigError("--consolidation-iterations needs --learn")
+    if args.learn_from_one and not args.learn:
+        from rnnpb.errors import ConfigError
+
+        raise ConfigError("--learn-from-one needs --learn")
     overrides = read_config(args.config, CONFIG_SECTIONS, NAME)
     tables = ConfigTables() if overrides is None else ConfigTables(overrides.tables, overrides.path)
     if tables.teaches and not args.learn:
@@ -266,18 +280,14 @@ def run(args: argparse.Namespace) -> int:
         )
         answers: list[tuple[str | None, str]] = []
         said = [0]  # teaching events printed so far
-        unlearned: list[str] = []  # patterns kept and not yet in a consolidation
 
         def say_teaching() -> None:
             for event in teacher.events[said[0] :]:
-                if event.kind == "kept":
-                    unlearned.append(event.pattern)
                 if event.kind not in _TEACHING_LINES:
                     continue
                 text = event.text
                 if event.kind == "consolidating":
-                    text += f" (pattern {', '.join(unlearned)})"
-                    unlearned.clear()
+                    text += f" (pattern {event.pattern})"
                 line = f"step {event.step + 1}: {text}"
                 if bar.disable:
                     print(line, flush=True)
@@ -384,7 +394,7 @@ def run(args: argparse.Namespace) -> int:
 
 # The teaching events worth a line of their own (`recording` changes every cycle: the bar's
 # or the step lines' business would be too chatty).
-_TEACHING_LINES = ("kept", "refused", "consolidating", "learned", "failed")
+_TEACHING_LINES = ("kept", "waiting", "refused", "consolidating", "learned", "failed")
 
 
 def _start_teaching(stack, loop, model_path, source, args, online, tables):
@@ -393,7 +403,7 @@ def _start_teaching(stack, loop, model_path, source, args, online, tables):
     from pathlib import Path
 
     import rnnpb.models
-    from rnnpb.interaction.teaching import Teacher, tracked_hands
+    from rnnpb.interaction.teaching import PERFORMANCES, Teacher, tracked_hands
     from rnnpb.memory import MemoryStore, memory_path_for
     from rnnpb.model import MirrorSystem
 
@@ -422,6 +432,7 @@ def _start_teaching(stack, loop, model_path, source, args, online, tables):
         hands_of=tracked_hands(source),
         iterations=args.consolidation_iterations,
         tables=tables,
+        performances=1 if args.learn_from_one else PERFORMANCES,
     )
     stack.callback(lambda: teacher.job.cancel() if teacher.job is not None else None)
     print(

@@ -59,7 +59,9 @@ def _consolidation_worker(
             queue.put(("progress", int(p.iteration), int(p.total), float(p.mse)))
 
         config = teaching_consolidation(model, iterations, overrides, origin)
-        learned = consolidate(model, sequences, config, parent=model_path, progress=progress)
+        learned = consolidate(
+            model, sequences, config, parent=model_path, progress=progress, grow=True
+        )
         learned.save(out_path)
         rehearsed = rehearse(
             model, config.rehearsal_steps, config.rehearsal_transient, config.rehearsal_source

@@ -12,6 +12,7 @@ import numpy as np
 from rnnpb.demonstrator import MirrorMapping
 from rnnpb.errors import RnnpbError
 from rnnpb.interaction.episodes import RECORDING, EpisodeCutter, TeachingConfig
+from rnnpb.interaction.repeats import find_repeat
 from rnnpb.safety import SafetyChecker, SafetyLimits
 
 
@@ -20,8 +21,11 @@ class TeachingEvent:
     """Something the teacher did, for the dashboard and the log.
 
     ``kind`` is ``recording`` (a novel movement is being recorded; ``text`` says which cycle),
-    ``kept`` (an episode was stored; ``episode_id``, ``pattern``) or ``refused`` (the memory
-    would not take it, or its joint angles are unsafe for the robot; ``text`` says why).
+    ``kept`` (an episode was stored; ``episode_id``, ``pattern``; ``repeat_of`` the episode
+    it was merged with when it is another performance of a kept movement, and ``performances``
+    how many the memory holds of it) or ``refused`` (the memory would not take it, or its
+    joint angles are unsafe for the robot; ``text`` says why). The
+    :class:`~rnnpb.interaction.teaching.Teacher` adds its own kinds.
     """
 
     step: int
@@ -29,10 +33,17 @@ class TeachingEvent:
     text: str
     episode_id: int | None = None
     pattern: str = ""
+    repeat_of: int | None = None
+    performances: int = 0
 
 
 SHOWN_STEPS = 2000  # steps of a source's own account kept (an episode is far shorter)
 SHOWN_AS = "shown as "  # in an episode's note: what a scripted source said it performed
+
+
+def times(n: int) -> str:
+    """ "once", "twice", "3 times"."""
+    return {1: "once", 2: "twice"}.get(n, f"{n} times")
 
 
 def episode_steps(note: str) -> tuple[int, int] | None:
@@ -55,9 +66,26 @@ def shown_as(note: str) -> str:
     return ""
 
 
+MERGED_WITH = "merged with episode "  # in an episode's note: the movement it repeats
+
+
+def merged_with(note: str) -> int | None:
+    """The episode an episode's note says it was merged with (the last merge), or None."""
+    found = None
+    for part in note.split("; "):
+        if part.startswith(MERGED_WITH):
+            number = part[len(MERGED_WITH) :].split(" ")[0]
+            found = int(number) if number.isdigit() else found
+        elif part.startswith("split from "):
+            found = None
+    return found
+
+
 class EpisodeKeeper:
     """A loop subscriber: cuts novel movements with an :class:`EpisodeCutter` and stores each
-    as an episode in the short-term memory, under the next free name ``new-1``, ``new-2`` ….
+    as an episode in the short-term memory: another performance of a movement the memory
+    holds (:func:`rnnpb.interaction.repeats.find_repeat`) under that movement's name, merged
+    with it; else under the next free name ``new-1``, ``new-2`` ….
 
     Parameters
     ----------
@@ -73,6 +101,9 @@ class EpisodeKeeper:
         gives them (a camera's depth from size); else they lie on the fixed plane.
 
     ``events`` lists what happened, newest last; ``kept`` the stored episodes' ids.
+    ``recognition`` (a :class:`~rnnpb.model.recognition.RecognitionConfig`, default the
+    paper preset's) is how shapes are compared: the running mirror system's, set by the
+    teacher.
     """
 
     def __init__(
@@ -93,6 +124,7 @@ class EpisodeKeeper:
         self.events: list[TeachingEvent] = []
         self.kept: list[int] = []
         self._last_text = ""
+        self.recognition = None
         # What a scripted source says it performed, per recent step (a demonstrator's
         # pattern): only written into an episode's note, for the person; never used to learn.
         self._shown: deque[tuple[int, str]] = deque(maxlen=SHOWN_STEPS)  # (step, pattern)
@@ -134,9 +166,15 @@ class EpisodeKeeper:
             # angles, so this guards a mapping that was changed or bypassed.
             self.events.append(TeachingEvent(record.step, "refused", unsafe))
             return
-        pattern = self.next_pattern_name()
         shown_as = self._shown_as(episode.first_step, episode.last_step)
+        note = f"steps {episode.first_step}-{episode.last_step}" + (
+            f"; {SHOWN_AS}{shown_as}" if shown_as else ""
+        )
         try:
+            repeat = find_repeat(self.memory, episode.sensory, self.recognition)
+            pattern = repeat.pattern if repeat is not None else self.next_pattern_name()
+            if repeat is not None:
+                note += f"; {MERGED_WITH}{repeat.episode_id} ({repeat.describe()})"
             episode_id = self.memory.add_episode(
                 episode.sensory,
                 episode.motor,
@@ -144,21 +182,29 @@ class EpisodeKeeper:
                 model=self.model,
                 pattern=pattern,
                 n_cycles=episode.n_cycles,
-                note=f"steps {episode.first_step}-{episode.last_step}"
-                + (f"; {SHOWN_AS}{shown_as}" if shown_as else ""),
+                note=note,
             )
+            performances = len(self.memory.group(pattern))
         except RnnpbError as error:
             self.events.append(TeachingEvent(record.step, "refused", str(error)))
             return
         self.kept.append(episode_id)
+        size = f"{episode.n_cycles} cycles, {len(episode.sensory)} steps"
+        text = (
+            f"kept a new movement as {pattern} ({size})"
+            if repeat is None
+            else f"kept another performance of {pattern} ({size}; merged with episode "
+            f"{repeat.episode_id}, {repeat.describe()}): seen {times(performances)}"
+        )
         self.events.append(
             TeachingEvent(
                 record.step,
                 "kept",
-                f"kept a new movement as {pattern} ({episode.n_cycles} cycles, "
-                f"{len(episode.sensory)} steps)",
+                text,
                 episode_id,
                 pattern,
+                None if repeat is None else repeat.episode_id,
+                performances,
             )
         )
 

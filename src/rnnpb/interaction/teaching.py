@@ -6,6 +6,8 @@ It composes parts of one job each:
 
 - :mod:`rnnpb.interaction.episodes`: the episode cutter (:class:`EpisodeCutter`, pure
   bookkeeping on each step's novelty word) and its :class:`TeachingConfig`;
+- :mod:`rnnpb.interaction.repeats`: whether a kept movement repeats one the memory holds
+  (:func:`find_repeat`, by shape), so that it is merged with it rather than kept anew;
 - :mod:`rnnpb.interaction.keeper`: the memory keeper (:class:`EpisodeKeeper`), which stores
   each cut movement as an episode of the short-term memory;
 - :mod:`rnnpb.interaction.background`: the consolidation in a spawned process
@@ -48,9 +50,12 @@ from rnnpb.interaction.keeper import (
     EpisodeKeeper,
     TeachingEvent,
     episode_steps,
+    merged_with,
     shown_as,
+    times,
     tracked_hands,
 )
+from rnnpb.interaction.repeats import Repeat, find_repeat, shape_distance
 from rnnpb.interaction.settings import ConfigTables
 
 if TYPE_CHECKING:
@@ -67,16 +72,27 @@ __all__ = [
     "CutterStatus",
     "EpisodeCutter",
     "EpisodeKeeper",
+    "PERFORMANCES",
     "KeptMovement",
     "PreparedMirror",
+    "Repeat",
     "Teacher",
     "TeachingConfig",
     "TeachingEvent",
     "episode_steps",
+    "find_repeat",
+    "merged_with",
+    "shape_distance",
     "shown_as",
     "tracked_hands",
     "version_path",
 ]
+
+
+PERFORMANCES = 2
+"""Performances of a new movement the teacher waits for before learning it: a pattern
+learned from one short take predicts that movement's next performance poorly; from two that
+differ it learns what varies."""
 
 
 def version_path(model_path: str | os.PathLike[str], version: int) -> Path:
@@ -90,10 +106,18 @@ def version_path(model_path: str | os.PathLike[str], version: int) -> Path:
 class Teacher:
     """On-line teaching in the interaction loop (docs/teaching.md).
 
-    Subscribe it to the loop (it keeps novel movements as episodes) and pass
-    :meth:`between_steps` to ``loop.run``: there it starts a consolidation in the background
-    once an episode is kept (``auto``, else on :meth:`confirm`), swaps the new model version in
-    between two steps when it is done, and keeps every version for :meth:`undo`. With
+    Subscribe it to the loop (it keeps novel movements as episodes, a repeat of a kept one
+    merged with it) and pass :meth:`between_steps` to ``loop.run``: there it starts a
+    consolidation in the background once a movement is ready (``auto``, else on
+    :meth:`confirm`), swaps the new model version in between two steps when it is done, and
+    keeps every version for :meth:`undo`.
+
+    A new movement is ready when it has been seen ``performances`` times (default
+    :data:`PERFORMANCES`: a pattern learned from one short take predicts the next performance
+    poorly); until then the teacher says how many it has and waits for the next one.
+    :meth:`confirm` (the person insists) learns what is kept, even from one performance, and
+    so does ``performances=1``. A performance of a pattern teaching learned already is more
+    data for it: ready at once, consolidated into that pattern. With
     ``wait`` (a run as fast as possible) it blocks until each consolidation finishes, so a
     scripted run repeats; paced it never waits, and with ``prepare`` (paced: the default) the
     new version's mirror system is built and its step compiled in a thread before the swap,
@@ -120,7 +144,11 @@ class Teacher:
         iterations: int | None = None,
         prepare: bool | None = None,
         tables: ConfigTables | None = None,
+        performances: int = PERFORMANCES,
     ) -> None:
+        if performances < 1:
+            raise ConfigError(f"performances must be >= 1, got {performances}")
+        self.performances = performances
         self.iterations = iterations
         self.tables = tables or ConfigTables()
         config = self.tables.teaching(config or TeachingConfig())
@@ -139,7 +167,10 @@ class Teacher:
         self.prepare = (not self.wait) if prepare is None else prepare
         self._prepared: PreparedMirror | None = None
         self.job: BackgroundConsolidation | None = None
+        self._job_patterns: tuple[str, ...] = ()
+        self._patterns: dict[str, tuple[str, ...]] = {}  # a version's file -> its patterns
         self.pending: list[int] = []
+        self._look = False  # whether a pending movement may have become ready
         self.events = self.keeper.events
         self.swapped_at: list[int] = []
         loop.subscribe(self._on_step)
@@ -151,10 +182,73 @@ class Teacher:
     def _on_step(self, record) -> None:
         before = len(self.keeper.kept)
         self.keeper.model = self.model_path
+        self.keeper.recognition = getattr(self.loop.mirror, "recognition", None)
         self.keeper(record)
-        self.pending.extend(self.keeper.kept[before:])
-        if self.auto and self.pending and self.job is None:
-            self.confirm()
+        new = self.keeper.kept[before:]
+        self.pending.extend(new)
+        if new:
+            self._say_waiting()
+            self._look = True
+        # What is ready changes only with a new episode or a new version (reads the memory).
+        if self.auto and self.job is None and self._look:
+            self._look = False
+            self._start(self.ready())
+
+    def learned_patterns(self) -> tuple[str, ...]:
+        """The patterns of the running version."""
+        path = self.model_path
+        if path not in self._patterns:
+            from rnnpb.model import TrainedModel
+
+            self._patterns[path] = TrainedModel.load(path).patterns
+        return self._patterns[path]
+
+    def _groups(self) -> dict[str, list[int]]:
+        """The pending episodes by movement (pattern name), in the order they were kept."""
+        names = {e.id: e.pattern for e in self.memory.episodes("kept")}
+        groups: dict[str, list[int]] = {}
+        for episode_id in self.pending:
+            if episode_id in names:
+                groups.setdefault(names[episode_id], []).append(episode_id)
+        return groups
+
+    def ready(self) -> list[int]:
+        """The pending episodes a consolidation would learn now: those of a movement seen
+        ``performances`` times, or of a pattern the running version holds."""
+        learned = set(self.learned_patterns())
+        return [
+            episode_id
+            for pattern, ids in self._groups().items()
+            if pattern in learned or len(self.memory.group(pattern)) >= self.performances
+            for episode_id in ids
+        ]
+
+    def waiting_for_confirm(self) -> bool:
+        """Some movement is ready and waits for :meth:`confirm` (not ``auto``)."""
+        return not self.auto and self.job is None and bool(self.pending) and bool(self.ready())
+
+    def _say_waiting(self) -> None:
+        """Say how many performances each pending new movement has: "seen once: show it
+        again", or "seen twice: learn it now?" when it waits for the person's Confirm."""
+        learned = set(self.learned_patterns())
+        for pattern, ids in self._groups().items():
+            if pattern in learned:
+                continue
+            count = len(self.memory.group(pattern))
+            if count < self.performances:
+                more = self.performances - count
+                text = (
+                    f"{pattern} seen {times(count)}: show it "
+                    f"{'again' if more == 1 else f'{more} more times'} to learn it "
+                    "(or confirm to learn it from what was seen)"
+                )
+            elif self.auto:
+                continue  # learned now: the consolidating event says so
+            else:
+                text = f"{pattern} seen {times(count)}: learn it now?"
+            self.events.append(
+                TeachingEvent(self.loop.steps, "waiting", text, ids[-1], pattern, None, count)
+            )
 
     def consolidation(self, model) -> ConsolidationConfig:
         """The consolidation a confirmed episode of ``model`` runs (in its own process)."""
@@ -163,15 +257,24 @@ class Teacher:
         )
 
     def confirm(self) -> None:
-        """Start consolidating the pending episodes (the person said yes)."""
+        """Start consolidating every pending episode (the person said yes): a movement seen
+        fewer than ``performances`` times is learned from what was seen."""
         if self.job is not None or not self.pending:
+            return
+        self._start(list(self.pending))
+
+    def _start(self, ids: list[int]) -> None:
+        """Consolidate the pending episodes ``ids`` in the background."""
+        if self.job is not None or not ids:
             return
         number = len(self.versions) + 1
         out = version_path(self.model_path, number)
         while out.exists():  # a version an earlier run wrote: never overwritten
             number += 1
             out = version_path(self.model_path, number)
-        ids, self.pending = self.pending, []
+        self.pending = [i for i in self.pending if i not in ids]
+        names = {e.id: e.pattern for e in self.memory.episodes()}
+        self._job_patterns = tuple(dict.fromkeys(names.get(i, "?") for i in ids))
         self.job = BackgroundConsolidation(
             self.model_path,
             self.memory.path,
@@ -186,6 +289,7 @@ class Teacher:
                 self.loop.steps,
                 "consolidating",
                 f"consolidating {len(ids)} episode(s) into {out.name}",
+                pattern=", ".join(self._job_patterns),
             )
         )
 
@@ -205,6 +309,8 @@ class Teacher:
             elif state.state == "failed":
                 self.events.append(TeachingEvent(self.loop.steps, "failed", state.describe()))
                 self.job = None
+                self._job_patterns = ()
+                self._look = bool(self.pending)
         rest = wait_s - (time.perf_counter() - start)
         if rest > 0:
             time.sleep(min(rest, 0.02))
@@ -221,16 +327,23 @@ class Teacher:
             model = TrainedModel.load(state.model_path)
             self._use(self.make_mirror(model))
         self.versions.append(state.model_path)
+        self._patterns[state.model_path] = model.patterns
+        self._look = bool(self.pending)
         self.swapped_at.append(self.loop.steps)
-        learned = ", ".join(p for p in model.patterns if p.startswith("new-")) or "?"
+        names = [p for p in self._job_patterns if p in model.patterns]
+        learned = ", ".join(names) or "?"
+        counts = ", ".join(times(len(self.memory.group(p))) for p in names)
         self.events.append(
             TeachingEvent(
                 self.loop.steps,
                 "learned",
                 f"learned as pattern {learned} "
-                f"({state.seconds:.0f} s, {Path(state.model_path).name})",
+                f"(seen {counts or 'as kept'}; "
+                f"{state.seconds:.0f} s, {Path(state.model_path).name})",
+                pattern=learned,
             )
         )
+        self._job_patterns = ()
 
     def _use(self, mirror) -> None:
         """Swap ``mirror`` in between two steps, continuing the running interaction (its

@@ -189,6 +189,15 @@ def _text(value: object, name: str) -> str:
     return text
 
 
+def _joined(note: str, part: str) -> str:
+    """``note`` with ``part`` added (parts are separated by "; "), the oldest parts dropped
+    past the length a note may have."""
+    parts = [p for p in note.split("; ") if p] + [part]
+    while len(parts) > 1 and len("; ".join(parts)) > _TEXT_LIMIT:
+        del parts[1]  # the first part says which steps the episode was cut from
+    return "; ".join(parts)[:_TEXT_LIMIT]
+
+
 def _pattern(name: str) -> str:
     problem = pattern_name_problem(name)
     if problem:
@@ -465,6 +474,63 @@ class MemoryStore:
             (_pattern(pattern), int(episode_id)),
             episode_id,
         )
+
+    def group(self, pattern: str, statuses: Iterable[str] = ("kept", "learned")) -> list[int]:
+        """The ids of the episodes of one movement (the episodes named ``pattern``), of these
+        statuses, oldest first."""
+        wanted = tuple(statuses)
+        return [e.id for e in self.episodes() if e.pattern == pattern and e.status in wanted]
+
+    def merge(self, episode_id: int, into: int, why: str = "") -> str:
+        """Episode ``episode_id`` is another performance of episode ``into``'s movement: it
+        takes that episode's pattern name, and its note says so (``why``: how alike they
+        are). One transaction; returns the pattern. A learned episode is not moved (it is
+        part of a model version already: forget or undo that version first)."""
+        target = self.episode_summary(into)
+        moved = self.episode_summary(episode_id)
+        if moved.status == "learned":
+            raise DataFileError(
+                f"memory: episode {episode_id} is learned as {moved.pattern!r}; it cannot join "
+                "another movement"
+            )
+        if episode_id == into or moved.pattern == target.pattern:
+            return target.pattern
+        note = _joined(moved.note, f"merged with episode {into}" + (f" ({why})" if why else ""))
+        self._change(
+            "UPDATE episodes SET pattern = ?, note = ? WHERE id = ?",
+            (target.pattern, _text(note, "note"), int(episode_id)),
+            episode_id,
+        )
+        return target.pattern
+
+    def split(self, episode_id: int, pattern: str) -> None:
+        """Episode ``episode_id`` is a movement of its own after all (a merge undone): it is
+        named ``pattern``, which no other episode may carry. A learned episode is not moved."""
+        moved = self.episode_summary(episode_id)
+        if moved.status == "learned":
+            raise DataFileError(
+                f"memory: episode {episode_id} is learned as {moved.pattern!r}; it cannot be "
+                "split from it"
+            )
+        if any(e.pattern == pattern for e in self.episodes() if e.id != episode_id):
+            raise DataFileError(f"memory: the name {pattern!r} is taken by another episode")
+        note = _joined(moved.note, f"split from {moved.pattern}")
+        self._change(
+            "UPDATE episodes SET pattern = ?, note = ? WHERE id = ?",
+            (_pattern(pattern), _text(note, "note"), int(episode_id)),
+            episode_id,
+        )
+
+    def episode_summary(self, episode_id: int) -> EpisodeSummary:
+        """One episode without its arrays; raises :class:`MemoryFileError` when absent."""
+        rows = self._read(
+            "SELECT id, created_at, source, model, pattern, status, n_steps, n_cycles, "
+            "note FROM episodes WHERE id = ?",
+            (int(episode_id),),
+        )
+        if not rows:
+            raise MemoryFileError(f"{self.path}: no episode {episode_id}")
+        return EpisodeSummary(*rows[0])
 
     def forget(self, episode_id: int) -> None:
         """Delete an episode and its movement (the consolidations keep their rehearsals)."""

@@ -446,7 +446,9 @@ def rehearse(
     return out
 
 
-def _check_new(model: TrainedModel, new_sequences: SequenceABC[Sequence]) -> None:
+def _check_new(
+    model: TrainedModel, new_sequences: SequenceABC[Sequence], grow: bool = False
+) -> None:
     if not new_sequences:
         raise DataFileError("no new sequences to add")
     net = model.network
@@ -458,7 +460,7 @@ def _check_new(model: TrainedModel, new_sequences: SequenceABC[Sequence]) -> Non
                 f"{net.sensory_size} and {net.motor_size}: a model of another network size"
             )
     clashes = sorted({s.pattern for s in new_sequences} & set(model.patterns))
-    if clashes:
+    if clashes and not grow:
         raise ConfigError(
             f"new pattern name(s) {', '.join(repr(c) for c in clashes)} already learned by the "
             f"model (it holds {', '.join(model.patterns)}); a consolidation adds new patterns "
@@ -530,16 +532,22 @@ def consolidate(
     progress: bool | Callable[[TrainingProgress], None] = False,
     checkpoint_path: str | os.PathLike[str] | None = None,
     resume: bool = False,
+    grow: bool = False,
 ) -> TrainedModel:
     """Add the patterns of ``new_sequences`` to ``model``; return the new model.
+
+    A pattern is learned from all its sequences, as a first training learns each pattern
+    from its demonstrations: give every performance of a new pattern. With ``grow`` a
+    sequence may name a pattern the model holds: it is more data for that pattern (its PB and
+    initial context start at the pattern's), learned with the pattern's rehearsal.
 
     Parameters
     ----------
     model : TrainedModel
         The learned model (not changed).
     new_sequences : list of Sequence
-        Demonstrations of the new pattern(s): names the model does not hold, the model's
-        sensory and motor sizes, values within its normalization.
+        Demonstrations of the new pattern(s): names the model does not hold (but with
+        ``grow``), the model's sensory and motor sizes, values within its normalization.
     config : ConsolidationConfig
         The method and the learning (default: rehearsal with the model's own learning).
     replay_data : list of Sequence
@@ -556,7 +564,7 @@ def consolidate(
         The old sequences (rehearsed, replayed or, for finetune, as they were), then the new;
         ``meta["history"]`` is the model's history with this step appended.
     """
-    _check_new(model, new_sequences)
+    _check_new(model, new_sequences, grow)
     config = (config or ConsolidationConfig()).resolved(model)
     learning = config.learning_for(model)
     limits = model_joint_limits(model)
@@ -569,6 +577,10 @@ def consolidate(
     else:
         fresh_pb = np.full((len(new), net.pb_size), 0.5)
     fresh_context = np.full((len(new), net.context_size), 0.5)
+    grown = [i for i, s in enumerate(new) if s.pattern in model.patterns]
+    for i in grown:  # more data of a learned pattern starts where that pattern is
+        fresh_pb[i] = model.pattern_pb[new[i].pattern]
+        fresh_context[i] = model.pattern_initial_context(new[i].pattern)
     details: dict[str, Any] = {}
     warm: WarmStart | None = None
     tag = f"{model.fingerprint}:{config.method}:new-pb={config.new_pb_start}"
@@ -645,6 +657,8 @@ def consolidate(
         # Replay and scratch learn from the original data, whose hands are the taught ones.
         learned = replace(learned, taught_sensory=_taught(model, learned, len(new)))
     training = learned.meta["training"]
+    if grown:
+        details["grown"] = sorted({new[i].pattern for i in grown})
     entry = HistoryEntry(
         method=config.method,
         added=tuple(dict.fromkeys(s.pattern for s in new)),

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from rnnpb.errors import ConfigError, RnnpbError
-from rnnpb.interaction.teaching import TeachingConfig, shown_as
+from rnnpb.interaction.teaching import TeachingConfig, merged_with, shown_as
 from rnnpb.web._protocol import TEACH_MODES
 
 log = logging.getLogger("rnnpb.web")
@@ -323,11 +323,14 @@ class SessionTeaching:
         session.model_name = name
 
     def _holding(self) -> bool:
-        """Nothing more is kept while a kept movement waits for Confirm or is being learned:
-        the same movement, performed on, would otherwise be kept again and again (its run
-        restarts whenever the detector hesitates) and learned as several patterns."""
+        """Nothing more is kept while a movement seen often enough waits for Confirm or is
+        being learned: the same movement, performed on, would otherwise be kept again and
+        again (its run restarts whenever the detector hesitates). A movement seen fewer times
+        waits for its next performance, which is kept and merged with it."""
         teacher = self.teacher
-        waiting = self.mode == "confirm" and self._lists.get("pending", 0) > 0
+        if teacher is None:
+            return False
+        waiting = self.mode == "confirm" and teacher.waiting_for_confirm()
         return waiting or teacher.job is not None or self._prepared is not None
 
     def between_steps(self) -> None:
@@ -462,11 +465,24 @@ class SessionTeaching:
                 "source": e.source,
                 "when": datetime.datetime.fromtimestamp(e.created_at).strftime("%H:%M:%S"),
                 "note": e.note,
+                "merged": merged_with(e.note),
             }
             for e in reversed(episodes)
         ][:SHOWN_EPISODES]
         pending = sum(e.status == "kept" for e in episodes)
-        self._lists = {"episodes": shown, "pending": pending, "total": len(episodes)}
+        # How many performances the memory holds of each movement waiting to be learned.
+        seen: dict[str, int] = {}
+        for e in episodes:
+            if e.status in ("kept", "learned"):
+                seen[e.pattern] = seen.get(e.pattern, 0) + 1
+        waiting = {e.pattern: seen[e.pattern] for e in episodes if e.status == "kept"}
+        self._lists = {
+            "episodes": shown,
+            "pending": pending,
+            "total": len(episodes),
+            "seen": waiting,
+            "performances": self.teacher.performances if self.teacher is not None else 2,
+        }
         # Which demonstrator shape each learned pattern was shown as (the buttons say so).
         self._shapes = {
             shown_as(e.note): e.pattern
@@ -546,5 +562,6 @@ class SessionTeaching:
             taught_shapes={k: v for k, v in self._shapes.items() if v in running},
             can_undo=len(teacher.versions) > 1 and teacher.job is None,
             consolidating=teacher.job is not None,
+            waiting=self.mode == "confirm" and teacher.waiting_for_confirm(),
         )
         return out

@@ -4,7 +4,7 @@ measures of a starting model, and the paced run (each runs in a worker process).
 The interaction loop runs with the :class:`rnnpb.interaction.teaching.Teacher` subscribed, as
 fast as possible — so the loop waits between two steps for each consolidation, and a run
 repeats. The paced run plays the new shape at dt 0.4 while the background process
-consolidates the kept episode of one run again, and the new model is swapped in between two
+consolidates the kept episodes of one run again, and the new model is swapped in between two
 steps. Each job copies its starting model into its own folder and never writes the original.
 """
 
@@ -194,8 +194,13 @@ def teach_job(
         )
         for k, (step, cpu, wall, worker) in enumerate(watch.times)
     ]
+    # Followed from the episode that made the shape ready to learn: the last of the shape's
+    # kept before the first consolidation started (its second performance's).
+    ready = [
+        e for e in from_shape if not consolidations or e.kept_at <= consolidations[0].started_at
+    ]
     follow_s, follow_steps = follow_time(
-        min(from_shape, key=lambda e: e.kept_at, default=None),
+        max(ready, key=lambda e: e.kept_at, default=None),
         consolidations[0] if consolidations else None,
         lock_next,
         new_start,
@@ -286,8 +291,8 @@ def paced_job(
     set_name: str, shape: str, start_path: str, config: TeachConfig, runs: Path
 ) -> PacedRun:
     """At dt 0.4, paced, in ``runs/paced_setK_SHAPE``: the user keeps performing ``shape``
-    while the episode the fast run (``runs/setK_SHAPE``) kept is consolidated again in the
-    background, and the new model is swapped in."""
+    while the episodes the fast run (``runs/setK_SHAPE``) kept of it are consolidated again in
+    the background, and the new model is swapped in."""
     run_folder = runs / f"set{set_name}_{shape}"
     folder = str(runs / f"paced_set{set_name}_{shape}")
     from rnnpb import _xla
@@ -301,20 +306,22 @@ def paced_job(
     path = fresh_copy(start_path, folder)
     model = TrainedModel.load(path)
     with MemoryStore(Path(run_folder) / "model.npz", create=False) as taught:
-        episode = next(e for e in taught.episodes() if e.pattern == "new-1")
-        movement = taught.episode(episode.id)
+        movements = [taught.episode(i) for i in taught.group("new-1")]
     scenario = make_scenario([(shape, 120)], seed=config.scenario_seed + 7)
     online = config.online
     with ScenarioSource(scenario, loop=True) as source, MemoryStore(path) as memory:
-        episode_id = memory.add_episode(
-            movement.sensory,
-            movement.motor,
-            source=movement.summary.source,
-            model=str(path),
-            pattern=movement.summary.pattern,
-            n_cycles=movement.summary.n_cycles,
-            note=movement.summary.note,
-        )
+        episode_ids = [
+            memory.add_episode(
+                movement.sensory,
+                movement.motor,
+                source=movement.summary.source,
+                model=str(path),
+                pattern=movement.summary.pattern,
+                n_cycles=movement.summary.n_cycles,
+                note=movement.summary.note,
+            )
+            for movement in movements
+        ]
         mirror = MirrorSystem(model, online)
         loop = InteractionLoop(mirror, source, config=LoopConfig(config.dt, paced=True))
         # Compiled before the clock starts, as a session's first step would be at its start.
@@ -323,7 +330,7 @@ def paced_job(
         teacher = teacher_for(loop, path, memory, config, source="paced", auto=False)
         watch = Watch(teacher, loop)
         watch.step_limit = config.paced_max_steps
-        teacher.pending.append(episode_id)
+        teacher.pending.extend(episode_ids)
         teacher.confirm()
         watch.started()
 

@@ -2,9 +2,10 @@
 
 Per learning set and new shape of the demonstrator (:data:`rnnpb.demonstrator.NEW_SHAPES`) a
 scripted user stands in front of the robot and performs, one after another: a learned
-pattern; the new shape, for several cycles; the other learned patterns; unstructured
-movement (a random walk, then jerky movement); and the new shape again
-(:func:`segments`).
+pattern; the new shape, for several cycles; another learned pattern; the new shape a second
+time (teaching learns a new movement from two performances, as a person shows it); the other
+learned patterns; unstructured movement (a random walk, then jerky movement); and the new
+shape again, its next performance (:func:`segments`).
 """
 
 from __future__ import annotations
@@ -31,12 +32,12 @@ class TeachConfig:
     teaching's policy (the model's preset's ``[teaching]`` ``iterations``:
     :func:`rnnpb.model.consolidation.consolidation_config` with ``purpose="teach"``), so that
     what improves there is what this study measures. The scripted user: ``lead_steps``
-    of a learned pattern, ``new_steps`` of the new shape, ``other_steps`` of each other
-    learned pattern, ``unstructured_steps`` of each unstructured movement, ``again_steps`` of
-    the new shape again. ``paced``: the (learning set, shape) whose kept episode is
-    consolidated again during a paced run; ``paced_max_steps`` ends that run early (the
-    consolidation is then cancelled: the quick form), else it ends ``paced_after_swap`` steps
-    after the swap.
+    of a learned pattern, ``new_steps`` of the new shape (each of its two first performances),
+    ``other_steps`` of each other learned pattern, ``unstructured_steps`` of each unstructured
+    movement, ``again_steps`` of the new shape again. ``paced``: the (learning set, shape)
+    whose kept episodes are consolidated again during a paced run; ``paced_max_steps`` ends
+    that run early (the consolidation is then cancelled: the quick form), else it ends
+    ``paced_after_swap`` steps after the swap.
     """
 
     quick: bool = False
@@ -111,13 +112,16 @@ def segments(
     patterns: tuple[str, ...], shape: str, index: int, config: TeachConfig
 ) -> list[tuple[str, int]]:
     """What the user performs, (movement, steps) in order, when taught the ``index``-th shape:
-    the learned pattern it leads with is another per shape."""
+    the learned pattern it leads with is another per shape; the shape's two first
+    performances have the first of the other learned patterns between them."""
     lead = patterns[index % len(patterns)]
     others = [p for p in patterns if p != lead]
     return [
         (lead, config.lead_steps),
         (shape, config.new_steps),
-        *((p, config.other_steps) for p in others),
+        (others[0], config.other_steps),
+        (shape, config.new_steps),
+        *((p, config.other_steps) for p in others[1:]),
         *((m, config.unstructured_steps) for m in UNSTRUCTURED_MOVEMENTS),
         (shape, config.again_steps),
     ]

@@ -3,7 +3,7 @@
 Per learning set (1–4 and the larger set) and new shape, a scripted user teaches the robot the
 shape (:mod:`rnnpb.experiments.scenarios.teaching_scenario`); measured
 (:mod:`~rnnpb.experiments.scenarios.teaching_measures`): the timeline, the detection delay,
-the episode kept, the consolidation's time, the lock-on to the shape's next performance and
+the episodes kept, the consolidation's time, the lock-on to the shape's next performance and
 the interaction time to follow it, the paper's measures of the old patterns before and after,
 the episodes kept from unstructured movement, and the deadlines of a paced run at dt 0.4.
 
@@ -256,8 +256,9 @@ def _introduction(
         f"Per learning set and new shape, a scripted user performs: {performed} (steps; the "
         "first of the learned patterns is another per shape). The loop runs "
         "as fast as possible with the teacher: it waits between two steps for each "
-        "consolidation, so a run repeats. *Follow*: steps from the new shape's first step "
-        "until its episode is kept, plus the steps a paced loop runs while the consolidation "
+        "consolidation, so a run repeats. The new shape is learned from its two first "
+        "performances. *Follow*: steps from the new shape's first step until the episode of "
+        "its second performance is kept, plus the steps a paced loop runs while the consolidation "
         "takes its CPU time on one core, plus the lock-on steps on the shape's next "
         f"performance, × dt {config.dt:g} s (target ≤ {follow.parameter('seconds'):.0f} s, and "
         f"the lock-on itself within {follow.parameter('lock_steps'):g} steps, the paper's). The "
@@ -360,7 +361,7 @@ def _paced_section(paced: PacedRun) -> list[str]:
         "## Deadlines during the background consolidation (paced)",
         "",
         f"Learning set {paced.learning_set}: the user keeps performing {paced.shape} while "
-        "the episode kept in its run is consolidated again in the background process; "
+        "the episodes kept in its run are consolidated again in the background process; "
         f"the loop paced at dt {paced.dt:g} s, the new model swapped in between two steps.",
         "",
         *table(("measure", "value"), rows),

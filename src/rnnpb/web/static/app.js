@@ -344,8 +344,7 @@ function showTeachingStatus(status, step) {
       + "cycles";
   } else if (phase === "kept") {
     badge = "kept";
-    text = "new movement kept in the short-term memory"
-      + (teaching.mode === "confirm" ? " — press Confirm to learn it" : "");
+    text = `new movement kept in the short-term memory${seenText(teaching)}`;
   } else if (phase === "off") {
     badge = "off";
     text = teaching.available ? "learning is off: nothing is kept"
@@ -357,12 +356,13 @@ function showTeachingStatus(status, step) {
     // Recording can start only when nothing waits (no kept movement before Confirm, no
     // learning, no swap of the model) and learning is on.
     const canRecord = teaching.available && teaching.mode !== "off" && !job
-      && (teaching.pending || 0) === 0 && !(dash.state && dash.state.loading);
+      && !teaching.waiting && !(dash.state && dash.state.loading);
     text = !step ? "start the robot and perform a movement"
       : NOVELTY_WORDS[novelty] ? `the robot sees ${NOVELTY_WORDS[novelty]}`
         + (novelty === "novel" && canRecord ? " — keep performing it: whole cycles are counted"
           : "")
         : "the robot is not sure yet what it sees";
+    if (step) text += seenText(teaching);
   }
   const box = $("teach-phase");
   box.dataset.phase = phase;
@@ -375,6 +375,20 @@ function showTeachingStatus(status, step) {
   dash.teachPhase = phase;
   const canConfirm = teaching.available && !job && (teaching.pending || 0) > 0;
   $("teach-confirm").disabled = !dash.connected || !canConfirm;
+}
+
+// How many performances the kept movements have: a new movement is learned from two (Confirm
+// learns it from what was seen).
+const TIMES = { 1: "once", 2: "twice" };
+function seenText(teaching) {
+  const seen = Object.entries(teaching.seen || {});
+  if (!seen.length) return "";
+  const needed = teaching.performances || 2;
+  return " — " + seen.map(([pattern, n]) => `${pattern} seen ${TIMES[n] || `${n} times`}: `
+    + (n < needed ? "show it again to learn it"
+      + (teaching.mode === "confirm" ? " (or press Confirm to learn it from one)" : "")
+      : teaching.mode === "confirm" ? "learn it now? press Confirm" : "learning it"))
+    .join("; ");
 }
 
 function showTeaching(state) {
@@ -404,10 +418,11 @@ function showTeaching(state) {
   const rows = (teaching.episodes || []).map((e) => el("tr", {},
     el("td", {}, `#${e.id}`), el("td", {}, e.pattern),
     el("td", { className: `status-${e.status}` }, e.status),
-    el("td", {}, `${e.n_cycles} cycles, ${e.n_steps} steps`), el("td", {}, e.source),
+    el("td", {}, `${e.n_cycles} cycles, ${e.n_steps} steps`),
+    el("td", {}, e.merged ? `another performance of #${e.merged}` : ""), el("td", {}, e.source),
     el("td", {}, e.when)));
   $("teach-episodes").replaceChildren(rows.length
-    ? el("tr", {}, ...["", "pattern", "status", "movement", "from", "kept"].map((h) =>
+    ? el("tr", {}, ...["", "pattern", "status", "movement", "merged", "from", "kept"].map((h) =>
       el("th", {}, h)))
     : el("tr", {}, el("td", {}, "nothing kept yet")), ...rows);
   $("teach-versions").replaceChildren(...(teaching.versions || []).map((v) => {
