@@ -1,6 +1,7 @@
 """The memory keeper: a loop subscriber that stores each novel movement the
 :class:`~rnnpb.interaction.episodes.EpisodeCutter` cuts as an episode of the short-term memory,
-and the notes those episodes carry."""
+and the notes those episodes carry; and each performance of a pattern teaching learned that the
+robot recognises but does not follow closely, as more data for that pattern."""
 
 from __future__ import annotations
 
@@ -36,6 +37,14 @@ class TeachingEvent:
     repeat_of: int | None = None
     performances: int = 0
 
+
+# A recognised pattern is followed closely ("locked", the paper measures' definition:
+# rnnpb.analysis.metrics.SENSORY_LOCK_THRESHOLD and LOCK_HOLD, which a test holds these to)
+# when the one-step prediction of the hands has been within LOCK_ERROR (RMS, view units) for
+# LOCK_STEPS steps running.
+LOCK_ERROR = 0.03
+LOCK_STEPS = 6
+GROWS = "grows "  # in an episode's note: a performance of a learned pattern, more data for it
 
 SHOWN_STEPS = 2000  # steps of a source's own account kept (an episode is far shorter)
 SHOWN_AS = "shown as "  # in an episode's note: what a scripted source said it performed
@@ -100,6 +109,11 @@ class EpisodeKeeper:
         ``hands_of(record) -> array (2, 3) or None``: the 3-D hands of a step when the source
         gives them (a camera's depth from size); else they lie on the fixed plane.
 
+    A performance recognised as one of ``taught`` (the patterns teaching learned: the
+    teacher sets them) but not followed closely — not locked on (:data:`LOCK_ERROR` over
+    :data:`LOCK_STEPS` steps) on most of its steps, cut as a novel movement is — is stored
+    under that pattern's name, as more data for it ("grow a pattern with use").
+
     ``events`` lists what happened, newest last; ``kept`` the stored episodes' ids.
     ``recognition`` (a :class:`~rnnpb.model.recognition.RecognitionConfig`, default the
     paper preset's) is how shapes are compared: the running mirror system's, set by the
@@ -119,6 +133,12 @@ class EpisodeKeeper:
         self.model = str(model)
         self.source = str(source)
         self.cutter = EpisodeCutter(config, mapping)
+        # Cuts performances of a taught pattern it does not follow closely, as ``cutter`` cuts
+        # novel movements: "novel" there is "recognised as ``_growing`` but not locked".
+        self.grower = EpisodeCutter(config, mapping)
+        self.taught: frozenset[str] = frozenset()
+        self._growing = ""
+        self._errors: deque[float] = deque(maxlen=LOCK_STEPS)
         self._checker: SafetyChecker | None = None  # made at the first episode
         self.hands_of = hands_of
         self.events: list[TeachingEvent] = []
@@ -150,6 +170,9 @@ class EpisodeKeeper:
         if shown:
             self._shown.append((record.step, str(shown)))  # the oldest fall off the end
         hands = self.hands_of(record) if self.hands_of is not None else None
+        grown = self._grow(record, hands)
+        if grown is not None:
+            self._store(record, grown, self._growing)
         episode = self.cutter.observe(
             record.step, record.observed, getattr(record, "novelty", ""), hands
         )
@@ -160,6 +183,29 @@ class EpisodeKeeper:
             self._last_text = text
             return
         self._last_text = text
+        self._store(record, episode)
+
+    def _grow(self, record, hands):
+        """One step of the grower: the performance of a taught pattern it cuts, or None."""
+        error = getattr(record, "prediction_error", float("nan"))
+        self._errors.append(float(error))
+        recognised = getattr(record, "recognised", None)
+        if recognised not in self.taught:
+            if self._growing:
+                self.grower.reset()
+                self._growing = ""
+            return None
+        if recognised != self._growing:  # another pattern: another performance
+            self.grower.reset()
+            self._growing = str(recognised)
+        errors = np.sqrt(np.asarray(self._errors))
+        locked = len(errors) == LOCK_STEPS and bool(np.all(errors < LOCK_ERROR))
+        word = "familiar" if locked else "novel"
+        return self.grower.observe(record.step, record.observed, word, hands)
+
+    def _store(self, record, episode, grows: str = "") -> None:
+        """Store a cut episode: under ``grows`` (a taught pattern it is more data for), else
+        merged with the movement it repeats, else as a new movement."""
         unsafe = self._unsafe(episode.motor)
         if unsafe:
             # Never learned: the network would learn to command it. The retargeting makes safe
@@ -171,9 +217,11 @@ class EpisodeKeeper:
             f"; {SHOWN_AS}{shown_as}" if shown_as else ""
         )
         try:
-            repeat = find_repeat(self.memory, episode.sensory, self.recognition)
-            pattern = repeat.pattern if repeat is not None else self.next_pattern_name()
-            if repeat is not None:
+            repeat = None if grows else find_repeat(self.memory, episode.sensory, self.recognition)
+            pattern = grows or (repeat.pattern if repeat is not None else self.next_pattern_name())
+            if grows:
+                note += f"; {GROWS}{grows} (recognised, not followed closely)"
+            elif repeat is not None:
                 note += f"; {MERGED_WITH}{repeat.episode_id} ({repeat.describe()})"
             episode_id = self.memory.add_episode(
                 episode.sensory,
@@ -191,7 +239,10 @@ class EpisodeKeeper:
         self.kept.append(episode_id)
         size = f"{episode.n_cycles} cycles, {len(episode.sensory)} steps"
         text = (
-            f"kept a new movement as {pattern} ({size})"
+            f"kept a performance of {pattern} the robot did not follow closely ({size}): "
+            f"more data for it"
+            if grows
+            else f"kept a new movement as {pattern} ({size})"
             if repeat is None
             else f"kept another performance of {pattern} ({size}; merged with episode "
             f"{repeat.episode_id}, {repeat.describe()}): seen {times(performances)}"

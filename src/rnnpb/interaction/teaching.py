@@ -183,6 +183,7 @@ class Teacher:
         before = len(self.keeper.kept)
         self.keeper.model = self.model_path
         self.keeper.recognition = getattr(self.loop.mirror, "recognition", None)
+        self.keeper.taught = self.taught_patterns()
         self.keeper(record)
         new = self.keeper.kept[before:]
         self.pending.extend(new)
@@ -194,14 +195,20 @@ class Teacher:
             self._look = False
             self._start(self.ready())
 
-    def learned_patterns(self) -> tuple[str, ...]:
-        """The patterns of the running version."""
-        path = self.model_path
+    def learned_patterns(self, path: str | None = None) -> tuple[str, ...]:
+        """The patterns of the running version (or of the version file ``path``)."""
+        path = self.model_path if path is None else path
         if path not in self._patterns:
             from rnnpb.model import TrainedModel
 
             self._patterns[path] = TrainedModel.load(path).patterns
         return self._patterns[path]
+
+    def taught_patterns(self) -> frozenset[str]:
+        """The patterns teaching learned: in the running version, not in the first."""
+        if len(self.versions) == 1:
+            return frozenset()
+        return frozenset(self.learned_patterns()) - set(self.learned_patterns(self.versions[0]))
 
     def _groups(self) -> dict[str, list[int]]:
         """The pending episodes by movement (pattern name), in the order they were kept."""
@@ -401,6 +408,7 @@ class Teacher:
         if taught:
             renamed = model.renamed(pattern, name)
             renamed.save(self.model_path)
+            self._patterns.pop(self.model_path, None)  # the same file, new names
             self._use(self.make_mirror(renamed))
         for episode in episodes:
             self.memory.rename(episode.id, name)
