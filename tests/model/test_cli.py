@@ -174,8 +174,14 @@ def test_bench_prints_and_writes_its_figures(tmp_path):
         "dyad_step_ms_median",
         "dyad_step_side_by_side_ms_median",
         "dyad_step_one_agent_ms_median",
+        "online_step_paper_ms_p99",
+        "online_step_default_guarded_ms_median",
+        "online_step_batched_per_session_ms_median",
+        "online_batched_step_vs_default",
     ):
         assert figures[key] > 0
+    assert figures["online_step_paper_vs_paper"] == 1.0
+    assert "sessions in one call" in result.stdout
     # Two agents are timed in a process of their own, which may use two cores.
     assert 1 <= figures["dyad_cores"] <= 2
     assert "two coupled agents" in result.stdout and "side by side" in result.stdout

@@ -21,6 +21,11 @@ single-threaded, after warm-up:
     in the regression, then the command filter's check before sending: docs/safety.md), and
     each guard's step alone (the barrier on the newest step, on 3 steps, on the whole
     window, the projection);
+  - side by side in the same run, each as median, 99th percentile and ratio to the first:
+    the step with the paper's regression, with the default one, with the default one and its
+    detectors and the safety guard (barrier and command filter), and the step per session
+    of 16 sessions stepped in one call (rnnpb.model.BatchedMirror), with the ratio of the
+    16 sessions' call to one default step;
   - the same on-line step in a straightforward NumPy implementation (the reference the
     tests hold the compiled one to), and the ratio;
   - colour-ball tracking of 640x480 frames;
@@ -33,6 +38,9 @@ single-threaded, after warm-up:
 online_step_ms_median, online_step_ms_p99, ...) with the machine and versions.
 """
 
+
+BATCHED_SESSIONS = 16
+"""Sessions of the batched figure: a study's draws of one model, or a room of users."""
 
 SAFETY_GUARD_TIMED = "barrier"
 """The guard of the "safety on" figure: the one a map switches on by default
@@ -96,6 +104,7 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb.demonstrator import learning_set
     from rnnpb.model import (
         MIRROR_SYSTEMS,
+        BatchedMirror,
         NetworkConfig,
         OnlineConfig,
         TrainConfig,
@@ -177,13 +186,24 @@ def run(args: argparse.Namespace) -> int:
     }
     guarded = {name: compiled(model, cfg, meta=meta) for name, cfg in guards.items()}
     command_filter = CommandFilter()
+    # The paper's regression, and many sessions of the default in one call, each session at
+    # its own place in the stream (its own phase).
+    paper = compiled(model, OnlineConfig.paper())
+    batched = BatchedMirror(model, BATCHED_SESSIONS, online)
     stream = np.concatenate([s.sensory for s in sequences])
+    offsets = np.arange(BATCHED_SESSIONS) * 7
+
+    def session_hands(t: int) -> np.ndarray:
+        return stream[(t + offsets) % len(stream)]
+
     for t in range(40):
         mirror.step(stream[t])
         plain.step(stream[t])
+        paper.step(stream[t])
+        batched.step(session_hands(t))
         for system in guarded.values():
             command_filter(system.step(stream[t]).motor)
-    step_times, plain_times = [], []
+    step_times, plain_times, paper_times, batched_times = [], [], [], []
     # Also the processor time of each step: on a shared machine the wall-clock time includes
     # waiting for a core, the processor time does not (the ratios are measured in one run).
     cpu_times: dict[str, list[float]] = {name: [] for name in ("off", *guarded)}
@@ -191,7 +211,7 @@ def run(args: argparse.Namespace) -> int:
     filter_times: dict[str, list[float]] = {name: [] for name in guarded}
     for t in range(args.steps):
         u = stream[(40 + t) % len(stream)]
-        for system, times in ((mirror, step_times), (plain, plain_times)):
+        for system, times in ((mirror, step_times), (plain, plain_times), (paper, paper_times)):
             t0, c0 = time.perf_counter(), time.process_time()
             system.step(u)
             times.append((time.perf_counter() - t0) * 1e3)
@@ -206,6 +226,10 @@ def run(args: argparse.Namespace) -> int:
             t2 = time.perf_counter()
             guarded_times[name].append((t1 - t0) * 1e3)
             filter_times[name].append((t2 - t1) * 1e3)
+        hands = session_hands(40 + t)
+        t0 = time.perf_counter()
+        batched.step(hands)
+        batched_times.append((time.perf_counter() - t0) * 1e3)
     step_times = np.asarray(step_times)
     next_part()
 
@@ -229,6 +253,28 @@ def run(args: argparse.Namespace) -> int:
     # cores (this one is pinned to one, and XLA sizes its threads when it starts).
     dyad_figures = _dyad_figures(model, online, args.steps)
 
+    # Side by side: each as a median, a 99th percentile and a ratio to the paper's step.
+    guarded_with_filter = np.add(
+        guarded_times[SAFETY_GUARD_TIMED], filter_times[SAFETY_GUARD_TIMED]
+    )
+    side_by_side = {
+        "paper": np.asarray(paper_times),
+        "default": step_times,
+        "default_guarded": guarded_with_filter,
+        "batched_per_session": np.asarray(batched_times) / BATCHED_SESSIONS,
+    }
+    paper_median = float(np.median(paper_times))
+    compared: dict[str, float] = {}
+    for name, times in side_by_side.items():
+        compared[f"step_{name}_ms_median"] = float(np.median(times))
+        compared[f"step_{name}_ms_p99"] = float(np.percentile(times, 99))
+        compared[f"step_{name}_vs_paper"] = float(np.median(times)) / paper_median
+    compared["batched_sessions"] = float(BATCHED_SESSIONS)
+    compared["batched_step_ms_median"] = float(np.median(batched_times))
+    compared["batched_step_vs_default"] = float(np.median(batched_times)) / float(
+        np.median(step_times)
+    )
+
     figures = {
         "train_iteration_ms_median": train_ms,
         "train_50k_iterations_s_estimate": train_ms * 50.0,
@@ -251,6 +297,7 @@ def run(args: argparse.Namespace) -> int:
         },
         "online_step_reference_numpy_ms_median": reference_ms,
         "online_speedup_vs_numpy": reference_ms / float(np.median(step_times)),
+        **{f"online_{key}": value for key, value in compared.items()},
         **dyad_figures,
     }
     if not args.no_tracking:
@@ -315,6 +362,24 @@ def run(args: argparse.Namespace) -> int:
             f"{figures[f'online_step_{name}_ms_median']:8.3f} ms median, processor time "
             f"{figures[f'online_step_{name}_cpu_ms_median']:.3f} ms"
         )
+    print("  side by side in this run (median, p99, ratio of medians to the paper's step):")
+    labels = {
+        "paper": "the paper's regression",
+        "default": "the default",
+        "default_guarded": "default, detectors, guard and filter",
+        "batched_per_session": f"per session of {BATCHED_SESSIONS} in one call",
+    }
+    for name, label in labels.items():
+        print(
+            f"    {label + ':':<39}{figures[f'online_step_{name}_ms_median']:8.3f} ms median, "
+            f"{figures[f'online_step_{name}_ms_p99']:.3f} ms p99, "
+            f"{figures[f'online_step_{name}_vs_paper']:.2f}x"
+        )
+    print(
+        f"    {f'{BATCHED_SESSIONS} sessions in one call:':<39}"
+        f"{figures['online_batched_step_ms_median']:8.3f} ms median "
+        f"({figures['online_batched_step_vs_default']:.2f}x one default step)"
+    )
     print(
         f"  on-line step, NumPy reference:           {reference_ms:8.1f} ms median "
         f"(over {args.reference_steps} steps) — compiled is "

@@ -6,6 +6,7 @@ docstring: model files (``io.py``), the training driver's checkpoints and clock
 ``reference.py`` is the NumPy twin the compiled code is held to.
 """
 
+from rnnpb.model.batched import BatchedMirror
 from rnnpb.model.consolidation import (
     CONSOLIDATION_METHODS,
     ConsolidationConfig,
@@ -36,6 +37,7 @@ from rnnpb.model.training import TrainingProgress, train
 __all__ = [
     "CONSOLIDATION_METHODS",
     "MIRROR_SYSTEMS",
+    "BatchedMirror",
     "ConsolidationConfig",
     "ConsolidationPolicy",
     "Generated",

@@ -36,6 +36,7 @@ from rnnpb.model.online import (
 from rnnpb.model.online_config import OnlineConfig, suggested_online_config
 from rnnpb.model.recognition import (
     RecognitionConfig,
+    RecognitionState,
     initial_recognition_state,
     recognise,
     taught_stretches,
@@ -352,12 +353,27 @@ class MirrorSystem:
             self._pattern_rho,
             self.recognition.recognition_steps,
         )
-        outputs = self._layout.unpack(np.asarray(packed, dtype=np.float64))
+        result, self._recognition, self._predicted = self._finish(
+            np.asarray(packed, dtype=np.float64), u, seen, self._recognition, self._predicted
+        )
         self.steps += 1
-        prediction_error = one_step_prediction_error(self._predicted, u, seen)
-        self._predicted = outputs.predicted_sensory
-        self._recognition, seen_now = recognise(
-            self._recognition,
+        return result
+
+    def _finish(
+        self,
+        packed: np.ndarray,
+        u: np.ndarray,
+        seen: np.ndarray,
+        recognition: RecognitionState,
+        predicted: np.ndarray | None,
+    ) -> tuple[StepResult, RecognitionState, np.ndarray]:
+        """The host side of a step, from its packed outputs (one session's row): the
+        prediction error, recognition and the result in raw units; returns the result, the
+        recognition state and the prediction to measure the next step against."""
+        outputs = self._layout.unpack(packed)
+        prediction_error = one_step_prediction_error(predicted, u, seen)
+        recognition, seen_now = recognise(
+            recognition,
             u,
             seen,
             outputs.pattern_errors,
@@ -367,7 +383,7 @@ class MirrorSystem:
             self.recognition,
             self._taught,
         )
-        return StepResult(
+        result = StepResult(
             motor=motor_command(self.model, outputs.motor),
             predicted_hands=outputs.predicted_sensory,
             pb=outputs.pb,
@@ -382,3 +398,4 @@ class MirrorSystem:
             pattern_confidence=seen_now.confidences,
             pattern_errors=outputs.pattern_errors,
         )
+        return result, recognition, outputs.predicted_sensory

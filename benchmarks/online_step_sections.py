@@ -1,0 +1,141 @@
+"""Where the on-line step's time goes, by section.
+
+Times, alternately on the same machine (pinned to one core, XLA single-threaded), with the
+shipped model (learning set 1, the fast preset):
+
+* the whole ``MirrorSystem.step`` under several regressions: the default, the paper's, the
+  default without phase restarts, without restarts, with half and with no iterations (what is
+  left with none is everything but the regression loop);
+* the default step by section: the hands checked, the compiled call and its one transfer
+  back, the outputs unpacked, recognition on the host, the motor command;
+* ``BatchedMirror``: B sessions in one call against one session's step.
+
+Prints medians and 99th percentiles and the ratios of medians to the default's; quote the
+ratios from one run (other processes change the absolute figures).
+
+    PYTHONPATH=src .venv/bin/python benchmarks/online_step_sections.py [--steps N] [--sessions B]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--steps", type=int, default=200)
+    parser.add_argument("--sessions", type=int, default=16)
+    args = parser.parse_args()
+    from rnnpb import _xla
+
+    _xla.configure()
+    _xla.single_threaded()
+    _xla.compilation_cache()
+    if hasattr(os, "sched_setaffinity"):
+        os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
+    import numpy as np
+
+    from rnnpb.demonstrator import learning_set
+    from rnnpb.model import BatchedMirror, MirrorSystem, OnlineConfig, TrainedModel
+    from rnnpb.model.mirror import _online_step_packed, motor_command, normalized_hands
+    from rnnpb.model.recognition import recognise
+    from rnnpb.models import SHIPPED_MODEL
+
+    model = TrainedModel.load(SHIPPED_MODEL)
+    stream = np.concatenate([s.sensory for s in learning_set("1", seed=0)])
+    default = OnlineConfig()
+    variants = {
+        "default": default,
+        "paper": OnlineConfig.paper(),
+        "no phase restarts": default.with_tuning(phase_restarts=0),
+        "no restarts": default.with_tuning(restart_span=0),
+        "half the iterations": OnlineConfig(iterations=default.iterations // 2),
+        "no iterations": OnlineConfig(iterations=0),
+    }
+    systems = {name: MirrorSystem(model, config) for name, config in variants.items()}
+    batched = BatchedMirror(model, args.sessions, default)
+    offsets = np.arange(args.sessions) * 7
+
+    def session_hands(t: int) -> np.ndarray:
+        return stream[(t + offsets) % len(stream)]
+
+    for t in range(40):
+        for system in systems.values():
+            system.step(stream[t])
+        batched.step(session_hands(t))
+
+    whole: dict[str, list[float]] = {name: [] for name in systems}
+    whole[f"{args.sessions} sessions in one call"] = []
+    sections: dict[str, list[float]] = {
+        name: []
+        for name in ("hands checked", "compiled call", "unpacked", "recognition", "motor command")
+    }
+    mirror = systems["default"]
+    for t in range(args.steps):
+        u_raw = stream[(40 + t) % len(stream)]
+        for name, system in systems.items():
+            t0 = time.perf_counter()
+            system.step(u_raw)
+            whole[name].append(time.perf_counter() - t0)
+        hands = session_hands(40 + t)
+        t0 = time.perf_counter()
+        batched.step(hands)
+        whole[f"{args.sessions} sessions in one call"].append(time.perf_counter() - t0)
+        # The default's step by section, on a copy of its state (the mirror goes on as above).
+        marks = [time.perf_counter()]
+        u, seen = normalized_hands(u_raw, model.network.sensory_size)
+        marks.append(time.perf_counter())
+        _, packed = _online_step_packed(
+            mirror._params,
+            mirror._state,
+            u.astype(np.float32),
+            seen,
+            mirror.config,
+            mirror._candidates,
+            mirror._phase_candidates,
+            mirror._meta,
+            mirror._pattern_rho,
+            mirror.recognition.recognition_steps,
+        )
+        packed = np.asarray(packed, dtype=np.float64)
+        marks.append(time.perf_counter())
+        outputs = mirror._layout.unpack(packed)
+        marks.append(time.perf_counter())
+        recognise(
+            mirror._recognition,
+            u,
+            seen,
+            outputs.pattern_errors,
+            outputs.pb,
+            mirror._learned_pb,
+            mirror.patterns,
+            mirror.recognition,
+            mirror._taught,
+        )
+        marks.append(time.perf_counter())
+        motor_command(model, outputs.motor)
+        marks.append(time.perf_counter())
+        for name, start, end in zip(sections, marks[:-1], marks[1:], strict=True):
+            sections[name].append(end - start)
+
+    base = float(np.median(whole["default"]))
+
+    def line(name: str, times: list[float]) -> str:
+        ms = np.asarray(times) * 1e3
+        return (
+            f"  {name + ':':<30}{np.median(ms):8.3f} ms median, {np.percentile(ms, 99):8.3f} "
+            f"ms p99, {np.median(times) / base:5.2f}x the default step"
+        )
+
+    print(f"on-line step by regression ({args.steps} steps each, alternately):")
+    for name, times in whole.items():
+        print(line(name, times))
+    print("the default step by section:")
+    for name, times in sections.items():
+        print(line(name, times))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,196 @@
+"""Many sessions in one call: :class:`BatchedMirror` steps ``B`` independent interactions with
+the same trained model (users, draws, seeds) through one compiled call per step.
+
+Each session is what a :class:`rnnpb.model.MirrorSystem` of the same model and settings would
+be: its own window, PB, onset and recognition, started from its own initial PB. The compiled
+step is :func:`rnnpb.model.online.online_step` mapped over the sessions (``jax.vmap`` over the
+state and the observations; the weights, restarts and settings are shared), and its outputs
+come back to the host in one transfer, as a (B, packed) array; recognition then runs on the
+host for each session, as in ``MirrorSystem``. ``tests/model/test_batched.py`` holds it to
+``B`` separate mirror systems step by step.
+"""
+
+from __future__ import annotations
+
+from functools import partial
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from rnnpb.errors import ConfigError
+from rnnpb.model.io import TrainedModel
+from rnnpb.model.meta import MetaParams
+from rnnpb.model.mirror import MirrorSystem, StepResult, _online_step_packed, normalized_hands
+from rnnpb.model.network import Params
+from rnnpb.model.online import OnlineState, initial_state
+from rnnpb.model.online_config import OnlineConfig
+from rnnpb.model.recognition import (
+    RecognitionConfig,
+    RecognitionState,
+    initial_recognition_state,
+)
+
+
+@partial(jax.jit, static_argnames=("config", "recognition_steps"))
+def _batched_step_packed(
+    params: Params,
+    states: OnlineState,
+    u: jax.Array,
+    seen: jax.Array,
+    config: OnlineConfig,
+    candidates: jax.Array | None,
+    phase_candidates: jax.Array | None,
+    meta: MetaParams | None,
+    pattern_rho: jax.Array | None,
+    recognition_steps: int,
+) -> tuple[OnlineState, jax.Array]:
+    """One step of every session: ``states`` with a leading session axis (B, ...), ``u`` and
+    ``seen`` (B, S); returns the states and the packed outputs (B, packed)."""
+
+    def one(state: OnlineState, u_b: jax.Array, seen_b: jax.Array) -> tuple[OnlineState, jax.Array]:
+        return _online_step_packed(
+            params,
+            state,
+            u_b,
+            seen_b,
+            config,
+            candidates,
+            phase_candidates,
+            meta,
+            pattern_rho,
+            recognition_steps,
+        )
+
+    return jax.vmap(one)(states, u, seen)
+
+
+class BatchedMirror:
+    """``sessions`` independent on-line interactions with one trained model, stepped together.
+
+    >>> mirrors = BatchedMirror(model, sessions=16)               # doctest: +SKIP
+    >>> results = mirrors.step(hands)   # hands (16, 4); a list of 16 StepResult  # doctest: +SKIP
+
+    Parameters
+    ----------
+    model, config, meta, recognition
+        As for :class:`rnnpb.model.MirrorSystem`; shared by every session.
+    sessions : int
+        B, the sessions stepped together.
+    initial_pb : array, shape (B, P), optional
+        Each session's PB at its start (default: the centre of the learned PBs, as
+        ``MirrorSystem``).
+    """
+
+    def __init__(
+        self,
+        model: TrainedModel,
+        sessions: int,
+        config: OnlineConfig | None = None,
+        meta: MetaParams | None = None,
+        recognition: RecognitionConfig | None = None,
+        initial_pb: np.ndarray | None = None,
+    ) -> None:
+        if isinstance(sessions, bool) or not isinstance(sessions, int) or sessions < 1:
+            raise ConfigError(f"sessions must be a whole number >= 1, got {sessions!r:.40}")
+        # One mirror system holds what the sessions share (weights, restarts, settings) and
+        # does each session's host side; the sessions' own state is kept here.
+        self._shared = MirrorSystem(model, config, meta, recognition)
+        self.model = model
+        self.config = self._shared.config
+        self.recognition = self._shared.recognition
+        self.patterns = self._shared.patterns
+        self.sessions = sessions
+        self._states: OnlineState = self._initial_states(initial_pb)
+        self._recognition: list[RecognitionState] = [
+            self._fresh_recognition() for _ in range(sessions)
+        ]
+        self._predicted: list[np.ndarray | None] = [None] * sessions
+        self.steps = 0
+
+    def _fresh_recognition(self) -> RecognitionState:
+        net = self.model.network
+        return initial_recognition_state(net.sensory_size, net.pb_size, self.recognition)
+
+    def _initial_states(self, initial_pb: np.ndarray | None) -> OnlineState:
+        if initial_pb is None:
+            starts: list[np.ndarray | None] = [None] * self.sessions
+        else:
+            pbs = np.asarray(initial_pb, dtype=np.float64)
+            if pbs.shape != (self.sessions, self.model.network.pb_size):
+                raise ConfigError(
+                    f"initial_pb must have shape ({self.sessions}, "
+                    f"{self.model.network.pb_size}), got {pbs.shape}"
+                )
+            starts = list(pbs)
+        states = [initial_state(self.model, self.config, pb) for pb in starts]
+        return jax.tree_util.tree_map(lambda *a: jnp.stack(a), *states)
+
+    def reset(self, initial_pb: np.ndarray | None = None) -> None:
+        """Forget every session's window: the next step starts new interactions
+        (``initial_pb`` as for the constructor)."""
+        self._states = self._initial_states(initial_pb)
+        self._recognition = [self._fresh_recognition() for _ in range(self.sessions)]
+        self._predicted = [None] * self.sessions
+        self.steps = 0
+
+    def reset_session(self, index: int, initial_pb: np.ndarray | None = None) -> None:
+        """Start session ``index`` afresh (a new user); the others go on."""
+        if not 0 <= index < self.sessions:
+            raise ConfigError(f"session {index} does not exist: there are {self.sessions}")
+        fresh = initial_state(self.model, self.config, initial_pb)
+        self._states = jax.tree_util.tree_map(
+            lambda batch, one: batch.at[index].set(one), self._states, fresh
+        )
+        self._recognition[index] = self._fresh_recognition()
+        self._predicted[index] = None
+
+    @property
+    def pb(self) -> np.ndarray:
+        """Each session's current PB, shape (B, P)."""
+        n = np.maximum(np.asarray(self._states.n) - 1, 0)
+        rho = np.asarray(self._states.rho, dtype=np.float64)[np.arange(self.sessions), n]
+        return 1.0 / (1.0 + np.exp(-rho))
+
+    def step(self, observed_hands: np.ndarray) -> list[StepResult]:
+        """Observe every session's hands for this step; regress each session's PB; return
+        each session's result, in order.
+
+        Parameters
+        ----------
+        observed_hands : array, shape (B, 4)
+            Row ``b`` is session ``b``'s ``lhy lhz rhy rhz`` (NaN where not seen), as
+            :meth:`rnnpb.model.MirrorSystem.step` takes it.
+        """
+        rows = np.asarray(observed_hands, dtype=np.float64)
+        if rows.ndim != 2 or rows.shape[0] != self.sessions:
+            raise ConfigError(
+                f"observed hands must be one row per session ({self.sessions}), "
+                f"got shape {rows.shape}"
+            )
+        size = self.model.network.sensory_size
+        hands = [normalized_hands(row, size) for row in rows]
+        u = np.stack([h[0] for h in hands])
+        seen = np.stack([h[1] for h in hands])
+        shared = self._shared
+        self._states, packed = _batched_step_packed(
+            shared._params,
+            self._states,
+            u.astype(np.float32),
+            seen,
+            self.config,
+            shared._candidates,
+            shared._phase_candidates,
+            shared._meta,
+            shared._pattern_rho,
+            self.recognition.recognition_steps,
+        )
+        packed = np.asarray(packed, dtype=np.float64)
+        results = []
+        for b in range(self.sessions):
+            result, self._recognition[b], self._predicted[b] = shared._finish(
+                packed[b], u[b], seen[b], self._recognition[b], self._predicted[b]
+            )
+            results.append(result)
+        self.steps += 1
+        return results
