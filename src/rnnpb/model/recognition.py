@@ -249,7 +249,8 @@ class Recognition(NamedTuple):
     distances : dict of str to float
         Each learned pattern's best-fit RMS distance (NaN while there is none).
     structure : float
-        The movement's self-difference at its best lag (NaN when not measured): low repeats.
+        How unlike the cycle before it the last cycle is, at its best period (NaN when not
+        measured; :func:`rnnpb.structure.cycle_differences`): low repeats.
     """
 
     recognised: str | None

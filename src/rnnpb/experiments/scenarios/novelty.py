@@ -2,15 +2,16 @@
 the user through the mirror system, and what its novelty states and recognition got right.
 
 For each model the streams are: each learned pattern held; a learned pattern, then a novel
-structured movement (the left-out pattern, new shapes of :data:`rnnpb.demonstrator.NEW_SHAPES`);
-each new shape at half and at twice the usual speed (``novel-slow``, ``novel-fast``: the user
-performs the whole stream at that speed, the learned pattern before it too); unstructured
-movement (:data:`rnnpb.demonstrator.UNSTRUCTURED`); the hands held still; the hands stopping
+structured movement (the left-out pattern, new shapes of
+:data:`rnnpb.demonstrator.NEW_SHAPES`); each new shape at half and at twice the usual speed
+(``novel-slow``, ``novel-fast``: the user performs the whole stream at that speed, the learned
+pattern before it too); unstructured movement (:data:`rnnpb.demonstrator.UNSTRUCTURED`, twice
+as long: long enough for the detector to decide); the hands held still; the hands stopping
 after a learned pattern, a new shape and unstructured movement (``stopped``). Every step's
 novelty state is compared with the truth: the confusion matrix of the states, the delay until a
 novel movement is called ``novel``, a ROC curve of the novelty score (the best learned
-pattern's RMS error), the recognition accuracy on learned patterns (with the
-nearest-learned-PB rule for comparison).
+pattern's RMS error), the recognition accuracy on learned patterns (with the nearest-learned-PB
+rule for comparison).
 """
 
 from __future__ import annotations
@@ -70,7 +71,9 @@ def streams(
             lead = patterns[(seed + i) % len(patterns)]
             segments = [(lead, LEAD_STEPS), (movement, length)]
             out.append((kind, movement, LEAD_STEPS, segments, speed))
-    out += [("unstructured", m, 0, [(m, steps)], 1.0) for m in UNSTRUCTURED]
+    # Unstructured movement twice as long: it is undecided until the longest period the
+    # detector looks for could have repeated (80 steps), then unstructured.
+    out += [("unstructured", m, 0, [(m, 2 * steps)], 1.0) for m in UNSTRUCTURED]
     out.append(("still", PAUSE, 0, [(PAUSE, steps)], 1.0))
     shapes = [m for m in novel if m in NEW_SHAPES] or list(novel)
     before = [patterns[seed % len(patterns)], *shapes[seed % len(shapes) :][:1], UNSTRUCTURED[0]]
