@@ -155,6 +155,18 @@ def test_a_slow_and_a_fast_shape_repeat_and_random_movement_does_not():
         assert least(sensory).min() > config.structure_level
 
 
+def test_after_a_stop_a_slow_shape_is_undecided_until_it_repeats_then_novel(mirror):
+    # What came before the stop does not count: the slow shape is not called unstructured
+    # while its own cycles are too few to tell.
+    rng = np.random.default_rng(6)
+    walk = np.clip(0.5 + np.cumsum(0.05 * rng.standard_normal((90, 4)), axis=0), 0.1, 0.9)
+    held = walk[-1] + 0.002 * rng.standard_normal((15, 4))
+    slow = _circles(2 * PERIOD, 100, seed=13)
+    novelty = [r.novelty for r in _answers(mirror, np.concatenate([walk, held, slow]))]
+    after = novelty[len(walk) + len(held) :]
+    assert "unstructured" not in after and after[-40:] == ["novel"] * 40, after
+
+
 @pytest.mark.parametrize("before", ["novel", "walk"])
 def test_stillness_is_decided_within_a_few_steps_of_the_hands_stopping(mirror, before):
     rng = np.random.default_rng(5)

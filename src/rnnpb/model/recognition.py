@@ -50,7 +50,8 @@ How it decides (docs/model.md, "Recognition and novelty"):
    same shape performed at half or twice the speed gives the same value at its own period.
    A cycle repeats at its period; a random walk or jumps between random targets do not repeat
    at any lag. Else it is ``unstructured`` — once every period could be measured (a longer
-   one might yet repeat).
+   one might yet repeat) on this movement: what came before the last pause longer than
+   ``hold_steps`` is not compared with it.
 5. **Stillness.** The hands are ``still`` when no observed value's spread over the last
    ``still_steps`` observations reaches ``still_level``. Through a short pause
    (``hold_steps``) the last recognised pattern stays recognised: the robot keeps generating
@@ -423,6 +424,20 @@ def _structure(history: np.ndarray, config: RecognitionConfig) -> tuple[float, b
     return float(np.nanmin(differences)), count == len(lags), int(lags[shortest])
 
 
+def _this_movement(filled: np.ndarray, paused: np.ndarray, config: RecognitionConfig) -> np.ndarray:
+    """The observations with those before the last pause longer than ``hold_steps`` marked
+    unseen (NaN): what came before a stop is another movement, and does not say whether this
+    one repeats (until this one has lasted long enough to tell, it is undecided)."""
+    edges = np.diff(np.concatenate([[0], paused.astype(int), [0]]))
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    long = ends[ends - starts > config.hold_steps]
+    if not len(long):
+        return filled
+    out = filled.copy()
+    out[: long[-1]] = np.nan
+    return out
+
+
 def turning_steps(period: int) -> int:
     """Still steps that are a turning point of a movement of ``period`` steps, not a stop: a
     quarter of its cycle (a hand slows into a turn and out of it within the half cycle between
@@ -574,7 +589,7 @@ def recognise(
     total = likelihood.sum() + unknown
     shares = likelihood / total
     best = int(np.argmax(shares))
-    structure, every_lag, period = _structure(filled, config)
+    structure, every_lag, period = _structure(_this_movement(filled, paused, config), config)
     if shares[best] >= config.confidence_level:
         answer, confidence, novelty = names[best], float(shares[best]), "familiar"
     else:
