@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cache
 
 import numpy as np
 
@@ -69,24 +70,32 @@ def cycle_differences(x: np.ndarray, lags: np.ndarray, steps: int) -> np.ndarray
     drift or a random walk.
     """
     x = _as_steps(x)
-    size = len(x)
-    lags = np.asarray(lags, dtype=int)
-    windows = np.maximum(lags, steps)
-    newest = size - 1 - np.arange(int(windows.max()))  # the newest step first
-    inside = np.arange(int(windows.max()))[None] < windows[:, None]  # (L, W)
-    rows = np.where(inside, newest[None], size - 1)
-    earlier = np.maximum(rows - lags[:, None], 0)
-    squares = np.sum((x[rows] - x[earlier]) ** 2, axis=2)  # (L, W)
-    difference = np.sum(np.where(inside, squares, 0.0), axis=1) / windows / x.shape[1]
+    rows, earlier, windows, spans = _cycle_layout(len(x), tuple(int(k) for k in lags), steps)
+    difference = np.sum((x[rows] - x[earlier]) ** 2, axis=(1, 2)) / windows / x.shape[1]
     # The variance of the last n steps, for each lag's n = window + lag, from sums taken from
-    # the newest step back.
-    back = (x - x[size - int((windows + lags).max()) :].mean(axis=0))[::-1]  # centred: exact sums
-    first, second = np.cumsum(back, axis=0), np.cumsum(back * back, axis=0)
-    n = (windows + lags)[:, None]
-    mean = first[n[:, 0] - 1] / n
-    variance = np.mean(second[n[:, 0] - 1] / n - mean**2, axis=1)
+    # the newest step back (centred first, so that the sums stay exact).
+    back = (x - x[len(x) - int(spans.max()) :].mean(axis=0))[::-1]
+    first, second = np.cumsum(back, axis=0)[spans - 1], np.cumsum(back * back, axis=0)[spans - 1]
+    n = spans[:, None]
+    variance = np.mean(second / n - (first / n) ** 2, axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(variance > 1e-12, difference / (2.0 * variance), np.nan)
+
+
+@cache
+def _cycle_layout(
+    size: int, lags: tuple[int, ...], steps: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """For :func:`cycle_differences`: the steps each lag compares (L, W) and those ``k``
+    earlier (outside a lag's window both the newest step, which adds nothing), each lag's
+    window and the steps it spans (window + lag)."""
+    k = np.asarray(lags, dtype=int)
+    windows = np.maximum(k, steps)
+    longest = int(windows.max())
+    inside = np.arange(longest)[None] < windows[:, None]
+    rows = np.where(inside, size - 1 - np.arange(longest)[None], size - 1)
+    earlier = np.where(inside, rows - k[:, None], size - 1)
+    return rows, earlier, windows, windows + k
 
 
 def autocorrelation(signal: np.ndarray, lags: np.ndarray) -> np.ndarray:
