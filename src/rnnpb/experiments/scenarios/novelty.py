@@ -7,11 +7,11 @@ structured movement (the left-out pattern, new shapes of
 (``novel-slow``, ``novel-fast``: the user performs the whole stream at that speed, the learned
 pattern before it too); unstructured movement (:data:`rnnpb.demonstrator.UNSTRUCTURED`, twice
 as long: long enough for the detector to decide); the hands held still; the hands stopping
-after a learned pattern, a new shape and unstructured movement (``stopped``). Every step's
-novelty state is compared with the truth: the confusion matrix of the states, the delay until a
-novel movement is called ``novel``, a ROC curve of the novelty score (the best learned
-pattern's RMS error), the recognition accuracy on learned patterns (with the nearest-learned-PB
-rule for comparison).
+after a learned pattern, a new shape (also at half speed) and unstructured movement
+(``stopped``). Every step's novelty state is compared with the truth: the confusion matrix of
+the states, the delay until a novel movement is called ``novel``, a ROC curve of the novelty
+score (the best learned pattern's RMS error), the recognition accuracy on learned patterns
+(with the nearest-learned-PB rule for comparison).
 """
 
 from __future__ import annotations
@@ -81,6 +81,11 @@ def streams(
         out.append(
             ("stopped", movement, LEAD_STEPS, [(movement, LEAD_STEPS), (PAUSE, STOP_STEPS)], 1.0)
         )
+    # A slow new shape stops too, after three of its cycles: its turning points are not stops,
+    # a stop still is.
+    slow = 3 * round(PERIOD / SPEEDS["novel-slow"])
+    shape = before[1]
+    out.append(("stopped", shape, slow, [(shape, slow), (PAUSE, STOP_STEPS)], SPEEDS["novel-slow"]))
     return out
 
 

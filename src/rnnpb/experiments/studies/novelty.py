@@ -62,8 +62,9 @@ STUDY_TARGETS: dict[str, ExamTarget] = {
     ),
     "stopped_called_still": ExamTarget(
         "stopped_called_still",
-        "steps of the hands held still after a learned pattern, a new shape or unstructured "
-        "movement called still, after the first `steps` of each stop, as a share",
+        "steps of the hands held still after a learned pattern, a new shape (at its usual and "
+        "at half speed) or unstructured movement called still, after the first `steps` of "
+        "each stop, as a share",
         ">=",
         0.9,
         {"steps": STILL_GRACE_STEPS},
