@@ -16,8 +16,8 @@ uses, each with its caller's thresholds:
 * :func:`first_period` (cutting a recording into cycles): the first strong peak of the
   autocorrelation of a centred signal, read off the self-difference through
   ``x[t]·x[t−k] = (x[t]² + x[t−k]² − (x[t] − x[t−k])²) / 2``;
-* on-line novelty (:mod:`rnnpb.model.recognition`): the smallest self-difference of the last
-  steps over a range of lags, relative to twice their variance.
+* on-line novelty (:func:`cycle_differences`, for :mod:`rnnpb.model.recognition`): at each
+  lag, the last cycle against the one before, relative to twice their variance.
 
 NumPy (and SciPy's cubic spline for a fractional lag) only; nothing here knows a model.
 """
@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cache
 
 import numpy as np
 
@@ -55,13 +56,46 @@ def self_difference(x: np.ndarray, lag: float) -> float:
     return float(np.mean((ahead - x[: len(ahead)]) ** 2))
 
 
-def recent_self_differences(x: np.ndarray, lags: np.ndarray, steps: int) -> np.ndarray:
-    """``d(k)`` of the last ``steps`` steps of ``x`` against the ``steps`` steps ``k`` earlier,
-    for each whole lag in ``lags`` (every lag + steps <= T); shape (len(lags),)."""
+def cycle_differences(x: np.ndarray, lags: np.ndarray, steps: int) -> np.ndarray:
+    """How unlike the cycle before it the last cycle of ``x`` is, for a cycle of each whole
+    lag ``k`` in ``lags`` (ascending; every ``k + max(k, steps) <= T``): ``d(k)`` of the last
+    ``max(k, steps)`` steps against the same steps ``k`` earlier, relative to twice the
+    variance (the mean over values) of all the steps compared; shape (len(lags),), NaN where
+    those steps do not vary.
+
+    The same movement at another speed gives the same value at its own period: one whole
+    cycle (at least ``steps`` steps) is compared with the one before, and each lag is
+    measured against the spread of its own steps. Near 0 at the period of a repeating
+    movement; about 1 for one that does not repeat (uncorrelated steps), about 1.5 for a
+    drift or a random walk.
+    """
     x = _as_steps(x)
-    size = len(x)
-    rows = (size - steps - np.asarray(lags))[:, None] + np.arange(steps)[None]
-    return np.mean((x[size - steps :][None] - x[rows]) ** 2, axis=(1, 2))
+    rows, earlier, windows, spans = _cycle_layout(len(x), tuple(int(k) for k in lags), steps)
+    difference = np.sum((x[rows] - x[earlier]) ** 2, axis=(1, 2)) / windows / x.shape[1]
+    # The variance of the last n steps, for each lag's n = window + lag, from sums taken from
+    # the newest step back (centred first, so that the sums stay exact).
+    back = (x - x[len(x) - int(spans.max()) :].mean(axis=0))[::-1]
+    first, second = np.cumsum(back, axis=0)[spans - 1], np.cumsum(back * back, axis=0)[spans - 1]
+    n = spans[:, None]
+    variance = np.mean(second / n - (first / n) ** 2, axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(variance > 1e-12, difference / (2.0 * variance), np.nan)
+
+
+@cache
+def _cycle_layout(
+    size: int, lags: tuple[int, ...], steps: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """For :func:`cycle_differences`: the steps each lag compares (L, W) and those ``k``
+    earlier (outside a lag's window both the newest step, which adds nothing), each lag's
+    window and the steps it spans (window + lag)."""
+    k = np.asarray(lags, dtype=int)
+    windows = np.maximum(k, steps)
+    longest = int(windows.max())
+    inside = np.arange(longest)[None] < windows[:, None]
+    rows = np.where(inside, size - 1 - np.arange(longest)[None], size - 1)
+    earlier = np.where(inside, rows - k[:, None], size - 1)
+    return rows, earlier, windows, windows + k
 
 
 def autocorrelation(signal: np.ndarray, lags: np.ndarray) -> np.ndarray:

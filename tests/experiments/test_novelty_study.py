@@ -9,14 +9,14 @@ import pytest
 from rnnpb.experiments.exams import load_exam
 from rnnpb.experiments.scenarios.novelty import StreamRun, measure
 from rnnpb.experiments.studies import StudyOptions, load_study, study_names
-from rnnpb.experiments.studies.novelty import judge, judge_results
+from rnnpb.experiments.studies.novelty import STUDY_TARGETS, judge, judge_results
 from rnnpb.model import TrainConfig
 
 EXAM = load_exam("novelty")
 SETTLE_STEPS = int(EXAM.parameter("settle_steps"))
 
 
-def _run(kind, movement, novelty, recognised, start=0, score=0.05, confidence=None):
+def _run(kind, movement, novelty, recognised, start=0, score=0.05, confidence=None, speed=1.0):
     n = len(novelty)
     return StreamRun(
         "1",
@@ -32,6 +32,7 @@ def _run(kind, movement, novelty, recognised, start=0, score=0.05, confidence=No
         np.zeros((n, 3)),
         np.zeros((n, 4)),
         tuple(confidence) if confidence is not None else (0.9,) * n,
+        speed,
     )
 
 
@@ -72,6 +73,46 @@ def test_the_measures_count_what_each_step_said():
     assert m["roc_auc"] == 0.75
     targets = judge(m)
     assert not targets["learned_recognised"].met and targets["still_called_still"].met
+
+
+def test_shapes_at_other_speeds_are_judged_over_the_same_cycles_and_a_stop_after_5_steps():
+    start, n = 36, 36 + 4 * SETTLE_STEPS
+    # At half speed the steps not judged are twice as many: those before are not counted.
+    slow = _run(
+        "novel-slow",
+        "one-arm",
+        ["familiar"] * (start + 2 * SETTLE_STEPS) + ["novel"] * (n - start - 2 * SETTLE_STEPS),
+        [None] * n,
+        start=start,
+        speed=0.5,
+    )
+    # At twice the speed, from settle_steps: a quarter of the judged steps undecided.
+    judged = n - start - SETTLE_STEPS
+    fast = _run(
+        "novel-fast",
+        "one-arm",
+        ["familiar"] * (start + SETTLE_STEPS)
+        + [""] * (judged // 4)
+        + ["novel"] * (judged - judged // 4),
+        [None] * n,
+        start=start,
+        speed=2.0,
+    )
+    # The hands stop at step 36: 5 steps not judged, then one of 20 still steps missed.
+    stop = _run(
+        "stopped", "1", ["familiar"] * 41 + ["novel"] + ["still"] * 19, ["1"] * 61, start=36
+    )
+    m = measure([slow, fast, stop], SETTLE_STEPS, 36)
+    assert m["novel_slow_called_novel"] == 1.0
+    assert m["novel_fast_called_novel"] == pytest.approx(1 - (judged // 4) / judged)
+    assert m["stopped_called_still"] == 19 / 20
+    assert m["confusion"]["stopped"]["still"] == 19 and m["confusion"]["novel-slow"]["novel"] > 0
+    targets = judge(m | {key: target.limit for key, target in EXAM.targets.items()})
+    assert set(STUDY_TARGETS) <= set(targets)
+    assert targets["novel_slow_called_novel"].met and targets["stopped_called_still"].met
+    assert targets["novel_fast_called_novel"].met == (m["novel_fast_called_novel"] >= 0.8)
+    # Measures written before these streams: their targets are left out, not failed.
+    assert not set(STUDY_TARGETS) & set(judge({k: t.limit for k, t in EXAM.targets.items()}))
 
 
 def test_the_study_is_registered():
@@ -159,5 +200,5 @@ def test_the_quick_form_writes_its_results_report_and_verdicts_with_the_taught_h
     assert all(settings["taught_hands"] for settings in results["config"]["models"].values())
     # Beside it, the same evidence without the taught hands (what they add).
     assert set(results["without_taught_hands"]) == {"fast-1", "fast-full", "all"}
-    assert set(results["without_taught_hands"]["all"]) == set(EXAM.targets)
+    assert set(results["without_taught_hands"]["all"]) == set(EXAM.targets) | set(STUDY_TARGETS)
     assert "## What the hands as taught add" in (tmp_path / "report.md").read_text()

@@ -91,11 +91,93 @@ def test_a_novel_shape_is_called_novel_and_not_recognised(mirror):
 
 
 def test_a_random_walk_is_never_called_novel(mirror):
+    # Undecided until every period up to the longest could be measured, then unstructured.
     rng = np.random.default_rng(3)
-    walk = np.clip(0.5 + np.cumsum(0.05 * rng.standard_normal((60, 4)), axis=0), 0.1, 0.9)
+    walk = np.clip(0.5 + np.cumsum(0.05 * rng.standard_normal((110, 4)), axis=0), 0.1, 0.9)
     novelty = [r.novelty for r in _answers(mirror, walk)]
     assert "novel" not in novelty and "familiar" not in novelty
     assert novelty[-20:] == ["unstructured"] * 20, novelty
+
+
+def _circles(period, steps, seed, hands=2):
+    """Both hands circling half a cycle apart (none of the learned patterns), or (one hand)
+    the left hand swinging up and down while the right one rests."""
+    rng = np.random.default_rng(seed)
+    phase = 2 * np.pi * np.arange(steps) / period + 1.0
+    c, s = np.cos(phase), np.sin(phase)
+    if hands == 2:
+        u = np.stack([0.5 + 0.25 * c, 0.5 + 0.25 * s, 0.5 - 0.25 * c, 0.5 - 0.25 * s], axis=1)
+    else:
+        rest = np.full(steps, 0.5)
+        u = np.stack([0.3 + 0.0 * s, 0.5 + 0.25 * s, rest + 0.2, rest], axis=1)
+    return u + 0.005 * rng.standard_normal(u.shape)
+
+
+@pytest.mark.parametrize("hands", [1, 2])
+@pytest.mark.parametrize("speed", [0.5, 2.0])
+def test_a_new_shape_is_novel_at_half_and_twice_the_speed(mirror, speed, hands):
+    # The same shape at half speed (24-step cycles, slow turns of one hand at its turning
+    # points) and at twice the speed (6-step cycles): called novel once two of its cycles
+    # were seen, and on every step after.
+    period = round(PERIOD / speed)
+    steps = 2 * period + 40 + 48
+    results = _answers(mirror, _circles(period, steps, seed=11, hands=hands))
+    novelty = [r.novelty for r in results]
+    assert all(r.recognised is None for r in results)
+    assert novelty[-48:] == ["novel"] * 48, novelty
+    assert "unstructured" not in novelty[2 * period + 12 :], novelty
+
+
+def test_a_slow_and_a_fast_shape_repeat_and_random_movement_does_not():
+    # The structure test alone, on the user's one- and two-handed new shapes at half and
+    # twice the usual speed, and on unstructured movement and a smooth random scribble.
+    from rnnpb.demonstrator import NEW_SHAPES, UNSTRUCTURED, PatternConfig, make_scenario
+    from rnnpb.model.recognition import _structure
+
+    config = RecognitionConfig.fast()
+    size = config.history
+
+    def least(sensory):
+        values = [_structure(sensory[t - size : t], config) for t in range(size, len(sensory))]
+        assert all(every for _, every, _ in values)
+        return np.array([value for value, _, _ in values])
+
+    for speed in (0.5, 2.0):
+        shape_config = PatternConfig(period_steps=12 / speed)
+        for shape in NEW_SHAPES:
+            sensory = make_scenario([(shape, size + 30)], seed=3, config=shape_config).sensory
+            assert least(sensory).max() < config.structure_level, (shape, speed)
+    rng = np.random.default_rng(4)
+    scribble = 0.5 + np.cumsum(rng.standard_normal((size + 40, 4)), axis=0) * 0.01
+    smooth = np.apply_along_axis(lambda x: np.convolve(x, np.ones(5) / 5, "same"), 0, scribble)
+    movements = [make_scenario([(m, size + 30)], seed=3).sensory for m in UNSTRUCTURED]
+    for sensory in [*movements, smooth[5:-5]]:
+        assert least(sensory).min() > config.structure_level
+
+
+def test_after_a_stop_a_slow_shape_is_undecided_until_it_repeats_then_novel(mirror):
+    # What came before the stop does not count: the slow shape is not called unstructured
+    # while its own cycles are too few to tell.
+    rng = np.random.default_rng(6)
+    walk = np.clip(0.5 + np.cumsum(0.05 * rng.standard_normal((90, 4)), axis=0), 0.1, 0.9)
+    held = walk[-1] + 0.002 * rng.standard_normal((15, 4))
+    slow = _circles(2 * PERIOD, 100, seed=13)
+    novelty = [r.novelty for r in _answers(mirror, np.concatenate([walk, held, slow]))]
+    after = novelty[len(walk) + len(held) :]
+    assert "unstructured" not in after and after[-40:] == ["novel"] * 40, after
+
+
+@pytest.mark.parametrize("before", ["novel", "walk"])
+def test_stillness_is_decided_within_a_few_steps_of_the_hands_stopping(mirror, before):
+    rng = np.random.default_rng(5)
+    if before == "novel":
+        moving = _circles(PERIOD, 60, seed=12)
+    else:
+        moving = np.clip(0.5 + np.cumsum(0.05 * rng.standard_normal((90, 4)), axis=0), 0.1, 0.9)
+    held = moving[-1] + 0.002 * rng.standard_normal((30, 4))
+    novelty = [r.novelty for r in _answers(mirror, np.concatenate([moving, held]))]
+    stopped = novelty[len(moving) :]
+    assert stopped[5:] == ["still"] * 25, stopped
 
 
 def test_held_still_hands_are_still_without_a_flickering_label(mirror):

@@ -44,7 +44,7 @@ def test_values_are_typed(name):
     assert learning["learn_initial_context"] in (True, False)
     recognition = preset.section("recognition")
     # Lists come back as tuples: the compiled code hashes its static settings.
-    assert recognition["lags"] == (8, 18)
+    assert recognition["lags"] == (5, 40)
     assert all(isinstance(speed, float) for speed in recognition["template_speeds"])
     assert isinstance(preset.section("online.pb")["integration_length"], int)
     with pytest.raises(TypeError):

@@ -42,17 +42,24 @@ How it decides (docs/model.md, "Recognition and novelty"):
    share is at least ``confidence_level``. A model without taught hands (a file of format 1
    or 2) goes by ``d_k`` and ``e_k`` alone, unclipped.
 4. **Structure.** Where no pattern is recognised, the movement is ``novel`` if what is seen
-   repeats itself: the smallest mean squared difference between the last ``structure_steps``
-   observations and the same steps one lag back, for lags in ``lags``, relative to twice the
-   variance of what is seen, is below ``structure_level``. A cycle repeats at its period; a
-   random walk or jumps between random targets do not repeat at any lag. Else it is
-   ``unstructured``.
+   repeats itself at some period ``k`` in ``lags`` (smallest and largest, steps): the mean
+   squared difference between the last cycle (its last ``max(k, structure_steps)`` steps) and
+   the one before (the same steps ``k`` earlier), relative to twice the variance of the steps
+   compared, is below ``structure_level`` for some ``k``
+   (:func:`rnnpb.structure.cycle_differences`). Whole cycles against their own spread: the
+   same shape performed at half or twice the speed gives the same value at its own period.
+   A cycle repeats at its period; a random walk or jumps between random targets do not repeat
+   at any lag. Else it is ``unstructured`` — once every period could be measured (a longer
+   one might yet repeat) on this movement: what came before the last pause longer than
+   ``hold_steps`` is not compared with it.
 5. **Stillness.** The hands are ``still`` when no observed value's spread over the last
    ``still_steps`` observations reaches ``still_level``. Through a short pause
    (``hold_steps``) the last recognised pattern stays recognised: the robot keeps generating
    it, as in the paper's section 3.1. Such a pause is a rest inside the movement (people rest
    between the cycles of a gesture): its steps are left out of the window matched against the
-   taught hands, and the taught hands' own rests (:func:`paused_steps`) out of theirs.
+   taught hands, and the taught hands' own rests (:func:`paused_steps`) out of theirs. A new
+   movement (``novel``) goes on through a still run no longer than a quarter of its period
+   (:func:`turning_steps`): that is where a slow movement turns, not a stop.
 6. **Hysteresis.** A new answer replaces the current one only after it has been the step's
    evidence for ``switch_steps`` steps running — ``release_steps`` when a recognised pattern
    would give way to none: the evidence dips for a few steps as a pause begins or ends.
@@ -115,8 +122,8 @@ class RecognitionConfig:
         init=False, repr=False
     )  # PB distance at which "none learned" is as likely
     confidence_level: float = field(init=False, repr=False)
-    structure_steps: int = field(init=False, repr=False)
-    lags: tuple[int, int] = field(init=False, repr=False)  # smallest and largest lag tried, steps
+    structure_steps: int = field(init=False, repr=False)  # fewest steps a cycle is compared on
+    lags: tuple[int, int] = field(init=False, repr=False)  # shortest and longest period, steps
     structure_level: float = field(init=False, repr=False)
     still_steps: int = field(init=False, repr=False)
     still_level: float = field(
@@ -203,7 +210,8 @@ class RecognitionConfig:
     @property
     def history(self) -> int:
         """Observed steps the detector keeps."""
-        return max(self.lags[1] + self.structure_steps, self.still_steps, self.template_steps)
+        longest = self.lags[1] + max(self.lags[1], self.structure_steps)
+        return max(longest, self.still_steps, self.template_steps)
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -242,7 +250,8 @@ class Recognition(NamedTuple):
     distances : dict of str to float
         Each learned pattern's best-fit RMS distance (NaN while there is none).
     structure : float
-        The movement's self-difference at its best lag (NaN when not measured): low repeats.
+        How unlike the cycle before it the last cycle is, at its best period (NaN when not
+        measured; :func:`rnnpb.structure.cycle_differences`): low repeats.
     """
 
     recognised: str | None
@@ -267,6 +276,7 @@ class RecognitionState(NamedTuple):
     novelty: str
     moving_run: int = 0  # moving steps since the hands were last still longer than hold_steps
     still: np.ndarray | None = None  # (H,) bool: the observation was a step of a pause
+    period: int = 0  # steps a cycle of the novel movement seen last takes (0: none)
 
 
 def initial_recognition_state(
@@ -384,34 +394,55 @@ def taught_distances(window: np.ndarray, taught: TaughtStretches) -> np.ndarray:
     return np.sqrt(1.0 - best**2)
 
 
-def _structure(history: np.ndarray, config: RecognitionConfig) -> tuple[float, bool]:
-    """The smallest self-difference (:func:`rnnpb.structure.recent_self_differences`) of the
-    recent observations over the lags, relative to twice their variance: near 0 for a
-    repeating movement, about 1 for one that does not repeat (NaN while no lag can be measured
-    yet); and whether every lag was measured.
+def _structure(history: np.ndarray, config: RecognitionConfig) -> tuple[float, bool, int]:
+    """How unlike the cycle before it the last cycle of the recent observations is, at the
+    period in ``config.lags`` where it is least (:func:`rnnpb.structure.cycle_differences`):
+    near 0 for a repeating movement, about 1 or more for one that does not repeat (NaN while
+    no period can be measured yet); whether every period was measured; and the shortest
+    period at which it repeats (where none does: the least unlike; 0 while none is measured).
 
-    The lags are tried from the smallest up, as far as the history has no gap (NaN)."""
-    from rnnpb.structure import recent_self_differences
+    Each period ``k`` compares the last ``max(k, structure_steps)`` steps with the same steps
+    ``k`` earlier, so it needs that many steps and ``k`` more without a gap (NaN); the
+    periods are tried from the shortest up, as far as the history reaches."""
+    from rnnpb.structure import cycle_differences
 
-    recent = config.structure_steps
     low, high = config.lags
-    size = len(history)
     lags = np.arange(low, high + 1)
+    spans = lags + np.maximum(lags, config.structure_steps)
     gap: np.ndarray = np.asarray(np.isnan(history).any(axis=1), dtype=bool)
-    if gap[size - recent :].any():
-        return float("nan"), False
-    # Lag l is measured when the steps it compares with (size - recent - l … size - l) have
-    # no gap, and every smaller lag was measured.
-    rows = (size - recent - lags)[:, None] + np.arange(recent)[None]
-    measured = np.cumprod(~gap[rows].any(axis=1)).astype(bool)
-    count = int(measured.sum())
+    gaps = np.flatnonzero(gap)
+    clean = len(history) - 1 - int(gaps[-1]) if len(gaps) else len(history)
+    count = int(np.sum(spans <= clean))  # spans grow with the lag
     if count == 0:
-        return float("nan"), False
-    best = float(np.min(recent_self_differences(history, lags[:count], recent)))
-    variance = float(np.var(history[size - recent - int(lags[count - 1]) :], axis=0).mean())
-    if not variance > 0:
-        return float("nan"), False
-    return best / (2.0 * variance), count == len(lags)
+        return float("nan"), False, 0
+    recent = history[len(history) - clean :]
+    differences = cycle_differences(recent, lags[:count], config.structure_steps)
+    if np.isnan(differences).all():
+        return float("nan"), False, 0
+    repeats = np.flatnonzero(differences < config.structure_level)
+    shortest = int(repeats[0]) if len(repeats) else int(np.nanargmin(differences))
+    return float(np.nanmin(differences)), count == len(lags), int(lags[shortest])
+
+
+def _this_movement(filled: np.ndarray, paused: np.ndarray, config: RecognitionConfig) -> np.ndarray:
+    """The observations with those before the last pause longer than ``hold_steps`` marked
+    unseen (NaN): what came before a stop is another movement, and does not say whether this
+    one repeats (until this one has lasted long enough to tell, it is undecided)."""
+    edges = np.diff(np.concatenate([[0], paused.astype(int), [0]]))
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    long = ends[ends - starts > config.hold_steps]
+    if not len(long):
+        return filled
+    out = filled.copy()
+    out[: long[-1]] = np.nan
+    return out
+
+
+def turning_steps(period: int) -> int:
+    """Still steps that are a turning point of a movement of ``period`` steps, not a stop: a
+    quarter of its cycle (a hand slows into a turn and out of it within the half cycle between
+    two swings); 0 for none."""
+    return period // 4
 
 
 def recognise(
@@ -485,6 +516,17 @@ def recognise(
     spread = float(np.sqrt(np.var(recent, axis=0).max()))
     if spread < config.still_level:
         still_run = state.still_run + 1
+        if state.novelty == "novel" and still_run <= turning_steps(state.period):
+            # The hands rest at a turning point of the new movement (a slow one rests longer
+            # than the still window): it is still that movement.
+            paused = paused.copy()
+            paused[-1] = True
+            turning = state._replace(
+                observed=observed, still_run=still_run, still=paused, novelty="novel"
+            )
+            return turning, Recognition(
+                None, state.confidence, "novel", none, no_distance, float("nan")
+            )
         keep = state.recognised if still_run <= config.hold_steps else None
         confidence = state.confidence if keep is not None else 1.0
         # A pause of at most hold_steps is a rest inside the movement (a person rests between
@@ -547,7 +589,7 @@ def recognise(
     total = likelihood.sum() + unknown
     shares = likelihood / total
     best = int(np.argmax(shares))
-    structure, every_lag = _structure(filled, config)
+    structure, every_lag, period = _structure(_this_movement(filled, paused, config), config)
     if shares[best] >= config.confidence_level:
         answer, confidence, novelty = names[best], float(shares[best]), "familiar"
     else:
@@ -584,6 +626,7 @@ def recognise(
         novelty,
         moving_run,
         paused,
+        period if novelty == "novel" else 0,
     )
     return new, Recognition(
         answer,

@@ -2,12 +2,16 @@
 the user through the mirror system, and what its novelty states and recognition got right.
 
 For each model the streams are: each learned pattern held; a learned pattern, then a novel
-structured movement (the left-out pattern, new shapes of :data:`rnnpb.demonstrator.NEW_SHAPES`);
-unstructured movement (:data:`rnnpb.demonstrator.UNSTRUCTURED`); the hands held still. Every
-step's novelty state is compared with the truth: the confusion matrix of the four states, the
-delay until a novel movement is called ``novel``, a ROC curve of the novelty score (the best
-learned pattern's RMS error), the recognition accuracy on learned patterns (with the
-nearest-learned-PB rule for comparison).
+structured movement (the left-out pattern, new shapes of
+:data:`rnnpb.demonstrator.NEW_SHAPES`); each new shape at half and at twice the usual speed
+(``novel-slow``, ``novel-fast``: the user performs the whole stream at that speed, the learned
+pattern before it too); unstructured movement (:data:`rnnpb.demonstrator.UNSTRUCTURED`, twice
+as long: long enough for the detector to decide); the hands held still; the hands stopping
+after a learned pattern, a new shape (also at half speed) and unstructured movement
+(``stopped``). Every step's novelty state is compared with the truth: the confusion matrix of
+the states, the delay until a novel movement is called ``novel``, a ROC curve of the novelty
+score (the best learned pattern's RMS error), the recognition accuracy on learned patterns
+(with the nearest-learned-PB rule for comparison).
 """
 
 from __future__ import annotations
@@ -23,6 +27,9 @@ from rnnpb.experiments.scenarios import study_models as shared
 STATES = ("familiar", "novel", "unstructured", "still", "")
 LEAD_STEPS = 36  # a learned pattern before each novel movement (three cycles)
 PERIOD = 12  # the demonstrator's period, steps (PatternConfig.period_steps)
+SPEEDS = {"novel-slow": 0.5, "novel-fast": 2.0}  # the new shapes' other speeds, by stream kind
+STOP_STEPS = 36  # the hands held still after a movement stops
+STILL_GRACE_STEPS = 5  # the first steps of a stop not judged: the hands are still coming to rest
 
 
 @dataclass(frozen=True)
@@ -42,19 +49,43 @@ class StreamRun:
     pattern_errors: np.ndarray  # (T, K) the evidence, to replay the detector with other settings
     pb: np.ndarray  # (T, P)
     confidence: tuple[float, ...] = ()  # the step's confidence in what it said
+    speed: float = 1.0  # the user's speed, a multiple of the demonstrator's (period PERIOD / speed)
 
 
 def streams(
     patterns: tuple[str, ...], novel: tuple[str, ...], seed: int, steps: int
-) -> list[tuple[str, str, int, list[tuple[str, int]]]]:
-    from rnnpb.demonstrator import PAUSE, UNSTRUCTURED
+) -> list[tuple[str, str, int, list[tuple[str, int]], float]]:
+    """The streams of one draw, each ``(kind, movement, start, segments, speed)``: ``start``
+    is the first step of the judged movement, ``segments`` what the user performs, at
+    ``speed`` times the demonstrator's speed."""
+    from rnnpb.demonstrator import NEW_SHAPES, PAUSE, UNSTRUCTURED
 
-    out = [("learned", p, 0, [(p, steps)]) for p in patterns]
+    out = [("learned", p, 0, [(p, steps)], 1.0) for p in patterns]
     for i, movement in enumerate(novel):
         lead = patterns[(seed + i) % len(patterns)]
-        out.append(("novel", movement, LEAD_STEPS, [(lead, LEAD_STEPS), (movement, steps)]))
-    out += [("unstructured", m, 0, [(m, steps)]) for m in UNSTRUCTURED]
-    out.append(("still", PAUSE, 0, [(PAUSE, steps)]))
+        out.append(("novel", movement, LEAD_STEPS, [(lead, LEAD_STEPS), (movement, steps)], 1.0))
+    for kind, speed in SPEEDS.items():
+        # At half speed the stream is twice as long: the same number of the shape's cycles.
+        length = round(steps * max(1.0, 1.0 / speed))
+        for i, movement in enumerate(m for m in novel if m in NEW_SHAPES):
+            lead = patterns[(seed + i) % len(patterns)]
+            segments = [(lead, LEAD_STEPS), (movement, length)]
+            out.append((kind, movement, LEAD_STEPS, segments, speed))
+    # Unstructured movement twice as long: it is undecided until the longest period the
+    # detector looks for could have repeated (80 steps), then unstructured.
+    out += [("unstructured", m, 0, [(m, 2 * steps)], 1.0) for m in UNSTRUCTURED]
+    out.append(("still", PAUSE, 0, [(PAUSE, steps)], 1.0))
+    shapes = [m for m in novel if m in NEW_SHAPES] or list(novel)
+    before = [patterns[seed % len(patterns)], *shapes[seed % len(shapes) :][:1], UNSTRUCTURED[0]]
+    for movement in before:
+        out.append(
+            ("stopped", movement, LEAD_STEPS, [(movement, LEAD_STEPS), (PAUSE, STOP_STEPS)], 1.0)
+        )
+    # A slow new shape stops too, after three of its cycles: its turning points are not stops,
+    # a stop still is.
+    slow = 3 * round(PERIOD / SPEEDS["novel-slow"])
+    shape = before[1]
+    out.append(("stopped", shape, slow, [(shape, slow), (PAUSE, STOP_STEPS)], SPEEDS["novel-slow"]))
     return out
 
 
@@ -66,11 +97,14 @@ def run_stream(
     seed: int,
     start: int,
     segments: list[tuple[str, int]],
+    speed: float = 1.0,
 ) -> StreamRun:
-    """Play one generated stream through ``mirror`` (reset first)."""
-    from rnnpb.demonstrator import make_scenario
+    """Play one generated stream through ``mirror`` (reset first), the user moving at
+    ``speed`` times the demonstrator's speed."""
+    from rnnpb.demonstrator import PatternConfig, make_scenario
 
-    scenario = make_scenario(segments, seed=seed)
+    config = PatternConfig(period_steps=PERIOD / speed)
+    scenario = make_scenario(segments, seed=seed, config=config)
     mirror.reset()
     novelty, recognised, nearest, score, evidence, pbs = [], [], [], [], [], []
     confidence = []
@@ -98,6 +132,7 @@ def run_stream(
         np.array(evidence),
         np.array(pbs),
         tuple(confidence),
+        speed,
     )
 
 
@@ -201,9 +236,9 @@ def model_job(
     patterns = learning_set_patterns(set_name)
     novel = ((novel_pattern(set_name),) if set_name != "full" else ()) + tuple(shapes)
     runs = [
-        run_stream(mirror, name, kind, movement, seed, start, segments)
+        run_stream(mirror, name, kind, movement, seed, start, segments, speed)
         for seed in seeds
-        for kind, movement, start, segments in streams(patterns, novel, seed, steps)
+        for kind, movement, start, segments, speed in streams(patterns, novel, seed, steps)
     ]
     settings = {
         "online_preset": choice.name,
@@ -219,12 +254,19 @@ def model_job(
     return name, settings, runs, alone
 
 
-def _judged(run: StreamRun, settle_steps: int) -> range:
-    return range(run.start + settle_steps, len(run.novelty))
+def _judged(run: StreamRun, settle_steps: int, grace_steps: int = STILL_GRACE_STEPS) -> range:
+    """The steps judged: of a stop, after its first ``grace_steps``; of a movement, from
+    ``settle_steps`` after it starts — at a slower speed, as many more as the same cycles
+    take."""
+    if run.kind == "stopped":
+        return range(run.start + grace_steps, len(run.novelty))
+    return range(run.start + round(settle_steps * max(1.0, 1.0 / run.speed)), len(run.novelty))
 
 
-def _share(runs: list[StreamRun], test, settle_steps: int) -> float:
-    hits = [test(run, t) for run in runs for t in _judged(run, settle_steps)]
+def _share(
+    runs: list[StreamRun], test, settle_steps: int, grace_steps: int = STILL_GRACE_STEPS
+) -> float:
+    hits = [test(run, t) for run in runs for t in _judged(run, settle_steps, grace_steps)]
     return float(np.mean(hits)) if hits else float("nan")
 
 
@@ -235,21 +277,31 @@ def _delay(run: StreamRun) -> int | None:
     return None
 
 
-def measure(runs: list[StreamRun], settle_steps: int, novel_steps: int) -> dict[str, Any]:
+def measure(
+    runs: list[StreamRun],
+    settle_steps: int,
+    novel_steps: int,
+    grace_steps: int = STILL_GRACE_STEPS,
+) -> dict[str, Any]:
     """Every measure of the study from its runs: steps are judged from ``settle_steps`` after
-    a movement starts; a novel movement counts as detected in time when called novel within
-    ``novel_steps`` of its start."""
-    by_kind = {
-        k: [r for r in runs if r.kind == k] for k in ("learned", "novel", "unstructured", "still")
-    }
+    a movement starts (:func:`_judged`), and from ``grace_steps`` after the hands stop; a
+    novel movement counts as detected in time when called novel within ``novel_steps`` of its
+    start."""
+    kinds = ("learned", "novel", *SPEEDS, "unstructured", "still", "stopped")
+    by_kind = {k: [r for r in runs if r.kind == k] for k in kinds}
     confusion = {
         kind: {
             state or "undecided": int(
-                sum(run.novelty[t] == state for run in rs for t in _judged(run, settle_steps))
+                sum(
+                    run.novelty[t] == state
+                    for run in rs
+                    for t in _judged(run, settle_steps, grace_steps)
+                )
             )
             for state in STATES
         }
         for kind, rs in by_kind.items()
+        if rs or kind in ("learned", "novel", "unstructured", "still")
     }
     learned = by_kind["learned"]
     delays = [_delay(r) for r in by_kind["novel"]]
@@ -314,6 +366,15 @@ def measure(runs: list[StreamRun], settle_steps: int, novel_steps: int) -> dict[
         ),
         "still_called_still": _share(
             by_kind["still"], lambda r, t: r.novelty[t] == "still", settle_steps
+        ),
+        "novel_slow_called_novel": _share(
+            by_kind["novel-slow"], lambda r, t: r.novelty[t] == "novel", settle_steps
+        ),
+        "novel_fast_called_novel": _share(
+            by_kind["novel-fast"], lambda r, t: r.novelty[t] == "novel", settle_steps
+        ),
+        "stopped_called_still": _share(
+            by_kind["stopped"], lambda r, t: r.novelty[t] == "still", settle_steps, grace_steps
         ),
         "roc": roc,
         "roc_auc": auc,
