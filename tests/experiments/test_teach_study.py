@@ -95,6 +95,11 @@ def test_the_paced_run_and_the_files(study):
     assert paced["missed_deadlines"] >= 0 and paced["max_lateness_ms"] >= 0
     assert set(outcome.targets) == {
         "follow_within_90s",
+        "follow_next_performance",
+        "next_performance_recognised",
+        "no_duplicate_patterns",
+        "consolidation_cpu",
+        "old_patterns_within_limits",
         "no_missed_deadline",
         "old_patterns_keep_paper_targets",
         "nothing_kept_from_unstructured",
@@ -255,3 +260,28 @@ def test_models_not_given_are_learned_under_the_demos_names(tmp_path, monkeypatc
     # The full forms learn as the demo does: the paper's algorithm, the larger set its own.
     assert module.paper_training("1").optimizer == "momentum"
     assert module.paper_training("full", seed=2).seed == 2
+
+
+def test_the_next_performance_duplicates_and_consolidations_are_judged_by_the_exam():
+    from rnnpb.experiments.scenarios.teaching_measures import ConsolidationTime
+
+    exam = load_exam("teach")
+    settle = int(exam.target("next_performance_recognised").parameter("settle_steps"))
+    recognised = ["1"] * 40 + ["new-1"] * settle + ["new-1"] * 20 + [""] * 4  # last 36: next
+    run = replace(
+        _run(5, 60.0),
+        segments=[("1", 40), ("figure-eight", 36)],
+        timeline={"recognised": recognised, "taught": {"new-1": "figure-eight"}},
+        consolidations=[ConsolidationTime(10, 12.5, 20.0, 1, "done")],
+    )
+    twice = replace(run, timeline={**run.timeline, "taught": {"new-1": "x", "new-2": "x"}})
+    slow = replace(run, consolidations=[ConsolidationTime(10, 15.5, 20.0, 1, "done")])
+    targets = judge([run], None, exam)
+    # of the 24 settled steps of the next performance, 20 recognised as new-1
+    assert targets["next_performance_recognised"].detail.startswith("mean 83.3 %")
+    assert not targets["next_performance_recognised"].met
+    assert targets["no_duplicate_patterns"].met and targets["consolidation_cpu"].met
+    assert not judge([twice], None, exam)["no_duplicate_patterns"].met
+    assert not judge([slow], None, exam)["consolidation_cpu"].met
+    assert targets["follow_next_performance"].met
+    assert not judge([run, _run(None, None)], None, exam)["follow_next_performance"].met

@@ -6,8 +6,7 @@ the user (:mod:`rnnpb.experiments.scenarios.novelty`): each learned pattern held
 pattern, then a novel structured movement; each new shape at half and at twice the usual
 speed; unstructured movement; the hands held still; the hands stopping after a movement.
 Every step's novelty state is compared with the truth. The targets' definitions are the
-study's exam (``exams/novelty.toml``); those of the new shapes at other speeds and of the
-hands stopping are the study's own (:data:`STUDY_TARGETS`) where the exam holds none.
+study's exam (``exams/novelty.toml``).
 
 Models: ``--models DIR`` (the models ``rnnpb demo`` writes), else ``OUT/models/`` — those
 present there, the others learned and saved there (the paper's algorithm and the fast preset;
@@ -23,13 +22,12 @@ from typing import Any
 
 import numpy as np
 
-from rnnpb.experiments.exams import Exam, ExamTarget, load_exam
+from rnnpb.experiments.exams import Exam, load_exam
 from rnnpb.experiments.reporting import embed, fmt, table, versions, write_outputs
 from rnnpb.experiments.scenarios.novelty import (
     LEAD_STEPS,
     PERIOD,
     STATES,
-    STILL_GRACE_STEPS,
     StreamRun,
     measure,
     model_job,
@@ -42,42 +40,6 @@ from rnnpb.experiments.summary import Target
 NAME = "novelty"
 SUMMARY = "recognition with confidence and novelty detection over generated streams"
 
-#: The study's own targets' definitions, for what its exam does not define (an exam's
-#: definition of the same name wins): structure at any speed, and stillness after a stop.
-STUDY_TARGETS: dict[str, ExamTarget] = {
-    "novel_slow_called_novel": ExamTarget(
-        "novel_slow_called_novel",
-        "settled steps of the new shapes performed at half speed called novel, as a share "
-        "(settled: from twice settle_steps after the shape starts, as many of its cycles as "
-        "at its usual speed)",
-        ">=",
-        0.8,
-    ),
-    "novel_fast_called_novel": ExamTarget(
-        "novel_fast_called_novel",
-        "settled steps of the new shapes performed at twice the speed called novel, as a "
-        "share (settled: from settle_steps after the shape starts)",
-        ">=",
-        0.8,
-    ),
-    "stopped_called_still": ExamTarget(
-        "stopped_called_still",
-        "steps of the hands held still after a learned pattern, a new shape (at its usual and "
-        "at half speed) or unstructured movement called still, after the first `steps` of "
-        "each stop, as a share",
-        ">=",
-        0.9,
-        {"steps": STILL_GRACE_STEPS},
-    ),
-}
-
-
-def with_study_targets(exam: Exam) -> Exam:
-    """``exam`` with the study's own definitions (:data:`STUDY_TARGETS`) of the targets it
-    does not define."""
-    extra = {k: t for k, t in STUDY_TARGETS.items() if k not in exam.targets}
-    return replace(exam, targets={**exam.targets, **extra})
-
 
 def run(out: Path, options: StudyOptions) -> StudyOutcome:
     from rnnpb import _xla
@@ -88,7 +50,7 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
     started = time.perf_counter()
     out = Path(out)
     (out / "figures").mkdir(parents=True, exist_ok=True)
-    exam = with_study_targets(options.exam or load_exam(NAME))
+    exam = options.exam or load_exam(NAME)
     steps = 72 if options.quick else 84
     if options.exam is not None:
         seeds = list(exam.seed_list("user"))
@@ -179,25 +141,18 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
 def _definitions(exam: Exam) -> tuple[int, int, int]:
     """The steps not judged after a movement starts, the steps within which a novel
     movement is detected in time, and the steps not judged after the hands stop."""
-    exam = with_study_targets(exam)
     settle = int(exam.parameter("settle_steps"))
     within = int(exam.target("novel_within_3_cycles").parameter("steps"))
     return settle, within, int(exam.target("stopped_called_still").parameter("steps"))
 
 
 def judge(measures: dict[str, Any], exam: Exam | None = None) -> dict[str, Target]:
-    """The targets by ``exam``'s definitions (default: the study's exam), and the study's own
-    where it defines none, from the measures (those not measured, as in results written
-    before the study measured them, are left out)."""
-    base = exam or load_exam(NAME)
-    exam = replace(
-        base,
-        targets={
-            **base.targets,
-            **{k: t for k, t in STUDY_TARGETS.items() if k in measures and k not in base.targets},
-        },
-    )
-    return exam.verdicts(
+    """The targets by ``exam``'s definitions (default: the study's exam), from the measures
+    (a target whose measure is absent, as in results written before the study measured it, is
+    left out, not failed)."""
+    exam = exam or load_exam(NAME)
+    measured = replace(exam, targets={k: t for k, t in exam.targets.items() if k in measures})
+    return measured.verdicts(
         measures, lambda t, v: f"{100 * v:.1f} % ({t.compare} {100 * t.limit:.0f} %)"
     )
 
@@ -266,11 +221,12 @@ def _per_set_section(per_set: dict[str, dict[str, Any]], exam: Exam) -> list[str
               "novel within 3 cycles %", "median delay (steps)", "novel after detection %",
               "unstructured novel %", "still %", "ROC AUC"]  # fmt: skip
     speeds = [[name, *[fmt(100 * m[key]) for key in SPEED_KEYS]] for name, m in per_set.items()]
+    grace = _definitions(exam)[2]
     return [
         "", "## Per learning set", "", *table(header, rows), "",
         "New shapes at half and at twice the usual speed (share of settled steps called "
         "novel; at half speed the stream and the steps not judged are twice as long), and the "
-        f"hands stopping (share of each stop's steps after its first {STILL_GRACE_STEPS} "
+        f"hands stopping (share of each stop's steps after its first {grace} "
         "called still):",
         "", *table(["set", "0.5× novel %", "2× novel %", "stopped: still %"], speeds),
     ]  # fmt: skip

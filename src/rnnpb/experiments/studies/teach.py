@@ -209,7 +209,7 @@ def _follow_next(runs: list[TeachRun], target: ExamTarget) -> tuple[float, str]:
 def next_performance_share(run: TeachRun, settle: int) -> float:
     """The share of the steps of the shape's next performance (the run's last segment), from
     its ``settle``-th step on, recognised as the pattern it was learned as (0 when none)."""
-    if not run.new_pattern:
+    if not run.new_pattern or not run.segments or "recognised" not in run.timeline:
         return 0.0
     steps = run.segments[-1][1]
     recognised = run.timeline["recognised"][-steps:][int(settle) :]
