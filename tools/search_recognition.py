@@ -12,9 +12,10 @@ searched (the keys whose source is the section's search: ``recognition-search``,
 
 Objective: the novelty study's measures (:func:`~rnnpb.experiments.scenarios.novelty.measure`)
 over every run, judged by the novelty exam's target definitions (the definitions only, never
-its draws). A candidate's score is the number of targets met (of six: learned patterns
-recognised, learned not called novel, novel called novel within three cycles and after,
-unstructured not called novel, still called still) plus the mean of those six shares, each
+its draws). A candidate's score is the number of the exam's targets met (learned patterns
+recognised, learned not called novel, novel called novel within three cycles and after, new
+shapes at half and twice the speed called novel, unstructured not called novel, still called
+still, a stop called still) plus the mean of those shares, each
 turned so that higher is better (a share below 1 breaks ties between candidates meeting the
 same targets). The values picked (``--pick best``: the best-scored trial; ``median``: each
 value's median over the trials meeting every target) are printed against the current values.
@@ -382,7 +383,7 @@ def _run(args: argparse.Namespace, command: str) -> int:
         "steps": args.steps,
         "shapes": list(shapes),
         "seed": args.seed,
-        "objective": "targets met + mean of the six target shares turned higher-is-better",
+        "objective": "targets met + mean of the exam's target shares turned higher-is-better",
         "current": baseline,
         "pick": args.pick,
         "best": best,

@@ -267,7 +267,8 @@ def test_the_panel_records_consolidates_learns_renames_and_undoes(browser, model
         _until(page, "document.querySelector('#status').textContent.includes('model set1.npz ')")
         assert page.input_value("#model") == "set1.npz"
         # The episode the undone version learned is kept again, to learn on a Confirm.
-        _until(page, "rnnpbDashboard.state.teaching.pending === 1")
+        # (and the demonstrator, performing on, may have shown it once more meanwhile)
+        _until(page, "rnnpbDashboard.state.teaching.pending >= 1")
         assert "not learned by this model" in page.text_content(eight)
         _shot(page, "teach-7-undone", "#teach")
         page.click("#stop")
