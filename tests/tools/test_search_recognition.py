@@ -1,12 +1,9 @@
 """tools/search_recognition.py: the recognition settings' search refuses exam draws, scores the
 preset's current values beside its trials, and writes a fragment in the preset files' form."""
 
-import importlib.util
 import json
 import shutil
-import sys
 import tomllib
-from pathlib import Path
 
 import pytest
 
@@ -14,18 +11,10 @@ from rnnpb.experiments.exams import load_exam
 from rnnpb.model.recognition import RecognitionConfig
 from rnnpb.models import SHIPPED_MODEL
 
-SCRIPT = Path(__file__).resolve().parents[2] / "tools" / "search_recognition.py"
-
 
 @pytest.fixture(scope="module")
-def tool():
-    spec = importlib.util.spec_from_file_location("search_recognition", SCRIPT)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    yield module
-    sys.modules.pop(spec.name, None)
+def tool(load_tool):
+    return load_tool("search_recognition")
 
 
 def test_an_exam_draw_is_refused_in_one_line(tool, tmp_path, capsys):

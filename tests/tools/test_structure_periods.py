@@ -1,27 +1,16 @@
 """tools/structure_periods.py: the structure test's evidence separates the new shapes at every
 speed from random movement, and refuses exam draws."""
 
-import importlib.util
 import json
-import sys
-from pathlib import Path
 
 import pytest
 
 from rnnpb.presets import load_preset
 
-SCRIPT = Path(__file__).resolve().parents[2] / "tools" / "structure_periods.py"
-
 
 @pytest.fixture(scope="module")
-def tool():
-    spec = importlib.util.spec_from_file_location("structure_periods", SCRIPT)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    yield module
-    sys.modules.pop(spec.name, None)
+def tool(load_tool):
+    return load_tool("structure_periods")
 
 
 def test_the_presets_level_lies_between_the_shapes_and_random_movement(tool, tmp_path):
