@@ -118,6 +118,23 @@ def test_the_missing_case_explanation_counts_the_closed_loop_cycles():
     assert missing_cases_explanation(runs + [_novel(3, None, 0.4)], periodic) == []
 
 
+def test_the_larger_sets_seeds_learn_together_one_group_per_worker_first(tmp_path):
+    from rnnpb.experiments.report import run_jobs
+
+    seen = []
+
+    def runner(jobs):
+        seen.extend((function.__name__, args) for _, function, args in jobs)
+        return iter(())
+
+    config = ExperimentConfig(training_seeds=(0,), larger_set_seeds=5, workers=2)
+    run_jobs(tmp_path, config, log=lambda _: None, runner=runner)
+    assert [args[0] for _, args in seen[:2]] == [(0, 2, 4), (1, 3)]
+    assert [name for name, _ in seen[:2]] == ["larger_set_job"] * 2
+    assert seen[0][1][4] == [str(tmp_path / "models" / f"full_seed{s}.npz") for s in (0, 2, 4)]
+    assert all(name == "learning_set_job" for name, _ in seen[2:])
+
+
 def test_the_papers_regression_runs_only_on_the_first_seeds_networks(tmp_path):
     from rnnpb.experiments.report import run_jobs
 
@@ -137,7 +154,7 @@ def test_the_papers_regression_runs_only_on_the_first_seeds_networks(tmp_path):
         if name == "learning_set_job"
     }
     assert compared == {(s, seed): seed == 0 for s in "1234" for seed in (0, 1, 2)}
-    assert sum(name == "larger_set_job" for _, name, _ in seen) == 1
+    assert [args[0] for _, name, args in seen if name == "larger_set_job"] == [(0,)]
     # Every network is still measured in full (draws, attractors and novel patterns).
     assert all(args[7] for _, name, args in seen if name == "learning_set_job")
     with pytest.raises(ConfigError, match="compare_seeds must be >= 1"):

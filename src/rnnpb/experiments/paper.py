@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from itertools import permutations
 from typing import Any
@@ -761,33 +762,42 @@ class LargerSetRun:
 
 
 def larger_set_job(
-    seed: int,
+    seeds: Sequence[int],
     train_config: TrainConfig,
     online: OnlineConfig,
     config: ExperimentConfig,
-    model_path: str,
-) -> LargerSetRun:
-    """Train the 4-pattern set with one seed; does the robot follow every pattern?"""
+    model_paths: Sequence[str],
+) -> list[LargerSetRun]:
+    """Train the 4-pattern set with each of ``seeds``, all in one compiled call
+    (:func:`rnnpb.model.train_seeds`: each model is the one its seed learns alone); does the
+    robot follow every pattern?"""
     from rnnpb.demonstrator import learning_set
+    from rnnpb.model import train_seeds
 
     limits = _limits()
-    model = train(
+    models = train_seeds(
         learning_set("full", seed=config.data_seed, samples_per_pattern=config.samples_per_pattern),
         limits,
-        config=replace(train_config, seed=seed),
+        seeds,
+        config=train_config,
     )
-    model.save(model_path)
-    follow = follows_every_pattern(model, online, limits, seed=config.scenario_seed + seed)
-    draws = {
-        extra: follows_every_pattern(model, online, limits, seed=extra + seed)
-        for extra in config.extra_scenario_seeds
-    }
-    return LargerSetRun(
-        seed=seed,
-        model=model_path,
-        train_mse_max=model.meta["training"]["mse_max"],
-        steps_to_follow=follow.steps_to_follow,
-        follows_all=follow.follows_all,
-        scenario_seed=config.scenario_seed,
-        draws=draws,
-    )
+    runs = []
+    for seed, model, model_path in zip(seeds, models, model_paths, strict=True):
+        model.save(model_path)
+        follow = follows_every_pattern(model, online, limits, seed=config.scenario_seed + seed)
+        draws = {
+            extra: follows_every_pattern(model, online, limits, seed=extra + seed)
+            for extra in config.extra_scenario_seeds
+        }
+        runs.append(
+            LargerSetRun(
+                seed=seed,
+                model=model_path,
+                train_mse_max=model.meta["training"]["mse_max"],
+                steps_to_follow=follow.steps_to_follow,
+                follows_all=follow.follows_all,
+                scenario_seed=config.scenario_seed,
+                draws=draws,
+            )
+        )
+    return runs

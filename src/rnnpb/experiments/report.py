@@ -158,20 +158,25 @@ def run_jobs(
                     ),
                 )
             )
-    for seed in range(config.larger_set_seeds):
-        jobs.append(
+    # The larger set's seeds learn together, in as many groups as there are workers
+    # (rnnpb.model.train_seeds), and start first: they are the longest jobs.
+    seeds = tuple(range(config.larger_set_seeds))
+    groups = [g for g in (seeds[i :: config.workers] for i in range(config.workers)) if g]
+    larger_jobs: list[Job] = [
+        (
+            ("larger", group, None),
+            larger_set_job,
             (
-                ("larger", seed, None),
-                larger_set_job,
-                (
-                    seed,
-                    config.larger_train,
-                    config.online,
-                    config,
-                    str(models / f"full_seed{seed}.npz"),
-                ),
-            )
+                group,
+                config.larger_train,
+                config.online,
+                config,
+                [str(models / f"full_seed{seed}.npz") for seed in group],
+            ),
         )
+        for group in groups
+    ]
+    jobs = larger_jobs + jobs
     by_seed: dict[int, dict[str, LearningSetResult]] = {s: {} for s in config.training_seeds}
     larger: list[LargerSetRun] = []
     for done, ((kind, key, seed), result) in enumerate(runner(jobs), start=1):
@@ -179,8 +184,8 @@ def run_jobs(
             by_seed[seed][key] = result
             what = f"set {key}, training seed {seed}"
         else:
-            larger.append(result)
-            what = f"larger set, seed {key}"
+            larger.extend(result)
+            what = f"larger set, seed{'s' if len(key) > 1 else ''} {', '.join(map(str, key))}"
         log(f"  [{done}/{len(jobs)}] {what} done")
     larger.sort(key=lambda r: r.seed)
     return DemoJobs({s: {k: v[k] for k in sorted(v)} for s, v in by_seed.items()}, larger)

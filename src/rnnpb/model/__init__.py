@@ -32,7 +32,7 @@ from rnnpb.model.network import (
 from rnnpb.model.online_config import OnlineConfig
 from rnnpb.model.parametric_bias import pb_update
 from rnnpb.model.reference import MIRROR_SYSTEMS, ReferenceMirrorSystem
-from rnnpb.model.training import TrainingProgress, train
+from rnnpb.model.training import TrainingProgress, train, train_seeds
 
 __all__ = [
     "CONSOLIDATION_METHODS",
@@ -63,4 +63,5 @@ __all__ = [
     "rehearse",
     "step",
     "train",
+    "train_seeds",
 ]

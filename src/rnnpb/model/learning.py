@@ -315,6 +315,21 @@ def chunk_runner(config: TrainConfig) -> ChunkRunner:
     return _compiled_chunk(normal.with_tuning(chunk_iterations=1))
 
 
+def seeds_chunk_runner(config: TrainConfig) -> ChunkRunner:
+    """:func:`chunk_runner` over a batch of training states (one per seed, stacked on a first
+    axis) that learn the same ``inputs`` and ``valid`` together: ``run_chunk(states, inputs,
+    valid, n_iterations, pb_learning) -> states``. Each state's arithmetic is its own
+    iteration's, so each seed learns what it learns alone."""
+    normal = replace(config, iterations=0, seed=0, checkpoint_every=1)
+    return _compiled_seeds_chunk(normal.with_tuning(chunk_iterations=1))
+
+
+@functools.lru_cache(maxsize=8)
+def _compiled_seeds_chunk(config: TrainConfig) -> ChunkRunner:
+    run_chunk = _compiled_chunk(config)
+    return jax.jit(jax.vmap(run_chunk, in_axes=(0, None, None, None, None)))
+
+
 @functools.lru_cache(maxsize=16)
 def _compiled_chunk(config: TrainConfig) -> ChunkRunner:
     optimizer = optimizer_for(config)

@@ -16,7 +16,7 @@ import os
 import time
 from collections.abc import Callable
 from collections.abc import Sequence as SequenceABC
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import jax
@@ -36,6 +36,7 @@ from rnnpb.model.learning import (
     per_output_mse,
     prepare_data,
     preset_record,
+    seeds_chunk_runner,
 )
 from rnnpb.model.network import NetworkConfig
 from rnnpb.sequences import Sequence
@@ -176,6 +177,88 @@ def train(
             bar.close()
     elapsed = time.perf_counter() - start
     return _finish(state, data, network, config, history, elapsed)
+
+
+def train_seeds(
+    sequences: SequenceABC[Sequence],
+    joint_limits: np.ndarray,
+    seeds: SequenceABC[int],
+    network: NetworkConfig | None = None,
+    config: TrainConfig | None = None,
+    *,
+    progress: Callable[[TrainingProgress], None] | None = None,
+) -> list[TrainedModel]:
+    """Learn the sequences once per seed, all seeds in one compiled call; return the models
+    in the order of ``seeds``.
+
+    Each model is the one :func:`train` learns with ``config``'s seed replaced, for less CPU
+    than a call per seed (one network's products are too small to keep the processor busy, a
+    batch of networks fills it): the same numbers with the paper's gradient descent, the
+    same to rounding with Adam, whose batched update rounds differently. Each model records
+    the run's wall time as its ``seconds``. No checkpoints or warm starts: those are
+    :func:`train`'s. ``progress`` receives the largest error over the seeds after each chunk.
+    """
+    network = network or NetworkConfig()
+    config = config or TrainConfig()
+    seeds = [int(s) for s in seeds]
+    if not seeds or len(set(seeds)) != len(seeds):
+        raise ConfigError(f"train_seeds needs one or more distinct seeds, got {seeds}")
+    data = prepare_data(sequences, joint_limits)
+    if data.inputs.shape[-1] != network.io_size:
+        raise ConfigError(
+            f"sequences have {data.inputs.shape[-1]} values per step but the "
+            f"network expects {network.io_size}"
+        )
+    configs = [replace(config, seed=seed) for seed in seeds]
+    states = [init_state(data, network, c, None) for c in configs]
+    state = jax.tree_util.tree_map(lambda *leaves: jnp.stack(leaves), *states)
+    run_chunk = seeds_chunk_runner(config)
+    inputs = jnp.asarray(data.inputs, jnp.float32)
+    valid = jnp.asarray(data.valid)
+    every_pb_learns = jnp.ones(data.valid.shape[0], dtype=bool)
+    errors = jax.vmap(per_output_mse, in_axes=((0, 0), 0, None, None))
+
+    def mse_per_seed(state: TrainState) -> np.ndarray:
+        per_output = errors((state.params, state.initial_context_logit), state.rho, inputs, valid)
+        return np.asarray(jnp.mean(per_output, axis=1), dtype=np.float64)
+
+    start = time.perf_counter()
+    done = 0
+    histories: list[list[tuple[int, float]]] = [[(0, float(m))] for m in mse_per_seed(state)]
+    while done < config.iterations:
+        # The chunks :func:`train` runs, so that each history has its points.
+        n = min(config.chunk_iterations, config.iterations - done)
+        next_checkpoint = (done // config.checkpoint_every + 1) * config.checkpoint_every
+        n = min(n, next_checkpoint - done)
+        state = run_chunk(state, inputs, valid, jnp.asarray(n, jnp.int32), every_pb_learns)
+        done += n
+        mse = mse_per_seed(state)
+        diverged = [seed for seed, m in zip(seeds, mse, strict=True) if not math.isfinite(m)]
+        if diverged:
+            raise ConfigError(
+                f"training diverged at iteration {done} for seed(s) "
+                f"{', '.join(map(str, diverged))}; lower the learning rate"
+            )
+        for history, m in zip(histories, mse, strict=True):
+            history.append((done, float(m)))
+        if progress is not None:
+            progress(
+                TrainingProgress(
+                    done, config.iterations, float(mse.max()), time.perf_counter() - start
+                )
+            )
+    elapsed = time.perf_counter() - start
+    return [
+        _finish(
+            jax.tree_util.tree_map(lambda leaf, i=i: leaf[i], state),
+            data,
+            network,
+            configs[i],
+            histories[i],
+            elapsed,
+        )
+        for i in range(len(seeds))
+    ]
 
 
 def _finish(
