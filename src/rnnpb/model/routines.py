@@ -365,7 +365,11 @@ def learn_from_inputs(
     data = TrainingData(
         inputs, valid, tuple(names), np.zeros(network.io_size), np.ones(network.io_size)
     )
-    config = TrainConfig.fast(iterations=learning.iterations, seed=learning.seed)
+    # Eq. 1's sum over the whole sequence: each sequence's PB stays one value (the routine's),
+    # not a profile that could itself signal the switches.
+    config = TrainConfig.fast(iterations=learning.iterations, seed=learning.seed).with_tuning(
+        pb={"integration_length": 2 * n_steps}
+    )
     state = init_state(data, network, config)
     run = chunk_runner(config)
     state = run(
