@@ -130,9 +130,7 @@ def parse_scenario(spec: str, seed: int = 0):
         raise ConfigError(f"scenario {spec!r}: {error}") from None
 
 
-def _segments(
-    argument: str, what: str = "steps", unit: str = "STEPS"
-) -> list[tuple[str, int]]:
+def _segments(argument: str, what: str = "steps", unit: str = "STEPS") -> list[tuple[str, int]]:
     """``"1*60,pause*10"`` → ``[("1", 60), ("pause", 10)]``."""
     segments = []
     for part in argument.split(","):

@@ -30,9 +30,10 @@ steps in a row."""
 
 
 def learn(lower: TrainedModel, seeds: list[int]) -> RoutineModel:
-    """Learn :data:`ROUTINES` over ``lower`` from one performance per seed of each."""
+    """Learn :data:`ROUTINES` over ``lower`` from one recording per seed of each (the
+    routine performed twice in a row)."""
     recordings = {
-        name: [routine_scenario(parts, seed=s).sensory for s in seeds]
+        name: [routine_scenario(parts, seed=s, repeats=2).sensory for s in seeds]
         for name, parts in ROUTINES.items()
     }
     return learn_routines(lower, recordings)
