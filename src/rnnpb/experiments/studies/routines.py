@@ -201,8 +201,16 @@ def _lag_section(m: dict[str, Any], within: int, jitters) -> list[str]:
                     _pct(m["deviation_followed_with"]),
                     _pct(m["deviation_followed_without"]),
                 ],
-                ["routine recognised in its first part %", _pct(m["recognised_in_first_segment"]), "-"],
-                ["unlearned order taken for a routine, % of steps", _pct(m["unlearned_taken_for_learned"]), "-"],
+                [
+                    "routine recognised in its first part %",
+                    _pct(m["recognised_in_first_segment"]),
+                    "-",
+                ],
+                [
+                    "unlearned order taken for a routine, % of steps",
+                    _pct(m["unlearned_taken_for_learned"]),
+                    "-",
+                ],
             ],
         ),
-    ]  # fmt: skip
+    ]
