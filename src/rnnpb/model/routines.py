@@ -56,6 +56,7 @@ from rnnpb.errors import ConfigError, DataFileError, ModelFileError
 from rnnpb.model.batched import BatchedMirror
 from rnnpb.model.io import TrainedModel, load_archive, save_archive
 from rnnpb.model.learning import TrainConfig, TrainingData, chunk_runner, init_state
+from rnnpb.model.meta import MetaParams
 from rnnpb.model.mirror import MirrorSystem, StepResult
 from rnnpb.model.network import (
     NetworkConfig,
@@ -69,6 +70,7 @@ from rnnpb.model.network import (
 )
 from rnnpb.model.online_config import OnlineConfig
 from rnnpb.model.parametric_bias import PBUpdateConfig, pb_update
+from rnnpb.model.recognition import RecognitionConfig
 
 ROUTINES_FORMAT = "rnnpb-routines"
 ROUTINES_FORMAT_VERSION = 1
@@ -638,10 +640,16 @@ class TwoLevelMirror:
         routines: RoutineModel,
         config: OnlineConfig | None = None,
         use_prior: bool = True,
+        meta: MetaParams | None = None,
+        recognition: RecognitionConfig | None = None,
     ) -> None:
+        """``config``, ``meta``, ``recognition``: the lower mirror system's
+        (:class:`MirrorSystem`); ``use_prior`` False: the higher level only watches."""
         routines.check_lower(lower)
         self.lower = lower
-        self.mirror = MirrorSystem(lower, config or OnlineConfig.for_model(lower).config)
+        self.mirror = MirrorSystem(
+            lower, config or OnlineConfig.for_model(lower).config, meta, recognition
+        )
         self.follower = RoutineFollower(routines)
         self.use_prior = use_prior
         self._last: FollowStep | None = None
