@@ -173,6 +173,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     import json
     from pathlib import Path
+    from typing import cast
 
     from rnnpb import __version__, _interrupt
     from rnnpb._atomic import atomic_write
@@ -285,8 +286,14 @@ def run(args: argparse.Namespace) -> int:
                 getattr(mirror, "columns", None),
             )
         )
+        # A RoutineMirror steps where the mirror system does (its `model`, `step`).
         loop = InteractionLoop(
-            mirror, source, robot, recorder, loop_config, command_filter=safety.command_filter
+            cast("MirrorSystem", mirror),
+            source,
+            robot,
+            recorder,
+            loop_config,
+            command_filter=safety.command_filter,
         )
         if args.render:
             from rnnpb.interaction.render import SessionVideo

@@ -15,7 +15,7 @@ def plot_two_levels(
     lower_pb: np.ndarray,
     higher_pb: np.ndarray,
     switches: SequenceABC[int],
-    routine: SequenceABC[str],
+    routine: SequenceABC[str | None],
     path: str | os.PathLike[str],
     title: str = "",
 ) -> None:
