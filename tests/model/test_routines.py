@@ -35,8 +35,8 @@ def lower():
 @pytest.fixture(scope="module")
 def routines(lower):
     recordings = {
-        "dance": [routine_scenario(DANCE, seed=201, repeats=2).sensory],
-        "wave": [routine_scenario(WAVE, seed=201, repeats=2).sensory],
+        "dance": [routine_scenario(DANCE, seed=201).sensory],
+        "wave": [routine_scenario(WAVE, seed=201).sensory],
     }
     return learn_routines(lower, recordings, RoutineLearning(iterations=1500))
 
@@ -108,3 +108,39 @@ def test_a_routine_is_performed_alone_top_down(lower, routines):
     assert parts[:3] == ["1", "3", "2"]
     with pytest.raises(ConfigError, match="unknown routine"):
         generate_routine(lower, routines, "salsa", 10)
+
+
+def test_interact_records_the_routine_and_what_it_anticipates(routines, tmp_path, capsys):
+    from rnnpb.cli import main
+    from rnnpb.interaction import read_session
+
+    path = tmp_path / "routines.npz"
+    routines.save(path)
+    out = tmp_path / "run"
+    argv = ["interact", "--source", "scenario:routine:1*3,3*2", "--routines", str(path),
+            "--robot", "kinematic", "--no-progress", "--out", str(out)]  # fmt: skip
+    assert main(argv) == 0
+    session = read_session(out / "session.csv")
+    said = list(session["routine"])
+    assert said[30] == "dance" and session["anticipated"][30] == "3"
+    # Routines learned over another model: one line, exit status 2.
+    other = tmp_path / "other.npz"
+    model = TrainedModel.load(SHIPPED_MODEL)
+    params = model.params._replace(b_h=np.asarray(model.params.b_h) + 0.01)
+    dataclasses.replace(model, params=params).save(other)
+    argv = ["interact", "--model", str(other), *argv[1:-1], str(tmp_path / "run2")]
+    assert main(argv) == 2
+    assert "learned over another lower model" in capsys.readouterr().err
+
+
+def test_train_routines_refuses_a_recording_of_one_movement(tmp_path, capsys):
+    from rnnpb.cli import main
+
+    record = ["record", "scenario:held:1", "--steps", "40", "--cut", "whole",
+              "--pattern", "still", "--out", str(tmp_path / "one")]  # fmt: skip
+    assert main(record) == 0
+    argv = ["train-routines", "--model", str(SHIPPED_MODEL), "--data", str(tmp_path / "one"),
+            "--out", str(tmp_path / "r.npz")]  # fmt: skip
+    assert main(argv) == 2
+    assert "a routine needs at least two movements" in capsys.readouterr().err
+    assert not (tmp_path / "r.npz").exists()

@@ -29,11 +29,11 @@ FOLLOWED_STEPS = 3
 steps in a row."""
 
 
-def learn(lower: TrainedModel, seeds: list[int]) -> RoutineModel:
+def learn(lower: TrainedModel, seeds: list[int], repeats: int = 2) -> RoutineModel:
     """Learn :data:`ROUTINES` over ``lower`` from one recording per seed of each (the
-    routine performed twice in a row)."""
+    routine performed ``repeats`` times in a row)."""
     recordings = {
-        name: [routine_scenario(parts, seed=s, repeats=2).sensory for s in seeds]
+        name: [routine_scenario(parts, seed=s, repeats=repeats).sensory for s in seeds]
         for name, parts in ROUTINES.items()
     }
     return learn_routines(lower, recordings)
@@ -99,11 +99,17 @@ def perform(
 
 
 def runs_for_seed(
-    lower: TrainedModel, routines: RoutineModel, seed: int, jitters: tuple[float, ...]
+    lower: TrainedModel,
+    routines: RoutineModel,
+    seed: int,
+    jitters: tuple[float, ...],
+    names: tuple[str, ...] = tuple(ROUTINES),
 ) -> list[RoutineRun]:
-    """Every stream of one user draw, each with and without the prior."""
+    """Every stream of one user draw (of the routines ``names``), each with and without the
+    prior."""
     streams: list[tuple[str, str, Scenario]] = []
-    for name, parts in ROUTINES.items():
+    for name in names:
+        parts = ROUTINES[name]
         streams.append(("learned", name, routine_scenario(parts, seed=seed)))
         streams.append(("deviation", name, routine_scenario(DEVIATIONS[name], seed=seed)))
         for jitter in jitters:
