@@ -95,6 +95,11 @@ def test_the_file_round_trips_and_is_refused_for_another_lower_model(lower, rout
         RoutineModel.load(path, other)
     with pytest.raises(ModelFileError, match="another lower model"):
         TwoLevelMirror(other, loaded)
+    # A file whose numbers are not finite is refused, not half-used.
+    bad = dataclasses.replace(loaded, recognition_error=float("nan"))
+    bad.save(tmp_path / "bad.npz")
+    with pytest.raises(ModelFileError, match="must be finite"):
+        RoutineModel.load(tmp_path / "bad.npz")
     # A model file is not a routine file.
     with pytest.raises(ModelFileError, match=str(SHIPPED_MODEL.name)):
         RoutineModel.load(SHIPPED_MODEL)

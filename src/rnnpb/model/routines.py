@@ -275,8 +275,14 @@ class RoutineModel:
             )
         except (KeyError, TypeError, ValueError, IndexError) as error:
             raise ModelFileError(f"{path}: not a valid routine file ({error})") from None
-        if not np.all(np.isfinite(arrays["routine_pb"])):
-            raise ModelFileError(f"{path}: routine PBs are not finite")
+        finite = all(np.all(np.isfinite(arrays[k])) for k in ("routine_pb", "codes"))
+        if not finite or not (
+            math.isfinite(routines.recognition_error) and routines.recognition_error > 0
+        ):
+            raise ModelFileError(
+                f"{path}: routine PBs, codes and recognition_error must be finite "
+                "(recognition_error > 0)"
+            )
         if lower is not None:
             routines.check_lower(lower, path)
         return routines
