@@ -27,6 +27,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "rnnpb.commands.study",
     "rnnpb.commands.sweep",
     "rnnpb.commands.train",
+    "rnnpb.commands.train_routines",
     "rnnpb.commands.consolidate",
     "rnnpb.commands.info",
     "rnnpb.commands.generate",

@@ -14,6 +14,11 @@ joints as a sequence CSV (the same columns as training data; joints in radians).
 Example:
   rnnpb generate --model model.npz --pattern 1 --steps 100 --out gen.csv
   rnnpb generate --model model.npz --pb 0.2,0.8,0.5,0.1 --steps 100 --out gen.csv
+  rnnpb generate --model model.npz --routines routines.npz --routine dance --steps 200 \
+      --out dance.csv
+
+With --routines and --routine the robot performs a learned routine alone: the routine level
+in closed loop gives each movement's PB and how long it lasts, top-down (docs/routines.md).
 """
 
 
@@ -22,6 +27,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     which = parser.add_mutually_exclusive_group(required=True)
     which.add_argument("--pattern", help="name of a learned pattern")
     which.add_argument("--pb", help="PB values, comma-separated, each in [0, 1]")
+    which.add_argument("--routine", help="name of a routine in --routines")
+    parser.add_argument("--routines", help="routine file (`rnnpb train-routines`)")
     parser.add_argument("--steps", type=int, default=100, help="steps to write (default 100)")
     parser.add_argument(
         "--transient",
@@ -50,6 +57,19 @@ def run(args: argparse.Namespace) -> int:
             f"{args.steps + args.transient:,}"
         )
     model = TrainedModel.load(args.model)
+    if (args.routine is None) != (args.routines is None):
+        raise ConfigError("--routine and --routines go together")
+    if args.routine is not None:
+        from rnnpb.model.routines import RoutineModel, generate_routine
+
+        routines = RoutineModel.load(args.routines, model)
+        _, sensory, motor = generate_routine(
+            model, routines, args.routine, args.steps + args.transient
+        )
+        k = args.transient
+        write_sequence(args.out, Sequence(sensory[k:], motor[k:], args.routine, args.out))
+        print(f"wrote {args.steps} steps of routine {args.routine} to {args.out}")
+        return 0
     if args.pattern is not None:
         if args.pattern not in model.pattern_pb:
             raise ConfigError(

@@ -155,6 +155,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="no command filter and no PB guard (docs/safety.md)",
     )
+    parser.add_argument(
+        "--routines",
+        metavar="FILE",
+        help="a routine file learned over this model (`rnnpb train-routines`): the robot "
+        "also follows routines and anticipates their switches; the recording gains the "
+        "columns routine and anticipated (docs/routines.md)",
+    )
     add_config_argument(parser, CONFIG_SECTIONS)
     parser.add_argument(
         "--no-progress",
@@ -166,6 +173,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     import json
     from pathlib import Path
+    from typing import cast
 
     from rnnpb import __version__, _interrupt
     from rnnpb._atomic import atomic_write
@@ -240,9 +248,28 @@ def run(args: argparse.Namespace) -> int:
 
     safety = online_safety(model_path, model, online, enabled=not args.no_safety)
     online = safety.config
-    mirror = MirrorSystem(
-        model, online, meta=safety.meta, recognition=tables.recognition_for(model)
-    )
+    extra_columns: tuple[str, ...] = ()
+    if args.routines is not None:
+        from rnnpb.interaction.routines import ROUTINE_COLUMNS, RoutineMirror
+        from rnnpb.model.routines import RoutineModel
+
+        if args.learn:
+            from rnnpb.errors import ConfigError
+
+            raise ConfigError("--routines and --learn exclude each other")
+        routines = RoutineModel.load(args.routines, model)
+        mirror = RoutineMirror(
+            model,
+            routines,
+            online,
+            meta=safety.meta,
+            recognition=tables.recognition_for(model),
+        )
+        extra_columns = ROUTINE_COLUMNS
+    else:
+        mirror = MirrorSystem(
+            model, online, meta=safety.meta, recognition=tables.recognition_for(model)
+        )
     with contextlib.ExitStack() as stack:
         # SIGTERM (`kill`, a service manager) ends the run as Ctrl-C does: at the next step,
         # with the recording, the summary and a playable video.
@@ -251,9 +278,22 @@ def run(args: argparse.Namespace) -> int:
         stack.enter_context(robot)
         if safety.command_filter is not None:
             safety.command_filter.reset(robot.read())  # the pose the first command leaves
-        recorder = stack.enter_context(SessionRecorder(out / "session.csv", model.network.pb_size))
+        recorder = stack.enter_context(
+            SessionRecorder(
+                out / "session.csv",
+                model.network.pb_size,
+                extra_columns,
+                getattr(mirror, "columns", None),
+            )
+        )
+        # A RoutineMirror steps where the mirror system does (its `model`, `step`).
         loop = InteractionLoop(
-            mirror, source, robot, recorder, loop_config, command_filter=safety.command_filter
+            cast("MirrorSystem", mirror),
+            source,
+            robot,
+            recorder,
+            loop_config,
+            command_filter=safety.command_filter,
         )
         if args.render:
             from rnnpb.interaction.render import SessionVideo

@@ -24,6 +24,8 @@ The recording is cut into training sequences, written as DIR/PATTERN_1.csv, PATT
   --cut cycles   (default) --cycles N whole cycles per sequence; a cycle runs from one upward
                  crossing of the movement's main component through its mean to the next
   --cut length   consecutive sequences of --length steps
+  --cut whole    each stretch with both hands seen as one sequence (a routine, for
+                 `rnnpb train-routines`)
 A hand lost for more than a few steps splits the recording; no sequence spans the gap.
 
 SOURCE is one of webcam:INDEX, video:PATH, images:DIR, synthetic:PATTERN, csv:FILE,
@@ -68,9 +70,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--cut",
-        choices=("cycles", "length"),
+        choices=("cycles", "length", "whole"),
         default="cycles",
-        help="cut into whole cycles or fixed-length sequences (default cycles)",
+        help="cut into whole cycles, fixed-length sequences or keep each seen stretch whole "
+        "(a routine: `rnnpb train-routines`) (default cycles)",
     )
     parser.add_argument(
         "--cycles",

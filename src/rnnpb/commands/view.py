@@ -22,7 +22,8 @@ for recorded time series: every step on one timeline you can scrub, with
   joints/     the eight joint angles, radians
   pb/         the parametric bias
   errors/     the prediction error and the window error
-  status/     the ground-truth pattern, and recognition and novelty when recorded
+  status/     the ground-truth pattern, and recognition and novelty when recorded (and the
+              routine level's routine and anticipated movement, `interact --routines`)
 
 SESSION is a session CSV, or a folder holding session.csv. Without --save the viewer opens
 (it needs a display); --save FILE.rrd writes a recording file instead, to open later with
@@ -38,7 +39,16 @@ Examples:
 LEFT_RGB = (220, 40, 40)  # the red ball on the user's left hand
 RIGHT_RGB = (30, 90, 220)  # the blue ball on the right
 #: Text columns shown on the status timeline when a recording has them.
-STATUS_COLUMNS = ("truth_pattern", "recognised", "confidence", "novelty", "unsafe", "filtered")
+STATUS_COLUMNS = (
+    "truth_pattern",
+    "recognised",
+    "confidence",
+    "novelty",
+    "unsafe",
+    "filtered",
+    "routine",
+    "anticipated",
+)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -21,6 +21,8 @@ from rnnpb.demonstrator._scenarios import (
     make_scenario,
     novel_scenario,
     pause_scenario,
+    routine_scenario,
+    routine_segments,
     scenario_arrays,
     switch_scenario,
 )
@@ -77,6 +79,8 @@ __all__ = [
     "pause_scenario",
     "perform",
     "resolve_pattern",
+    "routine_scenario",
+    "routine_segments",
     "sample_rng",
     "scenario_arrays",
     "switch_scenario",

@@ -164,6 +164,51 @@ def novel_scenario(
     )
 
 
+def routine_segments(
+    routine: list[tuple[str, int]],
+    seed: int = 0,
+    config: PatternConfig | None = None,
+    timing_jitter: float = 0.1,
+) -> list[tuple[str, int]]:
+    """The steps a person gives each part of a routine: ``routine`` is ``[(pattern, cycles),
+    ...]``; each part lasts ``cycles`` periods, stretched or shortened by a factor drawn from
+    ``1 + timing_jitter * N(0, 1)`` (clipped to [0.6, 1.4]): people do not count cycles
+    exactly. Returns ``[(pattern, n_steps), ...]`` for :func:`make_scenario`."""
+    config = config or PatternConfig()
+    if not routine:
+        raise ConfigError("a routine needs at least one part")
+    if not 0 <= timing_jitter < 0.5:
+        raise ConfigError(f"timing_jitter must be in [0, 0.5), got {timing_jitter}")
+    rng = np.random.default_rng([seed, 7919])
+    segments = []
+    for pattern, cycles in routine:
+        if int(cycles) < 1:
+            raise ConfigError(f"routine part {pattern!r}: cycles must be >= 1, got {cycles}")
+        factor = float(np.clip(1 + timing_jitter * rng.standard_normal(), 0.6, 1.4))
+        steps = max(3, round(int(cycles) * config.period_steps * factor))
+        segments.append((resolve_pattern(pattern), steps))
+    return segments
+
+
+def routine_scenario(
+    routine: list[tuple[str, int]],
+    seed: int = 0,
+    config: PatternConfig | None = None,
+    timing_jitter: float = 0.1,
+    repeats: int = 1,
+) -> Scenario:
+    """The user performs a routine (``[(pattern, cycles), ...]``, :func:`routine_segments`),
+    ``repeats`` times in a row, each time with its own timing; the patterns blend into each
+    other over two steps as in every scenario."""
+    if repeats < 1:
+        raise ConfigError(f"repeats must be >= 1, got {repeats}")
+    segments = []
+    for r in range(repeats):
+        segments += routine_segments(routine, seed * 1000 + r, config, timing_jitter)
+    name = "routine " + ",".join(f"{resolve_pattern(p)}*{c}" for p, c in routine)
+    return make_scenario(segments, seed, config, name)
+
+
 def scenario_arrays(scenario: Scenario) -> tuple[np.ndarray, list[dict[str, Any]]]:
     """The sensory stream (n_steps, 4) and the per-step truth dicts of a scenario."""
     return scenario.sensory.copy(), [scenario.truth(t) for t in range(scenario.n_steps)]

@@ -13,7 +13,8 @@ smoothed, crosses its mean upwards once per cycle of any of the paper's patterns
 the stretches between successive upward crossings at least half the dominant period apart (the
 period from the autocorrelation's first peak, :func:`rnnpb.structure.first_period`). A
 sequence is then ``cycles_per_sequence`` whole cycles (``mode="cycles"``) or consecutive
-windows of ``length`` steps (``mode="length"``);
+windows of ``length`` steps (``mode="length"``) or each stretch whole (``mode="whole"``, a
+routine);
 steps where a hand could not be recovered (lost longer than the gap filling covers) split the
 recording, and a sequence never spans them.
 """
@@ -39,7 +40,7 @@ from rnnpb.sequences import Sequence
 from rnnpb.sources import FrameStepSource, UserSource
 from rnnpb.structure import first_period
 
-CUT_MODES = ("cycles", "length")
+CUT_MODES = ("cycles", "length", "whole")
 MIN_PERIOD = 4
 MAX_PERIOD = 60
 
@@ -260,7 +261,9 @@ def cut_sequences(
         raise ConfigError(f"sequence length must be >= 2, got {length}")
     sequences: list[Sequence] = []
     for start, stop in _valid_runs(demonstration.valid):
-        if mode == "length":
+        if mode == "whole":
+            pieces = [(start, stop)] if stop - start >= 2 else []
+        elif mode == "length":
             pieces = [(s, s + length) for s in range(start, stop - length + 1, length)]
         else:
             cycles = cycle_bounds(demonstration.sensory[start:stop])

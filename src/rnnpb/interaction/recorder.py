@@ -11,7 +11,9 @@ failed numerically and the last good state was kept), what the step recognised â
 :mod:`rnnpb.model.recognition`) â€”, when the source knows it, the ground truth
 ``truth_pattern``, and from the command filter (docs/safety.md) ``unsafe`` (why the
 generated command was unsafe, empty when safe) and ``filtered`` (what the filter did:
-``slowed``, ``shortened``, ``held``, or empty).
+``slowed``, ``shortened``, ``held``, or empty). With a routine level (``interact
+--routines``) two more: ``routine`` (the routine recognised, empty when none) and
+``anticipated`` (the movement it says comes next).
 
 Every row is flushed to the operating system when written, so a session interrupted by Ctrl-C
 or a crash keeps every step up to the last one written. A row is complete only with its line
@@ -24,7 +26,9 @@ from __future__ import annotations
 import csv
 import math
 import os
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -38,7 +42,15 @@ from rnnpb.vectors import (
     pb_column,
 )
 
-TEXT_COLUMNS = ("recognised", "novelty", TRUTH_PATTERN_COLUMN, "unsafe", "filtered")
+TEXT_COLUMNS = (
+    "recognised",
+    "novelty",
+    TRUTH_PATTERN_COLUMN,
+    "unsafe",
+    "filtered",
+    "routine",
+    "anticipated",
+)
 """The columns that hold words, not numbers."""
 DYAD_PREFIXES = ("a_", "b_")
 """Each agent's columns in a two-agent recording (:func:`dyad_columns`)."""
@@ -81,9 +93,18 @@ def _fmt(value: float) -> str:
 class SessionRecorder:
     """Writes a session recording row by row (a context manager)."""
 
-    def __init__(self, path: str | os.PathLike[str], pb_size: int = 4) -> None:
+    def __init__(
+        self,
+        path: str | os.PathLike[str],
+        pb_size: int = 4,
+        extra_columns: tuple[str, ...] = (),
+        extra: Callable[[Any], Sequence[str]] | None = None,
+    ) -> None:
+        """``extra_columns``: columns after the usual ones, their values per step from
+        ``extra(record)`` (the routine level's ``routine`` and ``anticipated``)."""
         self.path = Path(path)
-        self.columns = session_columns(pb_size)
+        self.columns = session_columns(pb_size) + list(extra_columns)
+        self._extra = extra if extra_columns else None
         self._handle = None
         self._writer = None
         self.rows = 0
@@ -120,6 +141,8 @@ class SessionRecorder:
             record.unsafe,
             record.filtered,
         ]
+        if self._extra is not None:
+            row += list(self._extra(record))
         self._writer.writerow(row)
         self._handle.flush()
         self.rows += 1
@@ -297,6 +320,8 @@ class DyadRecorder(SessionRecorder):
                 agent.intent,
                 int(agent.initiative),
             ]
+        if self._extra is not None:
+            row += list(self._extra(record))
         self._writer.writerow(row)
         self._handle.flush()
         self.rows += 1

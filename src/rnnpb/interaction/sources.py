@@ -5,6 +5,8 @@
 ``scenario:pause:P``       pattern ``P`` with a 5-step pause in the middle (paper 3.1)
 ``scenario:switch:A,B,…``  the patterns one after another, 50 steps each (paper 3.2)
 ``scenario:novel:SET``     the pattern learning set ``SET`` left out (paper 3.3)
+``scenario:routine:P*C,…`` a routine: pattern ``P`` for ``C`` cycles, then the next part,
+                           with a person's timing (each part about 10 % longer or shorter)
 ``scenario:steps:M*N,…``   movements ``M`` (any demonstrator movement, or ``pause``) for ``N``
                            steps each, one after another: ``steps:1*60,random-walk*60``
 ``csv:FILE``               a sensory stream file (``step lhy lhz rhy rhz``; empty = not seen)
@@ -35,7 +37,7 @@ from rnnpb.errors import ConfigError, RnnpbError
 from rnnpb.sources import CsvSensorySource, FrameStepSource, UserSource
 
 SOURCE_FORMS = {
-    "scenario": "scenario:held|pause|switch|novel|steps:ARGUMENT",
+    "scenario": "scenario:held|pause|switch|novel|steps|routine:ARGUMENT",
     "csv": "csv:FILE",
     "video": "video:PATH",
     "images": "images:DIR",
@@ -49,7 +51,7 @@ SOURCE_KINDS = tuple(SOURCE_FORMS)
 CAMERA_KINDS = ("webcam", "video", "images", "synthetic")
 """The kinds read through a camera and the colour-ball tracker."""
 
-SCENARIO_KINDS = ("held", "pause", "switch", "novel", "steps")
+SCENARIO_KINDS = ("held", "pause", "switch", "novel", "steps", "routine")
 
 
 @dataclass(frozen=True)
@@ -119,6 +121,8 @@ def parse_scenario(spec: str, seed: int = 0):
             return demonstrator.switch_scenario(tuple(argument.split(",")), seed=seed)
         if kind == "steps":
             return demonstrator.make_scenario(_segments(argument), seed=seed)
+        if kind == "routine":
+            return demonstrator.routine_scenario(parse_routine(argument), seed=seed)
         return demonstrator.novel_scenario(argument, seed=seed)
     except (KeyError, ValueError) as error:
         if isinstance(error, RnnpbError):
@@ -126,21 +130,33 @@ def parse_scenario(spec: str, seed: int = 0):
         raise ConfigError(f"scenario {spec!r}: {error}") from None
 
 
-def _segments(argument: str) -> list[tuple[str, int]]:
+def _segments(argument: str, what: str = "steps", unit: str = "STEPS") -> list[tuple[str, int]]:
     """``"1*60,pause*10"`` → ``[("1", 60), ("pause", 10)]``."""
     segments = []
     for part in argument.split(","):
         name, star, count = part.strip().rpartition("*")
         if not star or not name:
-            raise ConfigError(f"scenario steps: expected MOVEMENT*STEPS, got {part!r}")
+            raise ConfigError(f"scenario {what}: expected MOVEMENT*{unit}, got {part!r}")
         try:
             n = int(count)
         except ValueError:
-            raise ConfigError(f"scenario steps: {part!r}: steps must be an integer") from None
+            raise ConfigError(
+                f"scenario {what}: {part!r}: {unit.lower()} must be an integer"
+            ) from None
         if n < 1:
-            raise ConfigError(f"scenario steps: {part!r}: steps must be >= 1")
+            raise ConfigError(f"scenario {what}: {part!r}: {unit.lower()} must be >= 1")
         segments.append((name.strip().lower(), n))
     return segments
+
+
+def parse_routine(argument: str) -> list[tuple[str, int]]:
+    """``"1*3,3*2"`` → ``[("1", 3), ("3", 2)]``: patterns and their cycles."""
+    parts = []
+    for name, count in _segments(argument, "routine", "CYCLES"):
+        if name == "pause":
+            raise ConfigError("scenario routine: a routine is made of movements, not pauses")
+        parts.append((name, count))
+    return parts
 
 
 def open_source(

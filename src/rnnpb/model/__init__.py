@@ -32,6 +32,7 @@ from rnnpb.model.network import (
 from rnnpb.model.online_config import OnlineConfig
 from rnnpb.model.parametric_bias import pb_update
 from rnnpb.model.reference import MIRROR_SYSTEMS, ReferenceMirrorSystem
+from rnnpb.model.routines import RoutineFollower, RoutineModel, TwoLevelMirror, learn_routines
 from rnnpb.model.training import TrainingProgress, train, train_seeds
 
 __all__ = [
@@ -47,16 +48,20 @@ __all__ = [
     "OnlineConfig",
     "Params",
     "ReferenceMirrorSystem",
+    "RoutineFollower",
+    "RoutineModel",
     "StepResult",
     "TrainConfig",
     "TrainedModel",
     "TrainingProgress",
+    "TwoLevelMirror",
     "closed_loop",
     "consolidate",
     "consolidation_config",
     "consolidation_policy",
     "generate",
     "init_params",
+    "learn_routines",
     "mixed_loop",
     "open_loop",
     "pb_update",

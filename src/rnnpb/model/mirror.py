@@ -24,7 +24,7 @@ from rnnpb import _xla
 from rnnpb.errors import ConfigError
 from rnnpb.model.io import TrainedModel
 from rnnpb.model.meta import MetaParams
-from rnnpb.model.network import NetworkConfig, Params
+from rnnpb.model.network import NetworkConfig, Params, logit_numpy
 from rnnpb.model.online import (
     OnlineState,
     StepOutputs,
@@ -328,7 +328,7 @@ class MirrorSystem:
         n = int(self._state.n)
         return np.asarray(jax.nn.sigmoid(self._state.rho[:n]), dtype=np.float64)
 
-    def step(self, observed_hands: np.ndarray) -> StepResult:
+    def step(self, observed_hands: np.ndarray, prior_pb: np.ndarray | None = None) -> StepResult:
         """Observe the user's hands for this step; regress the PB; return the motor command.
 
         Parameters
@@ -337,7 +337,23 @@ class MirrorSystem:
             ``lhy lhz rhy rhz`` in [0, 1]. NaN marks a value that was not seen (a lost
             tracker): the network uses its own prediction there. Values outside [0, 1] are
             clipped to it (the view plane ends there).
+        prior_pb : array, shape (P,), optional
+            A PB expected from above (a routine's prediction, :mod:`rnnpb.model.routines`):
+            tried as one more restart for the recent end of the window, beside the learned
+            patterns' PBs; the window's evidence decides whether it is taken. Without it (or
+            with ``restart_span`` 0) the step is exactly the plain one.
         """
+        candidates = self._candidates
+        if prior_pb is not None and candidates is not None:
+            prior = np.clip(np.asarray(prior_pb, dtype=np.float64).reshape(-1), 0.0, 1.0)
+            if prior.shape != (self.model.network.pb_size,) or not np.isfinite(prior).all():
+                raise ConfigError(
+                    f"prior PB must be {self.model.network.pb_size} finite values, got "
+                    f"{np.shape(prior_pb)}"
+                )
+            candidates = jnp.concatenate(
+                [candidates, jnp.asarray(logit_numpy(prior)[None], jnp.float32)]
+            )
         u, seen = normalized_hands(observed_hands, self.model.network.sensory_size)
         # NumPy inputs go to the compiled step as they are and all outputs come back in one
         # transfer: at a few milliseconds a step, per-array round trips are worth avoiding.
@@ -347,7 +363,7 @@ class MirrorSystem:
             u.astype(np.float32),
             seen,
             self.config,
-            self._candidates,
+            candidates,
             self._phase_candidates,
             self._meta,
             self._pattern_rho,

@@ -38,6 +38,7 @@ from rnnpb.analysis.figures.paper import (
 )
 from rnnpb.analysis.figures.patterns import plot_patterns
 from rnnpb.analysis.figures.people import plot_following
+from rnnpb.analysis.figures.routines import plot_two_levels
 from rnnpb.analysis.figures.safety import plot_pb_safety_map
 from rnnpb.analysis.figures.sweeps import IntervalLike, plot_distributions
 from rnnpb.analysis.figures.teach import TEACHING_COLORS, plot_teaching_timeline
@@ -66,6 +67,7 @@ __all__ = [
     "plot_forgetting",
     "plot_novel_responses",
     "plot_following",
+    "plot_two_levels",
     "plot_patterns",
     "plot_patterns_found",
     "plot_pb_safety_map",

@@ -37,6 +37,7 @@ STUDY_MODULES: dict[str, str] = {
     "dyad": "rnnpb.experiments.studies.dyad",
     "teach": "rnnpb.experiments.studies.teach",
     "people": "rnnpb.experiments.studies.people",
+    "routines": "rnnpb.experiments.studies.routines",
 }
 
 
