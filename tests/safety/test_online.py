@@ -38,7 +38,12 @@ def _map_around(model, centre, radius=0.35):
     pbs = rng.uniform(size=(1500, model.network.pb_size))
     unsafe = np.linalg.norm(pbs - centre, axis=1) < radius
     experience = Experience(
-        pbs, unsafe, np.zeros(len(pbs), bool), np.array(["explored"] * len(pbs)), {}
+        pbs,
+        unsafe,
+        unsafe.astype(float),
+        np.zeros(len(pbs), bool),
+        np.array(["explored"] * len(pbs)),
+        {},
     )
     return new_map(model, fit_meta(experience, MetaConfig(iterations=800)), pbs, unsafe, 0.08, {})
 

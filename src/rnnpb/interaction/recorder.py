@@ -11,7 +11,9 @@ failed numerically and the last good state was kept), what the step recognised â
 :mod:`rnnpb.model.recognition`) â€”, when the source knows it, the ground truth
 ``truth_pattern``, and from the command filter (docs/safety.md) ``unsafe`` (why the
 generated command was unsafe, empty when safe) and ``filtered`` (what the filter did:
-``slowed``, ``shortened``, ``held``, or empty).
+``slowed``, ``shortened``, ``held``, or empty), and from the meta-level ``regime`` (what
+drove the motion: ``following``, ``lost``, ``still``, ``novel``, ``unstructured``) and
+``inhibited`` (why the generated command was held, empty when it was sent).
 
 Every row is flushed to the operating system when written, so a session interrupted by Ctrl-C
 or a crash keeps every step up to the last one written. A row is complete only with its line
@@ -38,7 +40,15 @@ from rnnpb.vectors import (
     pb_column,
 )
 
-TEXT_COLUMNS = ("recognised", "novelty", TRUTH_PATTERN_COLUMN, "unsafe", "filtered")
+TEXT_COLUMNS = (
+    "recognised",
+    "novelty",
+    TRUTH_PATTERN_COLUMN,
+    "unsafe",
+    "filtered",
+    "regime",
+    "inhibited",
+)
 """The columns that hold words, not numbers."""
 DYAD_PREFIXES = ("a_", "b_")
 """Each agent's columns in a two-agent recording (:func:`dyad_columns`)."""
@@ -71,6 +81,8 @@ def session_columns(pb_size: int) -> list[str]:
         TRUTH_PATTERN_COLUMN,
         "unsafe",
         "filtered",
+        "regime",
+        "inhibited",
     ]
 
 
@@ -119,6 +131,8 @@ class SessionRecorder:
             record.truth.get("pattern", ""),
             record.unsafe,
             record.filtered,
+            record.regime,
+            record.inhibited,
         ]
         self._writer.writerow(row)
         self._handle.flush()
