@@ -185,6 +185,11 @@ def run(args: argparse.Namespace) -> int:
         "projection": replace(online, safety_guard="projection"),
     }
     guarded = {name: compiled(model, cfg, meta=meta) for name, cfg in guards.items()}
+    # The meta-level as an on-line run has it (rnnpb.safety.online_safety): the barrier only
+    # where the PB drives the motion, the regime and the inhibition check on every step.
+    guarded["meta_level"] = compiled(
+        model, guards["barrier"], meta=meta, steering="pb_driven", inhibition=True
+    )
     command_filter = CommandFilter()
     # The paper's regression, and many sessions of the default in one call, each session at
     # its own place in the stream (its own phase).
@@ -356,6 +361,7 @@ def run(args: argparse.Namespace) -> int:
             "barrier": "barrier (newest step)",
             "barrier_3_steps": "barrier on 3 steps",
             "barrier_window": "barrier on the window",
+            "meta_level": "meta-level (steering where the PB drives, inhibition)",
         }.get(name, name)
         print(
             f"    the step with the {label} alone: "
