@@ -132,6 +132,11 @@ def test_a_command_whose_own_target_collides_is_the_seen_movements():
     assert attribution.attribute(ordinary, "collision:lforearm_geom-chest") == GENERATION
     assert attribution.attribute(ordinary, "") == ""
     assert attribution.asks_unsafe(np.full(4, np.nan)) == ""  # nothing seen: nothing asked
+    attribution.reset()
+    causes = attribution.attribute_sequence(
+        np.array([ordinary, crossing, ordinary]), ["", "collision:x-chest", "speed:lshp"]
+    )
+    assert causes[:2] == ["", SEEN]
 
 
 def test_exploration_labels_by_the_generation_after_its_transient(model):

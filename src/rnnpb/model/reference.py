@@ -329,8 +329,9 @@ class ReferenceMirrorSystem:
         self.recognition_state = initial_recognition_state(
             net.sensory_size, net.pb_size, self.recognition
         )
-        if getattr(self, "meta_level", None) is not None:
-            self.meta_level.reset()
+        meta_level = getattr(self, "meta_level", None)  # None before __init__ made it
+        if meta_level is not None:
+            meta_level.reset()
         self.steps = 0
 
     @property

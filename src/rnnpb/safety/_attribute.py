@@ -60,11 +60,11 @@ class Attribution:
     def reset(self) -> None:
         self._previous = None
 
-    def asks_unsafe(self, hands: np.ndarray) -> str:
+    def asks_unsafe(self, hands: np.ndarray, posture: np.ndarray | None = None) -> str:
         """Why the posture the hands ask for is unsafe (a collision at it or on the way
         from the one asked before, or faster than a servo), ``""`` when it is safe or a hand
-        was not seen."""
-        posture = asked_posture(hands)
+        was not seen. ``posture``: :func:`asked_posture` of ``hands`` when already known."""
+        posture = asked_posture(hands) if posture is None else np.asarray(posture, float)
         previous, self._previous = self._previous, None
         if not np.isfinite(posture).all():
             return ""
@@ -76,7 +76,19 @@ class Attribution:
         """The cause of a step's command, given why it was unsafe (``unsafe``, the filter's
         words; empty when safe): ``""`` for a safe command, :data:`SEEN` when the hands ask
         for an unsafe posture themselves, else :data:`GENERATION`."""
-        asked = self.asks_unsafe(hands)
+        return self._cause(self.asks_unsafe(hands), unsafe)
+
+    def attribute_sequence(self, hands: np.ndarray, unsafe: list[str]) -> list[str]:
+        """:meth:`attribute` for each step of ``hands`` (T, 4) and ``unsafe`` (T,) in turn;
+        the postures asked for are solved in one call (much faster than step by step)."""
+        postures = asked_posture(hands)
+        return [
+            self._cause(self.asks_unsafe(u, posture), why)
+            for u, posture, why in zip(hands, postures, unsafe, strict=True)
+        ]
+
+    @staticmethod
+    def _cause(asked: str, unsafe: str) -> str:
         if not any(w.split(":")[0] in ("collision", "speed") for w in unsafe.split()):
             return ""
         return SEEN if asked else GENERATION

@@ -181,7 +181,7 @@ def explore(
                 progress((k + 1) // starts, len(pbs))
     share = unsafe_runs.reshape(-1, starts).mean(axis=1)
     unsafe = share >= config.unsafe_share - 1e-9
-    per_pb = kind_runs.reshape(-1, starts, 4).any(axis=1)
+    per_pb = np.asarray(kind_runs.reshape(-1, starts, 4).any(axis=1), bool)
     counts = {
         kind: int(per_pb[:, j].sum())
         for j, kind in enumerate(("collision", "speed", "limit", "unsettled"))
@@ -192,7 +192,7 @@ def explore(
         pbs,
         unsafe,
         share,
-        unsettled_runs.reshape(-1, starts).any(axis=1),
+        np.asarray(unsettled_runs.reshape(-1, starts).any(axis=1), bool),
         np.array(["explored"] * len(pbs)),
         counts,
     )

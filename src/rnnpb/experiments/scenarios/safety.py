@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from rnnpb.errors import ConfigError
 from rnnpb.experiments.exams import Exam
@@ -227,7 +228,6 @@ def session_job(
         generated = result.generated if result.generated is not None else result.motor
         why = _physical(checker.command_reasons(before, generated))
         rows["generated_unsafe"].append(why)
-        rows["cause"].append(attribution.attribute(u, why))
         rows["commanded_unsafe"].append(_physical(checker.command_reasons(before, result.motor)))
         sent = result.motor
         if command_filter is not None:
@@ -238,6 +238,7 @@ def session_job(
         rows["inhibited"].append(bool(result.inhibited))
         rows["recognised"].append(result.recognised or "")
         before, sent_before = result.motor, sent
+    rows["cause"] = attribution.attribute_sequence(stream, rows["generated_unsafe"])
     out: dict[str, Any] = {k: np.array(v) for k, v in rows.items()}
     out["label"], out["arm"] = label, arm
     return out
@@ -310,7 +311,7 @@ def familiarity(maps, lived: np.ndarray, seed: int) -> dict[str, Any]:
     }
 
 
-def roc_auc(scores: np.ndarray, labels: np.ndarray) -> float:
+def roc_auc(scores: ArrayLike, labels: ArrayLike) -> float:
     """The area under the ROC curve of ``scores`` for the True ``labels`` (ties count half);
     NaN when one class is missing."""
     scores = np.asarray(scores, dtype=np.float64)
