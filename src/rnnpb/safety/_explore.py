@@ -125,8 +125,10 @@ def generate_from(
     contexts: np.ndarray,
     inputs: np.ndarray,
     steps: int,
+    sensory: bool = False,
 ) -> np.ndarray:
-    """Closed-loop generation of each row: the motor commands (steps, n, M), radians."""
+    """Closed-loop generation of each row: the motor commands (steps, n, M), radians (with
+    ``sensory``: the predicted hands (steps, n, S) instead)."""
     net = model.network
     params = jax.tree_util.tree_map(lambda a: jnp.asarray(a, jnp.float32), model.params)
     predictions, _ = _closed_loop(
@@ -135,7 +137,8 @@ def generate_from(
         jnp.asarray(inputs, jnp.float32),
         jnp.broadcast_to(jnp.asarray(pbs, jnp.float32), (steps, *pbs.shape)),
     )
-    return model.denormalize(np.asarray(predictions, dtype=np.float64))[..., net.sensory_size :]
+    values = model.denormalize(np.asarray(predictions, dtype=np.float64))
+    return values[..., : net.sensory_size] if sensory else values[..., net.sensory_size :]
 
 
 def explore(

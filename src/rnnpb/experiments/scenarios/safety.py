@@ -8,8 +8,11 @@ Users (generated here, seeded): random walks of both hands, jerky targets (a new
 target every 1–4 steps), fast scribbles (sums of sinusoids with periods of 2–5 steps), a full
 swing (each hand coordinate jumping between the view's edges every step), the paper's novel
 pattern (the pattern the learning set left out), lost hands (a pattern performed, then the
-hands lost, in turns) and still hands (a pattern performed, then the hands held still, in
-turns); and a person performing each learned pattern.
+hands lost, in turns), still hands (a pattern performed, then the hands held still, in
+turns) and an unsafe pattern (the hands the network itself predicts while generating from a
+PB whose own generation is unsafe from every start, a new such PB every 100 steps: the
+paper's case of perceiving a pattern the robot must not regenerate); and a person performing
+each learned pattern.
 
 Each user's stream runs three times through the mirror system (:func:`session_job`):
 ``unguarded`` (no map), ``steered`` (the map's guard where the PB drives, no inhibition) and
@@ -44,6 +47,7 @@ USERS = (
     "novel_pattern",
     "lost_hands",
     "still_hands",
+    "unsafe_pattern",
 )
 ARMS = ("unguarded", "steered", "everything")
 PHYSICAL = ("collision", "speed")
@@ -74,10 +78,17 @@ def _pattern_stream(pattern: str, n_steps: int, seed: int) -> np.ndarray:
     return held_scenario(pattern, n_steps=n_steps, seed=seed).sensory
 
 
-def user_stream(kind: str, n_steps: int, seed: int, learning_set: str, patterns=()) -> np.ndarray:
+def user_stream(
+    kind: str, n_steps: int, seed: int, learning_set: str, patterns=(), model=None
+) -> np.ndarray:
     """A user's hands (n_steps, 4) in [0, 1] (NaN where lost) of the given kind;
-    ``patterns``: the learned patterns (for ``lost_hands`` and ``still_hands``)."""
+    ``patterns``: the learned patterns (for ``lost_hands`` and ``still_hands``); ``model``:
+    the robot's (for ``unsafe_pattern``)."""
     rng = np.random.default_rng(seed)
+    if kind == "unsafe_pattern":
+        if model is None:
+            raise ConfigError("the unsafe_pattern user needs the model")
+        return _unsafe_pattern(model, n_steps, seed)
     if kind == "random_walk":
         walk = 0.5 + np.cumsum(rng.normal(0, 0.04, (n_steps, 4)), axis=0)
         return 1 - np.abs(1 - np.mod(walk, 2.0))  # reflected into [0, 1]
@@ -119,6 +130,27 @@ def user_stream(kind: str, n_steps: int, seed: int, learning_set: str, patterns=
             t, turn = end + gap, turn + 1
         return out
     raise ValueError(kind)
+
+
+def _unsafe_pattern(model, n_steps: int, seed: int, each: int = 100) -> np.ndarray:
+    """The hands the network predicts generating from PBs whose own generation is unsafe from
+    every start (found by an exploration of the user's seed), each for ``each`` steps after
+    the transient."""
+    from rnnpb.safety import ExplorationConfig, explore, generate_from, sample_starts
+
+    config = ExplorationConfig(samples=200, starts=2, seed=seed)
+    found = explore(model, config)
+    unsafe = found.pb[found.share >= 1.0]
+    if not len(unsafe):
+        raise ConfigError(f"no PB of the model generates unsafe movement (exploration {seed})")
+    rng = np.random.default_rng([seed, 2])
+    parts = []
+    for _ in range(-(-n_steps // each)):
+        pb = unsafe[rng.integers(len(unsafe))][None]
+        contexts, inputs = sample_starts(model, 1, config, rng)
+        hands = generate_from(model, pb, contexts, inputs, config.transient + each, sensory=True)
+        parts.append(hands[config.transient :, 0])
+    return np.clip(np.concatenate(parts)[:n_steps], 0.0, 1.0)
 
 
 @dataclass(frozen=True)
@@ -271,7 +303,7 @@ def learn_map(pool, model, model_path: Path, config, online, seeds: SafetySeeds,
 
 def _streams(model, config, user_seeds, learned_seed: int, set_name: str) -> dict[str, Any]:
     streams = {
-        user: user_stream(user, config.steps, seed, set_name, model.patterns)
+        user: user_stream(user, config.steps, seed, set_name, model.patterns, model)
         for user, seed in zip(USERS, user_seeds, strict=True)
     }
     for pattern in model.patterns:
