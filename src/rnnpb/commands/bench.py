@@ -20,7 +20,8 @@ single-threaded, after warm-up:
     the safety guard on (the default guard, the meta-level's barrier on the newest PB step
     in the regression, then the command filter's check before sending: docs/safety.md), and
     each guard's step alone (the barrier on the newest step, on 3 steps, on the whole
-    window, the projection);
+    window, the projection, and the meta-level as an on-line run has it: the barrier only
+    where the PB drives the motion, the regime and the inhibition check every step);
   - side by side in the same run, each as median, 99th percentile and ratio to the first:
     the step with the paper's regression, with the default one, with the default one and its
     detectors and the safety guard (barrier and command filter), and the step per session
