@@ -51,7 +51,8 @@ class ExplorationConfig:
             raise ConfigError("samples, starts and batch must be >= 1")
         if not 0 <= self.transient <= self.steps - 2:
             raise ConfigError(
-                f"transient must be in [0, steps - 2], got {self.transient} of {self.steps}"
+                f"steps must be at least the transient + 2 ({max(self.transient, 0) + 2}) "
+                f"and the transient >= 0: got steps {self.steps}, transient {self.transient}"
             )
         if not 0 < self.unsafe_share <= 1:
             raise ConfigError(f"unsafe_share must be in (0, 1], got {self.unsafe_share}")
