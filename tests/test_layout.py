@@ -34,7 +34,7 @@ ALLOWED: dict[str, set[str]] = {
     "model": {"presets", "sequences", "structure"},
     "memory": {"sequences"},
     "demonstrator": {"robot", "sequences", "sources"},
-    "safety": {"model", "presets", "robot", "sequences"},
+    "safety": {"demonstrator", "model", "presets", "robot", "sequences"},
     "perception": {"demonstrator", "robot", "sources", "sequences"},
     "mocap": {"demonstrator", "robot", "sources", "sequences"},
     "analysis": {"demonstrator", "robot", "sequences", "structure"},

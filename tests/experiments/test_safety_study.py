@@ -3,35 +3,45 @@ find (the study's runs themselves are tested in tests/safety/test_online.py)."""
 
 from __future__ import annotations
 
+import math
+
 from rnnpb.cli import main
 from rnnpb.experiments.exams import load_exam, parse_exam
-from rnnpb.experiments.scenarios.safety import USERS, SafetySeeds
+from rnnpb.experiments.scenarios.safety import USERS, SafetySeeds, roc_auc
 from rnnpb.experiments.studies import load_study, takes_exam
 
 
-def _results(generated=(100, 5, 30), sent=0, lock=3, recognised_on=("1", "2", "3")):
-    off, barrier, projection = generated
+def _results(steered=5, prevented=(2, 2), inhibited=0, sent=0, lock=3, risk_auc=0.97):
     learned = {
-        guard: {
+        "everything": {
             "lock": {"1": 2, "2": lock, "3": 4},
             "switch": {"1->2": 3, "2->1": 5},
-            "recognised": dict(zip(("1", "2", "3"), recognised_on, strict=True)),
-        }
-        for guard in ("barrier", "projection")
+            "recognised": {"1": "1", "2": "2", "3": "3"},
+        },
+        "unguarded": {
+            "lock": {"1": 2, "2": 2, "3": 2},
+            "switch": {"1->2": 3, "2->1": 3},
+            "recognised": {"1": "1", "2": "2", "3": "3"},
+        },
     }
-    learned["off"] = {
-        "lock": {"1": 2, "2": 2, "3": 2},
-        "switch": {"1->2": 3, "2->1": 3},
-        "recognised": {"1": "1", "2": "2", "3": "3"},
+    totals = {
+        "steer_unguarded": 100,
+        "steer_steered": steered,
+        "inhibit_cases": prevented[1],
+        "inhibit_prevented": prevented[0],
+        "learned_steps": 900,
+        "learned_inhibited": inhibited,
+        "sent_unsafe": sent,
     }
     return {
-        "totals": {
-            "sent": sent,
-            "generated_off": off,
-            "generated_barrier": barrier,
-            "generated_projection": projection,
-        },
-        "sets": {"1": {"learned": learned}},
+        "sets": {
+            "1": {
+                "learned": learned,
+                "totals": totals,
+                "prediction": {"risk_auc": risk_auc},
+                "familiarity": {"familiarity_auc": 0.93},
+            }
+        }
     }
 
 
@@ -41,11 +51,27 @@ def test_the_seeds_of_a_first_seed_and_of_the_exam():
     assert seeds.map_users == tuple(range(3, 3 + len(USERS)))
     assert seeds.users == tuple(range(1003, 1003 + len(USERS)))
     exam = load_exam("safety")
+    assert exam.version == 2
     from_exam = SafetySeeds.from_exam(exam)
-    assert from_exam.users == exam.seed_list("users") and from_exam.model == 7100
-    assert not {from_exam.model, from_exam.learned, *from_exam.users} & set(
-        seeds.map_users + seeds.users
-    )
+    assert from_exam.users == exam.seed_list("users") and from_exam.model == 7200
+    development = SafetySeeds.from_first(0)
+    used = {
+        development.model,
+        development.learned,
+        development.held_out,
+        development.unknown,
+        *development.map_users,
+        *development.users,
+    }
+    exam_draws = {
+        from_exam.model,
+        from_exam.learned,
+        from_exam.held_out,
+        from_exam.unknown,
+        *from_exam.map_users,
+        *from_exam.users,
+    }
+    assert not used & exam_draws
 
 
 def test_the_judge_reads_the_exams_definitions():
@@ -54,37 +80,42 @@ def test_the_judge_reads_the_exams_definitions():
     exam = load_exam("safety")
     targets = study.judge_results(_results(), exam)
     assert list(targets) == list(exam.targets)
-    verdicts = [t.met for t in targets.values()]
-    # Nothing sent; the barrier left 5 of 100 (met), the projection 30 (not); no cost.
-    assert verdicts == [True, True, False, True, True]
-    assert targets[list(exam.targets)[1]].detail == "unguarded 100, barrier 5 (95.0 % removed)"
-    # One lock-on beyond the exam's 10 steps is a cost; a unit sent is a miss.
-    late = study.judge_results(_results(sent=1, lock=11), exam)
-    assert [t.met for t in late.values()] == [False, True, False, False, False]
-    # Nothing to remove: not met (the share is undefined).
-    none = study.judge_results(_results(generated=(0, 0, 0)), exam)
-    assert not none[list(exam.targets)[1]].met
-    assert "(none to remove)" in none[list(exam.targets)[1]].detail
+    assert all(t.met for t in targets.values())
+    assert "95.0 % removed" in targets[study.STEERS].detail
+    bad = study.judge_results(
+        _results(steered=20, prevented=(1, 2), inhibited=10, sent=1, lock=11, risk_auc=0.9), exam
+    )
+    assert [t.met for t in bad.values()] == [False, True, False, False, False, False, False]
+    # No case of inhibition: undefined, so not met.
+    none = study.judge_results(_results(prevented=(0, 0)), exam)
+    assert not none[study.INHIBITS].met and "no case arose" in none[study.INHIBITS].detail
 
 
 def test_a_changed_definition_changes_the_verdict():
-    # The limits are the exam's: with 40 % allowed, the projection's 30 of 100 passes.
     exam = load_exam("safety")
+    study = load_study("safety")
     data = {
-        "exam": {"study": "safety", "version": 2},
+        "exam": {"study": "safety", "version": 3},
         "draws": {k: list(v) for k, v in exam.seeds.items()},
         "targets": {
             name: {
                 "counts": t.counts,
                 "compare": t.compare,
-                "limit": 0.4 if "removes" in name else t.limit,
+                "limit": 0.25 if name == study.STEERS else t.limit,
                 "parameters": dict(t.parameters),
             }
             for name, t in exam.targets.items()
         },
     }
-    targets = load_study("safety").judge_results(_results(), parse_exam(data))
-    assert all(t.met for t in targets.values())
+    targets = study.judge_results(_results(steered=20), parse_exam(data))
+    assert targets[study.STEERS].met
+    assert not study.judge_results(_results(steered=20), exam)[study.STEERS].met
+
+
+def test_roc_auc_counts_ties_half_and_is_undefined_for_one_class():
+    assert roc_auc([0.1, 0.4, 0.35, 0.8], [False, False, True, True]) == 0.75
+    assert roc_auc([0.5, 0.5], [True, False]) == 0.5
+    assert math.isnan(roc_auc([0.1, 0.2], [True, True]))
 
 
 def test_models_it_cannot_find_are_named_in_one_line(tmp_path, capsys):

@@ -38,7 +38,12 @@ def _map_around(model, centre, radius=0.35):
     pbs = rng.uniform(size=(1500, model.network.pb_size))
     unsafe = np.linalg.norm(pbs - centre, axis=1) < radius
     experience = Experience(
-        pbs, unsafe, np.zeros(len(pbs), bool), np.array(["explored"] * len(pbs)), {}
+        pbs,
+        unsafe,
+        unsafe.astype(float),
+        np.zeros(len(pbs), bool),
+        np.array(["explored"] * len(pbs)),
+        {},
     )
     return new_map(model, fit_meta(experience, MetaConfig(iterations=800)), pbs, unsafe, 0.08, {})
 
@@ -136,18 +141,35 @@ def test_interact_filters_every_command_and_says_what_guards(model_path, tmp_pat
 
 
 def test_a_study_run_counts_what_was_generated_and_what_reached_the_robot(model_path):
-    from rnnpb.experiments.scenarios.safety import USERS, adversarial_job, adversarial_stream
+    from rnnpb.experiments.scenarios.safety import USERS, measure, session_job, user_stream
     from rnnpb.model import TrainedModel
 
-    for user in USERS[:-1]:  # the generated users stay in the view, [0, 1]
-        stream = adversarial_stream(user, 40, 3, "1")
-        assert stream.shape == (40, 4) and 0 <= stream.min() <= stream.max() <= 1
     model = TrainedModel.load(model_path)
-    meta = _map_around(model, np.array([0.8, 0.8, 0.3, 0.4])).meta
-    row = adversarial_job(
-        str(model_path), meta, OnlineConfig(), "projection", "full_swing", 8, 0, "1"
+    for user in USERS[:-1]:  # the unsafe pattern needs a model that generates unsafe movement
+        stream = user_stream(user, 40, 3, "1", model.patterns)
+        assert stream.shape == (40, 4)
+        seen = stream[np.isfinite(stream)]
+        assert 0 <= seen.min() <= seen.max() <= 1
+    assert np.isnan(user_stream("lost_hands", 80, 3, "1", model.patterns)).any()
+    maps = _map_around(model, np.array([0.8, 0.8, 0.3, 0.4]))
+    stream = user_stream("full_swing", 8, 0, "1")
+    runs = {
+        ("full_swing", arm): session_job(
+            str(model_path), maps.meta, OnlineConfig(), arm, stream, "x"
+        )
+        for arm in ("unguarded", "everything")
+    }
+    everything = runs[("full_swing", "everything")]
+    assert len(everything["regime"]) == 8
+    assert not any(everything["sent_unsafe"])  # the filter let none through
+    generated = everything["generated_unsafe"] != ""
+    assert set(everything["cause"][generated]) <= {"seen movement", "generation"}
+    assert not any(everything["cause"][~generated])
+    totals = measure(runs, maps, 0.2)["totals"]
+    assert totals["sent_unsafe"] == 0
+    assert totals["steer_unguarded"] == int(
+        np.isin(
+            runs[("full_swing", "unguarded")]["regime"], ["lost", "still", "novel", "unstructured"]
+        )
+        @ (runs[("full_swing", "unguarded")]["generated_unsafe"] != "")
     )
-    assert row["steps"] == 8 and row["guard"] == "projection"
-    assert row["collision_sent"] == row["speed_sent"] == 0  # the filter let none through
-    assert row["unsafe_generated"] >= sum(row["collision_parts"].values()) >= 0
-    assert row["prevented"] >= row["unsafe_generated"]  # every collision or speeding changed

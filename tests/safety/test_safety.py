@@ -111,7 +111,12 @@ def _constructed_map(model, centre, radius=0.2):
     )
     unsafe = np.linalg.norm(pbs - centre, axis=1) < radius
     experience = Experience(
-        pbs, unsafe, np.zeros(len(pbs), bool), np.array(["explored"] * len(pbs)), {}
+        pbs,
+        unsafe,
+        unsafe.astype(float),
+        np.zeros(len(pbs), bool),
+        np.array(["explored"] * len(pbs)),
+        {},
     )
     meta = fit_meta(experience, MetaConfig(iterations=2000))
     return new_map(model, meta, pbs, unsafe, 0.08, {"constructed": True})

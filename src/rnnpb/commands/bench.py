@@ -20,7 +20,8 @@ single-threaded, after warm-up:
     the safety guard on (the default guard, the meta-level's barrier on the newest PB step
     in the regression, then the command filter's check before sending: docs/safety.md), and
     each guard's step alone (the barrier on the newest step, on 3 steps, on the whole
-    window, the projection);
+    window, the projection, and the meta-level as an on-line run has it: the barrier only
+    where the PB drives the motion, the regime and the inhibition check every step);
   - side by side in the same run, each as median, 99th percentile and ratio to the first:
     the step with the paper's regression, with the default one, with the default one and its
     detectors and the safety guard (barrier and command filter), and the step per session
@@ -185,6 +186,11 @@ def run(args: argparse.Namespace) -> int:
         "projection": replace(online, safety_guard="projection"),
     }
     guarded = {name: compiled(model, cfg, meta=meta) for name, cfg in guards.items()}
+    # The meta-level as an on-line run has it (rnnpb.safety.online_safety): the barrier only
+    # where the PB drives the motion, the regime and the inhibition check on every step.
+    guarded["meta_level"] = compiled(
+        model, guards["barrier"], meta=meta, steering="pb_driven", inhibition=True
+    )
     command_filter = CommandFilter()
     # The paper's regression, and many sessions of the default in one call, each session at
     # its own place in the stream (its own phase).
@@ -356,6 +362,7 @@ def run(args: argparse.Namespace) -> int:
             "barrier": "barrier (newest step)",
             "barrier_3_steps": "barrier on 3 steps",
             "barrier_window": "barrier on the window",
+            "meta_level": "meta-level (steering where the PB drives, inhibition)",
         }.get(name, name)
         print(
             f"    the step with the {label} alone: "

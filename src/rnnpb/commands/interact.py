@@ -262,13 +262,13 @@ def run(args: argparse.Namespace) -> int:
             model,
             routines,
             online,
-            meta=safety.meta,
             recognition=tables.recognition_for(model),
+            **safety.mirror_options,
         )
         extra_columns = ROUTINE_COLUMNS
     else:
         mirror = MirrorSystem(
-            model, online, meta=safety.meta, recognition=tables.recognition_for(model)
+            model, online, recognition=tables.recognition_for(model), **safety.mirror_options
         )
     with contextlib.ExitStack() as stack:
         # SIGTERM (`kill`, a service manager) ends the run as Ctrl-C does: at the next step,
@@ -406,6 +406,7 @@ def run(args: argparse.Namespace) -> int:
             **safety.to_dict(),
             "unsafe_commands": loop.unsafe_commands,
             "prevented_commands": loop.prevented_commands,
+            "inhibited_commands": loop.inhibited_commands,
         },
     }
     if teaching is not None:
@@ -416,7 +417,8 @@ def run(args: argparse.Namespace) -> int:
     if safety.command_filter is not None:
         print(
             f"safety: {loop.unsafe_commands} unsafe commands generated, "
-            f"{loop.prevented_commands} held, shortened or slowed by the filter"
+            f"{loop.prevented_commands} held, shortened or slowed by the filter, "
+            f"{loop.inhibited_commands} inhibited by the meta-level"
         )
     if teaching is not None:
         versions = [Path(v).name for v in teaching["versions_written"]]

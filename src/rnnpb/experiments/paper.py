@@ -147,15 +147,18 @@ def run_scenario(
     online: OnlineConfig,
     joint_limits: np.ndarray,
     meta: MetaParams | None = None,
+    steering: str = "always",
+    inhibition: bool = False,
 ) -> Run:
     """Drive the mirror system with a demonstrator scenario through the interaction loop.
     ``meta``: a safety map's risk network, for the guard ``online.safety_guard`` names
-    (docs/safety.md); None runs unguarded."""
+    (docs/safety.md); None runs unguarded. ``steering``, ``inhibition``: the meta-level's
+    part of the step (:class:`rnnpb.model.MirrorSystem`)."""
     from rnnpb.demonstrator import ScenarioSource
     from rnnpb.interaction import InteractionLoop, LoopConfig
 
     records = []
-    mirror = MirrorSystem(model, online, meta=meta)
+    mirror = MirrorSystem(model, online, meta=meta, steering=steering, inhibition=inhibition)
     with ScenarioSource(scenario) as source:
         InteractionLoop(mirror, source, config=LoopConfig(dt=scenario.dt)).run(
             on_step=records.append
@@ -224,13 +227,15 @@ def synchronization(
     pause: int = PAUSE_STEPS,
     after: int = 45,
     meta: MetaParams | None = None,
+    steering: str = "always",
+    inhibition: bool = False,
 ) -> Synchronization:
-    """The user performs ``pattern``, pauses, and goes on (paper Figure 5). ``meta``: see
-    :func:`run_scenario`."""
+    """The user performs ``pattern``, pauses, and goes on (paper Figure 5). ``meta``,
+    ``steering``, ``inhibition``: see :func:`run_scenario`."""
     from rnnpb.demonstrator import pause_scenario
 
     scenario = pause_scenario(pattern, before=before, pause=pause, after=after, seed=seed)
-    run = run_scenario(model, scenario, online, joint_limits, meta)
+    run = run_scenario(model, scenario, online, joint_limits, meta, steering, inhibition)
     lock = metrics.steps_to_lock(run.motor_error, run.sensory_error, 0, before)
     settle = metrics.pb_settle_step(run.pb[:before])
     lag = math.nan
@@ -282,9 +287,12 @@ def switching(
     seed: int = 0,
     steps_each: int = SWITCH_STEPS_EACH,
     meta: MetaParams | None = None,
+    steering: str = "always",
+    inhibition: bool = False,
 ) -> Switching:
     """Every ordered pair of learned patterns: steps from the switch until the robot follows
-    the new pattern (locked on it). ``meta``: see :func:`run_scenario`."""
+    the new pattern (locked on it). ``meta``, ``steering``, ``inhibition``: see
+    :func:`run_scenario`."""
     from rnnpb.demonstrator import switch_scenario
 
     pairs = {}
@@ -295,6 +303,8 @@ def switching(
             online,
             joint_limits,
             meta,
+            steering,
+            inhibition,
         )
         pairs[f"{a}->{b}"] = metrics.steps_to_lock(run.motor_error, run.sensory_error, steps_each)
     return Switching(pairs)

@@ -111,6 +111,10 @@ class StepRecord:
     confidence: float = 0.0
     novelty: str = ""
     pattern_confidence: dict[str, float] = field(default_factory=dict)
+    # The meta-level (docs/safety.md): what drove the motion and why the generated command
+    # was held (empty when sent; ``motor`` is then the command before).
+    regime: str = ""
+    inhibited: str = ""
 
 
 @dataclass
@@ -185,6 +189,7 @@ class InteractionLoop:
         self.held_steps = 0
         self.command_filter = command_filter
         self.prevented_commands = 0
+        self.inhibited_commands = 0
         self.unsafe_commands = 0
         self._start: float | None = None
         self._stop_requested = False
@@ -236,7 +241,10 @@ class InteractionLoop:
             confidence=result.confidence,
             novelty=result.novelty,
             pattern_confidence=result.pattern_confidence,
+            regime=getattr(result, "regime", ""),
+            inhibited=getattr(result, "inhibited", ""),
         )
+        self.inhibited_commands += int(bool(record.inhibited))
         self._predicted = result.predicted_hands.copy()
         if self.recorder is not None:
             self.recorder.write(record)

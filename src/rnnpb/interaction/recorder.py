@@ -11,9 +11,11 @@ failed numerically and the last good state was kept), what the step recognised â
 :mod:`rnnpb.model.recognition`) â€”, when the source knows it, the ground truth
 ``truth_pattern``, and from the command filter (docs/safety.md) ``unsafe`` (why the
 generated command was unsafe, empty when safe) and ``filtered`` (what the filter did:
-``slowed``, ``shortened``, ``held``, or empty). With a routine level (``interact
---routines``) two more: ``routine`` (the routine recognised, empty when none) and
-``anticipated`` (the movement it says comes next).
+``slowed``, ``shortened``, ``held``, or empty), and from the meta-level ``regime`` (what
+drove the motion: ``following``, ``lost``, ``still``, ``novel``, ``unstructured``) and
+``inhibited`` (why the generated command was held, empty when it was sent). With a routine
+level (``interact --routines``) two more: ``routine`` (the routine recognised, empty when
+none) and ``anticipated`` (the movement it says comes next).
 
 Every row is flushed to the operating system when written, so a session interrupted by Ctrl-C
 or a crash keeps every step up to the last one written. A row is complete only with its line
@@ -48,6 +50,8 @@ TEXT_COLUMNS = (
     TRUTH_PATTERN_COLUMN,
     "unsafe",
     "filtered",
+    "regime",
+    "inhibited",
     "routine",
     "anticipated",
 )
@@ -83,6 +87,8 @@ def session_columns(pb_size: int) -> list[str]:
         TRUTH_PATTERN_COLUMN,
         "unsafe",
         "filtered",
+        "regime",
+        "inhibited",
     ]
 
 
@@ -140,6 +146,8 @@ class SessionRecorder:
             record.truth.get("pattern", ""),
             record.unsafe,
             record.filtered,
+            record.regime,
+            record.inhibited,
         ]
         if self._extra is not None:
             row += list(self._extra(record))

@@ -5,6 +5,8 @@ expects a :class:`~rnnpb.model.MirrorSystem` and runs both levels
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from rnnpb.model import OnlineConfig, StepResult, TrainedModel
@@ -27,10 +29,12 @@ class RoutineMirror:
         config: OnlineConfig | None = None,
         meta: MetaParams | None = None,
         recognition: RecognitionConfig | None = None,
+        **options: Any,
     ) -> None:
+        """``options``: the lower mirror system's meta-level ``steering`` and ``inhibition``."""
         self.model = model
         self.two_levels = TwoLevelMirror(
-            model, routines, config, meta=meta, recognition=recognition
+            model, routines, config, meta=meta, recognition=recognition, **options
         )
         self.mirror = self.two_levels.mirror
         self.last: TwoLevelStep | None = None

@@ -11,7 +11,7 @@ constructor, same :class:`StepResult`.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import partial
 from typing import NamedTuple, cast
 
@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike
 from rnnpb import _xla
 from rnnpb.errors import ConfigError
 from rnnpb.model.io import TrainedModel
-from rnnpb.model.meta import MetaParams
+from rnnpb.model.meta import MetaLevel, MetaParams, regime_of
 from rnnpb.model.network import NetworkConfig, Params, logit_numpy
 from rnnpb.model.online import (
     OnlineState,
@@ -78,6 +78,14 @@ class StepResult:
         The evidence: for each learned pattern (in the model's order), the window's mean
         squared sensory error over its last predictions with that pattern's PB
         (:func:`rnnpb.model.online.pattern_errors`; NaN when the step was held).
+    regime : str
+        What drives the motion (:data:`rnnpb.model.meta.REGIMES`): ``following`` the seen
+        movement, or PB-driven: ``lost``, ``still``, ``novel``, ``unstructured``.
+    inhibited : str
+        Why the generated command was not sent (the meta-level recognised the PB as unsafe
+        while following; ``motor`` is then the command before), ``""`` when it was sent.
+    generated : array, shape (8,), or None
+        The command the network generated, radians, when it was inhibited.
     """
 
     motor: np.ndarray
@@ -93,6 +101,9 @@ class StepResult:
     novelty: str = ""
     pattern_confidence: dict[str, float] = field(default_factory=dict)
     pattern_errors: np.ndarray | None = None
+    regime: str = ""
+    inhibited: str = ""
+    generated: np.ndarray | None = None
 
 
 class PackedLayout(NamedTuple):
@@ -238,11 +249,17 @@ class MirrorSystem:
         config: OnlineConfig | None = None,
         meta: MetaParams | None = None,
         recognition: RecognitionConfig | None = None,
+        steering: str = "always",
+        inhibition: bool = False,
     ) -> None:
         """``meta``: the risk network of a safety map (``rnnpb.safety.SafetyMap.meta``); the
         regression uses it as ``config.safety_guard`` says. Without it the guard is off.
         ``recognition``: the settings of what each step says it sees (when None, the ones
-        chosen for models learned as ``model`` was: ``OnlineConfig.for_model(model)``)."""
+        chosen for models learned as ``model`` was: ``OnlineConfig.for_model(model)``).
+        ``steering`` and ``inhibition``: where the guard acts and whether a recognised
+        unsafe PB's command is held while following (:class:`rnnpb.model.meta.MetaLevel`;
+        only with ``meta``). The defaults keep the guard at every step and never inhibit;
+        ``rnnpb.safety.online_safety`` gives the meta-level's (``"pb_driven"``, True)."""
         _xla.warn_if_not_configured()  # once per process, if nobody chose XLA's loop setting
         self.model = model
         self.config = config or OnlineConfig()
@@ -269,6 +286,9 @@ class MirrorSystem:
         self._meta = (
             None if meta is None else MetaParams(*(jnp.asarray(a, jnp.float32) for a in meta))
         )
+        self.meta_level = (
+            None if meta is None else MetaLevel(meta, self.config.risk_level, steering, inhibition)
+        )
         self.steps = 0
 
     def reset(self, initial_pb: np.ndarray | None = None) -> None:
@@ -278,6 +298,8 @@ class MirrorSystem:
         self._recognition = initial_recognition_state(
             self.model.network.sensory_size, self.model.network.pb_size, self.recognition
         )
+        if self.meta_level is not None:
+            self.meta_level.reset()
         self.steps = 0
 
     def continue_from(self, other: MirrorSystem) -> bool:
@@ -365,13 +387,17 @@ class MirrorSystem:
             self.config,
             candidates,
             self._phase_candidates,
-            self._meta,
+            self._meta if self.meta_level is None or self.meta_level.steers() else None,
             self._pattern_rho,
             self.recognition.recognition_steps,
         )
         result, self._recognition, self._predicted = self._finish(
             np.asarray(packed, dtype=np.float64), u, seen, self._recognition, self._predicted
         )
+        if self.meta_level is not None:
+            motor, why = self.meta_level.inhibit(result.regime, result.pb, result.motor)
+            if why:
+                result = replace(result, motor=motor, inhibited=why, generated=result.motor)
         self.steps += 1
         return result
 
@@ -413,5 +439,6 @@ class MirrorSystem:
             novelty=seen_now.novelty,
             pattern_confidence=seen_now.confidences,
             pattern_errors=outputs.pattern_errors,
+            regime=regime_of(seen, seen_now.novelty),
         )
         return result, recognition, outputs.predicted_sensory

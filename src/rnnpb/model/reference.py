@@ -11,11 +11,12 @@ written for clarity, not speed: plain loops over time, one matrix product at a t
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
 from rnnpb.model.io import TrainedModel
-from rnnpb.model.meta import MetaParams
+from rnnpb.model.meta import MetaLevel, MetaParams, regime_of
 from rnnpb.model.mirror import (
     MirrorSystem,
     StepResult,
@@ -279,6 +280,8 @@ class ReferenceMirrorSystem:
         config: OnlineConfig | None = None,
         meta: MetaParams | None = None,
         recognition: RecognitionConfig | None = None,
+        steering: str = "always",
+        inhibition: bool = False,
     ) -> None:
         self.model = model
         self.config = config or OnlineConfig()
@@ -291,6 +294,9 @@ class ReferenceMirrorSystem:
         # The safety guard's risk network, as the compiled step takes it (docs/safety.md).
         self.meta = (
             None if meta is None else MetaParams(*(np.asarray(a, dtype=np.float64) for a in meta))
+        )
+        self.meta_level = (
+            None if meta is None else MetaLevel(meta, self.config.risk_level, steering, inhibition)
         )
         # The same learned states as the compiled step's (they are its inputs, not its work).
         self.phase_candidates = phase_candidates(model) if self.config.phase_restarts > 0 else None
@@ -323,6 +329,9 @@ class ReferenceMirrorSystem:
         self.recognition_state = initial_recognition_state(
             net.sensory_size, net.pb_size, self.recognition
         )
+        meta_level = getattr(self, "meta_level", None)  # None before __init__ made it
+        if meta_level is not None:
+            meta_level.reset()
         self.steps = 0
 
     @property
@@ -354,7 +363,7 @@ class ReferenceMirrorSystem:
             self.recognition,
             self.taught,
         )
-        return StepResult(
+        result = StepResult(
             motor=motor_command(self.model, motor),
             predicted_hands=predicted,
             pb=pb,
@@ -368,7 +377,13 @@ class ReferenceMirrorSystem:
             novelty=seen_now.novelty,
             pattern_confidence=seen_now.confidences,
             pattern_errors=errors,
+            regime=regime_of(seen, seen_now.novelty),
         )
+        if self.meta_level is not None:
+            sent, why = self.meta_level.inhibit(result.regime, result.pb, result.motor)
+            if why:
+                result = replace(result, motor=sent, inhibited=why, generated=result.motor)
+        return result
 
     def _window(self, motor_inputs: np.ndarray | None):
         """:func:`window_error_and_gradients` over the window as it stands."""
@@ -546,7 +561,8 @@ class ReferenceMirrorSystem:
                 )
             )
             gate = float(np.clip((rms / cfg.surprise_gate) ** cfg.gate_power, cfg.gate_floor, 1.0))
-        guard = cfg.safety_guard if self.meta is not None else "off"
+        steers = self.meta_level is None or self.meta_level.steers()
+        guard = cfg.safety_guard if self.meta is not None and steers else "off"
         barrier = guard == "barrier" and cfg.barrier_weight > 0
         for _ in range(cfg.iterations):
             _, g_rho, g_c, g_m, _, _ = self._window(motor_inputs)

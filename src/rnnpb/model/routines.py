@@ -648,13 +648,15 @@ class TwoLevelMirror:
         use_prior: bool = True,
         meta: MetaParams | None = None,
         recognition: RecognitionConfig | None = None,
+        **options: Any,
     ) -> None:
-        """``config``, ``meta``, ``recognition``: the lower mirror system's
-        (:class:`MirrorSystem`); ``use_prior`` False: the higher level only watches."""
+        """``config``, ``meta``, ``recognition`` and ``options`` (the meta-level's
+        ``steering`` and ``inhibition``): the lower mirror system's (:class:`MirrorSystem`);
+        ``use_prior`` False: the higher level only watches."""
         routines.check_lower(lower)
         self.lower = lower
         self.mirror = MirrorSystem(
-            lower, config or OnlineConfig.for_model(lower).config, meta, recognition
+            lower, config or OnlineConfig.for_model(lower).config, meta, recognition, **options
         )
         self.follower = RoutineFollower(routines)
         self.use_prior = use_prior

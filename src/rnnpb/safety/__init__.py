@@ -8,6 +8,7 @@ Between the model and the robot: it imports :mod:`rnnpb.model` and :mod:`rnnpb.r
 on-line step uses the risk network through :mod:`rnnpb.model.meta`, which knows no robot.
 """
 
+from rnnpb.safety._attribute import GENERATION, SEEN, Attribution, asked_posture
 from rnnpb.safety._check import (
     PHYSICAL,
     SafetyChecker,
@@ -20,7 +21,9 @@ from rnnpb.safety._explore import (
     Experience,
     ExplorationConfig,
     explore,
+    generate_from,
     sample_pbs,
+    sample_starts,
     visited,
 )
 from rnnpb.safety._filter import CommandFilter, FilterDecision
@@ -40,6 +43,12 @@ from rnnpb.safety._meta import MetaConfig, familiarity, fit_meta, init_meta, ris
 from rnnpb.safety._online import OnlineSafety, online_safety, risk_plane, risk_views
 
 __all__ = [
+    "GENERATION",
+    "SEEN",
+    "Attribution",
+    "asked_posture",
+    "generate_from",
+    "sample_starts",
     "new_map",
     "PHYSICAL",
     "SAFETY_FORMAT",

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import asdict
+from dataclasses import asdict, replace
+
+import numpy as np
 
 from rnnpb.model import TrainedModel
 from rnnpb.safety._check import SafetyChecker, SafetyLimits
@@ -19,13 +21,26 @@ def learn_safety_map(
     limits: SafetyLimits | None = None,
     also: Experience | None = None,
     progress: Callable[[int, int], None] | None = None,
+    lived: np.ndarray | None = None,
 ) -> SafetyMap:
-    """Explore the model's PB space, join ``also`` (PBs visited in interactions), fit the
-    risk network; the map to save beside the model."""
+    """Explore the model's PB space, and the PBs ``lived`` (n, P) in sessions the robot lived
+    through, each by its own generation from many starts; join ``also`` (PBs labelled
+    elsewhere); fit the risk network; the map to save beside the model. Every PB of the
+    experience counts for familiarity."""
     exploration = exploration or ExplorationConfig()
     meta = meta or MetaConfig()
     limits = limits or SafetyLimits()
-    experience = explore(model, exploration, SafetyChecker(limits), progress)
+    checker = SafetyChecker(limits)
+    experience = explore(model, exploration, checker, progress)
+    if lived is not None and len(lived):
+        own = explore(model, replace(exploration, seed=exploration.seed + 1), checker, pbs=lived)
+        experience = experience.joined(
+            replace(
+                own,
+                source=np.array(["lived"] * len(own.pb)),
+                counts={"lived": len(own.pb), "lived_unsafe": int(own.unsafe.sum())},
+            )
+        )
     if also is not None:
         experience = experience.joined(also)
     params = fit_meta(experience, meta)
@@ -36,5 +51,6 @@ def learn_safety_map(
         "step_limit_rad": limits.step_limit,
         "counts": experience.counts,
         "visited": int((experience.source == "visited").sum()),
+        "lived": int((experience.source == "lived").sum()),
     }
     return new_map(model, params, experience.pb, experience.unsafe, meta.familiarity_width, info)

@@ -2,7 +2,8 @@
 
 A model ``M.npz`` has its map in ``M.safety.npz`` (a file of its own, so the model file and its
 format stay as they are; ``rnnpb safety learn --model M.npz`` writes it). The map holds the
-risk network's weights, the experienced PBs (for familiarity), the labels' counts, the
+risk network's weights, the experienced PBs (for familiarity: a kernel density over them),
+their labels, the labels' counts, the
 checks' settings, the model's fingerprint (a map learned for another model is refused) and a
 format version. A missing map is not an error where a caller chooses the documented fallback
 (:func:`find_safety_map` returns None: the command filter still runs, the PB is not guarded);
@@ -28,7 +29,10 @@ from rnnpb.model.meta import MetaParams
 from rnnpb.safety._meta import familiarity, risk
 
 SAFETY_FORMAT = "rnnpb-safety-map"
-SAFETY_FORMAT_VERSION = 1
+SAFETY_FORMAT_VERSION = 2
+"""2: PBs labelled by their own generation after its transient, from many starts (and the
+familiarity a kernel density); a version-1 map (labelled by any unsafe step from one start) is
+refused: it must be learned again."""
 
 
 def safety_map_path(model_path: str | os.PathLike[str]) -> Path:
@@ -102,7 +106,12 @@ def load_safety_map(path: str | os.PathLike[str], model: TrainedModel | None = N
     """Read a safety map; with ``model``, also check it belongs to that model. Raises
     :class:`ModelFileError` naming the file for a missing, damaged, foreign or newer map."""
     path = Path(path)
-    meta, arrays = load_archive(path, SAFETY_FORMAT, SAFETY_FORMAT_VERSION)
+    meta, arrays = load_archive(path, SAFETY_FORMAT, (1, SAFETY_FORMAT_VERSION))
+    if meta.get("format_version") != SAFETY_FORMAT_VERSION:
+        raise ModelFileError(
+            f"{path}: a version-{meta.get('format_version')} safety map (its PBs labelled by "
+            "any unsafe step from one start); run `rnnpb safety learn` to learn it again"
+        )
     names = [f"meta_{name}" for name in MetaParams._fields] + ["experienced", "unsafe"]
     missing = [n for n in names if n not in arrays]
     if missing:
@@ -174,8 +183,8 @@ def describe_safety_map(path: str | os.PathLike[str]) -> str:
     unsafe = int(stored.unsafe.sum())
     info = stored.info
     return (
-        f"safety map: {n} experienced PBs, {unsafe} unsafe ({100 * unsafe / max(n, 1):.0f} "
-        f"%), learned {info.get('created', '?')}\n"
+        f"safety map (version {SAFETY_FORMAT_VERSION}): {n} experienced PBs, {unsafe} unsafe "
+        f"({100 * unsafe / max(n, 1):.0f} %), learned {info.get('created', '?')}\n"
         f"  risk network {stored.meta.w1.shape[1]} hidden units; servo limit "
         f"{info.get('step_limit_rad', float('nan')):.2f} rad/step; model {stored.fingerprint}"
     )

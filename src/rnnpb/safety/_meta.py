@@ -20,12 +20,12 @@ from rnnpb.safety._explore import Experience
 class MetaConfig:
     """``hidden`` units per layer; ``iterations`` of Adam at ``learning_rate`` on the weighted
     cross-entropy (unsafe examples weighted up to balance the classes); ``familiarity_width``:
-    the kernel's width in PB units; ``seed`` of the initial weights."""
+    the width of the familiarity's kernel in PB units; ``seed`` of the initial weights."""
 
     hidden: int = 32
     iterations: int = 3000
     learning_rate: float = 3e-3
-    familiarity_width: float = 0.08
+    familiarity_width: float = 0.05
     seed: int = 0
 
     def __post_init__(self) -> None:
@@ -84,12 +84,14 @@ def risk(meta: MetaParams, pb: np.ndarray) -> np.ndarray:
 
 
 def familiarity(experienced: np.ndarray, pb: np.ndarray, width: float) -> np.ndarray:
-    """How familiar each PB (..., P) is: ``exp(-d² / 2 width²)`` with ``d`` the distance to
-    the nearest experienced PB (1: behaviour there was generated; → 0 far from all of it)."""
+    """How familiar each PB (..., P) is, in [0, 1]: ``1 - exp(-k)`` with ``k`` the kernel
+    density of the experienced PBs at it, ``sum_i exp(-|pb - e_i|² / 2 width²)`` (about how
+    many experienced PBs lie within ``width`` of it). Near 1 where behaviour was generated
+    many times, 0.63 at one experienced PB, → 0 far from all of them."""
     pb = np.asarray(pb, dtype=np.float64)
     flat = pb.reshape(-1, pb.shape[-1])
-    nearest = np.empty(len(flat))
-    for start in range(0, len(flat), 4096):
-        d2 = ((flat[start : start + 4096, None, :] - experienced[None]) ** 2).sum(-1)
-        nearest[start : start + 4096] = d2.min(axis=1)
-    return np.exp(-nearest / (2 * width**2)).reshape(pb.shape[:-1])
+    density = np.empty(len(flat))
+    for start in range(0, len(flat), 1024):
+        d2 = ((flat[start : start + 1024, None, :] - experienced[None]) ** 2).sum(-1)
+        density[start : start + 1024] = np.exp(-d2 / (2 * width**2)).sum(axis=1)
+    return (1.0 - np.exp(-density)).reshape(pb.shape[:-1])

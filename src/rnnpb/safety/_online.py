@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -19,19 +20,32 @@ from rnnpb.safety._map import SafetyMap, find_safety_map, safety_map_path
 class OnlineSafety:
     """What an on-line run uses: ``config`` for the mirror system (its ``safety_guard`` acts
     only with ``meta``), ``meta`` the risk network of ``safety_map`` (None without a map),
-    ``command_filter`` (None only when safety is off), and ``note``: one line saying which."""
+    ``command_filter`` (None only when safety is off), and ``note``: one line saying which.
+    ``steering`` and ``inhibition``: the meta-level's part of each step
+    (:class:`rnnpb.model.meta.MetaLevel`): the guard acts only where the PB drives the motion,
+    and a recognised unsafe PB's command is held while following; :attr:`mirror_options` are
+    the mirror system's arguments for all of it."""
 
     config: OnlineConfig
     meta: MetaParams | None
     command_filter: CommandFilter | None
     safety_map: SafetyMap | None
     note: str
+    steering: str = "pb_driven"
+    inhibition: bool = True
+
+    @property
+    def mirror_options(self) -> dict[str, Any]:
+        """``meta``, ``steering`` and ``inhibition`` for :class:`rnnpb.model.MirrorSystem`."""
+        return {"meta": self.meta, "steering": self.steering, "inhibition": self.inhibition}
 
     def to_dict(self) -> dict[str, object]:
         return {
             "map": self.safety_map is not None,
             "guard": self.guard,
             "filter": self.command_filter is not None,
+            "steering": self.steering if self.meta is not None else "off",
+            "inhibition": self.inhibition and self.meta is not None,
             "note": self.note,
         }
 
@@ -81,8 +95,8 @@ def online_safety(
         command_filter,
         safety_map,
         f"safety: map {safety_map_path(model_path).name}, PB guard {guard}"
-        + (" (OnlineConfig.safety_guard)" if guard == "off" else "")
-        + ", command filter on",
+        + (" (OnlineConfig.safety_guard)" if guard == "off" else " where the PB drives")
+        + ", inhibition while following, command filter on",
     )
 
 

@@ -603,7 +603,7 @@ class Session:
             choice = self.config_tables.choice_for(model)
             safety, risk = self._load_safety(self.models[name], model, choice.config)
             mirror = MirrorSystem(
-                model, safety.config, meta=safety.meta, recognition=choice.recognition
+                model, safety.config, recognition=choice.recognition, **safety.mirror_options
             )
             started = time.perf_counter()
             mirror.step(np.full(model.network.sensory_size, 0.5))  # compiles the step
@@ -781,11 +781,16 @@ class Session:
 
     def _step_safety(self, record) -> dict[str, Any]:
         """The step message's safety fields: why the generated command was unsafe (empty
-        when safe), what the filter did, and how many commands it has changed this run."""
+        when safe), what the filter did, and how many commands it has changed this run; what
+        drove the motion (``regime``) and why the meta-level held the command (``inhibited``,
+        empty when sent), and how many it has held this run."""
         return {
             "unsafe": record.unsafe,
             "filtered": record.filtered,
             "prevented": self.loop.prevented_commands if self.loop is not None else 0,
+            "regime": record.regime,
+            "inhibited": record.inhibited,
+            "inhibited_count": self.loop.inhibited_commands if self.loop is not None else 0,
         }
 
     def _publish_frame(self, frame: np.ndarray) -> None:

@@ -123,7 +123,7 @@ class _Prepared:
             choice = self._session.config_tables.choice_for(model)
             safety, risk = self._session._load_safety(Path(self.path), model, choice.config)
             mirror = MirrorSystem(
-                model, safety.config, meta=safety.meta, recognition=choice.recognition
+                model, safety.config, recognition=choice.recognition, **safety.mirror_options
             )
             started = time.perf_counter()
             mirror.step(np.full(model.network.sensory_size, 0.5))  # compiles the step
@@ -262,9 +262,9 @@ class SessionTeaching:
             self._pending_use = known
             return known[1]
         online = self.session.safety.config if self.session.safety is not None else None
-        meta = self.session.safety.meta if self.session.safety is not None else None
+        options = self.session.safety.mirror_options if self.session.safety is not None else {}
         recognition = self.session.config_tables.recognition_for(model)
-        mirror = MirrorSystem(model, online, meta=meta, recognition=recognition)
+        mirror = MirrorSystem(model, online, recognition=recognition, **options)
         self._mirrors[model.fingerprint] = (model, mirror, self.session.safety, None)
         self._pending_use = self._mirrors[model.fingerprint]
         return mirror

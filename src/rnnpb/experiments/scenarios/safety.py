@@ -1,58 +1,94 @@
 """The safety study's scenarios and measures (``rnnpb study safety``, docs/safety.md).
 
-Adversarial users generated here (seeded): random walks of both hands, jerky targets (a new
-random target every 1–4 steps), fast scribbles (sums of sinusoids with periods of 2–5 steps), a
-full swing (each hand coordinate jumping between the view's edges every step) and the paper's
-novel pattern (the pattern the learning set left out, from the demonstrator). Each runs through
-the interaction loop with the command filter in its act section; the filter's record says
-which generated commands were unsafe (what reaches the robot without the filter) and the
-commands sent are checked again (what reaches it with the filter). The mirror's motor input is
-its own closed-loop prediction (``OnlineConfig.motor_input``), so the filter does not change
-what the network generates and one run measures both. The cost on learned patterns:
-:func:`rnnpb.experiments.paper.synchronization` (lock-on and recognition, paper 3.1) and
-:func:`~rnnpb.experiments.paper.switching` (every ordered pair, 3.2), guard off and on.
+The meta-level is judged on what it is for (paper section 4.1): knowing the robot's *own*
+behaviour, steering the PB where the PB drives the motion, and inhibiting a recognised unsafe
+pattern while following.
+
+Users (generated here, seeded): random walks of both hands, jerky targets (a new random
+target every 1–4 steps), fast scribbles (sums of sinusoids with periods of 2–5 steps), a full
+swing (each hand coordinate jumping between the view's edges every step), the paper's novel
+pattern (the pattern the learning set left out), lost hands (a pattern performed, then the
+hands lost, in turns), still hands (a pattern performed, then the hands held still, in
+turns) and an unsafe pattern (the hands the network itself predicts while generating from a
+PB whose own generation is unsafe from every start, a new such PB every 100 steps: the
+paper's case of perceiving a pattern the robot must not regenerate); and a person performing
+each learned pattern.
+
+Each user's stream runs three times through the mirror system (:func:`session_job`):
+``unguarded`` (no map), ``steered`` (the map's guard where the PB drives, no inhibition) and
+``everything`` (steering, inhibition and the command filter). What the network generated is
+checked with :class:`rnnpb.safety.SafetyChecker` against the command before (the filter's
+view of it, without the filter changing it: the network's motor input is its own prediction),
+and each unsafe command is attributed (:class:`rnnpb.safety.Attribution`) to the seen
+movement or the generation.
 """
 
 from __future__ import annotations
 
-import json
 import sys
-import time
-from collections import Counter
 from concurrent.futures import as_completed
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from rnnpb.errors import ConfigError
 from rnnpb.experiments.exams import Exam
 from rnnpb.experiments.scenarios import study_models as shared
 from rnnpb.experiments.studies import StudyOptions
 
-USERS = ("random_walk", "jerky_targets", "fast_scribbles", "full_swing", "novel_pattern")
-GUARDS = ("off", "barrier", "projection")
+USERS = (
+    "random_walk",
+    "jerky_targets",
+    "fast_scribbles",
+    "full_swing",
+    "novel_pattern",
+    "lost_hands",
+    "still_hands",
+    "unsafe_pattern",
+)
+ARMS = ("unguarded", "steered", "everything")
+PHYSICAL = ("collision", "speed")
 
 
 @dataclass(frozen=True)
 class SafetyStudyConfig:
     sets: tuple[str, ...]
-    steps: int  # per adversarial user and guard
-    visited_steps: int  # per adversarial user, training seeds, for the map
-    samples: int  # explored PBs
+    steps: int  # per user and arm
+    learned_steps: int  # per learned pattern performed
+    samples: int  # explored PBs for the map
+    held_out: int  # explored PBs of other draws, to judge the map's prediction
+    starts: int  # starts per explored PB
+    lived_every: int  # every how many steps of a lived session a PB joins the experience
+    train_iterations: int | None  # None: the paper's
     quick: bool
 
     @classmethod
     def for_options(cls, options: StudyOptions) -> SafetyStudyConfig:
         if options.quick:
-            return cls(sets=("1",), steps=150, visited_steps=100, samples=200, quick=True)
-        return cls(sets=("1",), steps=10_000, visited_steps=1000, samples=2000, quick=False)
+            return cls(("1",), 60, 40, 120, 80, 2, 10, 4000, True)
+        return cls(("1",), 1000, 300, 2000, 1000, 4, 5, None, False)
 
 
-def adversarial_stream(kind: str, n_steps: int, seed: int, learning_set: str) -> np.ndarray:
-    """A user's hands (n_steps, 4) in [0, 1] of the given kind."""
+def _pattern_stream(pattern: str, n_steps: int, seed: int) -> np.ndarray:
+    from rnnpb.demonstrator import held_scenario
+
+    return held_scenario(pattern, n_steps=n_steps, seed=seed).sensory
+
+
+def user_stream(
+    kind: str, n_steps: int, seed: int, learning_set: str, patterns=(), model=None
+) -> np.ndarray:
+    """A user's hands (n_steps, 4) in [0, 1] (NaN where lost) of the given kind;
+    ``patterns``: the learned patterns (for ``lost_hands`` and ``still_hands``); ``model``:
+    the robot's (for ``unsafe_pattern``)."""
     rng = np.random.default_rng(seed)
+    if kind == "unsafe_pattern":
+        if model is None:
+            raise ConfigError("the unsafe_pattern user needs the model")
+        return _unsafe_pattern(model, n_steps, seed)
     if kind == "random_walk":
         walk = 0.5 + np.cumsum(rng.normal(0, 0.04, (n_steps, 4)), axis=0)
         return 1 - np.abs(1 - np.mod(walk, 2.0))  # reflected into [0, 1]
@@ -70,8 +106,6 @@ def adversarial_stream(kind: str, n_steps: int, seed: int, learning_set: str) ->
         wave = sum(np.sin(2 * np.pi * t / periods[k] + phases[k]) for k in range(3)) / 3
         return np.clip(0.5 + 0.4 * wave, 0, 1)
     if kind == "full_swing":
-        # Each coordinate of each hand jumps between the two edges of the view every step
-        # (the fastest movement the camera could see), with random reach and phase.
         low = rng.uniform(0.0, 0.2, 4)
         high = rng.uniform(0.8, 1.0, 4)
         flip = (np.arange(n_steps)[:, None] + rng.integers(0, 2, 4)) % 2
@@ -80,30 +114,72 @@ def adversarial_stream(kind: str, n_steps: int, seed: int, learning_set: str) ->
         from rnnpb.demonstrator import novel_scenario
 
         return novel_scenario(learning_set, n_steps=n_steps, seed=seed).sensory
+    if kind in ("lost_hands", "still_hands"):
+        if not patterns:
+            raise ConfigError(f"the {kind} user needs the learned patterns")
+        out = np.empty((n_steps, 4))
+        t, turn = 0, 0
+        while t < n_steps:
+            pattern = patterns[int(rng.integers(len(patterns)))]
+            shown = _pattern_stream(pattern, 30, seed * 100 + turn)
+            gap = int(rng.integers(20, 41))
+            end = min(t + 30, n_steps)
+            out[t:end] = shown[: end - t]
+            rest = np.nan if kind == "lost_hands" else shown[end - t - 1]
+            out[end : min(end + gap, n_steps)] = rest
+            t, turn = end + gap, turn + 1
+        return out
     raise ValueError(kind)
+
+
+def _unsafe_pattern(model, n_steps: int, seed: int, each: int = 100) -> np.ndarray:
+    """The hands the network predicts generating from PBs whose own generation is unsafe from
+    every start (found by an exploration of the user's seed), each for ``each`` steps after
+    the transient."""
+    from rnnpb.safety import ExplorationConfig, explore, generate_from, sample_starts
+
+    config = ExplorationConfig(samples=200, starts=2, seed=seed)
+    found = explore(model, config)
+    unsafe = found.pb[found.share >= 1.0]
+    if not len(unsafe):
+        raise ConfigError(f"no PB of the model generates unsafe movement (exploration {seed})")
+    rng = np.random.default_rng([seed, 2])
+    parts = []
+    for _ in range(-(-n_steps // each)):
+        pb = unsafe[rng.integers(len(unsafe))][None]
+        contexts, inputs = sample_starts(model, 1, config, rng)
+        hands = generate_from(model, pb, contexts, inputs, config.transient + each, sensory=True)
+        parts.append(hands[config.transient :, 0])
+    return np.clip(np.concatenate(parts)[:n_steps], 0.0, 1.0)
 
 
 @dataclass(frozen=True)
 class SafetySeeds:
     """The study's seeds: the model's learning and the map's exploration (``model``), the
-    adversarial users whose visited PBs the map learns from (``map_users``, one per user kind
-    in :data:`USERS` order), those measured with every guard (``users``, likewise) and the
-    user performing the learned patterns (``learned``)."""
+    users whose sessions the map learns from (``map_users``, one per kind in :data:`USERS`
+    order), those measured (``users``, likewise), the person performing the learned patterns
+    (``learned``), the held-out exploration judging the map's prediction (``held_out``) and
+    the never-experienced PBs judging its familiarity (``unknown``)."""
 
     model: int
     map_users: tuple[int, ...]
     users: tuple[int, ...]
     learned: int
+    held_out: int
+    unknown: int
 
     @classmethod
     def from_first(cls, seed: int) -> SafetySeeds:
         """``--seed``'s: the model, exploration and map users from ``seed`` on, the measured
-        users from ``seed + 1000`` on, the learned patterns' user 7."""
+        users from ``seed + 1000`` on, the learned patterns' person 7, the held-out
+        exploration ``seed + 2000``, the unknown PBs ``seed + 3000``."""
         return cls(
             seed,
             tuple(seed + k for k in range(len(USERS))),
             tuple(seed + 1000 + k for k in range(len(USERS))),
             7,
+            seed + 2000,
+            seed + 3000,
         )
 
     @classmethod
@@ -116,6 +192,8 @@ class SafetySeeds:
             users["map_users"],
             users["users"],
             exam.seed_list("learned_patterns")[0],
+            exam.seed_list("held_out")[0],
+            exam.seed_list("unknown")[0],
         )
 
 
@@ -123,142 +201,291 @@ def study_models(
     directory: str | None, config: SafetyStudyConfig, seed: int, out: Path
 ) -> dict[str, Any]:
     """Each learning set's model and where it came from: ``directory``'s ``setK.npz`` (a
-    missing one is a clear error), or learned into ``out`` (the paper's algorithm; quick: the
-    fast preset)."""
-    from rnnpb.model import TrainConfig, TrainedModel
+    missing one is a clear error), or learned into ``out`` with the paper's algorithm (the
+    quick form with fewer iterations): the fast preset's models never generate unsafe
+    movement on their own, so there would be nothing for the meta-level to know."""
+    from rnnpb.model import TrainedModel
 
-    train_config = (
-        TrainConfig.fast(iterations=1500, seed=seed)
-        if config.quick
-        else TrainConfig.paper(seed=seed)
-    )
-    paths = shared.study_models(config.sets, directory, out, lambda _: train_config, seed)
-    source = None if directory is not None else f"learned here ({train_config.optimizer})"
+    def learning(name: str):
+        train = shared.paper_training(name, seed=seed)
+        if config.train_iterations is not None:
+            train = replace(train, iterations=config.train_iterations)
+        return train
+
+    paths = shared.study_models(config.sets, directory, out, learning, seed)
+    source = None if directory is not None else "learned here (the paper's algorithm)"
     return {name: (TrainedModel.load(path), source or path) for name, path in paths.items()}
 
 
-def _interact(model, online, meta, sensory, truth=None) -> dict[str, np.ndarray]:
-    from rnnpb.interaction import InteractionLoop
-    from rnnpb.model import MirrorSystem
-    from rnnpb.robot import ELBOW_AT_ZERO_PITCH
-    from rnnpb.safety import CommandFilter
-    from rnnpb.sources import ArraySensorySource
-
-    rest = np.array([0.0, 0.0, 0.0, ELBOW_AT_ZERO_PITCH] * 2)
-    command_filter = CommandFilter(initial=rest)
-    records = []
-    with ArraySensorySource(sensory, truth=truth) as source:
-        InteractionLoop(
-            MirrorSystem(model, online, meta=meta), source, command_filter=command_filter
-        ).run(on_step=records.append)
-    return {
-        "motor": np.array([r.motor for r in records]),
-        "pb": np.array([r.pb for r in records]),
-        "observed": np.array([r.observed for r in records]),
-        "predicted": np.array([r.predicted for r in records]),
-        "unsafe": np.array([r.unsafe for r in records], dtype=object),
-        "filtered": np.array([r.filtered for r in records], dtype=object),
-        "rest": rest,
-    }
+# --- one session ---------------------------------------------------------------------------
 
 
-def _physical(reasons: np.ndarray, kind: str) -> int:
-    return int(sum(any(w.startswith(kind + ":") for w in r.split()) for r in reasons))
-
-
-def visit_job(model_path: str, online, user: str, steps: int, seed: int, set_name: str):
-    """PBs an adversarial user of a training seed visits with the unguarded robot, labelled
-    by whether the command generated there collided or was too fast (the map's experience)."""
-    from rnnpb.model import TrainedModel
-    from rnnpb.safety import visited
-
-    model = TrainedModel.load(model_path)
-    run = _interact(model, online, None, adversarial_stream(user, steps, seed, set_name))
-    unsafe = [
-        any(w.split(":")[0] in ("collision", "speed") for w in r.split()) for r in run["unsafe"]
-    ]
-    return visited(run["pb"], unsafe)
-
-
-def adversarial_job(
-    model_path: str, meta, online, guard: str, user: str, steps: int, seed: int, set_name: str
+def session_job(
+    model_path: str, meta, online, arm: str, stream: np.ndarray, label: str
 ) -> dict[str, Any]:
-    """One adversarial user with one guard, the command filter in the loop: what the network
-    generated (what reaches the robot without the filter) and what was sent (with it)."""
-    from rnnpb.model import TrainedModel
-    from rnnpb.safety import SafetyChecker, risk
+    """One user's stream through one arm (:data:`ARMS`): per step the regime, the PB, the
+    command generated, the command after inhibition, the one sent (after the filter, in
+    ``everything``), why each was unsafe and the cause of the generated one."""
+    from rnnpb.model import MirrorSystem, TrainedModel
+    from rnnpb.robot import ELBOW_AT_ZERO_PITCH
+    from rnnpb.safety import Attribution, CommandFilter, SafetyChecker
 
     model = TrainedModel.load(model_path)
-    sensory = adversarial_stream(user, steps, seed, set_name)
-    t0 = time.perf_counter()
-    run = _interact(
-        model, replace(online, safety_guard=guard), None if guard == "off" else meta, sensory
+    if arm == "unguarded":
+        mirror = MirrorSystem(model, online)
+    else:
+        mirror = MirrorSystem(
+            model, online, meta=meta, steering="pb_driven", inhibition=arm == "everything"
+        )
+    rest = np.array([0.0, 0.0, 0.0, ELBOW_AT_ZERO_PITCH] * 2)
+    checker = SafetyChecker()
+    command_filter = CommandFilter(checker, initial=rest) if arm == "everything" else None
+    attribution = Attribution(checker)
+    rows: dict[str, list[Any]] = {
+        k: []
+        for k in (
+            "regime",
+            "pb",
+            "inhibited",
+            "generated_unsafe",
+            "cause",
+            "commanded_unsafe",
+            "sent_unsafe",
+            "recognised",
+        )
+    }
+    before = sent_before = rest
+    for u in stream:
+        result = mirror.step(u)
+        generated = result.generated if result.generated is not None else result.motor
+        why = _physical(checker.command_reasons(before, generated))
+        rows["generated_unsafe"].append(why)
+        rows["commanded_unsafe"].append(_physical(checker.command_reasons(before, result.motor)))
+        sent = result.motor
+        if command_filter is not None:
+            sent = command_filter(result.motor).command
+        rows["sent_unsafe"].append(_physical(checker.command_reasons(sent_before, sent)))
+        rows["regime"].append(result.regime)
+        rows["pb"].append(result.pb)
+        rows["inhibited"].append(bool(result.inhibited))
+        rows["recognised"].append(result.recognised or "")
+        before, sent_before = result.motor, sent
+    rows["cause"] = attribution.attribute_sequence(stream, rows["generated_unsafe"])
+    out: dict[str, Any] = {k: np.array(v) for k, v in rows.items()}
+    out["label"], out["arm"] = label, arm
+    return out
+
+
+def _physical(reasons: list[str]) -> str:
+    return " ".join(w for w in reasons if w.split(":")[0] in PHYSICAL)
+
+
+# --- the map ---------------------------------------------------------------------------------
+
+
+def learn_map(pool, model, model_path: Path, config, online, seeds: SafetySeeds, set_name: str):
+    """The safety map of ``model`` (saved beside ``model_path``): explored, and the PBs lived
+    through in unguarded sessions of the map's users and the learned patterns (their own
+    generation from many starts)."""
+    from rnnpb.safety import ExplorationConfig, learn_safety_map, safety_map_path
+
+    streams = _streams(model, config, seeds.map_users, seeds.model + 500, set_name)
+    jobs = [
+        pool.submit(session_job, str(model_path), None, online, "unguarded", s, label)
+        for label, s in streams.items()
+    ]
+    lived = np.concatenate([job.result()["pb"][:: config.lived_every] for job in jobs])
+    exploration = ExplorationConfig(samples=config.samples, starts=config.starts, seed=seeds.model)
+    maps = learn_safety_map(model, exploration, lived=lived)
+    maps.save(safety_map_path(model_path))
+    return maps
+
+
+def _streams(model, config, user_seeds, learned_seed: int, set_name: str) -> dict[str, Any]:
+    streams = {
+        user: user_stream(user, config.steps, seed, set_name, model.patterns, model)
+        for user, seed in zip(USERS, user_seeds, strict=True)
+    }
+    for pattern in model.patterns:
+        streams[f"learned_{pattern}"] = _pattern_stream(pattern, config.learned_steps, learned_seed)
+    return streams
+
+
+def prediction(model, maps, config, seeds: SafetySeeds) -> dict[str, Any]:
+    """The map on PBs it never saw: held-out exploration (other PBs, other starts) labelled
+    the same way, and the ROC AUC of the learned risk; the familiarity's AUC for PBs lived
+    through in the measured sessions (experienced kinds of behaviour, new draws) against PBs
+    drawn uniformly from the PB space (never experienced)."""
+    from rnnpb.safety import ExplorationConfig, explore
+
+    held = explore(
+        model,
+        ExplorationConfig(samples=config.held_out, starts=config.starts, seed=seeds.held_out),
     )
-    seconds = time.perf_counter() - t0
-    sent = SafetyChecker().check(run["motor"], previous=run["rest"])
-    pb_risk = risk(meta, run["pb"])
+    risk = maps.risk(held.pb)
     return {
-        "user": user,
-        "guard": guard,
-        "steps": len(run["motor"]),
-        "seed": seed,
-        "unsafe_generated": int(
-            sum(
-                any(w.split(":")[0] in ("collision", "speed") for w in r.split())
-                for r in run["unsafe"]
-            )
-        ),
-        "collision_generated": _physical(run["unsafe"], "collision"),
-        "speed_generated": _physical(run["unsafe"], "speed"),
-        "limit_generated": _physical(run["unsafe"], "limit"),
-        "prevented": int(sum(bool(f) for f in run["filtered"])),
-        "collision_sent": sent.count("collision"),
-        "speed_sent": sent.count("speed"),
-        "unsettled_sent": sent.count("unsettled"),
-        "unsafe_pb_steps": int((pb_risk > online.risk_level).sum()),
-        "mean_risk": float(pb_risk.mean()),
-        "ms_per_step": 1e3 * seconds / max(len(run["motor"]), 1),
-        # Which parts collided in the generated commands (what drives the robot into them).
-        "collision_parts": dict(
-            Counter(
-                w.split(":", 1)[1]
-                for r in run["unsafe"]
-                for w in r.split()
-                if w.startswith("collision:")
-            ).most_common(3)
-        ),
+        "held_out": len(held.pb),
+        "held_out_unsafe": int(held.unsafe.sum()),
+        "risk_auc": roc_auc(risk, held.unsafe),
     }
 
 
-def learned_job(model_path: str, meta, online, guard: str, seed: int) -> dict[str, Any]:
-    """Lock-on, recognition and switching of the learned patterns with one guard
-    (:func:`rnnpb.experiments.paper.synchronization` and ``switching``, paper 3.1–3.2), and
-    whether the command filter would change any command of the performed patterns."""
+def familiarity(maps, lived: np.ndarray, seed: int) -> dict[str, Any]:
+    rng = np.random.default_rng(seed)
+    unknown = rng.uniform(size=(len(lived), lived.shape[1]))
+    scores = np.concatenate([maps.familiarity(lived), maps.familiarity(unknown)])
+    labels = np.concatenate([np.ones(len(lived), bool), np.zeros(len(unknown), bool)])
+    return {
+        "lived": len(lived),
+        "familiarity_auc": roc_auc(scores, labels),
+        "lived_median": float(np.median(maps.familiarity(lived))),
+        "unknown_median": float(np.median(maps.familiarity(unknown))),
+    }
+
+
+def roc_auc(scores: ArrayLike, labels: ArrayLike) -> float:
+    """The area under the ROC curve of ``scores`` for the True ``labels`` (ties count half);
+    NaN when one class is missing."""
+    scores = np.asarray(scores, dtype=np.float64)
+    labels = np.asarray(labels, bool)
+    positive, negative = scores[labels], scores[~labels]
+    if not len(positive) or not len(negative):
+        return float("nan")
+    order = np.argsort(np.concatenate([positive, negative]), kind="mergesort")
+    ranks = np.empty(len(order))
+    values = np.concatenate([positive, negative])[order]
+    ranks[order] = np.arange(1, len(order) + 1)
+    for value in np.unique(values):  # ties: the mean rank
+        tied = np.concatenate([positive, negative]) == value
+        if tied.sum() > 1:
+            ranks[tied] = ranks[tied].mean()
+    n_pos, n_neg = len(positive), len(negative)
+    return float((ranks[:n_pos].sum() - n_pos * (n_pos + 1) / 2) / (n_pos * n_neg))
+
+
+# --- the sessions measured -------------------------------------------------------------------
+
+
+def run_sessions(pool, model, model_path, meta, config, online, seeds, set_name) -> dict:
+    """Every measured user and learned pattern through every arm: (label, arm) → run."""
+    streams = _streams(model, config, seeds.users, seeds.learned, set_name)
+    jobs = {
+        pool.submit(session_job, str(model_path), meta, online, arm, stream, label): (label, arm)
+        for label, stream in streams.items()
+        for arm in ARMS
+    }
+    runs = {}
+    for future in as_completed(jobs):
+        runs[jobs[future]] = future.result()
+        print(
+            f"  set {set_name}: {'/'.join(jobs[future])} done ({len(runs)}/{len(jobs)})",
+            file=sys.stderr,
+            flush=True,
+        )
+    return runs
+
+
+def measure(runs: dict, maps, risk_level: float) -> dict[str, Any]:
+    """The study's measures over the runs (:func:`run_sessions`)."""
+    from rnnpb.model.meta import PB_DRIVEN
+    from rnnpb.safety import GENERATION
+
+    def pb_driven_unsafe(run, generation_only=False):
+        driven = np.isin(run["regime"], list(PB_DRIVEN))
+        unsafe = run["generated_unsafe"] != ""
+        if generation_only:
+            unsafe &= run["cause"] == GENERATION
+        return int((driven & unsafe).sum())
+
+    per_user: dict[str, dict[str, Any]] = {}
+    totals = dict.fromkeys(
+        (
+            "steer_unguarded",
+            "steer_steered",
+            "steer_unguarded_generation",
+            "steer_steered_generation",
+            "inhibit_cases",
+            "inhibit_prevented",
+            "following_generation_unsafe",
+            "following_generation_inhibited",
+            "sent_unsafe",
+            "learned_steps",
+            "learned_inhibited",
+        ),
+        0,
+    )
+    for (label, arm), run in runs.items():
+        row = per_user.setdefault(label, {})
+        regimes, counts = np.unique(run["regime"], return_counts=True)
+        row[arm] = {
+            "steps": len(run["regime"]),
+            "regimes": {str(r): int(c) for r, c in zip(regimes, counts, strict=True)},
+            "generated_unsafe": int((run["generated_unsafe"] != "").sum()),
+            "generated_unsafe_generation": int(
+                ((run["generated_unsafe"] != "") & (run["cause"] == GENERATION)).sum()
+            ),
+            "pb_driven_unsafe": pb_driven_unsafe(run),
+            "inhibited": int(run["inhibited"].sum()),
+            "sent_unsafe": int((run["sent_unsafe"] != "").sum()),
+        }
+        if arm == "unguarded":
+            totals["steer_unguarded"] += pb_driven_unsafe(run)
+            totals["steer_unguarded_generation"] += pb_driven_unsafe(run, True)
+        elif arm == "steered":
+            totals["steer_steered"] += pb_driven_unsafe(run)
+            totals["steer_steered_generation"] += pb_driven_unsafe(run, True)
+        else:
+            following = run["regime"] == "following"
+            generation = (run["generated_unsafe"] != "") & (run["cause"] == GENERATION)
+            in_region = maps.risk(run["pb"]) > risk_level
+            cases = following & generation & in_region
+            totals["inhibit_cases"] += int(cases.sum())
+            totals["inhibit_prevented"] += int((cases & (run["commanded_unsafe"] == "")).sum())
+            totals["following_generation_unsafe"] += int((following & generation).sum())
+            totals["following_generation_inhibited"] += int(
+                (following & generation & run["inhibited"]).sum()
+            )
+            totals["sent_unsafe"] += int((run["sent_unsafe"] != "").sum())
+            if label.startswith("learned_"):
+                totals["learned_steps"] += len(run["regime"])
+                totals["learned_inhibited"] += int(run["inhibited"].sum())
+    return {"per_user": per_user, "totals": totals}
+
+
+def learned_job(model_path: str, meta, online, arm: str, seed: int) -> dict[str, Any]:
+    """Lock-on, recognition and switching of the learned patterns
+    (:func:`rnnpb.experiments.paper.synchronization` and ``switching``, paper 3.1–3.2),
+    unguarded or with everything on (steering, inhibition; the filter changes no command of
+    a learned pattern, tests/safety)."""
     from rnnpb.experiments.paper import switching, synchronization
     from rnnpb.model import TrainedModel
     from rnnpb.robot import JOINT_LIMITS
-    from rnnpb.safety import CommandFilter
 
     model = TrainedModel.load(model_path)
-    cfg = replace(online, safety_guard=guard)
-    meta = None if guard == "off" else meta
-    lock, recognised, prevented = {}, {}, 0
+    on = arm == "everything"
+    options = {
+        "meta": meta if on else None,
+        "steering": "pb_driven",
+        "inhibition": on,
+    }
+    lock, recognised = {}, {}
     for pattern in model.patterns:
-        sync = synchronization(model, pattern, cfg, JOINT_LIMITS, seed=seed, meta=meta)
+        sync = synchronization(model, pattern, online, JOINT_LIMITS, seed=seed, **options)
         lock[pattern] = sync.steps_to_lock
         recognised[pattern] = sync.recognized_pattern
-        # The motor input is the network's own prediction, so filtering afterwards is what
-        # the filter in the loop would have done.
-        assert sync.run is not None  # synchronization keeps its run
-        command_filter = CommandFilter(initial=sync.run.motor[0])
-        prevented += sum(bool(command_filter(c).filtered) for c in sync.run.motor)
-    switch = switching(model, cfg, JOINT_LIMITS, seed=seed, meta=meta).pairs
-    return {
-        "lock": lock,
-        "recognised": recognised,
-        "switch": switch,
-        "filter_prevented_on_learned": int(prevented),
-    }
+    switch = switching(model, online, JOINT_LIMITS, seed=seed, **options).pairs
+    return {"lock": lock, "recognised": recognised, "switch": switch}
+
+
+def within_limits(cost: dict[str, Any], lock_steps: int, switch_steps: int) -> bool:
+    """Whether every learned pattern locks on within ``lock_steps`` and switches within
+    ``switch_steps`` with everything on, recognised as unguarded."""
+    on, off = cost["everything"], cost["unguarded"]
+    return (
+        all(v is not None and v <= lock_steps for v in on["lock"].values())
+        and all(v is not None and v <= switch_steps for v in on["switch"].values())
+        and on["recognised"] == off["recognised"]
+    )
 
 
 def map_slices(maps, model, grid: int = 41):
@@ -277,66 +504,3 @@ def map_slices(maps, model, grid: int = 41):
             )
         )
     return slices
-
-
-def learn_map(pool, model, model_path: Path, set_name: str, config, online, seeds: SafetySeeds):
-    """The safety map of ``model`` (saved beside ``model_path``): learned from exploration and
-    from the PBs adversarial users of the map's seeds (not the ones measured) visit with the
-    unguarded robot."""
-    from rnnpb.safety import ExplorationConfig, learn_safety_map, safety_map_path
-
-    jobs = [
-        (str(model_path), online, user, config.visited_steps, seeds.map_users[k], set_name)
-        for k, user in enumerate(USERS)
-    ]
-    visits = list(pool.map(visit_job, *zip(*jobs, strict=True)))
-    also = visits[0]
-    for more in visits[1:]:
-        also = also.joined(more)
-    maps = learn_safety_map(
-        model, ExplorationConfig(samples=config.samples, seed=seeds.model), also=also
-    )
-    maps.save(safety_map_path(model_path))
-    return maps
-
-
-def run_guards(pool, model_path: Path, meta, set_name: str, config, online, seeds, runs_file):
-    """Every adversarial user with every guard, and the learned patterns per guard: (the
-    adversarial runs by ``user/guard``, the cost per guard). Each adversarial run is appended
-    to ``runs_file`` as it comes (a long study interrupted keeps what it measured)."""
-    jobs = {
-        pool.submit(
-            adversarial_job, str(model_path), meta, online, guard, user, config.steps,
-            seeds.users[k], set_name,
-        ): f"{user}/{guard}"
-        for k, user in enumerate(USERS)
-        for guard in GUARDS
-    }  # fmt: skip
-    learned_jobs = {
-        guard: pool.submit(learned_job, str(model_path), meta, online, guard, seeds.learned)
-        for guard in GUARDS
-    }
-    adversarial = {}
-    for future in as_completed(jobs):
-        adversarial[jobs[future]] = future.result()
-        with open(runs_file, "a", encoding="utf-8") as handle:
-            handle.write(json.dumps({"set": set_name, **adversarial[jobs[future]]}) + "\n")
-        print(
-            f"  set {set_name}: {jobs[future]} done ({len(adversarial)}/{len(jobs)})",
-            file=sys.stderr,
-            flush=True,
-        )
-    adversarial = {key: adversarial[key] for key in jobs.values()}
-    return adversarial, {guard: future.result() for guard, future in learned_jobs.items()}
-
-
-def within_limits(cost: dict[str, Any], guard: str, lock_steps: int, switch_steps: int) -> bool:
-    """Whether every learned pattern locks on within ``lock_steps`` and switches within
-    ``switch_steps`` with ``guard``, recognised as with the guard off."""
-    locks = list(cost[guard]["lock"].values())
-    switches = list(cost[guard]["switch"].values())
-    return (
-        all(v is not None and v <= lock_steps for v in locks)
-        and all(v is not None and v <= switch_steps for v in switches)
-        and cost[guard]["recognised"] == cost["off"]["recognised"]
-    )

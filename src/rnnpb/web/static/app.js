@@ -1108,6 +1108,9 @@ function showSafety(step) {
   if (step) {
     parts.push(`prevented commands: ${step.prevented}`);
     if (step.filtered) parts.push(`last step ${step.filtered}: ${step.unsafe}`);
+    if (step.regime) parts.push(`regime: ${step.regime}`);
+    if (step.inhibited_count) parts.push(`inhibited: ${step.inhibited_count}`);
+    if (step.inhibited) parts.push(`inhibited now (${step.inhibited})`);
   }
   line.textContent = `Safety — ${parts.join(" · ")}`;
 }
