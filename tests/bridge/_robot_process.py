@@ -8,6 +8,7 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -37,13 +38,22 @@ class RobotProcess:
         ]  # fmt: skip
         if self.robot_map is not None:
             command += ["--robot-map", str(self.robot_map)]
-        self.process = subprocess.Popen(
-            command,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.STDOUT,
-            text=True,
-            env={**os.environ, "RNNPB_XLA_DEFAULTS": "0"},
-        )
+        # A child inherits an ignored SIGINT (a suite started in the background by a script
+        # runs so), and Ctrl-C would then not stop the robot: give it the default (signals
+        # are the main thread's to set).
+        main = threading.current_thread() is threading.main_thread()
+        previous = signal.signal(signal.SIGINT, signal.default_int_handler) if main else None
+        try:
+            self.process = subprocess.Popen(
+                command,
+                stdout=subprocess.PIPE,
+                stderr=subprocess.STDOUT,
+                text=True,
+                env={**os.environ, "RNNPB_XLA_DEFAULTS": "0"},
+            )
+        finally:
+            if main:
+                signal.signal(signal.SIGINT, previous)
         assert self.process.stdout is not None
         line = self.process.stdout.readline()
         assert line.startswith("robot serving"), line
