@@ -133,9 +133,7 @@ def train(
         )
     try:
         while done < config.iterations:
-            n = min(config.chunk_iterations, config.iterations - done)
-            next_checkpoint = (done // config.checkpoint_every + 1) * config.checkpoint_every
-            n = min(n, next_checkpoint - done)
+            n = _chunk(config, done)
             pb_learning = every_pb_learns
             if warm_start is not None:
                 pb_learning = warm_start.pb_learning(done)
@@ -226,10 +224,7 @@ def train_seeds(
     done = 0
     histories: list[list[tuple[int, float]]] = [[(0, float(m))] for m in mse_per_seed(state)]
     while done < config.iterations:
-        # The chunks :func:`train` runs, so that each history has its points.
-        n = min(config.chunk_iterations, config.iterations - done)
-        next_checkpoint = (done // config.checkpoint_every + 1) * config.checkpoint_every
-        n = min(n, next_checkpoint - done)
+        n = _chunk(config, done)  # the chunks :func:`train` runs: the same history points
         state = run_chunk(state, inputs, valid, jnp.asarray(n, jnp.int32), every_pb_learns)
         done += n
         mse = mse_per_seed(state)
@@ -259,6 +254,13 @@ def train_seeds(
         )
         for i in range(len(seeds))
     ]
+
+
+def _chunk(config: TrainConfig, done: int) -> int:
+    """How many iterations the next compiled chunk runs after ``done``: a chunk at most,
+    ending at the next checkpoint and at the last iteration."""
+    next_checkpoint = (done // config.checkpoint_every + 1) * config.checkpoint_every
+    return min(config.chunk_iterations, config.iterations - done, next_checkpoint - done)
 
 
 def _finish(
