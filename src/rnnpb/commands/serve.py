@@ -124,6 +124,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="FILE",
         help="with --robot: the robot's joint names, signs, offsets and limits (TOML)",
     )
+    parser.add_argument(
+        "--routines",
+        action="append",
+        default=[],
+        metavar="FILE",
+        help="a routine file (`rnnpb train-routines`; repeatable): over the model it was "
+        "learned for, the page says the routine it recognises and the movement it expects "
+        "next (docs/routines.md)",
+    )
     add_config_argument(parser, RUN_SECTIONS)
     add_perception_argument(parser)
     parser.add_argument(
@@ -171,14 +180,36 @@ def run(args: argparse.Namespace) -> int:
     )
     models = find_models(args.model if args.model is not None else default_model())
     args.dt = _models_dt(models, args.dt)
+    _check_routines(args.routines, models)
     # SIGTERM ends the serve as Ctrl-C does from here on, even while the banner prints, so the
     # robot is let go and the working folder removed.
     with terminate_as_interrupt():
         return _serve(args, models, access, teaching, overrides)
 
 
+def _check_routines(paths: list[str], models: dict) -> None:
+    """Each ``--routines`` file read, and learned over one of the offered models: one error
+    line now rather than a routine level that never shows."""
+    if not paths:
+        return
+    from rnnpb.errors import ConfigError
+    from rnnpb.model import TrainedModel
+    from rnnpb.model.routines import RoutineModel
+
+    fingerprints = {TrainedModel.load(path).fingerprint for path in models.values()}
+    for path in paths:
+        routines = RoutineModel.load(path)
+        if routines.lower_fingerprint not in fingerprints:
+            raise ConfigError(
+                f"{path}: these routines were learned over none of the models offered "
+                f"({', '.join(models)}); give --model the model they were learned over"
+            )
+
+
 def _serve(args: argparse.Namespace, models: dict, access, teaching, overrides) -> int:
     """Connect the robot, start the dashboard and wait; let both go however it ends."""
+    from pathlib import Path
+
     from rnnpb.interaction.settings import ConfigTables
     from rnnpb.web import DashboardServer
 
@@ -200,6 +231,8 @@ def _serve(args: argparse.Namespace, models: dict, access, teaching, overrides) 
         if overrides is not None:  # read when a model loads, and by teaching
             server.session.config_tables = ConfigTables(overrides.tables, overrides.path)
         server.session.robot = robot  # read when a run starts
+        # Read when a step is published (the routine level of the running model version).
+        server.session.routine_files = [Path(p) for p in args.routines]
         server.start()
         print(
             f"rnnpb dashboard: {server.url}  (models: {', '.join(models)}; Ctrl-C to stop)",

@@ -32,7 +32,7 @@ import shutil
 import threading
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -243,6 +243,10 @@ class Session:
         A ``--config`` file's tables (``rnnpb serve --config``), put over the on-line
         regression and recognition chosen for each model and over teaching's settings
         (:mod:`rnnpb.interaction.settings`); read when a model loads.
+    routines : paths, optional
+        Routine files (``rnnpb train-routines``, docs/routines.md): the one learned over the
+        running model version, if any, follows the interaction and the step message says the
+        routine it recognises and the movement it anticipates.
     """
 
     def __init__(
@@ -254,6 +258,7 @@ class Session:
         max_queued_commands: int = MAX_QUEUED_COMMANDS,
         teaching: TeachingSettings | None = None,
         config_tables: ConfigTables | None = None,
+        routines: Sequence[str | Path] = (),
     ) -> None:
         if not models:
             raise ConfigError("the dashboard needs at least one model")
@@ -303,6 +308,8 @@ class Session:
         self._risk_views: dict[str, Any] = {}
         self.config_tables = config_tables or ConfigTables()
         self.teaching = SessionTeaching(self, teaching or TeachingSettings())
+        self.routine_files = [Path(p) for p in routines]
+        self._followers: dict[str, tuple[Any, str]] = {}  # fingerprint -> (follower, note)
 
     # --- life cycle -----------------------------------------------------------------------
     def start(self, model_name: str | None = None) -> None:
@@ -433,6 +440,7 @@ class Session:
                 p: MOVEMENT_DESCRIPTIONS.get(p, "") for p in self.demonstrator.patterns
             },
             "teaching": self.teaching.state(),
+            "routines": self._routines_state(),
         }
 
     # --- the session thread ---------------------------------------------------------------
@@ -628,6 +636,7 @@ class Session:
         self.model, self.mirror, self.model_name = model, mirror, name
         self.safety, self._risk_views = safety, risk
         self.model_error = None
+        self._follower()  # the model's routine level, if a routine file was learned over it
         self._new_run()
         self.running = was_running
 
@@ -647,6 +656,9 @@ class Session:
         if self.mirror is None:
             return
         self.mirror.reset()
+        for follower, _ in self._followers.values():
+            if follower is not None:
+                follower.reset()
         with self._subscribers_lock:
             self._recent.clear()
             self._recordings += 1
@@ -774,6 +786,7 @@ class Session:
             "missed_deadlines": self.loop.missed_deadlines if self.loop is not None else 0,
             "teaching": self.teaching.status(),
             **self._step_safety(record),
+            **self._step_routine(record),
         }
         self._publish(message)
         if record.frame is not None and self._webcam is not None:
@@ -791,6 +804,67 @@ class Session:
             "regime": record.regime,
             "inhibited": record.inhibited,
             "inhibited_count": self.loop.inhibited_commands if self.loop is not None else 0,
+        }
+
+    def _follower(self) -> tuple[Any, str]:
+        """The routine level of the running model version (a
+        :class:`~rnnpb.model.routines.RoutineFollower`, or None) and a line on it: a routine
+        file applies to the model it was learned over only, so a version made by teaching
+        runs without one (and an Undo back to that model finds it again). Made on the
+        session thread only."""
+        from rnnpb.model.routines import RoutineFollower, RoutineModel
+
+        model = self.model
+        if model is None or not self.routine_files:
+            return None, ""
+        known = self._followers.get(model.fingerprint)
+        if known is not None:
+            return known
+        found: tuple[Any, str] = (
+            None,
+            f"no routine file was learned over {self.model_name} "
+            f"({', '.join(p.name for p in self.routine_files)} are over other models)",
+        )
+        for path in self.routine_files:
+            try:
+                routines = RoutineModel.load(path)
+            except RnnpbError as error:  # checked when the server started; gone since
+                log.warning("routine file %s: %s", path, error)
+                continue
+            if routines.lower_fingerprint == model.fingerprint:
+                names = ", ".join(routines.routines)
+                found = (RoutineFollower(routines), f"routines of {path.name}: {names}")
+                break
+        self._followers[model.fingerprint] = found
+        return found
+
+    def _routines_state(self) -> dict[str, Any]:
+        """The ``routines`` part of the state message: whether a routine level runs, and
+        a line on it (empty when the server was given no routine file)."""
+        model = self.model
+        known = self._followers.get(model.fingerprint) if model is not None else None
+        if known is None:  # made on the session thread when the model first steps or loads
+            return {"on": False, "note": ""}
+        return {"on": known[0] is not None, "note": known[1]}
+
+    def _step_routine(self, record) -> dict[str, Any]:
+        """The step message's routine fields (docs/routines.md): the routine recognised
+        (empty: none) and the movement it says comes next, with the steps left until then;
+        no fields without a routine level for the running model."""
+        follower, _ = self._follower()
+        model = self.model
+        if follower is None or model is None:
+            return {}
+        said = follower.observe(np.asarray(record.pb, dtype=np.float64))
+        anticipated = ""
+        if said.routine is not None:
+            anticipated = model.nearest_pattern(said.predicted_pb)[0]
+        steps_left = said.steps_left if said.routine is not None else None
+        return {
+            "routine": said.routine or "",
+            "anticipated": anticipated,
+            "switch_due": bool(said.switch_due),
+            "steps_left": None if steps_left is None else round(float(steps_left), 1),
         }
 
     def _publish_frame(self, frame: np.ndarray) -> None:

@@ -149,6 +149,7 @@ function onState(state) {
   updateStatus();
   drawPlots();
   showSafety(dash.lastStep);
+  showRoutine(dash.lastStep);
 }
 
 // The model list, and the one chosen: while a model loads, the one being loaded.
@@ -316,6 +317,7 @@ function onStep(step) {
   drawPlots();
   drawPointerPanel();
   showSafety(step);
+  showRoutine(step);
   showTeachingStatus(step.teaching, step);
 }
 
@@ -1113,6 +1115,24 @@ function showSafety(step) {
     if (step.inhibited) parts.push(`inhibited now (${step.inhibited})`);
   }
   line.textContent = `Safety — ${parts.join(" · ")}`;
+}
+
+// The routine level (docs/routines.md), when the server was given routine files: the routine
+// recognised and the movement it expects next (a line under the readouts, made here so that
+// the page's markup stays as it is; no line when the server has no routine file).
+function showRoutine(step) {
+  const routines = dash.state && dash.state.routines;
+  let line = $("routine-status");
+  if (!routines || (!routines.on && !routines.note)) { if (line) line.remove(); return; }
+  if (!line) {
+    line = el("div", { id: "routine-status" });
+    $("readouts-note").before(line);
+  }
+  if (!routines.on) { line.textContent = `Routine — ${routines.note}`; return; }
+  if (!step || step.routine === undefined) { line.textContent = `Routine — ${routines.note}`; return; }
+  if (!step.routine) { line.textContent = "Routine: none recognised yet"; return; }
+  const when = step.switch_due ? "now" : (step.steps_left === null ? "" : `in about ${Math.max(0, Math.round(step.steps_left))} steps`);
+  line.textContent = `Routine: ${step.routine} · next movement: ${step.anticipated || "—"}${when ? ` (${when})` : ""}`;
 }
 
 function drawTimings() {
