@@ -625,3 +625,19 @@ def test_switching_models_shows_the_one_loading_and_the_robot_goes_on(browser, m
         assert page.input_value("#model") == "b.npz"
         assert "model b.npz" in page.text_content("#status")
         page.click("#stop")
+
+
+def test_the_readout_names_the_pattern_taking_over_while_recognition_confirms_it(page):
+    # Recognition holds "1" for a few steps after the person switched to 3 (no flicker);
+    # the readout does not say "1 (0 %)" while 3 is already the likely one.
+    said = page.evaluate(
+        """rnnpbDashboard.readout({recognised: "1", confidence: 0.0001, novelty: "familiar",
+            pattern_confidence: {"1": 0.0001, "2": 0.0, "3": 0.93}})"""
+    )
+    assert said.startswith("3") and "93 %, confirming; was 1" in said
+    # Not while no other pattern is more likely than not.
+    said = page.evaluate(
+        """rnnpbDashboard.readout({recognised: "1", confidence: 0.2, novelty: "familiar",
+            pattern_confidence: {"1": 0.2, "2": 0.0, "3": 0.4}})"""
+    )
+    assert said.startswith("1") and "20 %" in said

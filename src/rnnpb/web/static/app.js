@@ -264,7 +264,16 @@ function buildPatternButtons(state) {
 // ---------------------------------------------------------------- recognition
 // What the robot says it sees: a learned pattern only when it is confident, else "not sure"
 // or "new movement" (rnnpb.model.recognition).
+dash.readout = (step) => readout(step);  // what the readout says of a step (tests)
 function readout(step) {
+  // Recognition holds a name until another pattern has been the most likely for a few steps
+  // (so the name does not flicker); while it waits, the page names the one taking over.
+  const taking = takingOver(step);
+  if (taking) {
+    const about = describe(taking);
+    return `${taking}${about ? ` — ${about}` : ""} ` +
+      `(${Math.round(100 * step.pattern_confidence[taking])} %, confirming; was ${step.recognised})`;
+  }
   if (step.recognised && (step.novelty === "familiar" || step.novelty === "still")) {
     const still = step.novelty === "still" ? ", hands still" : "";
     const about = describe(step.recognised);
@@ -274,6 +283,19 @@ function readout(step) {
   const words = { novel: "a new movement", unstructured: "not sure (no repeating pattern)",
     still: "hands still", "": "not sure yet" };
   return words[step.novelty] || "not sure";
+}
+
+// The learned pattern more likely than the name recognition still holds, and more likely
+// than not, if any.
+function takingOver(step) {
+  const shares = step.pattern_confidence || {};
+  if (!step.recognised || step.novelty !== "familiar") return null;
+  let best = null;
+  for (const [name, share] of Object.entries(shares)) {
+    if (name !== step.recognised && share > Math.max(step.confidence, 0.5)
+      && (!best || share > shares[best])) best = name;
+  }
+  return best;
 }
 
 function drawConfidenceBars(step) {
@@ -444,7 +466,7 @@ function showReadouts(step) {
   $("nearest").textContent = readout(step);
   // Only a learned pattern is shown as one; "hands still", "new movement", "not sure" are not.
   $("nearest").classList.toggle("unsure", !(step.recognised
-    && (step.novelty === "familiar" || step.novelty === "still")));
+    && (step.novelty === "familiar" || step.novelty === "still")) || !!takingOver(step));
   $("nearest-distance").textContent =
     `(nearest learned PB ${step.nearest}, distance ${fmt(step.nearest_distance, 2)})`;
   drawConfidenceBars(step);
