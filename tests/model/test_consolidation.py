@@ -523,7 +523,7 @@ def test_teacher_targets_are_the_start_networks_predictions():
     np.testing.assert_allclose(targets, data.inputs[:, 1:], atol=1e-5)
     noisy = np.asarray(teacher_targets(teacher, inputs, zero + 0.05))
     assert not np.allclose(noisy[0], data.inputs[0, 1:], atol=1e-3)
-    np.testing.assert_array_equal(noisy[1:], data.inputs[1:, 1:])
+    np.testing.assert_array_equal(noisy[1:], np.asarray(inputs)[1:, 1:])  # exactly its own
     assert WarmStart(model.params, context, pb, "start").teacher() is None
     with pytest.raises(ConfigError, match="one flag per sequence"):
         WarmStart(model.params, context, pb, "start", taught=np.ones(5, bool))
