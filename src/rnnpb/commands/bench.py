@@ -505,7 +505,7 @@ ROUTINE_PERFORMED_DRAW = 101
 """The demonstrator's draw that performs routine A in the timed stream (another development
 draw: the routines are followed, not replayed)."""
 ROUTINE_REPEATS = 4
-"""Times the timed stream performs routine A in a row (about 430 steps, more than the default
+"""Times the timed stream performs routine A in a row (about 450 steps, more than the default
 run's; a longer run starts it over)."""
 
 
