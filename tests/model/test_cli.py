@@ -178,8 +178,18 @@ def test_bench_prints_and_writes_its_figures(tmp_path):
         "online_step_default_guarded_ms_median",
         "online_step_batched_per_session_ms_median",
         "online_batched_step_vs_default",
+        "online_step_two_level_ms_median",
+        "online_step_two_level_ms_p99",
+        "online_step_two_level_follower_ms_median",
+        "online_step_two_level_follower_ms_p99",
     ):
         assert figures[key] > 0
+    # The routine level's part is a part of the two-level step, which stays within dt.
+    assert 0 < figures["online_step_two_level_follower_share"] < 1
+    assert figures["online_step_budget_ms"] == 400.0
+    assert figures["online_step_two_level_ms_p99"] < figures["online_step_budget_ms"]
+    assert "two levels (routines, with the prior)" in result.stdout
+    assert "budget: the step period dt, 400 ms" in result.stdout
     assert figures["online_step_paper_vs_paper"] == 1.0
     assert "sessions in one call" in result.stdout
     # Two agents are timed in a process of their own, which may use two cores.

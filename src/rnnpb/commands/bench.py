@@ -4,7 +4,12 @@ from __future__ import annotations
 
 import argparse
 import os
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from rnnpb.model.routines import FollowStep, TwoLevelMirror
 
 NAME = "bench"
 HELP = "time learning, the on-line step and tracking (single-threaded)"
@@ -24,9 +29,13 @@ single-threaded, after warm-up:
     where the PB drives the motion, the regime and the inhibition check every step);
   - side by side in the same run, each as median, 99th percentile and ratio to the first:
     the step with the paper's regression, with the default one, with the default one and its
-    detectors and the safety guard (barrier and command filter), and the step per session
+    detectors and the safety guard (barrier and command filter), the step per session
     of 16 sessions stepped in one call (rnnpb.model.BatchedMirror), with the ratio of the
-    16 sessions' call to one default step;
+    16 sessions' call to one default step, and the two-level step (docs/routines.md: the
+    shipped model's own step with the prior from the routine level above it, then the
+    routine level's observe, on a routine performed by the synthetic user), with
+    the routine level's part of it, the share of steps the prior went down on, and the
+    budget it must stay within, the step period dt;
   - the same on-line step in a straightforward NumPy implementation (the reference the
     tests hold the compiled one to), and the ratio;
   - colour-ball tracking of 640x480 frames;
@@ -36,7 +45,8 @@ single-threaded, after warm-up:
     the other and side by side, in a process of their own on up to two cores.
 
 --json FILE writes the same figures (keys train_iteration_ms_median,
-online_step_ms_median, online_step_ms_p99, ...) with the machine and versions.
+online_step_ms_median, online_step_ms_p99, online_step_two_level_ms_median, ...) with the
+machine and versions.
 """
 
 
@@ -115,7 +125,7 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb.model.network import init_params
     from rnnpb.robot import JOINT_LIMITS
 
-    parts = ["learning", "on-line step", "NumPy reference"] + (
+    parts = ["learning", "routine level", "on-line step", "NumPy reference"] + (
         [] if args.no_tracking else ["tracking"]
     )
     bar = progress_bar(
@@ -150,6 +160,11 @@ def run(args: argparse.Namespace) -> int:
         state = jax.block_until_ready(run_chunk(state, inputs, valid, chunk, every_pb))
         chunk_times.append((time.perf_counter() - t0) / chunk * 1e3)
     train_ms = float(np.median(chunk_times))
+    next_part()
+
+    # The two-level step needs a lower model that knows the patterns (the shipped one) and
+    # routines learned over it.
+    routine_level = _routine_level()
     next_part()
 
     # The on-line step costs the same for any weights: time it with a fresh network.
@@ -202,7 +217,10 @@ def run(args: argparse.Namespace) -> int:
     def session_hands(t: int) -> np.ndarray:
         return stream[(t + offsets) % len(stream)]
 
+    two_level, routine_stream, follower_times, step_period = routine_level
+    due = False  # the higher level said a switch is due: the prior goes down next step
     for t in range(40):
+        due = two_level.step(routine_stream[t % len(routine_stream)]).higher.switch_due
         mirror.step(stream[t])
         plain.step(stream[t])
         paper.step(stream[t])
@@ -210,6 +228,9 @@ def run(args: argparse.Namespace) -> int:
         for system in guarded.values():
             command_filter(system.step(stream[t]).motor)
     step_times, plain_times, paper_times, batched_times = [], [], [], []
+    two_level_times: list[float] = []
+    follower_times.clear()
+    prior_steps = 0
     # Also the processor time of each step: on a shared machine the wall-clock time includes
     # waiting for a core, the processor time does not (the ratios are measured in one run).
     cpu_times: dict[str, list[float]] = {name: [] for name in ("off", *guarded)}
@@ -236,6 +257,11 @@ def run(args: argparse.Namespace) -> int:
         t0 = time.perf_counter()
         batched.step(hands)
         batched_times.append((time.perf_counter() - t0) * 1e3)
+        prior_steps += due
+        t0 = time.perf_counter()
+        said = two_level.step(routine_stream[(40 + t) % len(routine_stream)])
+        two_level_times.append((time.perf_counter() - t0) * 1e3)
+        due = said.higher.switch_due
     step_times = np.asarray(step_times)
     next_part()
 
@@ -268,6 +294,7 @@ def run(args: argparse.Namespace) -> int:
         "default": step_times,
         "default_guarded": guarded_with_filter,
         "batched_per_session": np.asarray(batched_times) / BATCHED_SESSIONS,
+        "two_level": np.asarray(two_level_times),
     }
     paper_median = float(np.median(paper_times))
     compared: dict[str, float] = {}
@@ -280,6 +307,15 @@ def run(args: argparse.Namespace) -> int:
     compared["batched_step_vs_default"] = float(np.median(batched_times)) / float(
         np.median(step_times)
     )
+    # The routine level's own part of the two-level step, the steps the prior went down on,
+    # and the budget: the step period, by which the next hands arrive.
+    compared["step_two_level_follower_ms_median"] = float(np.median(follower_times))
+    compared["step_two_level_follower_ms_p99"] = float(np.percentile(follower_times, 99))
+    compared["step_two_level_follower_share"] = float(np.median(follower_times)) / float(
+        np.median(two_level_times)
+    )
+    compared["step_two_level_prior_share"] = prior_steps / args.steps
+    compared["step_budget_ms"] = step_period * 1e3
 
     figures = {
         "train_iteration_ms_median": train_ms,
@@ -375,8 +411,11 @@ def run(args: argparse.Namespace) -> int:
         "default": "the default",
         "default_guarded": "default, detectors, guard and filter",
         "batched_per_session": f"per session of {BATCHED_SESSIONS} in one call",
+        "two_level": "two levels (routines, with the prior)",
     }
     for name, label in labels.items():
+        if name == "two_level":
+            continue
         print(
             f"    {label + ':':<39}{figures[f'online_step_{name}_ms_median']:8.3f} ms median, "
             f"{figures[f'online_step_{name}_ms_p99']:.3f} ms p99, "
@@ -386,6 +425,24 @@ def run(args: argparse.Namespace) -> int:
         f"    {f'{BATCHED_SESSIONS} sessions in one call:':<39}"
         f"{figures['online_batched_step_ms_median']:8.3f} ms median "
         f"({figures['online_batched_step_vs_default']:.2f}x one default step)"
+    )
+    print(
+        f"    {labels['two_level'] + ':':<39}{figures['online_step_two_level_ms_median']:8.3f} "
+        f"ms median, {figures['online_step_two_level_ms_p99']:.3f} ms p99, "
+        f"{figures['online_step_two_level_vs_paper']:.2f}x"
+    )
+    print(
+        f"      the routine level's part:           "
+        f"{figures['online_step_two_level_follower_ms_median']:8.3f} ms median, "
+        f"{figures['online_step_two_level_follower_ms_p99']:.3f} ms p99 "
+        f"({figures['online_step_two_level_follower_share']:.0%} of the step)"
+    )
+    print(
+        f"      the prior went down on {figures['online_step_two_level_prior_share']:.0%} of "
+        f"the steps; budget: the step period dt, {figures['online_step_budget_ms']:.0f} ms "
+        f"(the p99 is "
+        f"{figures['online_step_two_level_ms_p99'] / figures['online_step_budget_ms']:.1%} "
+        "of it)"
     )
     print(
         f"  on-line step, NumPy reference:           {reference_ms:8.1f} ms median "
@@ -439,6 +496,87 @@ def run(args: argparse.Namespace) -> int:
             json.dump(document, handle, indent=2)
         print(f"wrote {args.json}")
     return 0
+
+
+ROUTINE_LEARNED_DRAW = 201
+"""The demonstrator's draw the bench's routines are learned from (a development draw of the
+routines study, never an exam draw)."""
+ROUTINE_PERFORMED_DRAW = 101
+"""The demonstrator's draw that performs routine A in the timed stream (another development
+draw: the routines are followed, not replayed)."""
+ROUTINE_REPEATS = 4
+"""Times the timed stream performs routine A in a row (about 450 steps, more than the default
+run's; a longer run starts it over)."""
+
+
+def _routine_level() -> tuple[TwoLevelMirror, np.ndarray, list[float], float]:
+    """The two levels (:class:`rnnpb.model.routines.TwoLevelMirror`, with the prior) over
+    the shipped model, with the on-line regression ``interact --routines`` chooses for it:
+    the routines study's two routines learned over it, and routine A performed by the
+    demonstrator, several times in a row. Returns the two-level mirror (its follower appends
+    the milliseconds of each ``observe`` to the returned list), the hands stream, that list
+    and the model's step period dt (s).
+
+    The routines are learned (:func:`~rnnpb.model.routines.learn_from_events`, the default
+    :class:`~rnnpb.model.routines.RoutineLearning`) from one performance of each, twice in a
+    row (so that the level knows how the routine starts over), cut into segments at the
+    demonstrator's own switch steps rather than from the lower level's PB run over the
+    recording as ``learn_routines`` does: the codes and the order are the same, the
+    boundaries a step or two apart, and the bench saves running the recordings through the
+    lower level."""
+    import time
+
+    import numpy as np
+
+    from rnnpb.demonstrator import routine_scenario
+    from rnnpb.experiments.scenarios.routines import ROUTINES
+    from rnnpb.model import TrainedModel
+    from rnnpb.model.routines import (
+        RoutineFollower,
+        RoutineLearning,
+        Segment,
+        SegmentConfig,
+        TwoLevelMirror,
+        learn_from_events,
+        routine_events,
+    )
+    from rnnpb.models import SHIPPED_MODEL
+
+    lower = TrainedModel.load(SHIPPED_MODEL)
+    names = list(lower.pattern_pb)
+    codes = np.array(list(lower.pattern_pb.values()))
+    events = []
+    for parts in ROUTINES.values():
+        performed = routine_scenario(parts, seed=ROUTINE_LEARNED_DRAW, repeats=2)
+        bounds = [0, *performed.switch_steps, performed.n_steps]
+        segments = []
+        for start, stop in zip(bounds[:-1], bounds[1:], strict=True):
+            k = names.index(performed.labels[start])
+            segments.append(Segment(start, stop, codes[k], k))
+        events.append(routine_events(segments))
+    routines = learn_from_events(
+        lower.fingerprint, codes, list(ROUTINES), events, RoutineLearning(), SegmentConfig()
+    )
+    times: list[float] = []
+
+    class TimedFollower(RoutineFollower):
+        """The follower, timing its own share of each two-level step."""
+
+        def observe(self, lower_pb: np.ndarray) -> FollowStep:
+            t0 = time.perf_counter()
+            said = super().observe(lower_pb)
+            times.append((time.perf_counter() - t0) * 1e3)
+            return said
+
+    stream = routine_scenario(
+        ROUTINES["A"], seed=ROUTINE_PERFORMED_DRAW, repeats=ROUTINE_REPEATS
+    ).sensory
+    # Compile the step with a prior (one more restart candidate) before any timing.
+    warm = TwoLevelMirror(lower, routines)
+    warm.mirror.step(stream[0], prior_pb=codes[0])
+    two_level = TwoLevelMirror(lower, routines)
+    two_level.follower = TimedFollower(routines)
+    return two_level, stream, times, lower.dt
 
 
 def _dyad_worker_start(cores: list[int]) -> None:
