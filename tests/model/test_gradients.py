@@ -201,27 +201,21 @@ def test_window_gradients_match_numpy_reference_and_finite_differences(motor_inp
 
 def test_hand_written_learning_gradients_equal_jax_with_noise_and_other_targets():
     """With input noise and targets other than the next steps (a rehearsal of the old
-    network's function), on the paper's network sizes."""
+    network's function)."""
     with jax.enable_x64(True):
-        net = NetworkConfig()
-        params = jax.tree_util.tree_map(
-            lambda a: jnp.asarray(a, jnp.float64) * 2, init_params(net, jax.random.PRNGKey(3))
-        )
+        params = _params64(3)
         rng = np.random.default_rng(3)
         n_seq, n_steps = 3, 11
-        inputs = jnp.asarray(rng.uniform(0.1, 0.9, (n_seq, n_steps, net.io_size)))
+        inputs = jnp.asarray(rng.uniform(0.1, 0.9, (n_seq, n_steps, NET.io_size)))
         valid = jnp.ones((n_seq, n_steps - 1), bool).at[1, 6:].set(False)
-        rho = jnp.asarray(rng.normal(0, 1, (n_seq, n_steps - 1, net.pb_size)))
-        context_logit = jnp.asarray(rng.normal(0, 1, (n_seq, net.context_size)))
-        noise = jnp.asarray(rng.normal(0, 0.02, (n_seq, n_steps - 1, net.io_size)))
-        targets = jnp.asarray(rng.uniform(0.1, 0.9, (n_seq, n_steps - 1, net.io_size)))
-        for chosen in (None, targets):
-            args = ((params, context_logit), rho, inputs, valid, noise, chosen)
-            expected = jax.grad(learning.squared_error, argnums=(0, 1))(*args)
-            got = learning.learning_gradients(*args)
-            leaves = zip(
-                jax.tree_util.tree_leaves(expected), jax.tree_util.tree_leaves(got), strict=True
-            )
-            for a, b in leaves:
-                assert a.shape == b.shape
-                _close(b, a, rtol=1e-10, atol=1e-13)
+        rho = jnp.asarray(rng.normal(0, 1, (n_seq, n_steps - 1, NET.pb_size)))
+        context_logit = jnp.asarray(rng.normal(0, 1, (n_seq, NET.context_size)))
+        noise = jnp.asarray(rng.normal(0, 0.02, (n_seq, n_steps - 1, NET.io_size)))
+        targets = jnp.asarray(rng.uniform(0.1, 0.9, (n_seq, n_steps - 1, NET.io_size)))
+        args = ((params, context_logit), rho, inputs, valid, noise, targets)
+        expected = jax.grad(learning.squared_error, argnums=(0, 1))(*args)
+        got = learning.learning_gradients(*args)
+        leaves = jax.tree_util.tree_leaves
+        for a, b in zip(leaves(expected), leaves(got), strict=True):
+            assert a.shape == b.shape
+            _close(b, a, rtol=1e-10, atol=1e-13)

@@ -6,8 +6,6 @@ over none of the models it offers."""
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 import threading
 import time
 
@@ -81,31 +79,26 @@ def test_the_routine_is_recognised_and_the_next_movement_said(model_dir, routine
     assert not any(r == "wave" for r, _ in said[40:])
 
 
-def test_a_routine_file_over_another_model_is_named_and_not_used(model_dir, tmp_path):
+def test_a_routine_file_over_another_model_is_named_and_not_used(
+    model_dir, routine_file, tmp_path, capsys
+):
     from dataclasses import replace
 
     import numpy as np
 
+    from rnnpb.cli import main
     from rnnpb.model import TrainedModel
-    from rnnpb.model.routines import RoutineModel
 
     lower = TrainedModel.load(model_dir / "set1.npz")
     params = lower.params._replace(b_h=np.asarray(lower.params.b_h) + 0.01)
-    other = replace(lower, params=params)
-    recordings = {"dance": [routine_scenario(DANCE, seed=201).sensory]}
-    path = tmp_path / "other.routines.npz"
-    learn_routines(other, recordings, RoutineLearning(iterations=50)).save(path)
-    assert RoutineModel.load(path).lower_fingerprint != lower.fingerprint
-    state, steps = _perform({"set1": model_dir / "set1.npz"}, [path], [("1", 5)])
+    replace(lower, params=params).save(tmp_path / "other.npz")
+    state, steps = _perform({"other": tmp_path / "other.npz"}, [routine_file], [("1", 5)])
     assert not state["routines"]["on"]
-    assert "other.routines.npz" in state["routines"]["note"]
+    assert "dance.routines.npz" in state["routines"]["note"]
     assert not any("routine" in s for s in steps)
     # The server refuses it at once, in one line.
-    result = subprocess.run(
-        [sys.executable, "-m", "rnnpb.cli", "serve", "--model", str(model_dir / "set1.npz"),
-         "--port", "0", "--routines", str(path)],
-        capture_output=True, text=True, timeout=60,
-    )  # fmt: skip
-    assert result.returncode == 2
-    assert "learned over none of the models offered" in result.stderr
-    assert len(result.stderr.strip().splitlines()) == 1
+    assert main(["serve", "--model", str(tmp_path / "other.npz"), "--port", "0",
+                 "--routines", str(routine_file)]) == 2  # fmt: skip
+    err = capsys.readouterr().err.strip()
+    assert "learned over none of the models offered" in err
+    assert len(err.splitlines()) == 1
