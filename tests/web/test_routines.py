@@ -14,8 +14,8 @@ import pytest
 from rnnpb.demonstrator import routine_scenario
 from rnnpb.model.routines import RoutineLearning, learn_routines
 
-from .conftest import TEST_DT
-
+FAST_DT = 0.02
+"""The shortest step the dashboard allows: the routine runs take a hundred steps."""
 DANCE = [("1", 3), ("3", 2), ("2", 4)]
 WAVE = [("2", 2), ("3", 3), ("1", 3)]
 
@@ -36,7 +36,7 @@ def _perform(models, routines, parts, timeout=60.0):
     state and step messages."""
     from rnnpb.web import Session
 
-    session = Session(models, dt=TEST_DT, routines=routines)
+    session = Session(models, dt=FAST_DT, routines=routines)
     steps, done = [], threading.Event()
     bounds = [sum(n for _, n in parts[: i + 1]) for i in range(len(parts))]
 
