@@ -400,7 +400,10 @@ def _compiled_chunk(config: TrainConfig) -> ChunkRunner:
         teacher: Teacher | None,
     ) -> TrainState:
         key, noise_key = jax.random.split(state.key)
-        noise = config.input_noise * jax.random.normal(noise_key, inputs[:, :-1].shape)
+        if config.input_noise:
+            noise = config.input_noise * jax.random.normal(noise_key, inputs[:, :-1].shape)
+        else:  # the paper's learning: no noise to draw (the same zeros, without the draw)
+            noise = jnp.zeros(inputs[:, :-1].shape, inputs.dtype)
         trainable = (state.params, state.initial_context_logit)
         targets = None if teacher is None else teacher_targets(teacher, inputs, noise)
         grad_trainable, grad_rho = learning_gradients(
