@@ -17,36 +17,21 @@ from rnnpb.safety import (
     GENERATION,
     SEEN,
     Attribution,
-    Experience,
     ExplorationConfig,
-    MetaConfig,
     asked_posture,
     explore,
-    fit_meta,
     load_safety_map,
     new_map,
     safety_map_path,
 )
 from rnnpb.safety._map import SAFETY_FORMAT
 
+from .maps import constructed_map
+
 
 @pytest.fixture(scope="module")
 def model(set1_model):
     return set1_model
-
-
-def _ball_map(model, centre, radius=0.2):
-    """A map whose unsafe region is the ball of ``radius`` around ``centre``."""
-    rng = np.random.default_rng(0)
-    pbs = np.concatenate(
-        [rng.uniform(size=(3000, 4)), np.clip(centre + rng.normal(0, 0.2, (1000, 4)), 0, 1)]
-    )
-    unsafe = np.linalg.norm(pbs - centre, axis=1) < radius
-    experience = Experience(
-        pbs, unsafe, unsafe.astype(float), np.zeros(len(pbs), bool), np.array(["e"] * 4000), {}
-    )
-    meta = fit_meta(experience, MetaConfig(iterations=2000))
-    return new_map(model, meta, pbs, unsafe, 0.05, {"constructed": True})
 
 
 def test_regimes_name_what_drives_the_motion():
@@ -62,7 +47,7 @@ def test_an_unsafe_region_is_inhibited_while_following_and_steered_out_when_the_
 ):
     pattern = model.patterns[1]
     centre = model.pattern_pb[pattern]
-    maps = _ball_map(model, centre)
+    maps = constructed_map(model, centre)
     assert maps.risk(centre) > 0.9
     performed = held_scenario(pattern, n_steps=40, seed=3).sensory
     stream = np.concatenate([performed, np.full((40, 4), np.nan)])  # then the hands are lost
@@ -93,7 +78,7 @@ def test_an_unsafe_region_is_inhibited_while_following_and_steered_out_when_the_
 
 def test_a_learned_safe_pattern_is_never_inhibited(model):
     far = np.array([0.05, 0.95, 0.05, 0.95])
-    maps = _ball_map(model, far, radius=0.25)
+    maps = constructed_map(model, far, radius=0.25)
     learned = np.array(list(model.pattern_pb.values()))
     assert maps.risk(learned).max() < 0.1
     for pattern in model.patterns:
@@ -152,7 +137,7 @@ def test_exploration_labels_by_the_generation_after_its_transient(model):
 
 def test_familiarity_separates_experienced_from_never_experienced(model):
     centre = model.pattern_pb[model.patterns[0]]
-    maps = _ball_map(model, centre)
+    maps = constructed_map(model, centre)
     rng = np.random.default_rng(2)
     near = np.clip(centre + rng.normal(0, 0.03, (50, 4)), 0, 1)
     assert maps.familiarity(near).min() > 0.9
@@ -161,7 +146,7 @@ def test_familiarity_separates_experienced_from_never_experienced(model):
 
 
 def test_a_version_1_map_is_refused(model, tmp_path):
-    maps = _ball_map(model, model.pattern_pb[model.patterns[0]])
+    maps = constructed_map(model, model.pattern_pb[model.patterns[0]])
     path = safety_map_path(tmp_path / "m.npz")
     maps.save(path)
     meta, arrays = load_archive(path, SAFETY_FORMAT, 2)

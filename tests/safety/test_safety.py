@@ -14,17 +14,15 @@ from rnnpb.model import MirrorSystem, OnlineConfig, TrainConfig, train
 from rnnpb.robot import ELBOW_AT_ZERO_PITCH, JOINT_LIMITS, KinematicRobot, SelfCollision
 from rnnpb.safety import (
     CommandFilter,
-    Experience,
-    MetaConfig,
     SafetyChecker,
     describe_safety_map,
     find_safety_map,
-    fit_meta,
     load_safety_map,
-    new_map,
     safety_map_path,
 )
 from rnnpb.sources import ArraySensorySource
+
+from .maps import constructed_map
 
 REST = np.array([0.0, 0.0, 0.0, ELBOW_AT_ZERO_PITCH] * 2)
 # The left arm swung across the body, upper arm turned in, elbow fully bent: the hand and
@@ -103,29 +101,10 @@ def model(set1_model):
     return set1_model
 
 
-def _constructed_map(model, centre, radius=0.2):
-    """A map whose unsafe region is the ball of ``radius`` around ``centre``."""
-    rng = np.random.default_rng(0)
-    pbs = np.concatenate(
-        [rng.uniform(size=(3000, 4)), np.clip(centre + rng.normal(0, 0.2, (1000, 4)), 0, 1)]
-    )
-    unsafe = np.linalg.norm(pbs - centre, axis=1) < radius
-    experience = Experience(
-        pbs,
-        unsafe,
-        unsafe.astype(float),
-        np.zeros(len(pbs), bool),
-        np.array(["explored"] * len(pbs)),
-        {},
-    )
-    meta = fit_meta(experience, MetaConfig(iterations=2000))
-    return new_map(model, meta, pbs, unsafe, 0.08, {"constructed": True})
-
-
 def test_a_constructed_unsafe_region_keeps_the_regressed_pb_out(model):
     pattern = model.patterns[1]
     centre = model.pattern_pb[pattern]
-    maps = _constructed_map(model, centre)
+    maps = constructed_map(model, centre, familiarity_width=0.08)
     assert maps.risk(centre) > 0.9
     from rnnpb.demonstrator import held_scenario
 
@@ -150,7 +129,7 @@ def test_a_missing_or_damaged_map_is_a_clear_error_or_the_documented_fallback(tm
     with pytest.raises(ModelFileError, match="no such file"):
         load_safety_map(safety_map_path(model_path))
     assert "none" in describe_safety_map(safety_map_path(model_path))
-    maps = _constructed_map(model, model.pattern_pb[model.patterns[0]])
+    maps = constructed_map(model, model.pattern_pb[model.patterns[0]], familiarity_width=0.08)
     maps.save(safety_map_path(model_path))
     assert load_safety_map(safety_map_path(model_path), model).fingerprint == maps.fingerprint
     assert "experienced PBs" in describe_safety_map(safety_map_path(model_path))
