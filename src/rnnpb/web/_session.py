@@ -822,8 +822,8 @@ class Session:
             return known
         found: tuple[Any, str] = (
             None,
-            f"no routine file was learned over {self.model_name} "
-            f"({', '.join(p.name for p in self.routine_files)} are over other models)",
+            f"no routine file was learned over {self.model_name} (given: "
+            f"{', '.join(p.name for p in self.routine_files)}, over other models)",
         )
         for path in self.routine_files:
             try:
