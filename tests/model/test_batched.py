@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from rnnpb.errors import ConfigError
-from rnnpb.model import BatchedMirror, MirrorSystem, OnlineConfig
+from rnnpb.model import BatchedMirror, MirrorSystem, OnlineConfig, run_streams
+from rnnpb.model.batched import pool_size
 
 from .synthetic import LIMITS, make_sequences
 
@@ -89,3 +90,25 @@ def test_wrong_shapes_are_clear_errors(trained):
         batched.step(np.full((2, 3), 0.5))
     with pytest.raises(ConfigError, match="does not exist"):
         batched.reset_session(2)
+
+
+def test_streams_of_any_length_run_in_a_pool_as_each_would_alone(trained):
+    """Five streams in two sessions: the longest start, and a session whose stream ends takes
+    the next one afresh; each stream's results are its own mirror system's."""
+    hands = _sessions(16)
+    streams = [hands[:16, 0], hands[:6, 1], hands[:11, 2], hands[3:12, 0], hands[:0, 1]]
+    pooled = run_streams(trained, streams, SHORT, sessions=2)
+    assert [len(r) for r in pooled] == [16, 6, 11, 9, 0]
+    for i, (stream, results) in enumerate(zip(streams, pooled, strict=True)):
+        alone = MirrorSystem(trained, SHORT)
+        for t, u in enumerate(stream):
+            _assert_same(results[t], alone.step(u), f"stream {i}, step {t}")
+
+
+def test_the_pool_is_as_narrow_as_its_rounds_allow():
+    assert [pool_size(n) for n in (1, 9, 16, 17, 27, 33)] == [1, 9, 16, 9, 14, 11]
+
+
+def test_a_stream_of_the_wrong_shape_is_a_clear_error(trained):
+    with pytest.raises(ConfigError, match="stream 1 must be"):
+        run_streams(trained, [np.full((3, 4), 0.5), np.full((3, 3), 0.5)], SHORT)

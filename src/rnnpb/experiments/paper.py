@@ -19,7 +19,16 @@ import numpy as np
 
 from rnnpb.analysis import metrics
 from rnnpb.errors import ConfigError
-from rnnpb.model import MirrorSystem, OnlineConfig, TrainConfig, TrainedModel, generate, train
+from rnnpb.model import (
+    MirrorSystem,
+    OnlineConfig,
+    StepResult,
+    TrainConfig,
+    TrainedModel,
+    generate,
+    run_streams,
+    train,
+)
 from rnnpb.model.meta import MetaParams
 from rnnpb.vectors import (
     MOTOR_NAMES,
@@ -34,6 +43,10 @@ from rnnpb.vectors import (
 # each pattern before switching.
 PAUSE_STEPS = 5
 SWITCH_STEPS_EACH = 50
+# Runs are stepped together in one batched call (run_scenarios) only when they hold this many
+# steps in all: each new number of sessions is compiled first (about 5 s), and a session's
+# share of a batched step saves about half a plain step (rnnpb bench), so fewer steps lose.
+BATCHED_STEPS = 2500
 
 
 @dataclass(frozen=True)
@@ -163,22 +176,82 @@ def run_scenario(
         InteractionLoop(mirror, source, config=LoopConfig(dt=scenario.dt)).run(
             on_step=records.append
         )
-    observed = np.array([r.observed for r in records])
-    predicted = np.array([r.predicted for r in records])
-    motor = np.array([r.motor for r in records])
+    return _run(
+        scenario,
+        np.array([r.predicted for r in records]),
+        [r.motor for r in records],
+        [r.pb for r in records],
+        [r.context for r in records],
+        tuple(r.recognised for r in records),
+        joint_limits,
+    )
+
+
+def run_scenarios(
+    model: TrainedModel,
+    scenarios: Sequence[Any],
+    online: OnlineConfig,
+    joint_limits: np.ndarray,
+    meta: MetaParams | None = None,
+    steering: str = "always",
+    inhibition: bool = False,
+) -> list[Run]:
+    """:func:`run_scenario` for each of ``scenarios``. Several run together, in sessions of
+    one batched call (:func:`rnnpb.model.run_streams`), unless the meta-level guards by
+    regime or inhibits (then one after the other): each run is what it would be alone, to the
+    rounding of a batched product. Batching pays once the runs hold :data:`BATCHED_STEPS`
+    steps in all: a batched step of a new width is compiled first, which costs seconds."""
+    steps = sum(scenario.n_steps for scenario in scenarios)
+    if steps < BATCHED_STEPS or len(scenarios) < 2 or steering != "always" or inhibition:
+        return [
+            run_scenario(model, scenario, online, joint_limits, meta, steering, inhibition)
+            for scenario in scenarios
+        ]
+    streams = run_streams(model, [scenario.sensory for scenario in scenarios], online, meta)
+    return [
+        _run(
+            scenario,
+            _predictions(results, model.network.sensory_size),
+            [r.motor for r in results],
+            [r.pb for r in results],
+            [r.context for r in results],
+            tuple(r.recognised for r in results),
+            joint_limits,
+        )
+        for scenario, results in zip(scenarios, streams, strict=True)
+    ]
+
+
+def _predictions(results: Sequence[StepResult], size: int) -> np.ndarray:
+    """Each step's prediction of its observation, made one step before (NaN at the first)."""
+    before = np.array([r.predicted_hands for r in results[:-1]]).reshape(-1, size)
+    return np.concatenate([np.full((1, size), math.nan), before])
+
+
+def _run(
+    scenario,
+    predicted: np.ndarray,
+    motor: Sequence[np.ndarray],
+    pb: Sequence[np.ndarray],
+    context: Sequence[np.ndarray | None],
+    recognised: tuple[str | None, ...],
+    joint_limits: np.ndarray,
+) -> Run:
+    observed = np.array(scenario.sensory, dtype=np.float64)
+    motor_array = np.array(motor)
     return Run(
         name=scenario.name,
         labels=list(scenario.labels),
         switch_steps=list(scenario.switch_steps),
         observed=observed,
         predicted=predicted,
-        motor=motor,
+        motor=motor_array,
         truth_motor=scenario.motor,
-        pb=np.array([r.pb for r in records]),
-        context=np.array([r.context for r in records]),
-        motor_error=metrics.motor_error(motor, scenario.motor, joint_limits),
+        pb=np.array(pb),
+        context=np.array(context),
+        motor_error=metrics.motor_error(motor_array, scenario.motor, joint_limits),
         sensory_error=metrics.sensory_error(predicted, observed),
-        recognised=tuple(r.recognised for r in records),
+        recognised=recognised,
     )
 
 
@@ -232,10 +305,52 @@ def synchronization(
 ) -> Synchronization:
     """The user performs ``pattern``, pauses, and goes on (paper Figure 5). ``meta``,
     ``steering``, ``inhibition``: see :func:`run_scenario`."""
+    scenario = _pause_scenario(pattern, seed, before, pause, after)
+    run = run_scenario(model, scenario, online, joint_limits, meta, steering, inhibition)
+    return _synchronization_of(model, pattern, run, before, pause)
+
+
+def synchronizations(
+    model: TrainedModel,
+    patterns: Sequence[str],
+    online: OnlineConfig,
+    joint_limits: np.ndarray,
+    seeds: Sequence[int] = (0,),
+    meta: MetaParams | None = None,
+    steering: str = "always",
+    inhibition: bool = False,
+) -> dict[int, list[Synchronization]]:
+    """:func:`synchronization` of each pattern with each draw ``seeds``, run together
+    (:func:`run_scenarios`); by draw, in the order of ``patterns``."""
+    cases = [(seed, pattern) for seed in seeds for pattern in patterns]
+    scenarios = [_pause_scenario(pattern, seed) for seed, pattern in cases]
+    runs = run_scenarios(model, scenarios, online, joint_limits, meta, steering, inhibition)
+    return _synchronizations_of(model, cases, runs, seeds)
+
+
+def _synchronizations_of(
+    model: TrainedModel,
+    cases: Sequence[tuple[int, str]],
+    runs: Sequence[Run],
+    seeds: Sequence[int],
+) -> dict[int, list[Synchronization]]:
+    out: dict[int, list[Synchronization]] = {seed: [] for seed in seeds}
+    for (seed, pattern), run in zip(cases, runs, strict=True):
+        out[seed].append(_synchronization_of(model, pattern, run, 75, PAUSE_STEPS))
+    return out
+
+
+def _pause_scenario(
+    pattern: str, seed: int, before: int = 75, pause: int = PAUSE_STEPS, after: int = 45
+):
     from rnnpb.demonstrator import pause_scenario
 
-    scenario = pause_scenario(pattern, before=before, pause=pause, after=after, seed=seed)
-    run = run_scenario(model, scenario, online, joint_limits, meta, steering, inhibition)
+    return pause_scenario(pattern, before=before, pause=pause, after=after, seed=seed)
+
+
+def _synchronization_of(
+    model: TrainedModel, pattern: str, run: Run, before: int, pause: int
+) -> Synchronization:
     lock = metrics.steps_to_lock(run.motor_error, run.sensory_error, 0, before)
     settle = metrics.pb_settle_step(run.pb[:before])
     lag = math.nan
@@ -291,23 +406,52 @@ def switching(
     inhibition: bool = False,
 ) -> Switching:
     """Every ordered pair of learned patterns: steps from the switch until the robot follows
-    the new pattern (locked on it). ``meta``, ``steering``, ``inhibition``: see
-    :func:`run_scenario`."""
+    the new pattern (locked on it), the pairs run together (:func:`run_scenarios`).
+    ``meta``, ``steering``, ``inhibition``: see :func:`run_scenario`."""
+    return switchings(model, online, joint_limits, (seed,), steps_each, meta, steering, inhibition)[
+        seed
+    ]
+
+
+def switchings(
+    model: TrainedModel,
+    online: OnlineConfig,
+    joint_limits: np.ndarray,
+    seeds: Sequence[int],
+    steps_each: int = SWITCH_STEPS_EACH,
+    meta: MetaParams | None = None,
+    steering: str = "always",
+    inhibition: bool = False,
+) -> dict[int, Switching]:
+    """:func:`switching` with each draw ``seeds``, every run together; by draw."""
+    cases = _switch_cases(model, seeds)
+    scenarios = [_switch_scenario(pair, seed, steps_each) for seed, pair in cases]
+    runs = run_scenarios(model, scenarios, online, joint_limits, meta, steering, inhibition)
+    return _switchings_of(cases, runs, seeds, steps_each)
+
+
+def _switch_cases(model: TrainedModel, seeds: Sequence[int]) -> list[tuple[int, tuple[str, str]]]:
+    return [(seed, pair) for seed in seeds for pair in permutations(model.patterns, 2)]
+
+
+def _switch_scenario(pair: tuple[str, str], seed: int, steps_each: int = SWITCH_STEPS_EACH):
     from rnnpb.demonstrator import switch_scenario
 
-    pairs = {}
-    for a, b in permutations(model.patterns, 2):
-        run = run_scenario(
-            model,
-            switch_scenario((a, b), steps_each=steps_each, seed=seed),
-            online,
-            joint_limits,
-            meta,
-            steering,
-            inhibition,
+    return switch_scenario(pair, steps_each=steps_each, seed=seed)
+
+
+def _switchings_of(
+    cases: Sequence[tuple[int, tuple[str, str]]],
+    runs: Sequence[Run],
+    seeds: Sequence[int],
+    steps_each: int = SWITCH_STEPS_EACH,
+) -> dict[int, Switching]:
+    out: dict[int, dict[str, int | None]] = {seed: {} for seed in seeds}
+    for (seed, (a, b)), run in zip(cases, runs, strict=True):
+        out[seed][f"{a}->{b}"] = metrics.steps_to_lock(
+            run.motor_error, run.sensory_error, steps_each
         )
-        pairs[f"{a}->{b}"] = metrics.steps_to_lock(run.motor_error, run.sensory_error, steps_each)
-    return Switching(pairs)
+    return {seed: Switching(pairs) for seed, pairs in out.items()}
 
 
 @dataclass(frozen=True)
@@ -352,6 +496,26 @@ class Draw:
     def without_runs(self) -> Draw:
         """The measures alone, light to send back from a worker."""
         return Draw([s.without_run() for s in self.synchronization], self.switching)
+
+
+def draws(
+    model: TrainedModel, online: OnlineConfig, joint_limits: np.ndarray, seeds: Sequence[int]
+) -> dict[int, Draw]:
+    """The synchronization of every learned pattern and the switching of every pair, with
+    each draw ``seeds`` of the user's imperfection, all run together (:func:`run_scenarios`);
+    by draw."""
+    sync_cases = [(seed, pattern) for seed in seeds for pattern in model.patterns]
+    switch_cases = _switch_cases(model, seeds)
+    runs = run_scenarios(
+        model,
+        [_pause_scenario(pattern, seed) for seed, pattern in sync_cases]
+        + [_switch_scenario(pair, seed) for seed, pair in switch_cases],
+        online,
+        joint_limits,
+    )
+    sync = _synchronizations_of(model, sync_cases, runs[: len(sync_cases)], seeds)
+    switch = _switchings_of(switch_cases, runs[len(sync_cases) :], seeds)
+    return {seed: Draw(sync[seed], switch[seed]) for seed in seeds}
 
 
 # --- 3.3 novel patterns and attractors -----------------------------------------------------
@@ -441,23 +605,9 @@ def novel_response(
 ) -> NovelResponse:
     """One cycle of the novel pattern, repeated for ``n_steps`` with on-line PB regression
     (the paper's open-loop attractor analysis); the response is classified."""
-    from rnnpb.demonstrator import Imperfection, PatternConfig, make_scenario, novel_pattern
-
-    pattern = novel_pattern(learning_set)
-    base = PatternConfig(imperfection=Imperfection.none())
-    config = replace(
-        base,
-        horizontal_amplitude=base.horizontal_amplitude * amplitude,
-        vertical_amplitude=base.vertical_amplitude * amplitude,
-        rotation_radius=base.rotation_radius * amplitude,
-    )
-    period = int(round(config.period_steps))
-    cycle = make_scenario([(pattern, period)], seed=0, config=config, novel=(pattern,))
-    repeats = int(math.ceil(n_steps / period))
-    sensory = np.tile(cycle.sensory, (repeats, 1))[:n_steps]
-    return _classified_response(
-        model, learning_set, pattern, amplitude, sensory, online, attractors, transient
-    )
+    return novel_responses(
+        model, learning_set, online, attractors, n_steps, transient, amplitudes=(amplitude,)
+    )[0]
 
 
 def novel_by_hand(
@@ -472,20 +622,60 @@ def novel_by_hand(
     """The user demonstrates the novel pattern by hand for ``n_steps``: imperfect cycles
     (period, size and shape vary from cycle to cycle, drawn with ``seed``), as in the paper's
     interaction experiment; the response is classified."""
+    return novel_responses(
+        model, learning_set, online, attractors, n_steps, transient, by_hand=(seed,)
+    )[0]
+
+
+def novel_responses(
+    model: TrainedModel,
+    learning_set: str,
+    online: OnlineConfig,
+    attractors: dict[str, Attractor],
+    n_steps: int,
+    transient: int,
+    amplitudes: Sequence[float] = (),
+    by_hand: Sequence[int] = (),
+) -> list[NovelResponse]:
+    """:func:`novel_response` at each of ``amplitudes``, then :func:`novel_by_hand` with each
+    draw of ``by_hand``, run together (:func:`rnnpb.model.run_streams`); in that order."""
     from rnnpb.demonstrator import novel_pattern, novel_scenario
 
-    scenario = novel_scenario(learning_set, n_steps=n_steps, seed=seed)
-    response = _classified_response(
-        model,
-        learning_set,
-        novel_pattern(learning_set),
-        1.0,
-        scenario.sensory,
-        online,
-        attractors,
-        transient,
+    pattern = novel_pattern(learning_set)
+    streams = [_repeated_cycle(pattern, amplitude, n_steps) for amplitude in amplitudes]
+    streams += [novel_scenario(learning_set, n_steps=n_steps, seed=d).sensory for d in by_hand]
+    if sum(map(len, streams)) < BATCHED_STEPS or len(streams) < 2:  # see run_scenarios
+        results = []
+        for stream in streams:
+            mirror = MirrorSystem(model, online)
+            results.append([mirror.step(u) for u in stream])
+    else:
+        results = run_streams(model, streams, online)
+    cases = [(a, None) for a in amplitudes] + [(1.0, d) for d in by_hand]
+    return [
+        _classified_response(
+            model, learning_set, pattern, amplitude, steps, attractors, transient, user_draw
+        )
+        for (amplitude, user_draw), steps in zip(cases, results, strict=True)
+    ]
+
+
+def _repeated_cycle(pattern: str, amplitude: float, n_steps: int) -> np.ndarray:
+    """One exact cycle of ``pattern`` at ``amplitude`` times the learned size, repeated for
+    ``n_steps``."""
+    from rnnpb.demonstrator import Imperfection, PatternConfig, make_scenario
+
+    base = PatternConfig(imperfection=Imperfection.none())
+    config = replace(
+        base,
+        horizontal_amplitude=base.horizontal_amplitude * amplitude,
+        vertical_amplitude=base.vertical_amplitude * amplitude,
+        rotation_radius=base.rotation_radius * amplitude,
     )
-    return replace(response, user_draw=seed)
+    period = int(round(config.period_steps))
+    cycle = make_scenario([(pattern, period)], seed=0, config=config, novel=(pattern,))
+    repeats = int(math.ceil(n_steps / period))
+    return np.tile(cycle.sensory, (repeats, 1))[:n_steps]
 
 
 def _classified_response(
@@ -493,19 +683,12 @@ def _classified_response(
     learning_set: str,
     pattern: str,
     amplitude: float,
-    sensory: np.ndarray,
-    online: OnlineConfig,
+    steps: Sequence[StepResult],
     attractors: dict[str, Attractor],
     transient: int,
+    user_draw: int | None,
 ) -> NovelResponse:
-    mirror = MirrorSystem(model, online)
-    motor, pbs, contexts = [], [], []
-    for u in sensory:
-        result = mirror.step(u)
-        motor.append(result.motor)
-        pbs.append(result.pb)
-        contexts.append(result.context)
-    motor = np.array(motor)
+    motor = np.array([r.motor for r in steps])
     normalized = _normalized_motor(model, motor)
     learned_cycles = {name: a.cycle for name, a in attractors.items()}
     case = metrics.classify_response(normalized[transient:], learned_cycles)
@@ -520,8 +703,9 @@ def _classified_response(
         distance=case.distance,
         return_error=case.return_error,
         motor=motor,
-        pb=np.array(pbs),
-        context=np.array(contexts),
+        pb=np.array([r.pb for r in steps]),
+        context=np.array([r.context for r in steps]),
+        user_draw=user_draw,
     )
 
 
@@ -545,19 +729,36 @@ def follows_every_pattern(
 ) -> FollowsEveryPattern:
     """The user switches through all learned patterns; does the robot follow each within
     ``metrics.SWITCH_LIMIT`` steps?"""
+    return follows_every_pattern_draws(model, online, joint_limits, (seed,), steps_each)[seed]
+
+
+def follows_every_pattern_draws(
+    model: TrainedModel,
+    online: OnlineConfig,
+    joint_limits: np.ndarray,
+    seeds: Sequence[int],
+    steps_each: int = SWITCH_STEPS_EACH,
+) -> dict[int, FollowsEveryPattern]:
+    """:func:`follows_every_pattern` with each draw ``seeds``, run together; by draw."""
     from rnnpb.demonstrator import switch_scenario
 
     order = list(model.patterns)
-    run = run_scenario(
-        model, switch_scenario(tuple(order), steps_each=steps_each, seed=seed), online, joint_limits
+    runs = run_scenarios(
+        model,
+        [switch_scenario(tuple(order), steps_each=steps_each, seed=seed) for seed in seeds],
+        online,
+        joint_limits,
     )
-    starts = [0, *run.switch_steps]
-    follow = {
-        p: metrics.steps_to_lock(run.motor_error, run.sensory_error, s, s + steps_each)
-        for p, s in zip(order, starts, strict=True)
-    }
-    ok = all(v is not None and v <= metrics.SWITCH_LIMIT for v in follow.values())
-    return FollowsEveryPattern(follow, ok)
+    out = {}
+    for seed, run in zip(seeds, runs, strict=True):
+        starts = [0, *run.switch_steps]
+        follow = {
+            p: metrics.steps_to_lock(run.motor_error, run.sensory_error, s, s + steps_each)
+            for p, s in zip(order, starts, strict=True)
+        }
+        ok = all(v is not None and v <= metrics.SWITCH_LIMIT for v in follow.values())
+        out[seed] = FollowsEveryPattern(follow, ok)
+    return out
 
 
 # --- one job per model (run in worker processes) -------------------------------------------
@@ -675,52 +876,37 @@ def learning_set_job(
     info = model.meta["training"]
     seed = config.scenario_seed
 
-    def draw(regression: OnlineConfig, scenario_seed: int) -> Draw:
-        return Draw(
-            [
-                synchronization(model, p, regression, limits, seed=scenario_seed)
-                for p in model.patterns
-            ],
-            switching(model, regression, limits, seed=scenario_seed),
-        )
-
-    primary = draw(online, seed)
+    seeds = (seed, *config.extra_scenario_seeds) if full else (seed,)
+    by_seed = draws(model, online, limits, seeds)
+    primary = by_seed[seed]
     extra: dict[str, Any] = {}
+    compared = draws(model, compare, limits, seeds) if compare is not None else {}
     if compare is not None:
-        extra["compare"] = draw(compare, seed)
+        extra["compare"] = compared[seed]
     if full:
-        extra["draws"], extra["compare_draws"] = {}, {}
-        for other in config.extra_scenario_seeds:
-            extra["draws"][other] = draw(online, other).without_runs()
-            if compare is not None:
-                extra["compare_draws"][other] = draw(compare, other).without_runs()
+        extra["draws"] = {other: by_seed[other].without_runs() for other in seeds[1:]}
+        extra["compare_draws"] = {other: compared[other].without_runs() for other in compared}
+        extra["compare_draws"].pop(seed, None)
         if not light:
             extra["sequence"] = switching_sequence(model, online, limits, seed=seed)
         attractors = learned_attractors(model, config.attractor_steps, config.attractor_transient)
         extra["attractors"] = attractors
         steps, transient = config.attractor_steps, config.attractor_transient
-        draws = (seed, *config.extra_scenario_seeds)
-        extra["novel"] = [
-            *(
-                novel_response(
-                    model, set_name, online, limits, attractors, steps, transient, amplitude
-                )
-                for amplitude in config.novel_amplitudes
-            ),
-            *(
-                novel_by_hand(model, set_name, online, attractors, steps, transient, seed=d)
-                for d in draws
-            ),
-        ]
+        extra["novel"] = novel_responses(
+            model,
+            set_name,
+            online,
+            attractors,
+            steps,
+            transient,
+            amplitudes=config.novel_amplitudes,
+            by_hand=seeds,
+        )
         if compare is not None:
             # The paper's regression: the exact cycle at the learned size, and by hand.
-            extra["compare_novel"] = [
-                novel_response(model, set_name, compare, limits, attractors, steps, transient),
-                *(
-                    novel_by_hand(model, set_name, compare, attractors, steps, transient, seed=d)
-                    for d in draws
-                ),
-            ]
+            extra["compare_novel"] = novel_responses(
+                model, set_name, compare, attractors, steps, transient, (1.0,), seeds
+            )
     result = LearningSetResult(
         label=label,
         learning_set=set_name,
@@ -794,11 +980,14 @@ def larger_set_job(
     runs = []
     for seed, model, model_path in zip(seeds, models, model_paths, strict=True):
         model.save(model_path)
-        follow = follows_every_pattern(model, online, limits, seed=config.scenario_seed + seed)
-        draws = {
-            extra: follows_every_pattern(model, online, limits, seed=extra + seed)
-            for extra in config.extra_scenario_seeds
-        }
+        followed = follows_every_pattern_draws(
+            model,
+            online,
+            limits,
+            [draw + seed for draw in (config.scenario_seed, *config.extra_scenario_seeds)],
+        )
+        follow = followed[config.scenario_seed + seed]
+        others = {extra: followed[extra + seed] for extra in config.extra_scenario_seeds}
         runs.append(
             LargerSetRun(
                 seed=seed,
@@ -807,7 +996,7 @@ def larger_set_job(
                 steps_to_follow=follow.steps_to_follow,
                 follows_all=follow.follows_all,
                 scenario_seed=config.scenario_seed,
-                draws=draws,
+                draws=others,
             )
         )
     return runs

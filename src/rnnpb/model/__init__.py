@@ -6,7 +6,7 @@ docstring: model files (``io.py``), the training driver's checkpoints and clock
 ``reference.py`` is the NumPy twin the compiled code is held to.
 """
 
-from rnnpb.model.batched import BatchedMirror
+from rnnpb.model.batched import BatchedMirror, run_streams
 from rnnpb.model.consolidation import (
     CONSOLIDATION_METHODS,
     ConsolidationConfig,
@@ -66,6 +66,7 @@ __all__ = [
     "open_loop",
     "pb_update",
     "rehearse",
+    "run_streams",
     "step",
     "train",
     "train_seeds",

@@ -8,10 +8,15 @@ state and the observations; the weights, restarts and settings are shared), and 
 come back to the host in one transfer, as a (B, packed) array; recognition then runs on the
 host for each session, as in ``MirrorSystem``. ``tests/model/test_batched.py`` holds it to
 ``B`` separate mirror systems step by step.
+
+:func:`run_streams` runs many recorded streams (the runs of an experiment) through a pool of
+batched sessions: a session that finishes its stream starts the next one afresh.
 """
 
 from __future__ import annotations
 
+import math
+from collections.abc import Sequence
 from functools import partial
 
 import jax
@@ -194,3 +199,70 @@ class BatchedMirror:
             results.append(result)
         self.steps += 1
         return results
+
+
+# Sessions stepped together by run_streams: beyond about 16 a session's share of the step
+# hardly falls (rnnpb bench: 16 sessions in about 7 times one session's step).
+POOL_SESSIONS = 16
+
+
+def pool_size(streams: int, most: int = POOL_SESSIONS) -> int:
+    """The sessions :func:`run_streams` steps together for ``streams`` streams: as few as
+    run them in the same number of rounds as ``most`` sessions would (27 streams: 14, two
+    rounds), since every session in the call costs its share whether it has a stream or not."""
+    if streams <= 0:
+        return 1
+    rounds = math.ceil(streams / most)
+    return math.ceil(streams / rounds)
+
+
+def run_streams(
+    model: TrainedModel,
+    streams: Sequence[np.ndarray],
+    config: OnlineConfig | None = None,
+    meta: MetaParams | None = None,
+    recognition: RecognitionConfig | None = None,
+    sessions: int | None = None,
+) -> list[list[StepResult]]:
+    """Each stream of observed hands, (T, 4) as :meth:`BatchedMirror.step` takes a row, run
+    from a fresh session to its end; returns each stream's step results, in order.
+
+    The streams share one :class:`BatchedMirror` of ``sessions`` sessions (default
+    :func:`pool_size`): the longest start first, and a session whose stream ends starts the
+    next waiting one afresh (:meth:`BatchedMirror.reset_session`), so each stream's results are
+    what a :class:`rnnpb.model.MirrorSystem` of its own gives (to the rounding of a batched
+    product, ``tests/model/test_batched.py``). A session with no stream left observes nothing
+    until the others end.
+    """
+    rows = [np.asarray(stream, dtype=np.float64) for stream in streams]
+    size = model.network.sensory_size
+    for i, stream in enumerate(rows):
+        if stream.ndim != 2 or stream.shape[1] != size:
+            raise ConfigError(
+                f"stream {i} must be (steps, {size}) observed hands, got shape {stream.shape}"
+            )
+    results: list[list[StepResult]] = [[] for _ in rows]
+    waiting = sorted((i for i, s in enumerate(rows) if len(s)), key=lambda i: -len(rows[i]))
+    if not waiting:
+        return results
+    width = pool_size(len(waiting)) if sessions is None else min(sessions, len(waiting))
+    mirror = BatchedMirror(model, width, config, meta, recognition)
+    running: list[int | None] = list(waiting[:width])
+    waiting = waiting[width:]
+    position = [0] * width
+    observed = np.full((width, size), np.nan)
+    while any(i is not None for i in running):
+        for slot, i in enumerate(running):
+            observed[slot] = np.nan if i is None else rows[i][position[slot]]
+        step = mirror.step(observed)
+        for slot, i in enumerate(running):
+            if i is None:
+                continue
+            results[i].append(step[slot])
+            position[slot] += 1
+            if position[slot] == len(rows[i]):
+                running[slot] = waiting.pop(0) if waiting else None
+                position[slot] = 0
+                if running[slot] is not None:
+                    mirror.reset_session(slot)
+    return results
