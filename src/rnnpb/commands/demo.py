@@ -54,7 +54,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 #: Minutes the run takes on 2 cores with 2 workers (the measured runs: notes/2026-12-03-history.md).
-MEASURED_MINUTES = {"full": 13.0, "quick": 3.0}
+MEASURED_MINUTES = {"full": 8.5, "quick": 3.0}
 
 
 def _estimate(config) -> str:
