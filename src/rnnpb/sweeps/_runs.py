@@ -122,8 +122,9 @@ def measure(run: RunSpec, model) -> list[Measure]:
         ("train_rms_max", "", _value(math.sqrt(info["mse_max"]))),
     ]
     if "synchronization" in run.experiments:
-        for pattern in model.patterns:
-            sync = paper.synchronization(model, pattern, online, JOINT_LIMITS, seed=run.user_draw)
+        draw = run.user_draw
+        each = paper.synchronizations(model, model.patterns, online, JOINT_LIMITS, (draw,))
+        for pattern, sync in zip(model.patterns, each[draw], strict=True):
             rows += [
                 ("steps_to_lock", pattern, _value(sync.steps_to_lock)),
                 ("pb_settle_steps", pattern, _value(sync.pb_settle_steps)),
@@ -141,36 +142,19 @@ def measure(run: RunSpec, model) -> list[Measure]:
     if "attractors" in run.experiments:
         rows += [("closed_loop_period", name, _value(a.period)) for name, a in attractors.items()]
     if "novel" in run.experiments:
-        responses = [
-            (
-                f"cycle x{a:g}",
-                paper.novel_response(
-                    model,
-                    run.learning_set,
-                    online,
-                    JOINT_LIMITS,
-                    attractors,
-                    run.attractor_steps,
-                    run.attractor_transient,
-                    a,
-                ),
-            )
-            for a in run.novel_amplitudes
-        ]
-        responses.append(
-            (
-                "by hand",
-                paper.novel_by_hand(
-                    model,
-                    run.learning_set,
-                    online,
-                    attractors,
-                    run.attractor_steps,
-                    run.attractor_transient,
-                    seed=run.user_draw,
-                ),
-            )
+        # Every run together (paper.novel_responses): the cycles at each size, then by hand.
+        answers = paper.novel_responses(
+            model,
+            run.learning_set,
+            online,
+            attractors,
+            run.attractor_steps,
+            run.attractor_transient,
+            amplitudes=run.novel_amplitudes,
+            by_hand=(run.user_draw,),
         )
+        keys = [*(f"cycle x{a:g}" for a in run.novel_amplitudes), "by hand"]
+        responses = list(zip(keys, answers, strict=True))
         for key, response in responses:
             rows += [
                 ("novel_case", key, float(response.case)),
