@@ -34,8 +34,9 @@ def test_runs_stepped_together_are_the_runs_alone(set1_model, monkeypatch):
         assert run.recognised == alone.recognised
 
 
-def test_draws_come_back_by_draw_with_every_pattern_and_pair(set1_model, monkeypatch):
-    monkeypatch.setattr(paper, "BATCHED_STEPS", 0)
+def test_draws_come_back_by_draw_with_every_pattern_and_pair(set1_model):
+    # Few steps: the runs go one by one (the pooled runs are the test above's), in the order
+    # draws() hands them back.
     by_seed = paper.draws(set1_model, SHORT, paper._limits(), (100, 200))
     assert list(by_seed) == [100, 200]
     for draw in by_seed.values():
@@ -44,4 +45,6 @@ def test_draws_come_back_by_draw_with_every_pattern_and_pair(set1_model, monkeyp
     alone = paper.synchronization(set1_model, "2", SHORT, paper._limits(), seed=200)
     together = by_seed[200].synchronization[1]
     assert together.pause_start == alone.pause_start
-    np.testing.assert_allclose(together.run.pb, alone.run.pb, atol=1e-4)
+    np.testing.assert_array_equal(together.run.pb, alone.run.pb)
+    switched = paper.switching(set1_model, SHORT, paper._limits(), seed=100)
+    assert by_seed[100].switching == switched
