@@ -19,6 +19,10 @@ from rnnpb.experiments import (
 from rnnpb.model import OnlineConfig, TrainConfig, TrainedModel
 from rnnpb.sequences import read_sequences
 
+# A short regression: these tests are about what a job keeps and compares, not how well the
+# robot follows (the demo's targets), and it keeps the compiled step and the runs cheap.
+SHORT = {"window": 8, "iterations": 5}
+
 
 def test_every_demonstration_is_learned_and_kept(tmp_path):
     config = ExperimentConfig(samples_per_pattern=3, extra_scenario_seeds=())
@@ -27,7 +31,7 @@ def test_every_demonstration_is_learned_and_kept(tmp_path):
     result = learning_set_job(
         "1",
         TrainConfig.fast(iterations=20),
-        OnlineConfig(),
+        OnlineConfig(**SHORT),
         config,
         str(tmp_path / "set1.npz"),
         str(data),
@@ -59,13 +63,13 @@ def test_the_comparison_runs_the_papers_regression_on_the_same_model(tmp_path):
     result = learning_set_job(
         "1",
         TrainConfig.fast(iterations=20),
-        OnlineConfig(),
+        OnlineConfig(**SHORT),
         config,
         str(tmp_path / "set1.npz"),
         None,
         "default",
         full=False,
-        compare=OnlineConfig.paper(),
+        compare=OnlineConfig.paper(**SHORT),
     )
     compared = result.compared("paper")
     assert compared.label == "paper" and compared.model == result.model

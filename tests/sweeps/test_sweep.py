@@ -1,8 +1,9 @@
 """Sweeps on a local Ray instance: a two-run sweep, its table, a killed worker, a resumed sweep.
 
 One Ray instance serves the module (starting it is the slow part). The runs are tiny (30
-learning iterations, the synchronization experiment); what is checked is the machinery: the
-results of an interrupted sweep, once finished, are those of an uninterrupted one, exactly.
+learning iterations, a short regression, the synchronization experiment); what is checked is
+the machinery: the results of an interrupted sweep, once finished, are those of an
+uninterrupted one, exactly.
 """
 
 import os
@@ -24,6 +25,11 @@ retries = {retries}
 [training.tiny]
 preset = "fast"
 iterations = 30
+
+[online.short]
+preset = "ungated"
+window = 8
+iterations = 5
 """
 
 
