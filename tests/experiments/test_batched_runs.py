@@ -48,3 +48,30 @@ def test_draws_come_back_by_draw_with_every_pattern_and_pair(set1_model):
     np.testing.assert_array_equal(together.run.pb, alone.run.pb)
     switched = paper.switching(set1_model, SHORT, paper._limits(), seed=100)
     assert by_seed[100].switching == switched
+
+
+def test_the_novelty_studys_streams_run_together_as_each_alone(set1_model, monkeypatch):
+    from rnnpb.demonstrator import PAUSE
+    from rnnpb.experiments.scenarios import novelty
+    from rnnpb.model import OnlineConfig as Online
+
+    recognition = Online.for_model(set1_model).recognition
+    cases = [
+        ("learned", "1", 1000, 0, [("1", 30)], 1.0),
+        ("novel-slow", "figure-eight", 1000, 10, [("2", 10), ("figure-eight", 25)], 0.5),
+        ("still", PAUSE, 1001, 0, [(PAUSE, 20)], 1.0),
+    ]
+    alone = novelty.run_streams_of(set1_model, SHORT, recognition, "set1", cases)
+    monkeypatch.setattr(paper, "BATCHED_STEPS", 0)
+    together = novelty.run_streams_of(set1_model, SHORT, recognition, "set1", cases)
+    for a, t in zip(alone, together, strict=True):
+        assert (t.kind, t.movement, t.seed, t.start, t.speed) == (
+            a.kind,
+            a.movement,
+            a.seed,
+            a.start,
+            a.speed,
+        )
+        assert t.novelty == a.novelty and t.recognised == a.recognised
+        np.testing.assert_array_equal(t.sensory, a.sensory)
+        np.testing.assert_allclose(t.pb, a.pb, atol=1e-4)

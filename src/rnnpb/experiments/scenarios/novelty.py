@@ -101,21 +101,59 @@ def run_stream(
 ) -> StreamRun:
     """Play one generated stream through ``mirror`` (reset first), the user moving at
     ``speed`` times the demonstrator's speed."""
+    scenario = _scenario(segments, seed, speed)
+    mirror.reset()
+    results = [mirror.step(u) for u in scenario.sensory]
+    case = (kind, movement, seed, start, speed)
+    return _stream_run(mirror.model, model_name, case, scenario, results)
+
+
+def run_streams_of(
+    model: Any,
+    config: Any,
+    recognition: Any,
+    model_name: str,
+    cases: list[tuple[str, str, int, int, list[tuple[str, int]], float]],
+) -> list[StreamRun]:
+    """Every stream of ``cases`` (``(kind, movement, seed, start, segments, speed)``) from a
+    fresh mirror system of ``model``, in order: run together in one batched call
+    (:func:`rnnpb.model.run_streams`) when they hold enough steps to pay for it
+    (:data:`rnnpb.experiments.paper.BATCHED_STEPS`), else one after the other."""
+    from rnnpb.experiments.paper import BATCHED_STEPS
+    from rnnpb.model import MirrorSystem, run_streams
+
+    scenarios = [_scenario(segments, seed, speed) for _, _, seed, _, segments, speed in cases]
+    if sum(s.n_steps for s in scenarios) < BATCHED_STEPS:
+        mirror = MirrorSystem(model, config, recognition=recognition)
+        return [
+            run_stream(mirror, model_name, kind, movement, seed, start, segments, speed)
+            for kind, movement, seed, start, segments, speed in cases
+        ]
+    results = run_streams(model, [s.sensory for s in scenarios], config, recognition=recognition)
+    return [
+        _stream_run(model, model_name, (kind, movement, seed, start, speed), scenario, steps)
+        for (kind, movement, seed, start, _, speed), scenario, steps in zip(
+            cases, scenarios, results, strict=True
+        )
+    ]
+
+
+def _scenario(segments: list[tuple[str, int]], seed: int, speed: float):
     from rnnpb.demonstrator import PatternConfig, make_scenario
 
-    config = PatternConfig(period_steps=PERIOD / speed)
-    scenario = make_scenario(segments, seed=seed, config=config)
-    mirror.reset()
-    novelty, recognised, nearest, score, evidence, pbs = [], [], [], [], [], []
-    confidence = []
-    for u in scenario.sensory:
-        result = mirror.step(u)
-        confidence.append(result.confidence)
-        evidence.append(result.pattern_errors)
-        pbs.append(result.pb)
-        novelty.append(result.novelty)
-        recognised.append(result.recognised)
-        nearest.append(mirror.model.nearest_pattern(result.pb)[0])
+    return make_scenario(segments, seed=seed, config=PatternConfig(period_steps=PERIOD / speed))
+
+
+def _stream_run(
+    model: Any,
+    model_name: str,
+    case: tuple[str, str, int, int, float],
+    scenario: Any,
+    results: list[Any],
+) -> StreamRun:
+    kind, movement, seed, start, speed = case
+    score = []
+    for result in results:
         errors = result.pattern_errors
         score.append(float(np.sqrt(np.min(errors))) if np.all(np.isfinite(errors)) else np.nan)
     return StreamRun(
@@ -124,14 +162,14 @@ def run_stream(
         movement,
         seed,
         start,
-        tuple(novelty),
-        tuple(recognised),
-        tuple(nearest),
+        tuple(r.novelty for r in results),
+        tuple(r.recognised for r in results),
+        tuple(model.nearest_pattern(r.pb)[0] for r in results),
         np.array(score),
         scenario.sensory.copy(),
-        np.array(evidence),
-        np.array(pbs),
-        tuple(confidence),
+        np.array([r.pattern_errors for r in results]),
+        np.array([r.pb for r in results]),
+        tuple(r.confidence for r in results),
         speed,
     )
 
@@ -227,19 +265,19 @@ def model_job(
     from dataclasses import replace
 
     from rnnpb.demonstrator import learning_set_patterns, novel_pattern
-    from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel
+    from rnnpb.model import OnlineConfig, TrainedModel
     from rnnpb.robot import JOINT_LIMITS
 
     model = TrainedModel.load(path, joint_limits=JOINT_LIMITS)
     choice = OnlineConfig.for_model(model)
-    mirror = MirrorSystem(model, choice.config, recognition=choice.recognition)
     patterns = learning_set_patterns(set_name)
     novel = ((novel_pattern(set_name),) if set_name != "full" else ()) + tuple(shapes)
-    runs = [
-        run_stream(mirror, name, kind, movement, seed, start, segments, speed)
+    cases = [
+        (kind, movement, seed, start, segments, speed)
         for seed in seeds
         for kind, movement, start, segments, speed in streams(patterns, novel, seed, steps)
     ]
+    runs = run_streams_of(model, choice.config, choice.recognition, name, cases)
     settings = {
         "online_preset": choice.name,
         "online": choice.config.to_dict(),
