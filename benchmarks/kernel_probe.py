@@ -1,13 +1,16 @@
-"""How fast the window's forward pass can run on one core: LLVM IR with explicit 8-wide
-vectors, compiled at run time by llvmlite, against the same pass compiled by XLA.
+"""How fast the on-line regression's window passes can run on one core: LLVM IR with explicit
+8-wide vectors, compiled at run time by llvmlite, beside the regression loop XLA runs today.
 
 A probe for a native kernel of the on-line regression that needs no C compiler: llvmlite is a
-wheel with LLVM inside. The pass is the window's (L = 30 steps, 42 inputs, 40 hidden units,
-42 outputs), with random weights of the network's shapes. In the IR the hidden layer's 40 sums
-are five 8-wide vectors and the outputs' 42 six, carried in registers through the products'
-loops, and the sigmoid is a rational function (the form Eigen gives tanh). Prints each one's
-time for 100 passes (median), the ratio, and the largest difference from a float64 NumPy
-pass. Needs llvmlite, which the package does not depend on::
+wheel with LLVM inside. The window is a real one (L = 30 steps, 42 inputs, 40 hidden units, 42
+outputs): the model's mirror system after 40 steps of its first pattern. In the IR the hidden
+layer's 40 sums are five 8-wide vectors and the outputs' 42 six, carried in registers through
+the products' loops, and the sigmoid is a rational function (the form Eigen gives tanh); the
+backward pass carries the inputs' error the same way. Prints, timed alternately, 100 forward
+passes, 100 forward and backward passes, and 100 iterations of the regression loop as the
+on-line step runs it in XLA (which also updates the PB and the onset: a few per cent more
+arithmetic), and the IR's largest difference from float64 NumPy. Needs llvmlite, which the
+package does not depend on::
 
     .venv/bin/pip install llvmlite
     PYTHONPATH=src .venv/bin/python benchmarks/kernel_probe.py [--repeats 30]
@@ -92,9 +95,11 @@ def _broadcast(scalar: str, name: str) -> list[str]:
     ]
 
 
-def forward_ir() -> str:
-    """``forward(iters, pre, mask, w_loop, w_out, b_out, first, out, hid, x)``: ``iters``
-    forward passes of the window (the arrays as :func:`main` lays them out)."""
+def forward_ir(with_backward: bool = False) -> str:
+    """``forward(iters, pre, mask, w_loop, w_out, b_out, first, out, hid, x, ...)``: ``iters``
+    forward passes of the window (the arrays as :func:`main` lays them out); with
+    ``with_backward``, each followed by the back-propagation of the sensory error through the
+    window (``..., w_out_t, w_loop_t, target, target_mask, next_mask, d_pre, g, dh``)."""
     body: list[str] = ["iter:", "%it = phi i64 [0, %entry], [%it.next, %iter.end]"]
     for v in range(IV):  # x = first * mask[0]
         body += _load(f"f{v}", "%first", str(8 * v)) + _load(f"m{v}", "%mask", str(8 * v))
@@ -146,7 +151,10 @@ def forward_ir() -> str:
         body += _sigmoid(f"%on{v}", f"os{v}") + [f"%ooi{v} = add i64 %outrow, {8 * v}"]
         body += _store(f"%os{v}r", "%out", f"%ooi{v}", f"ost{v}")
     body += ["br label %step.end", "step.end:", "%t.next = add i64 %t, 1"]
-    body += [f"%tdone = icmp eq i64 %t.next, {L}", "br i1 %tdone, label %iter.end, label %step"]
+    after = "back" if with_backward else "iter.end"
+    body += [f"%tdone = icmp eq i64 %t.next, {L}", f"br i1 %tdone, label %{after}, label %step"]
+    if with_backward:
+        body += _backward()
     body += ["iter.end:", "%it.next = add i64 %it, 1", "%itdone = icmp eq i64 %it.next, %iters"]
     body += ["br i1 %itdone, label %done, label %iter", "done:", "ret void"]
     labels = {line[:-1] for line in body if line.endswith(":")}
@@ -158,7 +166,14 @@ def forward_ir() -> str:
             f"declare {V} @llvm.fma.v8f32({V}, {V}, {V})",
             "define void @forward(i64 %iters, ptr noalias %pre, ptr noalias %mask, "
             "ptr noalias %wl, ptr noalias %wo, ptr noalias %bo, ptr noalias %first, "
-            "ptr noalias %out, ptr noalias %hid, ptr noalias %x) {",
+            "ptr noalias %out, ptr noalias %hid, ptr noalias %x"
+            + (
+                ", ptr noalias %wot, ptr noalias %wlt, ptr noalias %target, ptr noalias %tmask, "
+                "ptr noalias %nmask, ptr noalias %dpre, ptr noalias %g, ptr noalias %dh"
+                if with_backward
+                else ""
+            )
+            + ") {",
             "entry:",
             "  br label %iter",
             *indented,
@@ -167,7 +182,66 @@ def forward_ir() -> str:
     )
 
 
-def compiled_forward():
+def _backward() -> list[str]:
+    """IR lines: the window's backward pass, from the last step to the first (the sums of the
+    hidden layer's five vectors and of the inputs' six in registers, as in the forward pass)."""
+    zero = "zeroinitializer"
+    body = ["back:", "br label %bstep", "bstep:"]
+    body.append(f"%bt = phi i64 [{L - 1}, %back], [%bt.next, %bend]")
+    body += [f"%din{v} = phi {V} [{zero}, %back], [%dn{v}, %bend]" for v in range(IV)]
+    body += [f"%brow = mul i64 %bt, {IP}", f"%hrow = mul i64 %bt, {H}"]
+    for v in range(IV):  # g = (out - target) * target_mask + d_in * next_mask, times o (1 - o)
+        body.append(f"%bi{v} = add i64 %brow, {8 * v}")
+        for name, base in (("bo", "%out"), ("bx", "%target"), ("bm", "%tmask"), ("bn", "%nmask")):
+            body += _load(f"{name}{v}", base, f"%bi{v}")
+        body += [
+            f"%be{v} = fsub fast {V} %bo{v}, %bx{v}",
+            f"%bd{v} = fmul fast {V} %be{v}, %bm{v}",
+            f"%bc{v} = call fast {V} @llvm.fma.v8f32({V} %din{v}, {V} %bn{v}, {V} %bd{v})",
+            f"%bq{v} = fsub fast {V} {_vector(1.0)}, %bo{v}",
+            f"%bs{v} = fmul fast {V} %bo{v}, %bq{v}",
+            f"%bg{v} = fmul fast {V} %bc{v}, %bs{v}",
+        ]
+        body += _store(f"%bg{v}", "%g", str(8 * v), f"bgs{v}")
+    body += ["br label %ib.loop", "ib.loop:", "%ib = phi i64 [0, %bstep], [%ib.next, %ib.loop]"]
+    body += [f"%h{v} = phi {V} [{zero}, %bstep], [%hn{v}, %ib.loop]" for v in range(HV)]
+    body += ["%gi.p = getelementptr inbounds float, ptr %g, i64 %ib", "%gi = load float, ptr %gi.p"]
+    body += [*_broadcast("%gi", "gb"), f"%wtrow = mul i64 %ib, {H}"]
+    for v in range(HV):  # d_hidden = g @ w_out.T
+        body.append(f"%wti{v} = add i64 %wtrow, {8 * v}")
+        body += _load(f"wtv{v}", "%wot", f"%wti{v}")
+        body.append(f"%hn{v} = call fast {V} @llvm.fma.v8f32({V} %gb, {V} %wtv{v}, {V} %h{v})")
+    body += ["%ib.next = add i64 %ib, 1", f"%ibdone = icmp eq i64 %ib.next, {IO}"]
+    body += ["br i1 %ibdone, label %hb.done, label %ib.loop", "hb.done:"]
+    for v in range(HV):  # times h (1 - h): the error at the hidden layer's input
+        body.append(f"%hbi{v} = add i64 %hrow, {8 * v}")
+        body += _load(f"hv{v}", "%hid", f"%hbi{v}")
+        body += [
+            f"%hq{v} = fsub fast {V} {_vector(1.0)}, %hv{v}",
+            f"%hs{v}b = fmul fast {V} %hv{v}, %hq{v}",
+            f"%dp{v} = fmul fast {V} %hn{v}, %hs{v}b",
+        ]
+        body += _store(f"%dp{v}", "%dpre", f"%hbi{v}", f"dps{v}")
+        body += _store(f"%dp{v}", "%dh", str(8 * v), f"dhs{v}")
+    body += ["br label %jb.loop", "jb.loop:", "%jb = phi i64 [0, %hb.done], [%jb.next, %jb.loop]"]
+    body += [f"%d{v} = phi {V} [{zero}, %hb.done], [%dn{v}, %jb.loop]" for v in range(IV)]
+    body += [
+        "%dj.p = getelementptr inbounds float, ptr %dh, i64 %jb",
+        "%dj = load float, ptr %dj.p",
+    ]
+    body += [*_broadcast("%dj", "db"), f"%ltrow = mul i64 %jb, {IP}"]
+    for v in range(IV):  # d_input = d_hidden @ w_loop.T
+        body.append(f"%lti{v} = add i64 %ltrow, {8 * v}")
+        body += _load(f"ltv{v}", "%wlt", f"%lti{v}")
+        body.append(f"%dn{v} = call fast {V} @llvm.fma.v8f32({V} %db, {V} %ltv{v}, {V} %d{v})")
+    body += ["%jb.next = add i64 %jb, 1", f"%jbdone = icmp eq i64 %jb.next, {H}"]
+    body += ["br i1 %jbdone, label %bend, label %jb.loop", "bend:"]
+    body += ["%bt.next = sub i64 %bt, 1", "%btdone = icmp eq i64 %bt, 0"]
+    body += ["br i1 %btdone, label %iter.end, label %bstep"]
+    return body
+
+
+def compiled_forward(with_backward: bool = False):
     """The IR compiled for this machine's processor (LLVM's -O3 pipeline), as a ctypes
     function, and the engine that owns its code (keep it alive while calling)."""
     llvm = importlib.import_module("llvmlite.binding")
@@ -176,89 +250,172 @@ def compiled_forward():
     machine = llvm.Target.from_default_triple().create_target_machine(
         cpu=llvm.get_host_cpu_name(), features=llvm.get_host_cpu_features().flatten(), opt=3
     )
-    module = llvm.parse_assembly(forward_ir())
+    module = llvm.parse_assembly(forward_ir(with_backward))
     module.verify()
     builder = llvm.create_pass_builder(machine, llvm.create_pipeline_tuning_options(speed_level=3))
     builder.getModulePassManager().run(module, builder)
     engine = llvm.create_mcjit_compiler(module, machine)
     engine.finalize_object()
     pointer = ctypes.c_void_p
-    signature = ctypes.CFUNCTYPE(None, ctypes.c_int64, *[pointer] * 9)
+    signature = ctypes.CFUNCTYPE(None, ctypes.c_int64, *[pointer] * (17 if with_backward else 9))
     return signature(engine.get_function_address("forward")), engine
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=str(__doc__).splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=30, help="timed calls of 100 passes each")
-    args = parser.parse_args()
-    try:
-        forward, engine = compiled_forward()
-    except ModuleNotFoundError:
-        raise SystemExit("kernel_probe: needs llvmlite (.venv/bin/pip install llvmlite)") from None
-    rng = np.random.default_rng(0)
-    pre = rng.normal(size=(L, H)).astype(np.float32)
-    mask = np.zeros((L, IP), np.float32)
-    mask[:, :IO] = rng.random((L, IO)) > 0.1
-    w_loop = (rng.normal(size=(IO, H)) * 0.3).astype(np.float32)
-    w_out = np.zeros((H, IP), np.float32)
-    w_out[:, :IO] = rng.normal(size=(H, IO)) * 0.3
-    b_out = np.zeros(IP, np.float32)
-    b_out[:IO] = rng.normal(size=IO)
-    first = np.zeros(IP, np.float32)
-    first[:IO] = rng.random(IO)
-    out, hid, x = (
-        np.zeros((L, IP), np.float32),
-        np.zeros((L, H), np.float32),
-        np.zeros(IP, np.float32),
-    )
-    arrays = (pre, mask, w_loop, w_out, b_out, first, out, hid, x)
-    pointers = [a.ctypes.data_as(ctypes.c_void_p) for a in arrays]
-    forward(1, *pointers)
-
-    reference = np.zeros((L, IO))
-    inputs = first[:IO] * mask[0, :IO]
-    for t in range(L):
-        if t:
-            inputs = reference[t - 1] * mask[t, :IO]
-        hidden = 1 / (1 + np.exp(-(pre[t] + inputs @ w_loop)))
-        reference[t] = 1 / (1 + np.exp(-(hidden @ w_out[:, :IO] + b_out[:IO])))
-
+def _window(model_path: str | None):
+    """A real window: the model's mirror system after 40 steps of the demonstrator's first
+    pattern and one more observation shifted in; the project's regression loop over it (100
+    iterations of ``window.gradients`` and the PB update, as ``online_step`` runs them); and the
+    IR's arrays for the same window."""
     from rnnpb import _xla
 
     _xla.single_threaded()
     _xla.configure()
     import jax
+    import jax.numpy as jnp
+
+    from rnnpb.demonstrator import held_scenario
+    from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel, window
+    from rnnpb.model import online as online_module
+    from rnnpb.model.parametric_bias import pb_update
+    from rnnpb.models import SHIPPED_MODEL
+
+    model = TrainedModel.load(model_path or SHIPPED_MODEL)
+    config = OnlineConfig.for_model(model).config
+    mirror = MirrorSystem(model, config)
+    hands = held_scenario(model.patterns[0], n_steps=42, seed=3).sensory
+    for u in hands[:-1]:
+        mirror.step(u)
+    u, seen = hands[-1].astype(np.float32), np.isfinite(hands[-1])
+    state = online_module._shift_in(mirror._state, jnp.asarray(u), jnp.asarray(seen))
+    params = mirror._params
+    length = state.sensory.shape[0]
+    valid = jnp.arange(length) < state.n
 
     @jax.jit
-    def xla_forward(pre, mask, w_loop, w_out, b_out, first):
-        def step(previous, xs):
-            pre_t, mask_t = xs
-            hidden = jax.nn.sigmoid(pre_t + (previous * mask_t) @ w_loop)
-            output = jax.nn.sigmoid(hidden @ w_out + b_out)
-            return output, output
+    def project_loop(state):
+        def iteration(_, carry):
+            rho, velocity, context, motor = carry
+            g_rho, g_context, g_motor = window.gradients(params, state, rho, context, motor, config)
+            rho, velocity = pb_update(rho, velocity, g_rho, config.pb, valid)
+            context = context - config.onset_learning_rate * g_context
+            motor = motor - config.onset_learning_rate * g_motor
+            return rho, velocity, context, motor
 
-        def one_pass(_, start):  # each pass starts from the last one's last output
-            _, outputs = jax.lax.scan(step, start, (pre, mask), unroll=5)
-            return outputs[-1]
+        start = (state.rho, state.rho_velocity, state.onset_context, state.onset_motor)
+        return jax.lax.fori_loop(0, 100, iteration, start)
 
-        return jax.lax.fori_loop(0, 100, one_pass, first)
+    # The IR's arrays (rnnpb.model.window._window_terms, in NumPy)
+    n_s, n_m = model.network.sensory_size, model.network.motor_size
+    n_p = model.network.pb_size
+    w_in, w_out_full = np.asarray(params.w_in), np.asarray(params.w_out)
+    w_u, w_m = w_in[:n_s], w_in[n_s : n_s + n_m]
+    w_p, w_c = w_in[n_s + n_m : n_s + n_m + n_p], w_in[n_s + n_m + n_p :]
+    sensory, rho = np.asarray(state.sensory), np.asarray(state.rho)
+    n = int(state.n)
+    seen_w = np.asarray(state.seen) & (np.arange(length) < n)[:, None]
+    pre = np.where(seen_w, sensory, 0.0) @ w_u + (1 / (1 + np.exp(-rho))) @ w_p
+    pre = (pre + np.asarray(params.b_h)).astype(np.float32)
+    closed = config.motor_input == "closed_loop"
+    mask = np.zeros((L, IP), np.float32)
+    mask[:, :n_s] = ~seen_w
+    mask[:, n_s : n_s + n_m] = 1.0 if closed else 0.0
+    mask[:, n_s + n_m : IO] = 1.0
+    first = np.zeros(IP, np.float32)
+    first[:n_s] = 0.5
+    first[n_s : n_s + n_m] = 1 / (1 + np.exp(-np.asarray(state.onset_motor)))
+    first[n_s + n_m : IO] = 1 / (1 + np.exp(-np.asarray(state.onset_context)))
+    w_loop = np.concatenate([w_u, w_m, w_c]).astype(np.float32)
+    w_out = np.zeros((H, IP), np.float32)
+    w_out[:, :IO] = w_out_full
+    b_out = np.zeros(IP, np.float32)
+    b_out[:IO] = np.asarray(params.b_out)
+    target = np.zeros((L, IP), np.float32)
+    target[:-1, :n_s] = sensory[1:]
+    target_mask = np.zeros((L, IP), np.float32)
+    steps = np.arange(L - 1) < n - 1
+    target_mask[:-1, :n_s] = steps[:, None] & np.asarray(state.seen)[1:]
+    arrays = (pre, mask, w_loop, w_out, b_out, first, target, target_mask)
+    return (lambda: jax.block_until_ready(project_loop(state))), arrays
 
-    xla_args = (pre, mask[:, :IO], w_loop, w_out[:, :IO], b_out[:IO], first[:IO])
-    jax.block_until_ready(xla_forward(*xla_args))
-    ir_times, xla_times = [], []
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=str(__doc__).splitlines()[0])
+    parser.add_argument("--model", help="a learned model (default: the shipped one)")
+    parser.add_argument("--repeats", type=int, default=30, help="timed calls of 100 passes each")
+    args = parser.parse_args()
+    try:
+        forward, forward_engine = compiled_forward()
+        both, both_engine = compiled_forward(with_backward=True)
+    except ModuleNotFoundError:
+        raise SystemExit("kernel_probe: needs llvmlite (.venv/bin/pip install llvmlite)") from None
+    project_loop, arrays = _window(args.model)
+    pre, mask, w_loop, w_out, b_out, first, target, target_mask = arrays
+    # The backward pass's arrays: the weights transposed, the next step's mask (none after
+    # the last), scratch.
+    w_out_t = np.ascontiguousarray(w_out[:, :IO].T)
+    w_loop_t = np.zeros((H, IP), np.float32)
+    w_loop_t[:, :IO] = w_loop.T
+    next_mask = np.zeros((L, IP), np.float32)
+    next_mask[:-1] = mask[1:]
+
+    def scratch():
+        return np.zeros((L, IP), np.float32), np.zeros((L, H), np.float32), np.zeros(IP, np.float32)
+
+    out, hid, x = scratch()
+    weights = (pre, mask, w_loop, w_out, b_out, first)
+    out_b, hid_b, x_b = scratch()
+    d_pre, g, dh = np.zeros((L, H), np.float32), np.zeros(IP, np.float32), np.zeros(H, np.float32)
+    both_arrays = (*weights, out_b, hid_b, x_b, w_out_t, w_loop_t, target, target_mask)
+    both_arrays = (*both_arrays, next_mask, d_pre, g, dh)
+
+    def pointers(arrays):
+        return [a.ctypes.data_as(ctypes.c_void_p) for a in arrays]
+
+    fwd_pointers, both_pointers = pointers((*weights, out, hid, x)), pointers(both_arrays)
+    forward(1, *fwd_pointers)
+    both(1, *both_pointers)
+
+    # float64 NumPy: the forward pass and the backward pass of the same window
+    ref_out, ref_hid = np.zeros((L, IO)), np.zeros((L, H))
+    inputs = first[:IO] * mask[0, :IO]
+    for t in range(L):
+        if t:
+            inputs = ref_out[t - 1] * mask[t, :IO]
+        ref_hid[t] = 1 / (1 + np.exp(-(pre[t] + inputs @ w_loop)))
+        ref_out[t] = 1 / (1 + np.exp(-(ref_hid[t] @ w_out[:, :IO] + b_out[:IO])))
+    ref_d_pre, d_input = np.zeros((L, H)), np.zeros(IO)
+    for t in range(L - 1, -1, -1):
+        error = (ref_out[t] - target[t, :IO]) * target_mask[t, :IO]
+        grad = (error + d_input * next_mask[t, :IO]) * ref_out[t] * (1 - ref_out[t])
+        ref_d_pre[t] = (grad @ w_out[:, :IO].T) * ref_hid[t] * (1 - ref_hid[t])
+        d_input = ref_d_pre[t] @ w_loop.T
+
+    project_loop()
+    times: dict[str, list[float]] = {"forward": [], "both": [], "project": []}
+    calls = {
+        "forward": lambda: forward(100, *fwd_pointers),
+        "both": lambda: both(100, *both_pointers),
+        "project": project_loop,
+    }
     for _ in range(args.repeats):  # alternately, so that the machine's state is shared
-        start = time.perf_counter()
-        forward(100, *pointers)
-        ir_times.append(time.perf_counter() - start)
-        start = time.perf_counter()
-        jax.block_until_ready(xla_forward(*xla_args))
-        xla_times.append(time.perf_counter() - start)
-    ir_ms, xla_ms = np.median(ir_times) * 1e3, np.median(xla_times) * 1e3
-    print(f"window forward pass x100, LLVM IR (8-wide vectors): {ir_ms:.3f} ms median")
-    print(f"the same in XLA:                                   {xla_ms:.3f} ms median")
-    print(f"ratio XLA / IR: {xla_ms / ir_ms:.2f}")
-    print(f"largest difference from float64 NumPy: {np.max(np.abs(out[:, :IO] - reference)):.2e}")
-    del engine
+        for name, call in calls.items():
+            start = time.perf_counter()
+            call()
+            times[name].append(time.perf_counter() - start)
+    ms = {name: float(np.median(t)) * 1e3 for name, t in times.items()}
+    print("100 passes over a real window (L = 30) on one core, medians:")
+    print(f"  forward pass, LLVM IR (8-wide vectors):           {ms['forward']:.3f} ms")
+    print(f"  forward and backward pass, LLVM IR:               {ms['both']:.3f} ms")
+    print(
+        f"  the regression loop (XLA: gradients, PB update): {ms['project']:.3f} ms "
+        f"({ms['project'] / ms['both']:.2f}x the IR's forward and backward)"
+    )
+    print(
+        "largest difference from float64 NumPy: outputs "
+        f"{np.max(np.abs(out[:, :IO] - ref_out)):.2e}, backward errors "
+        f"{np.max(np.abs(d_pre - ref_d_pre)):.2e} (largest {np.max(np.abs(ref_d_pre)):.2e})"
+    )
+    del forward_engine, both_engine
 
 
 if __name__ == "__main__":
