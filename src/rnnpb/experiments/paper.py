@@ -30,6 +30,7 @@ from rnnpb.model import (
     train,
 )
 from rnnpb.model.meta import MetaParams
+from rnnpb.model.recognition import RecognitionConfig
 from rnnpb.vectors import (
     MOTOR_NAMES,
     PREDICTED_PREFIX,
@@ -196,18 +197,12 @@ def run_scenarios(
     steering: str = "always",
     inhibition: bool = False,
 ) -> list[Run]:
-    """:func:`run_scenario` for each of ``scenarios``. Several run together, in sessions of
-    one batched call (:func:`rnnpb.model.run_streams`), unless the meta-level guards by
-    regime or inhibits (then one after the other): each run is what it would be alone, to the
-    rounding of a batched product. Batching pays once the runs hold :data:`BATCHED_STEPS`
-    steps in all: a batched step of a new width is compiled first, which costs seconds."""
-    steps = sum(scenario.n_steps for scenario in scenarios)
-    if steps < BATCHED_STEPS or len(scenarios) < 2 or steering != "always" or inhibition:
-        return [
-            run_scenario(model, scenario, online, joint_limits, meta, steering, inhibition)
-            for scenario in scenarios
-        ]
-    streams = run_streams(model, [scenario.sensory for scenario in scenarios], online, meta)
+    """:func:`run_scenario` for each of ``scenarios``, stepped by :func:`step_streams`: each
+    run is what it would be alone (to the rounding of a batched product when they run
+    together)."""
+    streams = step_streams(
+        model, [s.sensory for s in scenarios], online, meta, None, steering, inhibition
+    )
     return [
         _run(
             scenario,
@@ -220,6 +215,32 @@ def run_scenarios(
         )
         for scenario, results in zip(scenarios, streams, strict=True)
     ]
+
+
+def step_streams(
+    model: TrainedModel,
+    streams: Sequence[np.ndarray],
+    online: OnlineConfig,
+    meta: MetaParams | None = None,
+    recognition: RecognitionConfig | None = None,
+    steering: str = "always",
+    inhibition: bool = False,
+) -> list[list[StepResult]]:
+    """Each stream of observed hands, (T, 4), from a fresh start of the mirror system; each
+    one's step results. Together in sessions of one batched call
+    (:func:`rnnpb.model.run_streams`) once they hold :data:`BATCHED_STEPS` steps in all (a
+    batched step of a new width is compiled first, which costs seconds) and the meta-level
+    neither guards by regime nor inhibits; else one after the other in one mirror system,
+    reset before each."""
+    together = len(streams) > 1 and sum(len(stream) for stream in streams) >= BATCHED_STEPS
+    if together and steering == "always" and not inhibition:
+        return run_streams(model, streams, online, meta, recognition)
+    mirror = MirrorSystem(model, online, meta, recognition, steering, inhibition)
+    out = []
+    for stream in streams:
+        mirror.reset()
+        out.append([mirror.step(u) for u in stream])
+    return out
 
 
 def _predictions(results: Sequence[StepResult], size: int) -> np.ndarray:
@@ -644,13 +665,7 @@ def novel_responses(
     pattern = novel_pattern(learning_set)
     streams = [_repeated_cycle(pattern, amplitude, n_steps) for amplitude in amplitudes]
     streams += [novel_scenario(learning_set, n_steps=n_steps, seed=d).sensory for d in by_hand]
-    if sum(map(len, streams)) < BATCHED_STEPS or len(streams) < 2:  # see run_scenarios
-        results = []
-        for stream in streams:
-            mirror = MirrorSystem(model, online)
-            results.append([mirror.step(u) for u in stream])
-    else:
-        results = run_streams(model, streams, online)
+    results = step_streams(model, streams, online)
     cases = [(a, None) for a in amplitudes] + [(1.0, d) for d in by_hand]
     return [
         _classified_response(

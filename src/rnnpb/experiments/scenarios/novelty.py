@@ -89,25 +89,6 @@ def streams(
     return out
 
 
-def run_stream(
-    mirror: Any,
-    model_name: str,
-    kind: str,
-    movement: str,
-    seed: int,
-    start: int,
-    segments: list[tuple[str, int]],
-    speed: float = 1.0,
-) -> StreamRun:
-    """Play one generated stream through ``mirror`` (reset first), the user moving at
-    ``speed`` times the demonstrator's speed."""
-    scenario = _scenario(segments, seed, speed)
-    mirror.reset()
-    results = [mirror.step(u) for u in scenario.sensory]
-    case = (kind, movement, seed, start, speed)
-    return _stream_run(mirror.model, model_name, case, scenario, results)
-
-
 def run_streams_of(
     model: Any,
     config: Any,
@@ -116,20 +97,13 @@ def run_streams_of(
     cases: list[tuple[str, str, int, int, list[tuple[str, int]], float]],
 ) -> list[StreamRun]:
     """Every stream of ``cases`` (``(kind, movement, seed, start, segments, speed)``) from a
-    fresh mirror system of ``model``, in order: run together in one batched call
-    (:func:`rnnpb.model.run_streams`) when they hold enough steps to pay for it
-    (:data:`rnnpb.experiments.paper.BATCHED_STEPS`), else one after the other."""
-    from rnnpb.experiments.paper import BATCHED_STEPS
-    from rnnpb.model import MirrorSystem, run_streams
+    fresh start of ``model``'s mirror system, in order, stepped by
+    :func:`rnnpb.experiments.paper.step_streams` (together in one batched call when they hold
+    enough steps to pay for it)."""
+    from rnnpb.experiments.paper import step_streams
 
     scenarios = [_scenario(segments, seed, speed) for _, _, seed, _, segments, speed in cases]
-    if sum(s.n_steps for s in scenarios) < BATCHED_STEPS:
-        mirror = MirrorSystem(model, config, recognition=recognition)
-        return [
-            run_stream(mirror, model_name, kind, movement, seed, start, segments, speed)
-            for kind, movement, seed, start, segments, speed in cases
-        ]
-    results = run_streams(model, [s.sensory for s in scenarios], config, recognition=recognition)
+    results = step_streams(model, [s.sensory for s in scenarios], config, recognition=recognition)
     return [
         _stream_run(model, model_name, (kind, movement, seed, start, speed), scenario, steps)
         for (kind, movement, seed, start, _, speed), scenario, steps in zip(
