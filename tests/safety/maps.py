@@ -14,6 +14,12 @@ def constructed_map(model, centre, radius=0.2, familiarity_width=0.05):
     pbs = np.concatenate(
         [rng.uniform(size=(3000, 4)), np.clip(centre + rng.normal(0, 0.2, (1000, 4)), 0, 1)]
     )
+    return ball_map(model, pbs, centre, radius, familiarity_width, 2000, {"constructed": True})
+
+
+def ball_map(model, pbs, centre, radius, familiarity_width, iterations, note):
+    """A map of ``model`` learned from ``pbs``, explored, unsafe within ``radius`` of
+    ``centre``: the risk network fitted for ``iterations``."""
     unsafe = np.linalg.norm(pbs - centre, axis=1) < radius
     experience = Experience(
         pbs,
@@ -23,5 +29,5 @@ def constructed_map(model, centre, radius=0.2, familiarity_width=0.05):
         np.array(["explored"] * len(pbs)),
         {},
     )
-    meta = fit_meta(experience, MetaConfig(iterations=2000))
-    return new_map(model, meta, pbs, unsafe, familiarity_width, {"constructed": True})
+    meta = fit_meta(experience, MetaConfig(iterations=iterations))
+    return new_map(model, meta, pbs, unsafe, familiarity_width, note)

@@ -13,14 +13,12 @@ from rnnpb.errors import ModelFileError
 from rnnpb.model import OnlineConfig, TrainConfig, train
 from rnnpb.robot import JOINT_LIMITS
 from rnnpb.safety import (
-    Experience,
-    MetaConfig,
-    fit_meta,
-    new_map,
     online_safety,
     risk_views,
     safety_map_path,
 )
+
+from .maps import ball_map
 
 
 @pytest.fixture(scope="module")
@@ -34,18 +32,8 @@ def model_path(tmp_path_factory):
 
 
 def _map_around(model, centre, radius=0.35):
-    rng = np.random.default_rng(1)
-    pbs = rng.uniform(size=(1500, model.network.pb_size))
-    unsafe = np.linalg.norm(pbs - centre, axis=1) < radius
-    experience = Experience(
-        pbs,
-        unsafe,
-        unsafe.astype(float),
-        np.zeros(len(pbs), bool),
-        np.array(["explored"] * len(pbs)),
-        {},
-    )
-    return new_map(model, fit_meta(experience, MetaConfig(iterations=800)), pbs, unsafe, 0.08, {})
+    pbs = np.random.default_rng(1).uniform(size=(1500, model.network.pb_size))
+    return ball_map(model, pbs, centre, radius, 0.08, 800, {})
 
 
 def test_without_a_map_the_filter_alone_guards_and_off_means_neither(model_path):
