@@ -95,6 +95,51 @@ def _broadcast(scalar: str, name: str) -> list[str]:
     ]
 
 
+def _products(
+    name: str,
+    entry: str,
+    exit_: str,
+    count: int,
+    scalars: str,
+    weights: str,
+    width: int,
+    initial: list[str],
+    out: str,
+    scalar_row: str | None = None,
+) -> list[str]:
+    """IR lines: a loop over ``count`` rows that adds scalar x weights' row to
+    ``len(initial)`` 8-wide sums held in registers (phi values starting at ``initial``, last
+    values ``%{out}0``, ``%{out}1``, ...). The scalars are at ``scalars`` (from index
+    ``scalar_row`` when given), the rows of ``width`` floats at ``weights``; ``entry`` is the
+    block the loop is entered from, ``exit_`` the block it opens after."""
+    i = f"%{name}"
+    lines = [f"br label %{name}.loop", f"{name}.loop:"]
+    lines.append(f"{i} = phi i64 [0, %{entry}], [{i}.next, %{name}.loop]")
+    lines += [
+        f"%{name}s{v} = phi {V} [{start}, %{entry}], [%{out}{v}, %{name}.loop]"
+        for v, start in enumerate(initial)
+    ]
+    index = i
+    if scalar_row is not None:
+        index = f"{i}.row"
+        lines.append(f"{index} = add i64 {scalar_row}, {i}")
+    lines += [
+        f"{i}.p = getelementptr inbounds float, ptr {scalars}, i64 {index}",
+        f"{i}.s = load float, ptr {i}.p",
+        *_broadcast(f"{i}.s", f"{name}.b"),
+        f"{i}.w = mul i64 {i}, {width}",
+    ]
+    for v in range(len(initial)):
+        lines.append(f"{i}.wi{v} = add i64 {i}.w, {8 * v}")
+        lines += _load(f"{name}.wv{v}", weights, f"{i}.wi{v}")
+        lines.append(
+            f"%{out}{v} = call fast {V} @llvm.fma.v8f32({V} %{name}.b, {V} %{name}.wv{v}, "
+            f"{V} %{name}s{v})"
+        )
+    lines += [f"{i}.next = add i64 {i}, 1", f"{i}.done = icmp eq i64 {i}.next, {count}"]
+    return [*lines, f"br i1 {i}.done, label %{exit_}, label %{name}.loop", f"{exit_}:"]
+
+
 def forward_ir(with_backward: bool = False) -> str:
     """``forward(iters, pre, mask, w_loop, w_out, b_out, first, out, hid, x, ...)``: ``iters``
     forward passes of the window (the arrays as :func:`main` lays them out); with
@@ -117,36 +162,18 @@ def forward_ir(with_backward: bool = False) -> str:
     for v in range(HV):
         body.append(f"%pi{v} = add i64 %prow, {8 * v}")
         body += _load(f"pv{v}", "%pre", f"%pi{v}")
-    body += ["br label %kloop", "kloop:", "%k = phi i64 [0, %hidden], [%k.next, %kloop]"]
-    body += [f"%a{v} = phi {V} [%pv{v}, %hidden], [%an{v}, %kloop]" for v in range(HV)]
-    body += ["%xk.p = getelementptr inbounds float, ptr %x, i64 %k", "%xk = load float, ptr %xk.p"]
-    body += _broadcast("%xk", "xb") + [f"%wrow = mul i64 %k, {H}"]
-    for v in range(HV):  # the hidden layer's sums: five vectors in registers
-        body.append(f"%wi{v} = add i64 %wrow, {8 * v}")
-        body += _load(f"wv{v}", "%wl", f"%wi{v}")
-        body.append(f"%an{v} = call fast {V} @llvm.fma.v8f32({V} %xb, {V} %wv{v}, {V} %a{v})")
-    body += ["%k.next = add i64 %k, 1", f"%kdone = icmp eq i64 %k.next, {IO}"]
-    body += ["br i1 %kdone, label %hsig, label %kloop", "hsig:"]
+    # the hidden layer's sums: five vectors in registers
+    sums = [f"%pv{v}" for v in range(HV)]
+    body += _products("k", "hidden", "hsig", IO, "%x", "%wl", H, sums, "an")
     for v in range(HV):
         body += _sigmoid(f"%an{v}", f"hs{v}") + [f"%hi{v} = add i64 %prow, {8 * v}"]
         body += _store(f"%hs{v}r", "%hid", f"%hi{v}", f"hst{v}")
     for v in range(IV):
         body += _load(f"bv{v}", "%bo", str(8 * v))
-    body += ["br label %jloop", "jloop:", "%j = phi i64 [0, %hsig], [%j.next, %jloop]"]
-    body += [f"%o{v} = phi {V} [%bv{v}, %hsig], [%on{v}, %jloop]" for v in range(IV)]
-    body += [
-        "%hj.i = add i64 %prow, %j",
-        "%hj.p = getelementptr inbounds float, ptr %hid, i64 %hj.i",
-    ]
-    body += (
-        ["%hj = load float, ptr %hj.p"] + _broadcast("%hj", "hb") + [f"%worow = mul i64 %j, {IP}"]
-    )
-    for v in range(IV):  # the outputs' sums: six vectors in registers
-        body.append(f"%woi{v} = add i64 %worow, {8 * v}")
-        body += _load(f"wov{v}", "%wo", f"%woi{v}")
-        body.append(f"%on{v} = call fast {V} @llvm.fma.v8f32({V} %hb, {V} %wov{v}, {V} %o{v})")
-    body += ["%j.next = add i64 %j, 1", f"%jdone = icmp eq i64 %j.next, {H}"]
-    body += ["br i1 %jdone, label %osig, label %jloop", "osig:", f"%outrow = mul i64 %t, {IP}"]
+    # the outputs' sums: six vectors in registers
+    sums = [f"%bv{v}" for v in range(IV)]
+    body += _products("j", "hsig", "osig", H, "%hid", "%wo", IP, sums, "on", scalar_row="%prow")
+    body += [f"%outrow = mul i64 %t, {IP}"]
     for v in range(IV):
         body += _sigmoid(f"%on{v}", f"os{v}") + [f"%ooi{v} = add i64 %outrow, {8 * v}"]
         body += _store(f"%os{v}r", "%out", f"%ooi{v}", f"ost{v}")
@@ -203,16 +230,8 @@ def _backward() -> list[str]:
             f"%bg{v} = fmul fast {V} %bc{v}, %bs{v}",
         ]
         body += _store(f"%bg{v}", "%g", str(8 * v), f"bgs{v}")
-    body += ["br label %ib.loop", "ib.loop:", "%ib = phi i64 [0, %bstep], [%ib.next, %ib.loop]"]
-    body += [f"%h{v} = phi {V} [{zero}, %bstep], [%hn{v}, %ib.loop]" for v in range(HV)]
-    body += ["%gi.p = getelementptr inbounds float, ptr %g, i64 %ib", "%gi = load float, ptr %gi.p"]
-    body += [*_broadcast("%gi", "gb"), f"%wtrow = mul i64 %ib, {H}"]
-    for v in range(HV):  # d_hidden = g @ w_out.T
-        body.append(f"%wti{v} = add i64 %wtrow, {8 * v}")
-        body += _load(f"wtv{v}", "%wot", f"%wti{v}")
-        body.append(f"%hn{v} = call fast {V} @llvm.fma.v8f32({V} %gb, {V} %wtv{v}, {V} %h{v})")
-    body += ["%ib.next = add i64 %ib, 1", f"%ibdone = icmp eq i64 %ib.next, {IO}"]
-    body += ["br i1 %ibdone, label %hb.done, label %ib.loop", "hb.done:"]
+    # d_hidden = g @ w_out.T
+    body += _products("ib", "bstep", "hb.done", IO, "%g", "%wot", H, [zero] * HV, "hn")
     for v in range(HV):  # times h (1 - h): the error at the hidden layer's input
         body.append(f"%hbi{v} = add i64 %hrow, {8 * v}")
         body += _load(f"hv{v}", "%hid", f"%hbi{v}")
@@ -223,19 +242,8 @@ def _backward() -> list[str]:
         ]
         body += _store(f"%dp{v}", "%dpre", f"%hbi{v}", f"dps{v}")
         body += _store(f"%dp{v}", "%dh", str(8 * v), f"dhs{v}")
-    body += ["br label %jb.loop", "jb.loop:", "%jb = phi i64 [0, %hb.done], [%jb.next, %jb.loop]"]
-    body += [f"%d{v} = phi {V} [{zero}, %hb.done], [%dn{v}, %jb.loop]" for v in range(IV)]
-    body += [
-        "%dj.p = getelementptr inbounds float, ptr %dh, i64 %jb",
-        "%dj = load float, ptr %dj.p",
-    ]
-    body += [*_broadcast("%dj", "db"), f"%ltrow = mul i64 %jb, {IP}"]
-    for v in range(IV):  # d_input = d_hidden @ w_loop.T
-        body.append(f"%lti{v} = add i64 %ltrow, {8 * v}")
-        body += _load(f"ltv{v}", "%wlt", f"%lti{v}")
-        body.append(f"%dn{v} = call fast {V} @llvm.fma.v8f32({V} %db, {V} %ltv{v}, {V} %d{v})")
-    body += ["%jb.next = add i64 %jb, 1", f"%jbdone = icmp eq i64 %jb.next, {H}"]
-    body += ["br i1 %jbdone, label %bend, label %jb.loop", "bend:"]
+    # d_input = d_hidden @ w_loop.T
+    body += _products("jb", "hb.done", "bend", H, "%dh", "%wlt", IP, [zero] * IV, "dn")
     body += ["%bt.next = sub i64 %bt, 1", "%btdone = icmp eq i64 %bt, 0"]
     body += ["br i1 %btdone, label %iter.end, label %bstep"]
     return body
