@@ -28,8 +28,9 @@ single-threaded, after warm-up:
     window, the projection, and the meta-level as an on-line run has it: the barrier only
     where the PB drives the motion, the regime and the inhibition check every step);
   - side by side in the same run, each as median, 99th percentile and ratio to the first:
-    the step with the paper's regression, with the default one, with the default one and its
-    detectors and the safety guard (barrier and command filter), the step per session
+    the step with the paper's regression, with the default one, the default one with its
+    regression loop in JAX rather than native code (rnnpb.model.native), with the default one
+    and its detectors and the safety guard (barrier and command filter), the step per session
     of 16 sessions stepped in one call (rnnpb.model.BatchedMirror), with the ratio of the
     16 sessions' call to one default step, and the two-level step (docs/routines.md: the
     shipped model's own step with the prior from the routine level above it, then the
@@ -116,6 +117,7 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb.model import (
         MIRROR_SYSTEMS,
         BatchedMirror,
+        MirrorSystem,
         NetworkConfig,
         OnlineConfig,
         TrainConfig,
@@ -188,6 +190,9 @@ def run(args: argparse.Namespace) -> int:
     compiled = MIRROR_SYSTEMS["compiled"]
     mirror = compiled(model, online)
     plain = compiled(model, online.with_tuning(phase_restarts=0))
+    # The default step with its regression loop in JAX as well (rnnpb.model.native's
+    # reference), side by side with the native loop.
+    whole_jax = MirrorSystem(model, online, native=False)
     # The safety-on steps: a risk network of the stored size (its weights do not change the
     # cost) guarding the regression — the barrier on the newest steps (the default span), the
     # barrier on the whole window, the projection — and the command filter before sending.
@@ -223,11 +228,13 @@ def run(args: argparse.Namespace) -> int:
         due = two_level.step(routine_stream[t % len(routine_stream)]).higher.switch_due
         mirror.step(stream[t])
         plain.step(stream[t])
+        whole_jax.step(stream[t])
         paper.step(stream[t])
         batched.step(session_hands(t))
         for system in guarded.values():
             command_filter(system.step(stream[t]).motor)
     step_times, plain_times, paper_times, batched_times = [], [], [], []
+    jax_times: list[float] = []
     two_level_times: list[float] = []
     follower_times.clear()
     prior_steps = 0
@@ -238,7 +245,12 @@ def run(args: argparse.Namespace) -> int:
     filter_times: dict[str, list[float]] = {name: [] for name in guarded}
     for t in range(args.steps):
         u = stream[(40 + t) % len(stream)]
-        for system, times in ((mirror, step_times), (plain, plain_times), (paper, paper_times)):
+        for system, times in (
+            (mirror, step_times),
+            (plain, plain_times),
+            (whole_jax, jax_times),
+            (paper, paper_times),
+        ):
             t0, c0 = time.perf_counter(), time.process_time()
             system.step(u)
             times.append((time.perf_counter() - t0) * 1e3)
@@ -292,6 +304,7 @@ def run(args: argparse.Namespace) -> int:
     side_by_side = {
         "paper": np.asarray(paper_times),
         "default": step_times,
+        "default_jax": np.asarray(jax_times),
         "default_guarded": guarded_with_filter,
         "batched_per_session": np.asarray(batched_times) / BATCHED_SESSIONS,
         "two_level": np.asarray(two_level_times),
@@ -409,6 +422,7 @@ def run(args: argparse.Namespace) -> int:
     labels = {
         "paper": "the paper's regression",
         "default": "the default",
+        "default_jax": "the default, its loop in JAX",
         "default_guarded": "default, detectors, guard and filter",
         "batched_per_session": f"per session of {BATCHED_SESSIONS} in one call",
         "two_level": "two levels (routines, with the prior)",

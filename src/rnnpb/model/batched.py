@@ -1,11 +1,13 @@
 """Many sessions in one call: :class:`BatchedMirror` steps ``B`` independent interactions with
-the same trained model (users, draws, seeds) through one compiled call per step.
+the same trained model (users, draws, seeds) in one step.
 
 Each session is what a :class:`rnnpb.model.MirrorSystem` of the same model and settings would
 be: its own window, PB, onset and recognition, started from its own initial PB. The compiled
 step is :func:`rnnpb.model.online.online_step` mapped over the sessions (``jax.vmap`` over the
-state and the observations; the weights, restarts and settings are shared), and its outputs
-come back to the host in one transfer, as a (B, packed) array; recognition then runs on the
+state and the observations; the weights, restarts and settings are shared) — with the native
+loop (:mod:`rnnpb.model.native`), its parts before and after the loop are, and each session's
+loop runs in turn between the two calls — and its outputs come back to the host in one
+transfer, as a (B, packed) array; recognition then runs on the
 host for each session, as in ``MirrorSystem``. ``tests/model/test_batched.py`` holds it to
 ``B`` separate mirror systems step by step.
 
@@ -26,9 +28,16 @@ import numpy as np
 from rnnpb.errors import ConfigError
 from rnnpb.model.io import TrainedModel
 from rnnpb.model.meta import MetaParams
-from rnnpb.model.mirror import MirrorSystem, StepResult, _online_step_packed, normalized_hands
+from rnnpb.model.mirror import (
+    MirrorSystem,
+    StepResult,
+    _conclude_packed,
+    _online_step_packed,
+    normalized_hands,
+)
+from rnnpb.model.native import step_start
 from rnnpb.model.network import Params
-from rnnpb.model.online import OnlineState, initial_state
+from rnnpb.model.online import OnlineState, Regressed, initial_state
 from rnnpb.model.online_config import OnlineConfig
 from rnnpb.model.recognition import (
     RecognitionConfig,
@@ -70,6 +79,48 @@ def _batched_step_packed(
     return jax.vmap(one)(states, u, seen)
 
 
+@partial(jax.jit, static_argnames=("config",))
+def _batched_prepare(
+    params: Params,
+    states: OnlineState,
+    u: jax.Array,
+    seen: jax.Array,
+    config: OnlineConfig,
+    candidates: jax.Array | None,
+    phase_candidates: jax.Array | None,
+) -> tuple[OnlineState, jax.Array]:
+    """Every session's step before its regression, and its block for the native kernel
+    (:func:`rnnpb.model.native.prepare_block` mapped over the sessions)."""
+
+    def one(state: OnlineState, u_b: jax.Array, seen_b: jax.Array) -> tuple[OnlineState, jax.Array]:
+        return step_start(params, state, u_b, seen_b, config, candidates, phase_candidates)
+
+    return jax.vmap(one)(states, u, seen)
+
+
+@partial(jax.jit, static_argnames=("config", "recognition_steps"))
+def _batched_conclude(
+    params: Params,
+    previous: OnlineState,
+    states: OnlineState,
+    regressed: Regressed[np.ndarray],
+    config: OnlineConfig,
+    meta: MetaParams | None,
+    pattern_rho: jax.Array | None,
+    recognition_steps: int,
+) -> tuple[OnlineState, jax.Array]:
+    """Every session's step after its native regression; the packed outputs (B, packed)."""
+
+    def one(
+        before: OnlineState, state: OnlineState, result: Regressed[np.ndarray]
+    ) -> tuple[OnlineState, jax.Array]:
+        return _conclude_packed(
+            params, before, state, result, config, meta, pattern_rho, recognition_steps
+        )
+
+    return jax.vmap(one)(previous, states, regressed)
+
+
 class BatchedMirror:
     """``sessions`` independent on-line interactions with one trained model, stepped together.
 
@@ -85,6 +136,10 @@ class BatchedMirror:
     initial_pb : array, shape (B, P), optional
         Each session's PB at its start (default: the centre of the learned PBs, as
         ``MirrorSystem``).
+    native : bool
+        As for ``MirrorSystem``: each session's regression loop in native code, one session
+        after the other, between two compiled calls for all sessions; False: the whole step
+        of every session in one compiled JAX call.
     """
 
     def __init__(
@@ -95,12 +150,13 @@ class BatchedMirror:
         meta: MetaParams | None = None,
         recognition: RecognitionConfig | None = None,
         initial_pb: np.ndarray | None = None,
+        native: bool = True,
     ) -> None:
         if isinstance(sessions, bool) or not isinstance(sessions, int) or sessions < 1:
             raise ConfigError(f"sessions must be a whole number >= 1, got {sessions!r:.40}")
         # One mirror system holds what the sessions share (weights, restarts, settings) and
         # does each session's host side; the sessions' own state is kept here.
-        self._shared = MirrorSystem(model, config, meta, recognition)
+        self._shared = MirrorSystem(model, config, meta, recognition, native=native)
         self.model = model
         self.config = self._shared.config
         self.recognition = self._shared.recognition
@@ -178,18 +234,34 @@ class BatchedMirror:
         u = np.stack([h[0] for h in hands])
         seen = np.stack([h[1] for h in hands])
         shared = self._shared
-        self._states, packed = _batched_step_packed(
-            shared._params,
-            self._states,
-            u.astype(np.float32),
-            seen,
-            self.config,
-            shared._candidates,
-            shared._phase_candidates,
-            shared._meta,
-            shared._pattern_rho,
-            self.recognition.recognition_steps,
-        )
+        arguments = (shared._params, self._states, u.astype(np.float32), seen, self.config)
+        native = shared._native
+        if native is not None and native.applies(shared._meta):
+            starts, blocks = _batched_prepare(
+                *arguments, shared._candidates, shared._phase_candidates
+            )
+            # The kernel runs each session's loop in turn (it is single-threaded native code).
+            sessions = [native(block) for block in np.asarray(blocks)]
+            regressed = Regressed(*(np.stack(part) for part in zip(*sessions, strict=True)))
+            self._states, packed = _batched_conclude(
+                shared._params,
+                self._states,
+                starts,
+                regressed,
+                self.config,
+                shared._meta,
+                shared._pattern_rho,
+                self.recognition.recognition_steps,
+            )
+        else:
+            self._states, packed = _batched_step_packed(
+                *arguments,
+                shared._candidates,
+                shared._phase_candidates,
+                shared._meta,
+                shared._pattern_rho,
+                self.recognition.recognition_steps,
+            )
         packed = np.asarray(packed, dtype=np.float64)
         results = []
         for b in range(self.sessions):

@@ -24,10 +24,13 @@ from rnnpb import _xla
 from rnnpb.errors import ConfigError
 from rnnpb.model.io import TrainedModel
 from rnnpb.model.meta import MetaLevel, MetaParams, regime_of
+from rnnpb.model.native import NativeRegression, native_regression, prepare_block
 from rnnpb.model.network import NetworkConfig, Params, logit_numpy
 from rnnpb.model.online import (
     OnlineState,
+    Regressed,
     StepOutputs,
+    conclude,
     initial_state,
     online_step,
     phase_candidates,
@@ -176,6 +179,25 @@ def _online_step_packed(
     return state, pack(outputs)
 
 
+@partial(jax.jit, static_argnames=("config", "recognition_steps"))
+def _conclude_packed(
+    params: Params,
+    previous: OnlineState,
+    state: OnlineState,
+    regressed: Regressed[jax.Array] | Regressed[np.ndarray],
+    config: OnlineConfig,
+    meta: MetaParams | None = None,
+    pattern_rho: jax.Array | None = None,
+    recognition_steps: int = 12,
+) -> tuple[OnlineState, jax.Array]:
+    """:func:`rnnpb.model.online.conclude` with its outputs packed into one vector: the step
+    after a native regression (:mod:`rnnpb.model.native`)."""
+    state, outputs = conclude(
+        params, previous, state, regressed, config, meta, pattern_rho, recognition_steps
+    )
+    return state, pack(outputs)
+
+
 def normalized_hands(values: object, sensory_size: int) -> tuple[np.ndarray, np.ndarray]:
     """Check a step's observed hands; return them normalized (clipped to [0, 1], 0 where not
     seen), shape (S,), and which were seen (finite), shape (S,)."""
@@ -251,6 +273,7 @@ class MirrorSystem:
         recognition: RecognitionConfig | None = None,
         steering: str = "always",
         inhibition: bool = False,
+        native: bool = True,
     ) -> None:
         """``meta``: the risk network of a safety map (``rnnpb.safety.SafetyMap.meta``); the
         regression uses it as ``config.safety_guard`` says. Without it the guard is off.
@@ -259,7 +282,10 @@ class MirrorSystem:
         ``steering`` and ``inhibition``: where the guard acts and whether a recognised
         unsafe PB's command is held while following (:class:`rnnpb.model.meta.MetaLevel`;
         only with ``meta``). The defaults keep the guard at every step and never inhibit;
-        ``rnnpb.safety.online_safety`` gives the meta-level's (``"pb_driven"``, True)."""
+        ``rnnpb.safety.online_safety`` gives the meta-level's (``"pb_driven"``, True).
+        ``native``: the regression's loop in native code where it can run
+        (:mod:`rnnpb.model.native`); False keeps the whole step in compiled JAX, the reference
+        the native loop is held to."""
         _xla.warn_if_not_configured()  # once per process, if nobody chose XLA's loop setting
         self.model = model
         self.config = config or OnlineConfig()
@@ -288,6 +314,11 @@ class MirrorSystem:
         )
         self.meta_level = (
             None if meta is None else MetaLevel(meta, self.config.risk_level, steering, inhibition)
+        )
+        # The regression's loop in native code where it can run (rnnpb.model.native); None:
+        # the whole step is the compiled JAX one.
+        self._native: NativeRegression | None = (
+            native_regression(self._params, model.network, self.config) if native else None
         )
         self.steps = 0
 
@@ -379,18 +410,29 @@ class MirrorSystem:
         u, seen = normalized_hands(observed_hands, self.model.network.sensory_size)
         # NumPy inputs go to the compiled step as they are and all outputs come back in one
         # transfer: at a few milliseconds a step, per-array round trips are worth avoiding.
-        self._state, packed = _online_step_packed(
-            self._params,
-            self._state,
-            u.astype(np.float32),
-            seen,
-            self.config,
-            candidates,
-            self._phase_candidates,
-            self._meta if self.meta_level is None or self.meta_level.steers() else None,
-            self._pattern_rho,
-            self.recognition.recognition_steps,
-        )
+        meta = self._meta if self.meta_level is None or self.meta_level.steers() else None
+        arguments = (self._params, self._state, u.astype(np.float32), seen, self.config)
+        if self._native is not None and self._native.applies(meta):
+            start, block = prepare_block(*arguments, candidates, self._phase_candidates)
+            self._state, packed = _conclude_packed(
+                self._params,
+                self._state,
+                start,
+                self._native(block),
+                self.config,
+                meta,
+                self._pattern_rho,
+                self.recognition.recognition_steps,
+            )
+        else:
+            self._state, packed = _online_step_packed(
+                *arguments,
+                candidates,
+                self._phase_candidates,
+                meta,
+                self._pattern_rho,
+                self.recognition.recognition_steps,
+            )
         result, self._recognition, self._predicted = self._finish(
             np.asarray(packed, dtype=np.float64), u, seen, self._recognition, self._predicted
         )

@@ -317,7 +317,23 @@ def online_step(
     state : OnlineState
     outputs : StepOutputs
     """
-    previous = state
+    start, gate = prepare(params, state, u, seen, config, candidates, phase_candidates)
+    regressed = regression(params, start, gate, config, meta)
+    return conclude(params, state, start, regressed, config, meta, pattern_rho, recognition_steps)
+
+
+def prepare(
+    params: Params,
+    state: OnlineState,
+    u: jax.Array,
+    seen: jax.Array,
+    config: OnlineConfig,
+    candidates: jax.Array | None = None,
+    phase_candidates: jax.Array | None = None,
+) -> tuple[OnlineState, jax.Array | None]:
+    """The step before its regression (arguments as for :func:`online_step`): the new
+    observation shifted in, the phase restarts and the restarts tried; returns the state the
+    regression starts from and the surprise gate's factor (None when the gate is off)."""
     state = _shift_in(state, u, seen)
     if phase_candidates is not None and config.phase_restarts > 0:
         state = _phase_restart(params, state, phase_candidates, config)
@@ -346,8 +362,31 @@ def online_step(
                 best > 0, jnp.zeros_like(state.rho_velocity), state.rho_velocity
             ),
         )
+    return state, _surprise_gate(params, state, config)
 
-    gate = _surprise_gate(params, state, config)
+
+class Regressed(NamedTuple, Generic[_Values]):
+    """What the regression's loop gives (from JAX, or NumPy from :mod:`rnnpb.model.native`):
+    the PB profile, its momentum, the onset (logits)."""
+
+    rho: _Values  # (L, P)
+    velocity: _Values  # (L, P)
+    onset_context: _Values  # (C,)
+    onset_motor: _Values  # (M,)
+
+
+def regression(
+    params: Params,
+    state: OnlineState,
+    gate: jax.Array | None,
+    config: OnlineConfig,
+    meta: MetaParams | None = None,
+) -> Regressed[jax.Array]:
+    """The regression's loop (eqs. 1–3, ``config.iterations`` times) from the state
+    :func:`prepare` gives; with ``meta`` and the guard "barrier", the barrier's gradient joins
+    the PB's. :mod:`rnnpb.model.native` is its twin in native code."""
+    length = state.sensory.shape[0]
+    valid = jnp.arange(length) < state.n
     guard = config.safety_guard if meta is not None else "off"
     barrier = None
     if guard == "barrier" and config.barrier_weight > 0:
@@ -367,12 +406,33 @@ def online_step(
             motor = motor - config.onset_learning_rate * g_motor
         return rho, velocity, context, motor
 
-    rho, velocity, context, motor = jax.lax.fori_loop(
-        0,
-        config.iterations,
-        iteration,
-        (state.rho, state.rho_velocity, state.onset_context, state.onset_motor),
+    return Regressed(
+        *jax.lax.fori_loop(
+            0,
+            config.iterations,
+            iteration,
+            (state.rho, state.rho_velocity, state.onset_context, state.onset_motor),
+        )
     )
+
+
+def conclude(
+    params: Params,
+    previous: OnlineState,
+    state: OnlineState,
+    regressed: Regressed[jax.Array] | Regressed[np.ndarray],
+    config: OnlineConfig,
+    meta: MetaParams | None = None,
+    pattern_rho: jax.Array | None = None,
+    recognition_steps: int = 12,
+) -> tuple[OnlineState, StepOutputs[jax.Array]]:
+    """The step after its regression: the projection guard, the window run with the
+    regressed profile and onset, the outputs and recognition's evidence, and the numerical
+    hold. ``previous``: the state before the step; ``state``: the one :func:`prepare` gave."""
+    length = state.sensory.shape[0]
+    valid = jnp.arange(length) < state.n
+    guard = config.safety_guard if meta is not None else "off"
+    rho, velocity, context, motor = (jnp.asarray(part) for part in regressed)
     if guard == "projection":
         assert meta is not None  # the guard is "off" without it
         rho = jnp.where(
