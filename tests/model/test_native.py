@@ -9,19 +9,21 @@ import pytest
 
 from rnnpb.model import MirrorSystem, NetworkConfig, OnlineConfig
 from rnnpb.model import native as native_module
+from rnnpb.model.meta import MetaParams
 from rnnpb.model.native import NativeRegression, native_regression, prepare_block
 from rnnpb.model.network import init_params
 from rnnpb.model.online import OnlineState, regression
 from rnnpb.model.parametric_bias import PBUpdateConfig
+from rnnpb.safety import init_meta
 
 from .synthetic import make_sequences
 
 _jax_regression = jax.jit(regression, static_argnames=("config",))
 
 
-def _assert_same_regression(kernel, params, start, block, gate, config) -> None:
-    expected = _jax_regression(params, start, gate, config)
-    got = kernel(block)
+def _assert_same_regression(kernel, params, start, block, gate, config, meta=None) -> None:
+    expected = _jax_regression(params, start, gate, config, meta)
+    got = kernel(block, meta)
     for name, want, have in zip(expected._fields, expected, got, strict=True):
         want = np.asarray(want)
         assert have.shape == want.shape, name
@@ -63,6 +65,35 @@ def test_the_kernel_is_the_jax_loop_on_a_real_window(trained, setting):
         assert 0 < float(gate) <= 1
     kernel = NativeRegression(mirror._params, trained.network, config)
     _assert_same_regression(kernel, mirror._params, start, block, gate, config)
+
+
+@pytest.mark.parametrize("span", [1, 0])
+def test_the_kernel_holds_the_safety_barrier(trained, span):
+    # A random risk network: the barrier moves the PB well away from where the error alone
+    # takes it.
+    meta = MetaParams(*(jnp.asarray(a) for a in init_meta(trained.network.pb_size, 32, 0)))
+    config = replace(OnlineConfig(), safety_guard="barrier").with_tuning(barrier_span=span)
+    mirror = MirrorSystem(trained, config, native=False)
+    demo = make_sequences(n_samples=1, n_steps=41, seed=4, kinds=(0,))[0]
+    for u in demo.sensory[:40]:
+        mirror.step(u)
+    u = demo.sensory[40].astype(np.float32)
+    start, block = prepare_block(
+        mirror._params,
+        mirror._state,
+        u,
+        np.isfinite(u),
+        config,
+        mirror._candidates,
+        mirror._phase_candidates,
+    )
+    kernel = NativeRegression(mirror._params, trained.network, config, meta)
+    assert kernel.applies(meta) and kernel.applies(None)
+    gate = jnp.asarray(np.asarray(block)[0])  # the default regression is gated
+    _assert_same_regression(kernel, mirror._params, start, block, gate, config, meta)
+    unguarded = kernel(block, None)
+    assert np.max(np.abs(kernel(block, meta).rho - unguarded.rho)) > 0.1
+    _assert_same_regression(kernel, mirror._params, start, block, gate, config, None)
 
 
 def test_the_kernel_pads_any_size_and_a_filling_window_with_lost_hands():
@@ -115,11 +146,15 @@ def test_the_jax_step_runs_where_the_native_loop_cannot(trained, monkeypatch):
     params = MirrorSystem(trained, native=False)._params
     kernel = native_regression(params, trained.network, OnlineConfig())
     assert kernel is not None
-    # The safety barrier's risk network is only in the JAX loop; the projection comes after
-    # the loop and runs with either.
-    meta = object()
+    # A kernel holds the risk network it was built with, not another one; the projection
+    # comes after the loop and runs with either.
+    meta = MetaParams(
+        *(jnp.asarray(a, jnp.float32) for a in init_meta(trained.network.pb_size, 8, 0))
+    )
     assert kernel.applies(None)
     assert not kernel.applies(meta)
+    with pytest.raises(ValueError, match="risk network"):
+        kernel(np.zeros(kernel.shapes.block_layout()["total"][0], np.float32), meta)
     projection = native_regression(
         params, trained.network, replace(OnlineConfig(), safety_guard="projection")
     )

@@ -241,7 +241,7 @@ class BatchedMirror:
                 *arguments, shared._candidates, shared._phase_candidates
             )
             # The kernel runs each session's loop in turn (it is single-threaded native code).
-            sessions = [native(block) for block in np.asarray(blocks)]
+            sessions = [native(block, shared._meta) for block in np.asarray(blocks)]
             regressed = Regressed(*(np.stack(part) for part in zip(*sessions, strict=True)))
             self._states, packed = _batched_conclude(
                 shared._params,

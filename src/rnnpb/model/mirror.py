@@ -318,7 +318,9 @@ class MirrorSystem:
         # The regression's loop in native code where it can run (rnnpb.model.native); None:
         # the whole step is the compiled JAX one.
         self._native: NativeRegression | None = (
-            native_regression(self._params, model.network, self.config) if native else None
+            native_regression(self._params, model.network, self.config, self._meta)
+            if native
+            else None
         )
         self.steps = 0
 
@@ -418,7 +420,7 @@ class MirrorSystem:
                 self._params,
                 self._state,
                 start,
-                self._native(block),
+                self._native(block, meta),
                 self.config,
                 meta,
                 self._pattern_rho,

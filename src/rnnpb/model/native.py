@@ -12,10 +12,11 @@ for the same loop does not manage; the sigmoid is a rational function (the form 
 Everything before and after the loop — the new observation, the restarts, the surprise gate, the
 outputs, recognition's evidence — stays the compiled JAX code of :mod:`rnnpb.model.online`
 (:func:`prepare` and :func:`rnnpb.model.online.conclude`): one step is a compiled call, the
-kernel, and a compiled call. The pure-JAX step is the reference and the fallback: it runs where
-llvmlite is missing, where ``RNNPB_NATIVE=0`` asks for it, and for a step whose regression goes
-through the safety barrier (whose risk network the kernel does not hold).
-``tests/model/test_native.py`` holds the two together.
+kernel, and a compiled call. The safety barrier's gradient (the risk network of
+:mod:`rnnpb.model.meta` on the window's newest steps) is in the kernel too, for the risk
+network it was built with. The pure-JAX step is the reference and the fallback: it runs where
+llvmlite is missing or ``RNNPB_NATIVE=0`` asks for it. ``tests/model/test_native.py`` holds the
+two together.
 
 Layouts (all float32): every row is padded to a whole number of 8-wide vectors — ``HP`` for the
 hidden layer (H), ``IP`` for the inputs and outputs with the context (``I + C``), ``PP`` for the
@@ -37,6 +38,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from rnnpb.model.meta import MetaParams
 from rnnpb.model.network import NetworkConfig, Params
 from rnnpb.model.online import OnlineState, Regressed, prepare
 from rnnpb.model.online_config import OnlineConfig
@@ -73,6 +75,10 @@ class Shapes:
     pb: int
     context: int
     hidden: int
+    # The safety barrier's risk network (rnnpb.model.meta): its hidden layer's size (0: no
+    # barrier in the kernel) and the newest steps of the window it acts on.
+    risk_hidden: int = 0
+    barrier_span: int = 0
 
     @property
     def io(self) -> int:
@@ -91,6 +97,10 @@ class Shapes:
     def pp(self) -> int:
         return _padded(self.pb)
 
+    @property
+    def rp(self) -> int:
+        return _padded(self.risk_hidden)
+
     def weights_layout(self) -> dict[str, tuple[int, int]]:
         """Offset and size of each part of the weights block."""
         h, hp, io, ip, p, pp = self.hidden, self.hp, self.io, self.ip, self.pb, self.pp
@@ -104,13 +114,24 @@ class Shapes:
             "w_p": p * hp,  # (P, HP)
             "w_p_t": h * pp,  # (H, PP)
         }
+        if self.risk_hidden:  # the risk network, padded (rnnpb.model.meta.MetaParams)
+            r, rp = self.risk_hidden, self.rp
+            parts |= {
+                "risk_w1": p * rp,  # (P, RP)
+                "risk_b1": rp,
+                "risk_w2": r * rp,  # (R, RP)
+                "risk_b2": rp,
+                "risk_w3": rp,
+                "risk_w2_t": r * rp,  # (R, RP)
+                "risk_w1_t": r * pp,  # (R, PP)
+            }
         return _offsets(parts)
 
     def block_layout(self) -> dict[str, tuple[int, int]]:
         """Offset and size of each part of a step's block (what :func:`prepare` returns)."""
         length, hp, ip, pp = self.window, self.hp, self.ip, self.pp
         parts = {
-            "head": 8,  # [gate, n]
+            "head": 8,  # [gate, n, barrier on]
             "fixed": length * hp,  # the hidden layer's input that does not depend on the loop
             "mask": length * ip,  # which outputs feed back as the next step's inputs
             "target": length * ip,  # the next observation, where it is a target
@@ -124,9 +145,25 @@ class Shapes:
         return _offsets(parts)
 
     def scratch_size(self) -> int:
-        length, hp, ip, pp = self.window, self.hp, self.ip, self.pp
-        # outputs, hidden, x, g, dh, first, pb, grad, cumulative, new rho
-        return length * ip + length * hp + 3 * ip + hp + 3 * length * pp + (length + 1) * pp
+        return _offsets(self.scratch_parts())["total"][0]
+
+    def scratch_parts(self) -> dict[str, int]:
+        length, hp, ip, pp, rp = self.window, self.hp, self.ip, self.pp, self.rp
+        return {
+            "out": length * ip,
+            "hid": length * hp,
+            "x": ip,
+            "g": ip,
+            "first": ip,
+            "dh": hp,
+            "pb": length * pp,
+            "grad": length * pp,
+            "rnew": length * pp,
+            "cum": (length + 1) * pp,
+            "risk_h1": rp,
+            "risk_d2": rp,
+            "risk_d1": rp,
+        }
 
 
 def _offsets(parts: dict[str, int]) -> dict[str, tuple[int, int]]:
@@ -233,6 +270,11 @@ class _Emitter:
         ratio = self.op("d", f"fdiv fast {V} {self.fmul(t, polynomials[0])}, {polynomials[1]}")
         return self.fma(ratio, half, half)
 
+    def tanh(self, x: str) -> str:
+        """tanh(x) = 2 sigmoid(2x) - 1."""
+        value = self.sigmoid(self.fmul(x, _vector_constant(2.0)))
+        return self.fma(value, _vector_constant(2.0), _vector_constant(-1.0))
+
     def loop(self, count: str | int, carried: list[str], body: Any) -> list[str]:
         """A counted loop ``for i in range(count)`` (``count`` ≥ 1) whose ``body(i, values)``
         emits its code and returns the carried vectors' next values; returns their last."""
@@ -298,24 +340,13 @@ def regression_ir(shapes: Shapes) -> str:
     weights, block = shapes.weights_layout(), shapes.block_layout()
     w = {key: part("%weights", weights, key) for key in weights if key != "total"}
     b = {key: part("%block", block, key) for key in block if key != "total"}
-    scratch_parts = _offsets(
-        {
-            "out": length * ip,
-            "hid": length * hp,
-            "x": ip,
-            "g": ip,
-            "first": ip,
-            "dh": hp,
-            "pb": length * pp,
-            "grad": length * pp,
-            "rnew": length * pp,
-            "cum": (length + 1) * pp,
-        }
-    )
+    scratch_parts = _offsets(shapes.scratch_parts())
     s = {key: part("%scratch", scratch_parts, key) for key in scratch_parts if key != "total"}
     coefficient = {
         name: e.broadcast(e.load_scalar(w["scalars"], i))
-        for i, name in enumerate(("k_bp", "k_nb", "rate", "momentum", "onset_rate"))
+        for i, name in enumerate(
+            ("k_bp", "k_nb", "rate", "momentum", "onset_rate", "barrier_weight", "risk_offset")
+        )
     }
     gate = e.broadcast(e.load_scalar(b["head"], 0))
     minus_gate = e.fsub(zero, gate)
@@ -389,6 +420,8 @@ def regression_ir(shapes: Shapes) -> str:
             gradient = e.fmul(gradient, e.load(b["learn"], 8 * v))
             onset = e.load(b["onset"], 8 * v)
             e.store(e.fsub(onset, e.fmul(coefficient["onset_rate"], gradient)), b["onset"], 8 * v)
+        if shapes.risk_hidden:
+            _barrier(e, shapes, w, s, b, coefficient, n)
         _pb_update(e, s, b, coefficient, n, pv, pp)
         return []
 
@@ -399,6 +432,7 @@ def regression_ir(shapes: Shapes) -> str:
             f"declare {V} @llvm.minnum.v8f32({V}, {V})",
             f"declare {V} @llvm.maxnum.v8f32({V}, {V})",
             f"declare {V} @llvm.fma.v8f32({V}, {V}, {V})",
+            f"declare float @llvm.vector.reduce.fadd.v8f32(float, {V})",
             "define void @regress(i64 %iterations, i64 %half, ptr noalias %weights, "
             "ptr noalias %block, ptr noalias %scratch) {",
             "entry:",
@@ -406,6 +440,72 @@ def regression_ir(shapes: Shapes) -> str:
             "}",
         ]
     )
+
+
+def _barrier(
+    e: _Emitter,
+    shapes: Shapes,
+    w: dict[str, str],
+    s: dict[str, str],
+    b: dict[str, str],
+    coefficient: dict[str, str],
+    n: str,
+) -> None:
+    """The safety barrier's gradient (:func:`rnnpb.model.online._barrier_gradient`) on the
+    window's newest ``barrier_span`` steps, added to the PB's error gradient: for each, the
+    risk network's logit of its PB, and ``barrier_weight · σ(logit − logit(risk_level)) ·
+    d logit / d rho`` by back-propagation through the network. Skipped at a step whose
+    block says the barrier is off (head[2] = 0)."""
+    length, p, pp, r, rp = shapes.window, shapes.pb, shapes.pp, shapes.risk_hidden, shapes.rp
+    span = shapes.barrier_span
+    on = e.op("z", f"fcmp one float {e.load_scalar(b['head'], 2)}, 0.0")
+    body, after = e.label("barrier"), e.label("barrier_done")
+    e.emit(f"br i1 {on}, label %{body}, label %{after}")
+    e.block(body)
+    start = e.int_op("z", "sub", n, span)
+    start = e.op("z", f"select i1 {e.op('z', f'icmp sgt i64 {start}, 0')}, i64 {start}, i64 0")
+    start = e.op(
+        "z",
+        f"select i1 {e.op('z', f'icmp slt i64 {start}, {length - span}')}, i64 {start}, "
+        f"i64 {length - span}",
+    )
+    zero = "zeroinitializer"
+    rv = rp // 8
+
+    def one_step(k: str, _: list[str]) -> list[str]:
+        row = e.int_op("z", "mul", e.int_op("z", "add", start, k), pp)
+        hidden = [e.load(w["risk_b1"], 8 * v) for v in range(rv)]
+        hidden = [e.tanh(a) for a in e.products(hidden, p, s["pb"], row, w["risk_w1"], rp)]
+        for v, value in enumerate(hidden):
+            e.store(value, s["risk_h1"], 8 * v)
+        second = [e.load(w["risk_b2"], 8 * v) for v in range(rv)]
+        second = [e.tanh(a) for a in e.products(second, r, s["risk_h1"], 0, w["risk_w2"], rp)]
+        total = zero
+        for v, value in enumerate(second):
+            total = e.fma(value, e.load(w["risk_w3"], 8 * v), total)
+        logit = e.op("z", f"call fast float @llvm.vector.reduce.fadd.v8f32(float 0.0, {V} {total})")
+        excess = e.fadd(e.broadcast(logit), coefficient["risk_offset"])
+        factor = e.fmul(e.sigmoid(excess), coefficient["barrier_weight"])
+        for v, value in enumerate(second):  # d logit / d (second layer's input)
+            slope = e.fsub(_vector_constant(1.0), e.fmul(value, value))
+            e.store(e.fmul(e.load(w["risk_w3"], 8 * v), slope), s["risk_d2"], 8 * v)
+        first = e.products([zero] * rv, r, s["risk_d2"], 0, w["risk_w2_t"], rp)
+        for v, value in enumerate(first):
+            h1 = e.load(s["risk_h1"], 8 * v)
+            e.store(
+                e.fmul(value, e.fsub(_vector_constant(1.0), e.fmul(h1, h1))), s["risk_d1"], 8 * v
+            )
+        d_pb = e.products([zero] * (pp // 8), r, s["risk_d1"], 0, w["risk_w1_t"], pp)
+        for v, value in enumerate(d_pb):
+            index = e.int_op("z", "add", row, 8 * v)
+            pb = e.load(s["pb"], index)
+            gradient = e.fmul(e.fmul(value, e.fmul(pb, e.one_minus(pb))), factor)
+            e.store(e.fsub(e.load(s["grad"], index), gradient), s["grad"], index)
+        return []
+
+    e.loop(span, [], one_step)
+    e.emit(f"br label %{after}")
+    e.block(after)
 
 
 def _pb_update(
@@ -530,8 +630,12 @@ def compiled(shapes: Shapes) -> Any:
         return _compiled[shapes][0]
 
 
-def shapes_of(network: NetworkConfig, config: OnlineConfig) -> Shapes:
-    """The kernel's sizes for a network and a window."""
+def shapes_of(
+    network: NetworkConfig, config: OnlineConfig, meta: MetaParams | None = None
+) -> Shapes:
+    """The kernel's sizes for a network, a window and, when the regression may go through the
+    safety barrier, the risk network."""
+    barrier = meta is not None and config.safety_guard == "barrier" and config.barrier_weight > 0
     return Shapes(
         window=config.window,
         sensory=network.sensory_size,
@@ -539,12 +643,16 @@ def shapes_of(network: NetworkConfig, config: OnlineConfig) -> Shapes:
         pb=network.pb_size,
         context=network.context_size,
         hidden=network.hidden_size,
+        risk_hidden=int(np.shape(meta.w1)[1]) if barrier and meta is not None else 0,
+        barrier_span=(config.barrier_span or config.window) if barrier else 0,
     )
 
 
-def _weights_block(params: Params, shapes: Shapes, config: OnlineConfig) -> np.ndarray:
-    """The weights block (:meth:`Shapes.weights_layout`): the PB update's and the onset's
-    coefficients, then the weights in the kernel's padded layouts."""
+def _weights_block(
+    params: Params, shapes: Shapes, config: OnlineConfig, meta: MetaParams | None
+) -> np.ndarray:
+    """The weights block (:meth:`Shapes.weights_layout`): the PB update's, the onset's and
+    the barrier's coefficients, then the weights in the kernel's padded layouts."""
     s, m, p, h, io = shapes.sensory, shapes.motor, shapes.pb, shapes.hidden, shapes.io
     w_in = np.asarray(params.w_in, np.float32)
     w_out = np.asarray(params.w_out, np.float32)
@@ -553,8 +661,11 @@ def _weights_block(params: Params, shapes: Shapes, config: OnlineConfig) -> np.n
     w_loop = np.concatenate([w_u, w_m, w_c])  # (IO, H)
     onset_rate = config.onset_learning_rate if config.optimize_onset else 0.0
     pb = config.pb
+    level = config.risk_level
+    risk_offset = 0.0 if meta is None else float(meta.b3) - np.log(level / (1.0 - level))
+    scalars = [pb.k_bp, pb.k_nb, pb.learning_rate, pb.momentum, onset_rate]
     parts = {
-        "scalars": np.array([pb.k_bp, pb.k_nb, pb.learning_rate, pb.momentum, onset_rate]),
+        "scalars": np.array([*scalars, config.barrier_weight, risk_offset]),
         "w_loop": _pad(w_loop, io, shapes.hp),
         "w_out": _pad(w_out, h, shapes.ip),
         "b_out": _pad(np.asarray(params.b_out, np.float32)[None], 1, shapes.ip),
@@ -563,6 +674,18 @@ def _weights_block(params: Params, shapes: Shapes, config: OnlineConfig) -> np.n
         "w_p": _pad(w_p, p, shapes.hp),
         "w_p_t": _pad(w_p.T, h, shapes.pp),
     }
+    if shapes.risk_hidden and meta is not None:
+        r, rp = shapes.risk_hidden, shapes.rp
+        w1, w2 = np.asarray(meta.w1, np.float32), np.asarray(meta.w2, np.float32)
+        parts |= {
+            "risk_w1": _pad(w1, p, rp),
+            "risk_b1": _pad(np.asarray(meta.b1, np.float32)[None], 1, rp),
+            "risk_w2": _pad(w2, r, rp),
+            "risk_b2": _pad(np.asarray(meta.b2, np.float32)[None], 1, rp),
+            "risk_w3": _pad(np.asarray(meta.w3, np.float32)[None], 1, rp),
+            "risk_w2_t": _pad(w2.T, r, rp),
+            "risk_w1_t": _pad(w1.T, r, shapes.pp),
+        }
     layout = shapes.weights_layout()
     block = np.zeros(layout["total"][0], np.float32)
     for name, values in parts.items():
@@ -652,14 +775,18 @@ prepare_block = jax.jit(step_start, static_argnames=("config",))
 
 
 def native_regression(
-    params: Params, network: NetworkConfig, config: OnlineConfig
+    params: Params,
+    network: NetworkConfig,
+    config: OnlineConfig,
+    meta: MetaParams | None = None,
 ) -> NativeRegression | None:
-    """The kernel for these weights and this setting, or None where the compiled JAX step
-    runs whole: native code not :func:`enabled`, or no regression (``iterations`` 0)."""
+    """The kernel for these weights and this setting (with ``meta``, the risk network the
+    safety barrier uses), or None where the compiled JAX step runs whole: native code not
+    :func:`enabled`, or no regression (``iterations`` 0)."""
     if config.iterations == 0 or not enabled():
         return None
     try:
-        return NativeRegression(params, network, config)
+        return NativeRegression(params, network, config, meta)
     except Exception as error:  # noqa: BLE001 - an LLVM that cannot build it: the JAX loop runs
         warnings.warn(
             f"the native regression could not be built ({error}); the JAX loop runs instead",
@@ -670,27 +797,47 @@ def native_regression(
 
 
 class NativeRegression:
-    """The kernel for one network's weights and one on-line setting: call it with a step's
-    block (from :func:`prepare_block`); it returns the regressed ``rho``, ``velocity``, onset
-    context and onset motor values (NumPy float32)."""
+    """The kernel for one network's weights, one on-line setting and the risk network of its
+    safety barrier, if any: call it with a step's block (from :func:`prepare_block`); it
+    returns the regressed ``rho``, ``velocity``, onset context and onset motor values (NumPy
+    float32)."""
 
-    def __init__(self, params: Params, network: NetworkConfig, config: OnlineConfig) -> None:
-        self.shapes = shapes_of(network, config)
+    def __init__(
+        self,
+        params: Params,
+        network: NetworkConfig,
+        config: OnlineConfig,
+        meta: MetaParams | None = None,
+    ) -> None:
+        self.shapes = shapes_of(network, config, meta)
         self.config = config
+        self.meta = meta if self.shapes.risk_hidden else None
         self._function = compiled(self.shapes)
-        self._weights = _weights_block(params, self.shapes, config)
+        self._weights = _weights_block(params, self.shapes, config, self.meta)
         self._scratch = np.zeros(self.shapes.scratch_size(), np.float32)
         self._layout = self.shapes.block_layout()
         self._lock = threading.Lock()
 
-    def applies(self, meta: Any) -> bool:
-        """Whether a step given ``meta`` (the risk network, or None) regresses without the
-        safety barrier, which only the JAX loop holds."""
-        barrier = self.config.safety_guard == "barrier" and self.config.barrier_weight > 0
-        return meta is None or not barrier
+    def _barrier(self, meta: MetaParams | None) -> bool:
+        """Whether a step given ``meta`` regresses through the safety barrier."""
+        config = self.config
+        return meta is not None and config.safety_guard == "barrier" and config.barrier_weight > 0
 
-    def __call__(self, block: jax.Array | np.ndarray) -> Regressed[np.ndarray]:
+    def applies(self, meta: MetaParams | None) -> bool:
+        """Whether this kernel can run a step given ``meta`` (the risk network, or None for a
+        step without the guard): one without the barrier, or with the risk network it was
+        built with."""
+        return not self._barrier(meta) or meta is self.meta
+
+    def __call__(
+        self, block: jax.Array | np.ndarray, meta: MetaParams | None = None
+    ) -> Regressed[np.ndarray]:
+        """The regression over a step's block; ``meta`` as the JAX step takes it (the
+        barrier acts when given, with the guard "barrier"; see :meth:`applies`)."""
+        if not self.applies(meta):
+            raise ValueError("this kernel was built without that risk network")
         values = np.array(block, dtype=np.float32, copy=True)
+        values[2] = 1.0 if self._barrier(meta) else 0.0
         shapes, layout = self.shapes, self._layout
         length, pp = shapes.window, shapes.pp
         n = int(values[1])
