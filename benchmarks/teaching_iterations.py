@@ -45,6 +45,7 @@ def main() -> None:
     from rnnpb import _xla
 
     _xla.configure()
+    _xla.compilation_cache()  # as the rnnpb command: each consolidation need not compile anew
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--models", required=True, help="demo's models directory")
     parser.add_argument("--iterations", default="10000,20000", help="comma-separated counts")

@@ -34,6 +34,28 @@ def teaching_consolidation(
     )
 
 
+def _one_core() -> None:
+    """Keep this process on one core: the one the system started it on (so that two
+    consolidations at once seldom share one), else the last it may use. XLA sizes its thread
+    pools by the cores a process may use, and the flag of ``_xla.single_threaded`` leaves part
+    of a larger model's learning to several threads, which costs CPU without saving time."""
+    if not hasattr(os, "sched_getaffinity"):
+        return
+    cores = sorted(os.sched_getaffinity(0))
+    if len(cores) > 1:
+        current = _current_core()
+        os.sched_setaffinity(0, {current if current in cores else cores[-1]})
+
+
+def _current_core() -> int | None:
+    """The core this process runs on (Linux: field 39 of /proc/self/stat), or None."""
+    try:
+        with open("/proc/self/stat") as stat:
+            return int(stat.read().rsplit(")", 1)[1].split()[36])
+    except (OSError, ValueError, IndexError):
+        return None
+
+
 def _consolidation_worker(
     model_path: str,
     memory_path: str,
@@ -53,6 +75,7 @@ def _consolidation_worker(
 
     if not _xla.backend_started():  # the flag is read when the backend starts
         _xla.single_threaded()
+        _one_core()
     start = time.perf_counter()
     try:
         from rnnpb.memory import MemoryStore

@@ -1,5 +1,6 @@
 """The on-line regression's loop as native code: a drop-in twin of the loop in
-:func:`rnnpb.model.online.online_step`, about three times faster on one core.
+:func:`rnnpb.model.online.online_step` (``rnnpb bench`` and ``benchmarks/native_loop.py`` time
+the two side by side).
 
 The loop — ``iterations`` times the window's forward and backward pass (:mod:`rnnpb.model.window`),
 the PB update of eqs. 1–2 (:func:`rnnpb.model.parametric_bias.pb_update`) and the onset's step —
@@ -11,8 +12,8 @@ for the same loop does not manage; the sigmoid is a rational function (the form 
 
 Everything before and after the loop — the new observation, the restarts, the surprise gate, the
 outputs, recognition's evidence — stays the compiled JAX code of :mod:`rnnpb.model.online`
-(:func:`prepare` and :func:`rnnpb.model.online.conclude`): one step is a compiled call, the
-kernel, and a compiled call. The safety barrier's gradient (the risk network of
+(:func:`rnnpb.model.online.prepare` and :func:`rnnpb.model.online.conclude`): one step is a
+compiled call, the kernel, and a compiled call. The safety barrier's gradient (the risk network of
 :mod:`rnnpb.model.meta` on the window's newest steps) is in the kernel too, for the risk
 network it was built with. The pure-JAX step is the reference and the fallback: it runs where
 llvmlite is missing or ``RNNPB_NATIVE=0`` asks for it. ``tests/model/test_native.py`` holds the

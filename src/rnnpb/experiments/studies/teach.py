@@ -16,6 +16,7 @@ shipped fast-preset model of learning set 1 one shape.
 from __future__ import annotations
 
 import math
+import statistics
 import time
 from dataclasses import asdict, replace
 from pathlib import Path
@@ -252,7 +253,7 @@ def _consolidation_cpu(runs: list[TeachRun], paced: PacedRun | None) -> tuple[fl
         return math.nan, "no consolidation ran"
     ordered = sorted(times)
     return ordered[-1], (
-        f"longest {ordered[-1]:.1f} s CPU, median {ordered[len(ordered) // 2]:.1f} s, over "
+        f"longest {ordered[-1]:.1f} s CPU, median {statistics.median(ordered):.1f} s, over "
         f"{len(times)} consolidations"
     )
 
