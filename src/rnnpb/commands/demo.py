@@ -54,8 +54,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 #: Minutes the run takes on 2 cores with 2 workers (the measured runs: notes/2026-12-03-history.md,
-#: notes/2026-12-06-batched-runs-step-limits.md).
-MEASURED_MINUTES = {"full": 8.5, "quick": 3.0}
+#: notes/2026-12-06-native-loop.md).
+MEASURED_MINUTES = {"full": 5.5, "quick": 3.0}
 
 
 def _estimate(config) -> str:
