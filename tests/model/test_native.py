@@ -128,6 +128,34 @@ def test_the_kernel_pads_any_size_and_a_filling_window_with_lost_hands():
     np.testing.assert_array_equal(got.velocity[8:], 0.0)
 
 
+def test_sessions_regressed_together_are_each_regressed_alone(trained):
+    # Five sessions at different places of a stream: a group of four and one left over.
+    config = OnlineConfig()
+    demo = make_sequences(n_samples=1, n_steps=60, seed=8, kinds=(2,))[0]
+    mirror = MirrorSystem(trained, config, native=False)
+    blocks = []
+    for t, u in enumerate(demo.sensory[:59]):
+        if t in (5, 18, 30, 44, 58):
+            hands = demo.sensory[t + 1].astype(np.float32)
+            _, block = prepare_block(
+                mirror._params,
+                mirror._state,
+                hands,
+                np.isfinite(hands),
+                config,
+                mirror._candidates,
+                mirror._phase_candidates,
+            )
+            blocks.append(np.asarray(block))
+        mirror.step(u)
+    kernel = NativeRegression(mirror._params, trained.network, config)
+    together = kernel.many(np.stack(blocks))
+    for b, block in enumerate(blocks):
+        alone = kernel(block)
+        for name, part, one in zip(alone._fields, together, alone, strict=True):
+            np.testing.assert_array_equal(part[b], one, err_msg=f"{name}, session {b}")
+
+
 def test_a_mirror_system_with_the_native_loop_steps_as_the_jax_one(trained):
     demo = make_sequences(n_samples=1, n_steps=60, seed=12, kinds=(2,))[0]
     hands = demo.sensory.copy()

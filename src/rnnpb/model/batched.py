@@ -5,10 +5,10 @@ Each session is what a :class:`rnnpb.model.MirrorSystem` of the same model and s
 be: its own window, PB, onset and recognition, started from its own initial PB. The compiled
 step is :func:`rnnpb.model.online.online_step` mapped over the sessions (``jax.vmap`` over the
 state and the observations; the weights, restarts and settings are shared) — with the native
-loop (:mod:`rnnpb.model.native`), its parts before and after the loop are, and each session's
-loop runs in turn between the two calls — and its outputs come back to the host in one
-transfer, as a (B, packed) array; recognition then runs on the
-host for each session, as in ``MirrorSystem``. ``tests/model/test_batched.py`` holds it to
+loop (:mod:`rnnpb.model.native`), its parts before and after the loop are, and the sessions'
+loops run between the two calls, a few to a kernel call — and its outputs come back to the
+host in one transfer, as a (B, packed) array; recognition then runs on the host for each
+session, as in ``MirrorSystem``. ``tests/model/test_batched.py`` holds it to
 ``B`` separate mirror systems step by step.
 
 :func:`run_streams` runs many recorded streams (the runs of an experiment) through a pool of
@@ -137,9 +137,9 @@ class BatchedMirror:
         Each session's PB at its start (default: the centre of the learned PBs, as
         ``MirrorSystem``).
     native : bool
-        As for ``MirrorSystem``: each session's regression loop in native code, one session
-        after the other, between two compiled calls for all sessions; False: the whole step
-        of every session in one compiled JAX call.
+        As for ``MirrorSystem``: the sessions' regression loops in native code, a few
+        sessions to a kernel call, between two compiled calls for all sessions; False: the
+        whole step of every session in one compiled JAX call.
     """
 
     def __init__(
@@ -240,9 +240,8 @@ class BatchedMirror:
             starts, blocks = _batched_prepare(
                 *arguments, shared._candidates, shared._phase_candidates
             )
-            # The kernel runs each session's loop in turn (it is single-threaded native code).
-            sessions = [native(block, shared._meta) for block in np.asarray(blocks)]
-            regressed = Regressed(*(np.stack(part) for part in zip(*sessions, strict=True)))
+            # The kernel runs the sessions' loops a few at a time (rnnpb.model.native.GROUP).
+            regressed = native.many(blocks, shared._meta)
             self._states, packed = _batched_conclude(
                 shared._params,
                 self._states,

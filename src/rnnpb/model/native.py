@@ -32,6 +32,7 @@ import os
 import struct
 import threading
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -58,6 +59,9 @@ _TANH_P = (
 )
 _TANH_Q = (1.19825839466702e-06, 1.18534705686654e-04, 2.26843463243900e-03, 4.89352518554385e-03)
 _TANH_CLAMP = 7.90531110763549805
+# Sessions regressed together by one kernel call (NativeRegression.many): each weight vector
+# loaded serves all of them.
+GROUP = 4
 _SCALARS = 8  # the weights block opens with the PB update's coefficients (see _weights_block)
 
 
@@ -302,128 +306,179 @@ class _Emitter:
 
     def products(
         self,
-        sums: list[str],
+        sums: list[list[str]],
         count: int,
-        scalars: str,
-        scalar_start: str | int,
+        scalars: Sequence[tuple[str, str | int]],
         weights: str,
         width: int,
-    ) -> list[str]:
-        """``sums[v] + Σ_k scalars[scalar_start + k] · weights[k, 8v : 8v + 8]`` for
-        ``k < count``, with the sums held in registers through the loop."""
+    ) -> list[list[str]]:
+        """For each session ``g``: ``sums[g][v] + Σ_k x_g[start_g + k] · weights[k, 8v : 8v
+        + 8]`` for ``k < count``, where ``scalars[g]`` is ``(x_g, start_g)``; the sums held in
+        registers through the loop, each weight vector loaded once for every session."""
+        group, vectors = len(sums), len(sums[0])
 
-        def body(k: str, current: list[str]) -> list[str]:
-            index = self.int_op("k", "add", scalar_start, k)
-            scalar = self.broadcast(self.load_scalar(scalars, index))
-            row = self.int_op("r", "mul", k, width)
-            return [
-                self.fma(scalar, self.load(weights, self.int_op("w", "add", row, 8 * v)), s)
-                for v, s in enumerate(current)
+        def body(k: str, flat: list[str]) -> list[str]:
+            current = [flat[g * vectors : (g + 1) * vectors] for g in range(group)]
+            factors = [
+                self.broadcast(self.load_scalar(base, self.int_op("k", "add", start, k)))
+                for base, start in scalars
             ]
+            row = self.int_op("r", "mul", k, width)
+            updated = [list(values) for values in current]
+            for v in range(vectors):
+                weight = self.load(weights, self.int_op("w", "add", row, 8 * v))
+                for g in range(group):
+                    updated[g][v] = self.fma(factors[g], weight, current[g][v])
+            return [value for values in updated for value in values]
 
-        return self.loop(count, sums, body)
+        flat = self.loop(count, [value for values in sums for value in values], body)
+        return [flat[g * vectors : (g + 1) * vectors] for g in range(group)]
 
 
-def regression_ir(shapes: Shapes) -> str:
-    """The kernel ``regress(iterations, half, weights, block, scratch)``: ``iterations`` of
-    the on-line regression's loop over one step's block (:meth:`Shapes.block_layout`),
-    updating its ``rho``, ``velocity`` and ``onset`` in place. ``half``: the integration
-    length's half (eq. 1)."""
+def regression_ir(shapes: Shapes, group: int = 1) -> str:
+    """The kernel ``regress(iterations, half, weights, blocks, scratch)``: ``iterations`` of
+    the on-line regression's loop over ``group`` sessions' blocks (:meth:`Shapes.block_layout`,
+    one after the other at ``blocks``), updating each one's ``rho``, ``velocity`` and
+    ``onset`` in place; ``scratch`` holds ``group`` times :meth:`Shapes.scratch_size`.
+    ``half``: the integration length's half (eq. 1).
+
+    The sessions of a group run in step: each weight vector loaded in a product's loop serves
+    every session's sums (loading the weights, not multiplying, bounds one session's loop).
+    Each session's arithmetic is the same, in the same order, as alone."""
     e = _Emitter()
     length, h, io, p = shapes.window, shapes.hidden, shapes.io, shapes.pb
     hp, ip, pp = shapes.hp, shapes.ip, shapes.pp
     hv, iv, pv = hp // 8, ip // 8, pp // 8
     zero = "zeroinitializer"
+    sessions = range(group)
 
     def part(base: str, layout: dict[str, tuple[int, int]], key: str) -> str:
         return e.address(base, layout[key][0])
 
     weights, block = shapes.weights_layout(), shapes.block_layout()
     w = {key: part("%weights", weights, key) for key in weights if key != "total"}
-    b = {key: part("%block", block, key) for key in block if key != "total"}
     scratch_parts = _offsets(shapes.scratch_parts())
-    s = {key: part("%scratch", scratch_parts, key) for key in scratch_parts if key != "total"}
+    b, s = [], []
+    for g in sessions:
+        base = e.address("%blocks", g * block["total"][0])
+        b.append({key: part(base, block, key) for key in block if key != "total"})
+        base = e.address("%scratch", g * scratch_parts["total"][0])
+        s.append({key: part(base, scratch_parts, key) for key in scratch_parts if key != "total"})
     coefficient = {
         name: e.broadcast(e.load_scalar(w["scalars"], i))
         for i, name in enumerate(
             ("k_bp", "k_nb", "rate", "momentum", "onset_rate", "barrier_weight", "risk_offset")
         )
     }
-    gate = e.broadcast(e.load_scalar(b["head"], 0))
-    minus_gate = e.fsub(zero, gate)
-    n = e.op("n", f"fptosi float {e.load_scalar(b['head'], 1)} to i64")
+    minus_gate = [e.fsub(zero, e.broadcast(e.load_scalar(b[g]["head"], 0))) for g in sessions]
+    n = [e.op("n", f"fptosi float {e.load_scalar(b[g]['head'], 1)} to i64") for g in sessions]
 
     def row_index(t: str, width: int, v: int) -> str:
         return e.int_op("o", "add", e.int_op("o", "mul", t, width), 8 * v)
 
+    def grouped(values: list[str], size: int) -> list[list[str]]:
+        return [values[g * size : (g + 1) * size] for g in sessions]
+
     def iteration(_: str, __: list[str]) -> list[str]:
         # the window's first input: sigmoid of the onset's logits (0 gives the sensory 0.5)
-        for v in range(iv):
-            e.store(e.sigmoid(e.load(b["onset"], 8 * v)), s["first"], 8 * v)
+        for g in sessions:
+            for v in range(iv):
+                e.store(e.sigmoid(e.load(b[g]["onset"], 8 * v)), s[g]["first"], 8 * v)
 
         def forward(t: str, _: list[str]) -> list[str]:
             pb_row = e.int_op("q", "mul", t, pp)
-            for v in range(pv):
-                index = e.int_op("q", "add", pb_row, 8 * v)
-                e.store(e.sigmoid(e.load(b["rho"], index)), s["pb"], index)
-            sums = [e.load(b["fixed"], row_index(t, hp, v)) for v in range(hv)]
-            sums = e.products(sums, p, s["pb"], pb_row, w["w_p"], hp)
+            for g in sessions:
+                for v in range(pv):
+                    index = e.int_op("q", "add", pb_row, 8 * v)
+                    e.store(e.sigmoid(e.load(b[g]["rho"], index)), s[g]["pb"], index)
+            sums = [
+                [e.load(b[g]["fixed"], row_index(t, hp, v)) for v in range(hv)] for g in sessions
+            ]
+            sums = e.products(sums, p, [(s[g]["pb"], pb_row) for g in sessions], w["w_p"], hp)
             # the recurrent input: the first input at t = 0, else the last output; masked
             first_step = e.op("z", f"icmp eq i64 {t}, 0")
             previous = e.int_op("y", "mul", e.int_op("y", "sub", t, 1), ip)
             previous = e.op("y", f"select i1 {first_step}, i64 0, i64 {previous}")
-            source = e.op("y", f"select i1 {first_step}, ptr {s['first']}, ptr {s['out']}")
-            for v in range(iv):
-                value = e.load(source, e.int_op("y", "add", previous, 8 * v))
-                e.store(e.fmul(value, e.load(b["mask"], row_index(t, ip, v))), s["x"], 8 * v)
-            sums = e.products(sums, io, s["x"], 0, w["w_loop"], hp)
+            for g in sessions:
+                source = e.op(
+                    "y", f"select i1 {first_step}, ptr {s[g]['first']}, ptr {s[g]['out']}"
+                )
+                for v in range(iv):
+                    value = e.load(source, e.int_op("y", "add", previous, 8 * v))
+                    mask = e.load(b[g]["mask"], row_index(t, ip, v))
+                    e.store(e.fmul(value, mask), s[g]["x"], 8 * v)
+            sums = e.products(sums, io, [(s[g]["x"], 0) for g in sessions], w["w_loop"], hp)
             hidden_row = e.int_op("h", "mul", t, hp)
-            for v, total in enumerate(sums):
-                e.store(e.sigmoid(total), s["hid"], e.int_op("h", "add", hidden_row, 8 * v))
-            outputs = [e.load(w["b_out"], 8 * v) for v in range(iv)]
-            outputs = e.products(outputs, h, s["hid"], hidden_row, w["w_out"], ip)
-            for v, total in enumerate(outputs):
-                e.store(e.sigmoid(total), s["out"], row_index(t, ip, v))
+            for g in sessions:
+                for v, total in enumerate(sums[g]):
+                    index = e.int_op("h", "add", hidden_row, 8 * v)
+                    e.store(e.sigmoid(total), s[g]["hid"], index)
+            bias = [e.load(w["b_out"], 8 * v) for v in range(iv)]
+            outputs = e.products(
+                [list(bias) for _ in sessions],
+                h,
+                [(s[g]["hid"], hidden_row) for g in sessions],
+                w["w_out"],
+                ip,
+            )
+            for g in sessions:
+                for v, total in enumerate(outputs[g]):
+                    e.store(e.sigmoid(total), s[g]["out"], row_index(t, ip, v))
             return []
 
         e.loop(length, [], forward)
 
-        def backward(k: str, d_input: list[str]) -> list[str]:
+        def backward(k: str, carried: list[str]) -> list[str]:
+            d_input = grouped(carried, iv)
             t = e.int_op("t", "sub", length - 1, k)
-            for v in range(iv):
-                index = row_index(t, ip, v)
-                out = e.load(s["out"], index)
-                error = e.fmul(
-                    e.fsub(out, e.load(b["target"], index)), e.load(b["target_mask"], index)
-                )
-                total = e.fma(d_input[v], e.load(b["next_mask"], index), error)
-                e.store(e.fmul(total, e.fmul(out, e.one_minus(out))), s["g"], 8 * v)
-            d_hidden = e.products([zero] * hv, io, s["g"], 0, w["w_out_t"], hp)
+            for g in sessions:
+                for v in range(iv):
+                    index = row_index(t, ip, v)
+                    out = e.load(s[g]["out"], index)
+                    error = e.fmul(
+                        e.fsub(out, e.load(b[g]["target"], index)),
+                        e.load(b[g]["target_mask"], index),
+                    )
+                    total = e.fma(d_input[g][v], e.load(b[g]["next_mask"], index), error)
+                    e.store(e.fmul(total, e.fmul(out, e.one_minus(out))), s[g]["g"], 8 * v)
+            d_hidden = e.products(
+                [[zero] * hv for _ in sessions],
+                io,
+                [(s[g]["g"], 0) for g in sessions],
+                w["w_out_t"],
+                hp,
+            )
             hidden_row = e.int_op("h", "mul", t, hp)
-            for v, total in enumerate(d_hidden):
-                hid = e.load(s["hid"], e.int_op("h", "add", hidden_row, 8 * v))
-                e.store(e.fmul(total, e.fmul(hid, e.one_minus(hid))), s["dh"], 8 * v)
-            d_pb = e.products([zero] * pv, h, s["dh"], 0, w["w_p_t"], pp)
+            for g in sessions:
+                for v, total in enumerate(d_hidden[g]):
+                    hid = e.load(s[g]["hid"], e.int_op("h", "add", hidden_row, 8 * v))
+                    e.store(e.fmul(total, e.fmul(hid, e.one_minus(hid))), s[g]["dh"], 8 * v)
+            errors = [(s[g]["dh"], 0) for g in sessions]
+            d_pb = e.products([[zero] * pv for _ in sessions], h, errors, w["w_p_t"], pp)
             pb_row = e.int_op("q", "mul", t, pp)
-            for v, total in enumerate(d_pb):
-                index = e.int_op("q", "add", pb_row, 8 * v)
-                pb = e.load(s["pb"], index)
-                gradient = e.fmul(total, e.fmul(pb, e.one_minus(pb)))
-                e.store(e.fmul(gradient, minus_gate), s["grad"], index)
-            return e.products([zero] * iv, h, s["dh"], 0, w["w_loop_t"], ip)
+            for g in sessions:
+                for v, total in enumerate(d_pb[g]):
+                    index = e.int_op("q", "add", pb_row, 8 * v)
+                    pb = e.load(s[g]["pb"], index)
+                    gradient = e.fmul(total, e.fmul(pb, e.one_minus(pb)))
+                    e.store(e.fmul(gradient, minus_gate[g]), s[g]["grad"], index)
+            d_input = e.products([[zero] * iv for _ in sessions], h, errors, w["w_loop_t"], ip)
+            return [value for values in d_input for value in values]
 
-        d_first = e.loop(length, [zero] * iv, backward)
-        # the onset's step (eq. of rnnpb.model.window.gradients: d_first · mask[0] · f (1 - f))
-        for v in range(iv):
-            first = e.load(s["first"], 8 * v)
-            gradient = e.fmul(d_first[v], e.load(b["mask"], 8 * v))
-            gradient = e.fmul(gradient, e.fmul(first, e.one_minus(first)))
-            gradient = e.fmul(gradient, e.load(b["learn"], 8 * v))
-            onset = e.load(b["onset"], 8 * v)
-            e.store(e.fsub(onset, e.fmul(coefficient["onset_rate"], gradient)), b["onset"], 8 * v)
-        if shapes.risk_hidden:
-            _barrier(e, shapes, w, s, b, coefficient, n)
-        _pb_update(e, s, b, coefficient, n, pv, pp)
+        d_first = grouped(e.loop(length, [zero] * (iv * group), backward), iv)
+        for g in sessions:
+            # the onset's step (rnnpb.model.window.gradients: d_first · mask[0] · f (1 - f))
+            for v in range(iv):
+                first = e.load(s[g]["first"], 8 * v)
+                gradient = e.fmul(d_first[g][v], e.load(b[g]["mask"], 8 * v))
+                gradient = e.fmul(gradient, e.fmul(first, e.one_minus(first)))
+                gradient = e.fmul(gradient, e.load(b[g]["learn"], 8 * v))
+                onset = e.load(b[g]["onset"], 8 * v)
+                step = e.fmul(coefficient["onset_rate"], gradient)
+                e.store(e.fsub(onset, step), b[g]["onset"], 8 * v)
+            if shapes.risk_hidden:
+                _barrier(e, shapes, w, s[g], b[g], coefficient, n[g])
+            _pb_update(e, s[g], b[g], coefficient, n[g], pv, pp)
         return []
 
     e.loop("%iterations", [], iteration)
@@ -435,7 +490,7 @@ def regression_ir(shapes: Shapes) -> str:
             f"declare {V} @llvm.fma.v8f32({V}, {V}, {V})",
             f"declare float @llvm.vector.reduce.fadd.v8f32(float, {V})",
             "define void @regress(i64 %iterations, i64 %half, ptr noalias %weights, "
-            "ptr noalias %block, ptr noalias %scratch) {",
+            "ptr noalias %blocks, ptr noalias %scratch) {",
             "entry:",
             *e.lines,
             "}",
@@ -476,11 +531,13 @@ def _barrier(
     def one_step(k: str, _: list[str]) -> list[str]:
         row = e.int_op("z", "mul", e.int_op("z", "add", start, k), pp)
         hidden = [e.load(w["risk_b1"], 8 * v) for v in range(rv)]
-        hidden = [e.tanh(a) for a in e.products(hidden, p, s["pb"], row, w["risk_w1"], rp)]
+        hidden = [e.tanh(a) for a in e.products([hidden], p, [(s["pb"], row)], w["risk_w1"], rp)[0]]
         for v, value in enumerate(hidden):
             e.store(value, s["risk_h1"], 8 * v)
         second = [e.load(w["risk_b2"], 8 * v) for v in range(rv)]
-        second = [e.tanh(a) for a in e.products(second, r, s["risk_h1"], 0, w["risk_w2"], rp)]
+        second = [
+            e.tanh(a) for a in e.products([second], r, [(s["risk_h1"], 0)], w["risk_w2"], rp)[0]
+        ]
         total = zero
         for v, value in enumerate(second):
             total = e.fma(value, e.load(w["risk_w3"], 8 * v), total)
@@ -490,13 +547,13 @@ def _barrier(
         for v, value in enumerate(second):  # d logit / d (second layer's input)
             slope = e.fsub(_vector_constant(1.0), e.fmul(value, value))
             e.store(e.fmul(e.load(w["risk_w3"], 8 * v), slope), s["risk_d2"], 8 * v)
-        first = e.products([zero] * rv, r, s["risk_d2"], 0, w["risk_w2_t"], rp)
+        first = e.products([[zero] * rv], r, [(s["risk_d2"], 0)], w["risk_w2_t"], rp)[0]
         for v, value in enumerate(first):
             h1 = e.load(s["risk_h1"], 8 * v)
             e.store(
                 e.fmul(value, e.fsub(_vector_constant(1.0), e.fmul(h1, h1))), s["risk_d1"], 8 * v
             )
-        d_pb = e.products([zero] * (pp // 8), r, s["risk_d1"], 0, w["risk_w1_t"], pp)
+        d_pb = e.products([[zero] * (pp // 8)], r, [(s["risk_d1"], 0)], w["risk_w1_t"], pp)[0]
         for v, value in enumerate(d_pb):
             index = e.int_op("z", "add", row, 8 * v)
             pb = e.load(s["pb"], index)
@@ -588,7 +645,7 @@ def _pb_update(
 
 # --- compiling and calling ---------------------------------------------------------------
 
-_compiled: dict[Shapes, tuple[Any, Any]] = {}
+_compiled: dict[tuple[Shapes, int], tuple[Any, Any]] = {}
 _compile_lock = threading.Lock()
 _SIGNATURE = ctypes.CFUNCTYPE(
     None, ctypes.c_int64, ctypes.c_int64, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p
@@ -606,11 +663,13 @@ def enabled() -> bool:
     return True
 
 
-def compiled(shapes: Shapes) -> Any:
-    """The kernel for ``shapes``, compiled once per process for this machine's processor
-    (LLVM's -O3 pipeline); a ctypes function."""
+def compiled(shapes: Shapes, group: int = 1) -> Any:
+    """The kernel for ``shapes`` and ``group`` sessions at once (:func:`regression_ir`),
+    compiled once per process for this machine's processor (LLVM's -O3 pipeline); a ctypes
+    function."""
+    key = (shapes, group)
     with _compile_lock:
-        if shapes not in _compiled:
+        if key not in _compiled:
             llvm = importlib.import_module("llvmlite.binding")
             llvm.initialize_native_target()
             llvm.initialize_native_asmprinter()
@@ -619,7 +678,7 @@ def compiled(shapes: Shapes) -> Any:
                 features=llvm.get_host_cpu_features().flatten(),
                 opt=3,
             )
-            module = llvm.parse_assembly(regression_ir(shapes))
+            module = llvm.parse_assembly(regression_ir(shapes, group))
             module.verify()
             options = llvm.create_pipeline_tuning_options(speed_level=3)
             builder = llvm.create_pass_builder(machine, options)
@@ -627,8 +686,8 @@ def compiled(shapes: Shapes) -> Any:
             engine = llvm.create_mcjit_compiler(module, machine)
             engine.finalize_object()
             function = _SIGNATURE(engine.get_function_address("regress"))
-            _compiled[shapes] = (function, engine)  # the engine owns the code: keep it
-        return _compiled[shapes][0]
+            _compiled[key] = (function, engine)  # the engine owns the code: keep it
+        return _compiled[key][0]
 
 
 def shapes_of(
@@ -813,11 +872,11 @@ class NativeRegression:
         self.shapes = shapes_of(network, config, meta)
         self.config = config
         self.meta = meta if self.shapes.risk_hidden else None
-        self._function = compiled(self.shapes)
         self._weights = _weights_block(params, self.shapes, config, self.meta)
-        self._scratch = np.zeros(self.shapes.scratch_size(), np.float32)
+        self._scratch = np.zeros(GROUP * self.shapes.scratch_size(), np.float32)
         self._layout = self.shapes.block_layout()
         self._lock = threading.Lock()
+        compiled(self.shapes)  # compile now, not at the first step
 
     def _barrier(self, meta: MetaParams | None) -> bool:
         """Whether a step given ``meta`` regresses through the safety barrier."""
@@ -835,27 +894,39 @@ class NativeRegression:
     ) -> Regressed[np.ndarray]:
         """The regression over a step's block; ``meta`` as the JAX step takes it (the
         barrier acts when given, with the guard "barrier"; see :meth:`applies`)."""
+        return Regressed(*(part[0] for part in self.many(np.asarray(block)[None], meta)))
+
+    def many(
+        self, blocks: jax.Array | np.ndarray, meta: MetaParams | None = None
+    ) -> Regressed[np.ndarray]:
+        """The regressions over many sessions' blocks, shape (B, block), ``GROUP`` sessions
+        to a kernel call; the results with a leading session axis."""
         if not self.applies(meta):
             raise ValueError("this kernel was built without that risk network")
-        values = np.array(block, dtype=np.float32, copy=True)
-        values[2] = 1.0 if self._barrier(meta) else 0.0
+        values = np.array(blocks, dtype=np.float32, copy=True)
+        values[:, 2] = 1.0 if self._barrier(meta) else 0.0
         shapes, layout = self.shapes, self._layout
-        length, pp = shapes.window, shapes.pp
-        n = int(values[1])
+        length, pp, sessions = shapes.window, shapes.pp, values.shape[0]
+        n = values[:, 1].astype(np.int64)
         rho_at, velocity_at = layout["rho"][0], layout["velocity"][0]
-        velocity = values[velocity_at : velocity_at + length * pp].reshape(length, pp)
+        velocity = values[:, velocity_at : velocity_at + length * pp].reshape(-1, length, pp)
         if self.config.iterations > 0:
-            velocity[n:] = 0.0  # the update leaves steps outside the window without momentum
+            # the update leaves steps outside the window without momentum
+            velocity[np.arange(length)[None, :] >= n[:, None]] = 0.0
             with self._lock:  # one scratch per kernel
-                self._function(
-                    self.config.iterations,
-                    self.config.pb.integration_length // 2,
-                    self._weights.ctypes.data,
-                    values.ctypes.data,
-                    self._scratch.ctypes.data,
-                )
-        rho = values[rho_at : rho_at + length * pp].reshape(length, pp)[:, : shapes.pb]
-        onset_at = layout["onset"][0]
-        motor = values[onset_at + shapes.sensory : onset_at + shapes.sensory + shapes.motor]
-        context = values[onset_at + shapes.sensory + shapes.motor : onset_at + shapes.io]
-        return Regressed(rho.copy(), velocity[:, : shapes.pb].copy(), context.copy(), motor.copy())
+                for first in range(0, sessions, GROUP):
+                    group = min(GROUP, sessions - first)
+                    compiled(shapes, group)(
+                        self.config.iterations,
+                        self.config.pb.integration_length // 2,
+                        self._weights.ctypes.data,
+                        values[first].ctypes.data,
+                        self._scratch.ctypes.data,
+                    )
+        rho = values[:, rho_at : rho_at + length * pp].reshape(-1, length, pp)[..., : shapes.pb]
+        onset_at = layout["onset"][0] + shapes.sensory
+        motor = values[:, onset_at : onset_at + shapes.motor]
+        context = values[:, onset_at + shapes.motor : onset_at - shapes.sensory + shapes.io]
+        return Regressed(
+            rho.copy(), velocity[..., : shapes.pb].copy(), context.copy(), motor.copy()
+        )
