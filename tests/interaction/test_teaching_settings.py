@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import pytest
 
 from rnnpb.cli import main
@@ -82,3 +84,16 @@ def test_teaching_tables_need_learn(research, tmp_path, capsys):
     assert main([*args, "--out", str(tmp_path / "run"), "--config", str(research)]) == 2
     err = capsys.readouterr().err
     assert "apply with --learn" in err and str(research) in err
+
+
+@pytest.mark.skipif(not hasattr(os, "sched_setaffinity"), reason="no CPU affinity here")
+def test_a_consolidation_process_keeps_to_one_core_of_those_it_may_use():
+    from rnnpb.interaction import background
+
+    allowed = os.sched_getaffinity(0)
+    try:
+        background._one_core()
+        kept = os.sched_getaffinity(0)
+        assert len(kept) == 1 and kept <= allowed
+    finally:
+        os.sched_setaffinity(0, allowed)

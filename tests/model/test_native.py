@@ -188,6 +188,15 @@ def test_the_jax_step_runs_where_the_native_loop_cannot(trained, monkeypatch):
     )
     assert projection is not None and projection.applies(meta)
     assert native_regression(params, trained.network, OnlineConfig(iterations=0)) is None
+
+    # An LLVM that cannot build the kernel: a warning, and the JAX loop.
+    def refuse(*_):
+        raise RuntimeError("no target for this processor")
+
+    monkeypatch.setattr(native_module, "compiled", refuse)
+    with pytest.warns(RuntimeWarning, match="no target for this processor"):
+        assert native_regression(params, trained.network, OnlineConfig(window=7)) is None
+    monkeypatch.undo()
     monkeypatch.setenv("RNNPB_NATIVE", "0")
     assert native_regression(params, trained.network, OnlineConfig()) is None
     assert MirrorSystem(trained)._native is None
