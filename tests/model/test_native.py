@@ -21,6 +21,21 @@ from .synthetic import make_sequences
 _jax_regression = jax.jit(regression, static_argnames=("config",))
 
 
+def _start(mirror: MirrorSystem, hands: np.ndarray):
+    """The state a mirror system's next step would regress from, given ``hands``, and its
+    block for the kernel."""
+    u = np.asarray(hands, np.float32)
+    return prepare_block(
+        mirror._params,
+        mirror._state,
+        u,
+        np.isfinite(u),
+        mirror.config,
+        mirror._candidates,
+        mirror._phase_candidates,
+    )
+
+
 def _assert_same_regression(kernel, params, start, block, gate, config, meta=None) -> None:
     expected = _jax_regression(params, start, gate, config, meta)
     got = kernel(block, meta)
@@ -48,17 +63,7 @@ def test_the_kernel_is_the_jax_loop_on_a_real_window(trained, setting):
     demo = make_sequences(n_samples=1, n_steps=45, seed=3, kinds=(1,))[0]
     for u in demo.sensory[:44]:
         mirror.step(u)
-    u = demo.sensory[44].astype(np.float32)
-    seen = np.isfinite(u)
-    start, block = prepare_block(
-        mirror._params,
-        mirror._state,
-        u,
-        seen,
-        config,
-        mirror._candidates,
-        mirror._phase_candidates,
-    )
+    start, block = _start(mirror, demo.sensory[44])
     gate = None
     if config.surprise_gate > 0:
         gate = jnp.asarray(np.asarray(block)[0])
@@ -77,16 +82,7 @@ def test_the_kernel_holds_the_safety_barrier(trained, span):
     demo = make_sequences(n_samples=1, n_steps=41, seed=4, kinds=(0,))[0]
     for u in demo.sensory[:40]:
         mirror.step(u)
-    u = demo.sensory[40].astype(np.float32)
-    start, block = prepare_block(
-        mirror._params,
-        mirror._state,
-        u,
-        np.isfinite(u),
-        config,
-        mirror._candidates,
-        mirror._phase_candidates,
-    )
+    start, block = _start(mirror, demo.sensory[40])
     kernel = NativeRegression(mirror._params, trained.network, config, meta)
     assert kernel.applies(meta) and kernel.applies(None)
     gate = jnp.asarray(np.asarray(block)[0])  # the default regression is gated
@@ -136,17 +132,7 @@ def test_sessions_regressed_together_are_each_regressed_alone(trained):
     blocks = []
     for t, u in enumerate(demo.sensory[:59]):
         if t in (5, 18, 30, 44, 58):
-            hands = demo.sensory[t + 1].astype(np.float32)
-            _, block = prepare_block(
-                mirror._params,
-                mirror._state,
-                hands,
-                np.isfinite(hands),
-                config,
-                mirror._candidates,
-                mirror._phase_candidates,
-            )
-            blocks.append(np.asarray(block))
+            blocks.append(np.asarray(_start(mirror, demo.sensory[t + 1])[1]))
         mirror.step(u)
     kernel = NativeRegression(mirror._params, trained.network, config)
     together = kernel.many(np.stack(blocks))
