@@ -273,7 +273,7 @@ class BatchedMirror:
 
 
 # Sessions stepped together by run_streams: beyond about 16 a session's share of the step
-# hardly falls (rnnpb bench: 16 sessions in about 7 times one session's step).
+# hardly falls (notes/2026-12-06-batched-runs-step-limits.md).
 POOL_SESSIONS = 16
 
 
