@@ -18,7 +18,9 @@ Print the speed of the parts that must keep up with real time, at the paper's si
 (12 inputs/outputs, 4 PB, 40 hidden, 30 context units), pinned to one CPU core and
 single-threaded, after warm-up:
 
-  - one learning iteration on 6 sequences x 50 steps (BPTT + weight and PB updates);
+  - one learning iteration on 6 sequences x 50 steps (BPTT + weight and PB updates), and
+    the same with its iterations in JAX rather than native code (rnnpb.model.native_learning),
+    timed alternately with it;
   - one on-line step (PB regression over a window of L = 30 steps, 100 iterations,
     then the motor command): median and 99th percentile, and the median of the same step
     without phase restarts, timed alternately with it (what they cost), and the step with
@@ -150,18 +152,24 @@ def run(args: argparse.Namespace) -> int:
     data = learning.prepare_data(sequences, JOINT_LIMITS)
     config = TrainConfig.paper()
     state = learning.init_state(data, network, config)
-    run_chunk = learning.chunk_runner(config)
     inputs = jax.numpy.asarray(data.inputs, jax.numpy.float32)
     valid = jax.numpy.asarray(data.valid)
     chunk = 200
     every_pb = jax.numpy.ones(data.valid.shape[0], bool)
-    state = jax.block_until_ready(run_chunk(state, inputs, valid, chunk, every_pb))
-    chunk_times = []
-    for _ in range(7):
-        t0 = time.perf_counter()
-        state = jax.block_until_ready(run_chunk(state, inputs, valid, chunk, every_pb))
-        chunk_times.append((time.perf_counter() - t0) / chunk * 1e3)
-    train_ms = float(np.median(chunk_times))
+    # The learning's chunk (native where it runs) and the compiled JAX chunk, alternately.
+    runners = {
+        "native": learning.chunk_runner(config),
+        "jax": learning.chunk_runner(config, native=False),
+    }
+    chunk_times: dict[str, list[float]] = {name: [] for name in runners}
+    for repeat in range(8):
+        for name, run_chunk in runners.items():
+            t0 = time.perf_counter()
+            jax.block_until_ready(run_chunk(state, inputs, valid, chunk, every_pb))
+            if repeat:  # the first is the warm-up
+                chunk_times[name].append((time.perf_counter() - t0) / chunk * 1e3)
+    train_ms = float(np.median(chunk_times["native"]))
+    train_jax_ms = float(np.median(chunk_times["jax"]))
     next_part()
 
     # The two-level step needs a lower model that knows the patterns (the shipped one) and
@@ -333,6 +341,7 @@ def run(args: argparse.Namespace) -> int:
     figures = {
         "train_iteration_ms_median": train_ms,
         "train_50k_iterations_s_estimate": train_ms * 50.0,
+        "train_iteration_jax_ms_median": train_jax_ms,
         "online_step_ms_median": float(np.median(step_times)),
         "online_step_ms_p99": float(np.percentile(step_times, 99)),
         "online_step_without_phase_restarts_ms_median": float(np.median(plain_times)),
@@ -382,6 +391,10 @@ def run(args: argparse.Namespace) -> int:
     print(
         f"  learning iteration (6 seq x 50 steps):   {train_ms:8.3f} ms median "
         f"(50,000 iterations ~ {train_ms * 50:.0f} s)"
+    )
+    print(
+        f"  the same, its iterations in JAX:         {train_jax_ms:8.3f} ms median "
+        f"({train_jax_ms / train_ms:.2f}x the native)"
     )
     print(
         f"  on-line step (L={online.window}, {online.iterations} it.): "

@@ -360,17 +360,34 @@ ChunkRunner = Callable[..., TrainState]
 """``run_chunk(state, inputs, valid, n_iterations, pb_learning, teacher=None) -> state``."""
 
 
-def chunk_runner(config: TrainConfig) -> ChunkRunner:
+def chunk_runner(config: TrainConfig, native: bool = True) -> ChunkRunner:
     """The compiled function ``run_chunk(state, inputs, valid, n_iterations, pb_learning,
     teacher=None) -> state`` that runs ``n_iterations`` learning iterations (``inputs`` (S, T,
     I), ``valid`` (S, T-1)); ``pb_learning`` (S,) bool says whose PB profile learns (eqs. 1–2):
     a sequence with False keeps its ``rho`` exactly, and its momentum stays zero. One function
     for every mask: the mask is an argument, not a setting compiled in. ``teacher``
-    (:class:`Teacher`) gives the sequences it flags its predictions as their targets."""
+    (:class:`Teacher`) gives the sequences it flags its predictions as their targets.
+
+    The iterations run in native code (:mod:`rnnpb.model.native_learning`) where it runs;
+    ``native=False``, ``RNNPB_NATIVE=0`` or a missing llvmlite give the compiled JAX chunk,
+    the reference."""
     # Settings that do not enter the compiled update are normalized away so that runs that
     # differ only in them share one compiled function.
     normal = replace(config, iterations=0, seed=0, checkpoint_every=1)
-    return _compiled_chunk(normal.with_tuning(chunk_iterations=1))
+    normal = normal.with_tuning(chunk_iterations=1)
+    return _runner(normal) if native else _compiled_chunk(normal)
+
+
+@functools.lru_cache(maxsize=16)
+def _runner(config: TrainConfig) -> ChunkRunner:
+    """The native chunk (:mod:`rnnpb.model.native_learning`) where it runs, else the compiled
+    JAX chunk: the reference, and what the native one falls back to."""
+    compiled = _compiled_chunk(config)
+    from rnnpb.model import native, native_learning
+
+    if not native.enabled():
+        return compiled
+    return native_learning.NativeChunk(config, compiled)
 
 
 def seeds_chunk_runner(config: TrainConfig) -> ChunkRunner:
@@ -379,13 +396,37 @@ def seeds_chunk_runner(config: TrainConfig) -> ChunkRunner:
     valid, n_iterations, pb_learning) -> states``. Each state's arithmetic is its own
     iteration's, so each seed learns what it learns alone."""
     normal = replace(config, iterations=0, seed=0, checkpoint_every=1)
-    return _compiled_seeds_chunk(normal.with_tuning(chunk_iterations=1))
+    return _seeds_runner(normal.with_tuning(chunk_iterations=1))
 
 
 @functools.lru_cache(maxsize=8)
-def _compiled_seeds_chunk(config: TrainConfig) -> ChunkRunner:
-    run_chunk = _compiled_chunk(config)
-    return jax.jit(jax.vmap(run_chunk, in_axes=(0, None, None, None, None)))
+def _seeds_runner(config: TrainConfig) -> ChunkRunner:
+    run_chunk = _runner(config)
+    if run_chunk is _compiled_chunk(config):
+        return jax.jit(jax.vmap(run_chunk, in_axes=(0, None, None, None, None)))
+
+    def each_seed(
+        states: TrainState,
+        inputs: jax.Array,
+        valid: jax.Array,
+        n_iterations: jax.Array,
+        pb_learning: jax.Array,
+    ) -> TrainState:
+        # The native chunk runs one network at a time: each seed's state in turn.
+        count = int(states.iteration.shape[0])
+        learned = [
+            run_chunk(
+                jax.tree_util.tree_map(lambda leaf, i=i: leaf[i], states),
+                inputs,
+                valid,
+                n_iterations,
+                pb_learning,
+            )
+            for i in range(count)
+        ]
+        return jax.tree_util.tree_map(lambda *leaves: jnp.stack(leaves), *learned)
+
+    return each_seed
 
 
 @functools.lru_cache(maxsize=16)

@@ -27,6 +27,7 @@ PB (P); the padding's weights are 0, so it changes nothing.
 from __future__ import annotations
 
 import ctypes
+import hashlib
 import importlib
 import os
 import struct
@@ -34,6 +35,7 @@ import threading
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import jax
@@ -670,24 +672,97 @@ def compiled(shapes: Shapes, group: int = 1) -> Any:
     key = (shapes, group)
     with _compile_lock:
         if key not in _compiled:
-            llvm = importlib.import_module("llvmlite.binding")
-            llvm.initialize_native_target()
-            llvm.initialize_native_asmprinter()
-            machine = llvm.Target.from_default_triple().create_target_machine(
-                cpu=llvm.get_host_cpu_name(),
-                features=llvm.get_host_cpu_features().flatten(),
-                opt=3,
-            )
-            module = llvm.parse_assembly(regression_ir(shapes, group))
-            module.verify()
-            options = llvm.create_pipeline_tuning_options(speed_level=3)
-            builder = llvm.create_pass_builder(machine, options)
-            builder.getModulePassManager().run(module, builder)
-            engine = llvm.create_mcjit_compiler(module, machine)
-            engine.finalize_object()
-            function = _SIGNATURE(engine.get_function_address("regress"))
-            _compiled[key] = (function, engine)  # the engine owns the code: keep it
+            _compiled[key] = build(regression_ir(shapes, group), "regress", _SIGNATURE)
         return _compiled[key][0]
+
+
+def build(ir: str, name: str, signature: Any) -> tuple[Any, Any]:
+    """The function ``name`` of the module ``ir``, compiled for this machine's processor
+    (LLVM's -O3 pipeline), as a ctypes function of ``signature``; and the engine that owns
+    its code (keep it as long as the function).
+
+    The machine code is kept on disk beside the compiled JAX programs (:func:`object_folder`),
+    named by a digest of the module, the processor, its features and LLVM's version, so that
+    a later process loads it instead of compiling it again; a file that does not match its
+    own digest is compiled again and replaced."""
+    llvm = importlib.import_module("llvmlite.binding")
+    llvm.initialize_native_target()
+    llvm.initialize_native_asmprinter()
+    cpu, features = llvm.get_host_cpu_name(), llvm.get_host_cpu_features().flatten()
+    target = llvm.Target.from_default_triple()
+    machine = target.create_target_machine(cpu=cpu, features=features, opt=3)
+    version = importlib.import_module("llvmlite").__version__
+    digest = hashlib.sha256(
+        "\n".join([version, str(llvm.get_default_triple()), cpu, features, ir]).encode()
+    ).hexdigest()
+    folder = object_folder()
+    path = None if folder is None else folder / f"{name}-{digest[:32]}.o"
+    code = _read_object(path)
+    if code is None:
+        module = llvm.parse_assembly(ir)
+        module.verify()
+        options = llvm.create_pipeline_tuning_options(speed_level=3)
+        builder = llvm.create_pass_builder(machine, options)
+        builder.getModulePassManager().run(module, builder)
+        code = machine.emit_object(module)
+        _write_object(path, code)
+    engine = llvm.create_mcjit_compiler(llvm.parse_assembly(""), machine)
+    engine.add_object_file(llvm.ObjectFileRef.from_data(code))
+    engine.finalize_object()
+    address = engine.get_function_address(name)
+    if not address:
+        raise RuntimeError(f"the compiled code has no function {name!r}")
+    return signature(address), engine
+
+
+_OBJECT_MAGIC = b"rnnpb native object 1\n"
+
+
+def object_folder() -> Path | None:
+    """Where compiled native code is kept: ``native`` in the folder of the compiled JAX
+    programs (``rnnpb._xla.cache_folder``: ``RNNPB_XLA_CACHE`` moves it, ``0`` turns both
+    off); None when off or when the folder cannot be made (a read-only home: compiled in
+    every process, silently)."""
+    from rnnpb import _xla
+
+    base = _xla.cache_folder()
+    if base is None:
+        return None
+    folder = base / "native"
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        return None
+    return folder
+
+
+def _read_object(path: Path | None) -> bytes | None:
+    """The machine code kept at ``path``, or None: no file, unreadable, or not matching its
+    digest (a file cut short or damaged)."""
+    if path is None:
+        return None
+    try:
+        data = path.read_bytes()
+    except OSError:
+        return None
+    head = len(_OBJECT_MAGIC)
+    digest, code = data[head : head + 32], data[head + 32 :]
+    if data[:head] != _OBJECT_MAGIC or hashlib.sha256(code).digest() != digest or not code:
+        return None
+    return code
+
+
+def _write_object(path: Path | None, code: bytes) -> None:
+    """Keep ``code`` at ``path`` whole or not at all (a temporary file renamed over it); a
+    folder that cannot be written to is left alone."""
+    if path is None:
+        return
+    temporary = path.with_name(f".{path.name}.{os.getpid()}.{threading.get_ident()}")
+    try:
+        temporary.write_bytes(_OBJECT_MAGIC + hashlib.sha256(code).digest() + code)
+        os.replace(temporary, path)
+    except OSError:
+        temporary.unlink(missing_ok=True)
 
 
 def shapes_of(

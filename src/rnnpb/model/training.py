@@ -186,13 +186,14 @@ def train_seeds(
     *,
     progress: Callable[[TrainingProgress], None] | None = None,
 ) -> list[TrainedModel]:
-    """Learn the sequences once per seed, all seeds in one compiled call; return the models
-    in the order of ``seeds``.
+    """Learn the sequences once per seed; return the models in the order of ``seeds``.
 
-    Each model is the one :func:`train` learns with ``config``'s seed replaced, for less CPU
-    than a call per seed (one network's products are too small to keep the processor busy, a
-    batch of networks fills it): the same numbers with the paper's gradient descent, the
-    same to rounding with Adam, whose batched update rounds differently. Each model records
+    Each model is the one :func:`train` learns with ``config``'s seed replaced. The native
+    iterations (:mod:`rnnpb.model.native_learning`) run the seeds one after the other, each
+    the same numbers as :func:`train`'s; the JAX chunk runs them in one compiled call, for
+    less CPU than a call per seed (one network's products are too small to keep the processor
+    busy, a batch of networks fills it): the same numbers with the paper's gradient descent,
+    the same to rounding with Adam, whose batched update rounds differently. Each model records
     the run's wall time as its ``seconds``. No checkpoints or warm starts: those are
     :func:`train`'s. ``progress`` receives the largest error over the seeds after each chunk.
     """
