@@ -167,6 +167,7 @@ def test_bench_prints_and_writes_its_figures(tmp_path):
     figures = json.loads(path.read_text())
     for key in (
         "train_iteration_ms_median",
+        "train_iteration_jax_ms_median",
         "online_step_ms_median",
         "online_step_ms_p99",
         "online_step_without_phase_restarts_ms_median",
