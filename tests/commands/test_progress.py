@@ -35,4 +35,5 @@ def test_the_demo_says_how_long_it_takes():
     )
     assert demo._estimate(ExperimentConfig(workers=1)).startswith(f"about {2 * full:.0f} minutes")
     quick = ExperimentConfig.quick_run()
-    assert demo._estimate(quick).startswith(f"about {quick_minutes:.0f} minutes")
+    assert demo._estimate(quick).startswith(f"about {quick_minutes:.0f} minute")
+    assert not demo._estimate(quick).startswith("about 1 minutes")

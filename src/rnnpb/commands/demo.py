@@ -54,8 +54,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 #: Minutes the run takes on 2 cores with 2 workers (the measured runs: notes/2026-12-03-history.md,
-#: notes/2026-12-06-native-loop.md).
-MEASURED_MINUTES = {"full": 5.5, "quick": 3.0}
+#: notes/2026-12-06-native-learning.md).
+MEASURED_MINUTES = {"full": 3.5, "quick": 1.0}
 
 
 def _estimate(config) -> str:
@@ -77,7 +77,8 @@ def _estimate(config) -> str:
         else ""
     )
     return (
-        f"about {minutes:.0f} minutes on 2 cores with {config.workers} worker(s)"
+        f"about {minutes:.0f} minute{'' if round(minutes) == 1 else 's'} on 2 cores with "
+        f"{config.workers} worker(s)"
         f"{more}{seeds} (longer while other programs use the cores)"
     )
 
