@@ -484,15 +484,26 @@ def regression_ir(shapes: Shapes, group: int = 1) -> str:
         return []
 
     e.loop("%iterations", [], iteration)
+    return module(
+        "regress(i64 %iterations, i64 %half, ptr noalias %weights, ptr noalias %blocks, "
+        "ptr noalias %scratch)",
+        e,
+    )
+
+
+def module(signature: str, e: _Emitter) -> str:
+    """A module of one function, ``void @signature``, whose body ``e`` holds (its return
+    added), with the intrinsics the emitter's code calls declared."""
     e.emit("ret void")
     return "\n".join(
         [
             f"declare {V} @llvm.minnum.v8f32({V}, {V})",
             f"declare {V} @llvm.maxnum.v8f32({V}, {V})",
             f"declare {V} @llvm.fma.v8f32({V}, {V}, {V})",
+            f"declare {V} @llvm.sqrt.v8f32({V})",
             f"declare float @llvm.vector.reduce.fadd.v8f32(float, {V})",
-            "define void @regress(i64 %iterations, i64 %half, ptr noalias %weights, "
-            "ptr noalias %blocks, ptr noalias %scratch) {",
+            "declare <8 x i32> @llvm.fshl.v8i32(<8 x i32>, <8 x i32>, <8 x i32>)",
+            f"define void @{signature} {{",
             "entry:",
             *e.lines,
             "}",

@@ -42,6 +42,7 @@ from rnnpb.model.native import (
     _pb_update,
     _vector_constant,
     build,
+    module,
 )
 
 GROUP = 4  # sequences that share each loaded weight vector
@@ -630,20 +631,10 @@ def learning_ir(shapes: LearningShapes) -> str:
         return []
 
     e.loop("%iterations", [], iteration)
-    e.emit("ret void")
-    return "\n".join(
-        [
-            f"declare {V} @llvm.minnum.v8f32({V}, {V})",
-            f"declare {V} @llvm.maxnum.v8f32({V}, {V})",
-            f"declare {V} @llvm.fma.v8f32({V}, {V}, {V})",
-            f"declare {V} @llvm.sqrt.v8f32({V})",
-            f"declare {I32} @llvm.fshl.v8i32({I32}, {I32}, {I32})",
-            "define void @learn(i64 %iterations, i64 %half, i64 %sequences, i64 %steps, "
-            "ptr noalias %table, ptr noalias %keys, ptr noalias %schedule) {",
-            "entry:",
-            *e.lines,
-            "}",
-        ]
+    return module(
+        "learn(i64 %iterations, i64 %half, i64 %sequences, i64 %steps, ptr noalias %table, "
+        "ptr noalias %keys, ptr noalias %schedule)",
+        e,
     )
 
 
