@@ -130,6 +130,9 @@ def test_training_learns_the_same_with_either_chunk(monkeypatch):
     expected = np.array(reference.meta["training"]["history"])
     np.testing.assert_allclose(history, expected, rtol=1e-3)
     assert history[-1, 1] < history[0, 1] / 2  # it learned
+    # each model says which code learned it
+    assert native.meta["training"]["code"].startswith("native (llvmlite ")
+    assert reference.meta["training"]["code"] == "jax"
 
 
 def test_a_kernel_llvm_cannot_build_falls_back_with_one_warning(monkeypatch):

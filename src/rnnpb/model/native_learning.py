@@ -23,6 +23,7 @@ so the context an output row holds is where the next input row wants it.
 from __future__ import annotations
 
 import ctypes
+import importlib
 import threading
 import warnings
 from collections.abc import Callable
@@ -754,6 +755,11 @@ _SCALARS = (
 )
 
 
+def code_version() -> str:
+    """What a model learned natively records as its learning's code."""
+    return f"native (llvmlite {importlib.import_module('llvmlite').__version__})"
+
+
 def compiled(shapes: LearningShapes) -> Any:
     """The learning kernel for ``shapes`` (:func:`learning_ir`), compiled once per process."""
     with _compile_lock:
@@ -827,6 +833,17 @@ class NativeChunk:
         self.config = config
         self.fallback = fallback
         self._warned = False
+
+    def runs_natively(self, state: Any, valid: Any, teacher: Any = None) -> bool:
+        """Whether a chunk from ``state`` over ``valid`` runs in the kernel (every sequence has
+        a step to predict and the kernel builds), rather than the fallback."""
+        if not np.all(np.asarray(valid, bool).sum(axis=1) >= 1):
+            return False
+        try:
+            compiled(self.shapes(state, teacher))
+        except Exception:  # noqa: BLE001 - the call warns and falls back
+            return False
+        return True
 
     def shapes(self, state: Any, teacher: Any) -> LearningShapes:
         return LearningShapes(

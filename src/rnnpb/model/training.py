@@ -174,7 +174,8 @@ def train(
         if bar is not None:
             bar.close()
     elapsed = time.perf_counter() - start
-    return _finish(state, data, network, config, history, elapsed)
+    code = _code(run_chunk, state, data, warm_start.teacher() if warm_start else None)
+    return _finish(state, data, network, config, history, elapsed, code)
 
 
 def train_seeds(
@@ -244,6 +245,7 @@ def train_seeds(
                 )
             )
     elapsed = time.perf_counter() - start
+    code = _code(chunk_runner(config), states[0], data, None)
     return [
         _finish(
             jax.tree_util.tree_map(lambda leaf, i=i: leaf[i], state),
@@ -252,6 +254,7 @@ def train_seeds(
             configs[i],
             histories[i],
             elapsed,
+            code,
         )
         for i in range(len(seeds))
     ]
@@ -264,6 +267,18 @@ def _chunk(config: TrainConfig, done: int) -> int:
     return min(config.chunk_iterations, config.iterations - done, next_checkpoint - done)
 
 
+def _code(run_chunk: object, state: TrainState, data: TrainingData, teacher: object) -> str:
+    """Which code ran the iterations: the native kernel (with llvmlite's version) or JAX's
+    compiled chunk; models from the two agree to float32 rounding, not bit for bit."""
+    from rnnpb.model import native_learning
+
+    if isinstance(run_chunk, native_learning.NativeChunk) and run_chunk.runs_natively(
+        state, data.valid, teacher
+    ):
+        return native_learning.code_version()
+    return "jax"
+
+
 def _finish(
     state: TrainState,
     data: TrainingData,
@@ -271,6 +286,7 @@ def _finish(
     config: TrainConfig,
     history: list[tuple[int, float]],
     elapsed: float,
+    code: str,
 ) -> TrainedModel:
     inputs = jnp.asarray(data.inputs, jnp.float32)
     valid = jnp.asarray(data.valid)
@@ -292,6 +308,7 @@ def _finish(
             "rms_per_output": np.sqrt(per_output).tolist(),
             "history": history,
             "seconds": elapsed,
+            "code": code,
             "data_fingerprint": data.fingerprint,
         },
         "rnnpb_version": __version__,
