@@ -10,10 +10,16 @@ with 8-wide vectors (the emitter of :mod:`rnnpb.model.native`) and compiled at r
 llvmlite. Sequences run four at a time, so that each weight vector loaded serves four
 sequences' sums, and the weights' gradients are summed as the errors come back, step by step.
 
-The input noise is JAX's: each chunk draws it first, from the same keys, in the same order, as
-the compiled chunk does, so the two learn from the same noise. The compiled JAX chunk is the
-reference and the fallback (llvmlite missing, ``RNNPB_NATIVE=0``, a sequence without a step to
-predict); ``tests/model/test_native_learning.py`` holds the two together.
+The input noise is JAX's: each iteration's noise key is split off as the compiled chunk splits
+it, and the kernel makes ``jax.random.normal``'s draws at the same places (threefry-2x32 bits,
+the uniform's mantissa trick, √2 · erfinv by XLA's polynomial), so the two learn from the same
+noise. The compiled JAX chunk is the reference and the fallback (llvmlite missing,
+``RNNPB_NATIVE=0``, a kernel LLVM cannot build, a sequence without a step to predict);
+``tests/model/test_native_learning.py`` holds the two together.
+
+The number of sequences and their steps are the call's: one kernel, compiled per network size,
+optimizer, teacher and noise, serves every set and every consolidation, and its machine code is
+kept on disk (:func:`rnnpb.model.native.build`).
 
 Layouts (float32, rows padded to whole 8-wide vectors): a step's inputs and outputs with the
 context share one row of ``OP`` values — the inputs (or predictions) first, then the context —
@@ -300,7 +306,6 @@ def learning_ir(shapes: LearningShapes) -> str:
     for index, name in enumerate(shapes.arrays(1, 1)):
         slot = e.op("p", f"getelementptr inbounds ptr, ptr %table, i64 {index}")
         ptr[name] = e.op("t", f"load ptr, ptr {slot}, align 8")
-    at, data_at = ptr, ptr
 
     def parts(base: str, layout: dict[str, tuple[int, int]]) -> dict[str, str]:
         return {
@@ -311,7 +316,9 @@ def learning_ir(shapes: LearningShapes) -> str:
     student = parts(ptr["weights"], weights_layout) | {"context": ptr["context"]}
     grads = parts(ptr["weight_grads"], weights_layout) | {"context": ptr["context_grads"]}
     teacher = parts(ptr["teacher"], weights_layout) if shapes.teacher else {}
-    scalar = {name: e.broadcast(e.load_scalar(at["scalars"], i)) for i, name in enumerate(_SCALARS)}
+    scalar = {
+        name: e.broadcast(e.load_scalar(ptr["scalars"], i)) for i, name in enumerate(_SCALARS)
+    }
     coefficient = {k: scalar[k] for k in ("k_bp", "k_nb", "rate", "momentum")}
 
     def lane_mask(low: int, high: int, v: int) -> str:
@@ -333,23 +340,23 @@ def learning_ir(shapes: LearningShapes) -> str:
         along = e.int_op("q", "mul", sequence, sequence_row)
         pbs = e.int_op("q", "mul", sequence, sequence_pbs)
         one = {
-            "inputs": e.address(data_at["inputs"], along),
-            "targets": e.address(data_at["targets"], along),
-            "mask": e.address(data_at["mask"], along),
-            "rho": e.address(at["rho"], pbs),
-            "velocity": e.address(at["velocity"], pbs),
+            "inputs": e.address(ptr["inputs"], along),
+            "targets": e.address(ptr["targets"], along),
+            "mask": e.address(ptr["mask"], along),
+            "rho": e.address(ptr["rho"], pbs),
+            "velocity": e.address(ptr["velocity"], pbs),
             "context": e.address(student["context"], e.int_op("q", "mul", sequence, op)),
             "grad_context": e.address(grads["context"], e.int_op("q", "mul", sequence, op)),
         }
-        one["n"] = e.op("n", f"fptosi float {e.load_scalar(data_at['n'], sequence)} to i64")
-        learns = e.load_scalar(at["learns"], sequence)
+        one["n"] = e.op("n", f"fptosi float {e.load_scalar(ptr['n'], sequence)} to i64")
+        learns = e.load_scalar(ptr["learns"], sequence)
         one["learns"] = e.op("l", f"fcmp one float {learns}, 0.0")
         if shapes.teacher:
             one["teacher_context"] = e.address(
-                data_at["teacher_context"], e.int_op("q", "mul", sequence, op)
+                ptr["teacher_context"], e.int_op("q", "mul", sequence, op)
             )
-            one["teacher_pb"] = e.address(data_at["teacher_pb"], e.int_op("q", "mul", sequence, pp))
-            taught = e.load_scalar(data_at["taught"], sequence)
+            one["teacher_pb"] = e.address(ptr["teacher_pb"], e.int_op("q", "mul", sequence, pp))
+            taught = e.load_scalar(ptr["taught"], sequence)
             one["taught"] = e.op("l", f"fcmp one float {taught}, 0.0")
         return one
 
@@ -494,7 +501,7 @@ def learning_ir(shapes: LearningShapes) -> str:
                 [[zero] * hv for _ in group],
                 rows,
                 [(scr[g]["d_out"], 0) for g in group],
-                at["w_out_t"],
+                ptr["w_out_t"],
                 hp,
             )
             dh = []
@@ -511,14 +518,14 @@ def learning_ir(shapes: LearningShapes) -> str:
             accumulate(grads["w_p"], p, [(scr[g]["pb"], pb_row) for g in group], dh, hp)
             add_into(grads["b_h"], dh)
             errors = [(scr[g]["dh"], 0) for g in group]
-            d_pb = e.products([[zero] * pv for _ in group], h, errors, at["w_p_t"], pp)
+            d_pb = e.products([[zero] * pv for _ in group], h, errors, ptr["w_p_t"], pp)
             for g in group:
                 for v, total in enumerate(d_pb[g]):
                     index = e.int_op("q", "add", pb_row, 8 * v)
                     pb = e.load(scr[g]["pb"], index)
                     gradient = e.fmul(e.fmul(total, pb), e.one_minus(pb))
                     e.store(e.fsub(zero, gradient), scr[g]["grad"], index)
-            d_next = e.products([[zero] * ov for _ in group], h, errors, at["w_c_t"], op)
+            d_next = e.products([[zero] * ov for _ in group], h, errors, ptr["w_c_t"], op)
             return [value for values in d_next for value in values]
 
         d_first = e.loop(count, [zero] * (ov * len(seqs)), step)
@@ -628,7 +635,7 @@ def learning_ir(shapes: LearningShapes) -> str:
             (("context", "context_grads", "context_first", "context_second"), contexts),
         ):
             _optimizer_step(e, shapes, [ptr[name] for name in names], scalar, correction, count)
-        _transposes(e, shapes, student, at)
+        _transposes(e, shapes, student, ptr)
         return []
 
     e.loop("%iterations", [], iteration)
@@ -680,7 +687,7 @@ def _optimizer_step(
 
 
 def _transposes(
-    e: _Emitter, shapes: LearningShapes, student: dict[str, str], at: dict[str, str]
+    e: _Emitter, shapes: LearningShapes, student: dict[str, str], ptr: dict[str, str]
 ) -> None:
     """The transposed weights the backward pass reads, from the weights just stepped."""
     io, c, h = shapes.io, shapes.context, shapes.hidden
@@ -718,12 +725,12 @@ def _transposes(
         e.loop(rows, [], outer)
 
     # w_out_t (rows: outputs with the context; HP): w_out (H, OP) transposed
-    transpose(student["w_out"], op, at["w_out_t"], hp, h, io + c, 0, 0)
+    transpose(student["w_out"], op, ptr["w_out_t"], hp, h, io + c, 0, 0)
     # w_c_t (H, OP), context columns: the context rows of w_xc transposed
     context_rows = e.address(student["w_xc"], io * hp)
-    transpose(context_rows, hp, at["w_c_t"], op, c, h, io, 0)
+    transpose(context_rows, hp, ptr["w_c_t"], op, c, h, io, 0)
     # w_p_t (H, PP): w_p (P, HP) transposed
-    transpose(student["w_p"], hp, at["w_p_t"], pp, shapes.pb, h, 0, 0)
+    transpose(student["w_p"], hp, ptr["w_p_t"], pp, shapes.pb, h, 0, 0)
 
 
 # --- compiling and calling ---------------------------------------------------------------
