@@ -401,8 +401,10 @@ def seeds_chunk_runner(config: TrainConfig) -> ChunkRunner:
 
 @functools.lru_cache(maxsize=8)
 def _seeds_runner(config: TrainConfig) -> ChunkRunner:
+    from rnnpb.model.native_learning import NativeChunk
+
     run_chunk = _runner(config)
-    if run_chunk is _compiled_chunk(config):
+    if not isinstance(run_chunk, NativeChunk):
         return jax.jit(jax.vmap(run_chunk, in_axes=(0, None, None, None, None)))
 
     def each_seed(
