@@ -185,15 +185,29 @@ def compilation_cache(environ: MutableMapping[str, str] | None = None) -> Path |
     for name, value in settings.items():
         if not environ.get(name, "").strip():  # unset or blank; a value of the user's stays
             environ[name] = value
-    if environ is os.environ and "jax" in sys.modules:
-        import jax
-
-        jax.config.update("jax_compilation_cache_dir", environ["JAX_COMPILATION_CACHE_DIR"])
-        jax.config.update(
-            "jax_compilation_cache_max_size", int(environ["JAX_COMPILATION_CACHE_MAX_SIZE"])
-        )
-        jax.config.update(
-            "jax_persistent_cache_min_compile_time_secs",
-            float(environ["JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS"]),
-        )
+    if environ is os.environ:
+        follow_cache_settings()
     return folder
+
+
+def follow_cache_settings() -> None:
+    """JAX, when imported, takes its persistent cache's settings from this process's
+    environment as it is now (a process forked from one that imported JAX before its
+    environment was set: :mod:`rnnpb.interaction.background`)."""
+    if "jax" not in sys.modules:
+        return
+    import jax
+
+    folder = os.environ.get("JAX_COMPILATION_CACHE_DIR", "").strip() or None
+    jax.config.update("jax_compilation_cache_dir", folder)
+    numbers = {
+        "JAX_COMPILATION_CACHE_MAX_SIZE": ("jax_compilation_cache_max_size", int),
+        "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS": (
+            "jax_persistent_cache_min_compile_time_secs",
+            float,
+        ),
+    }
+    for name, (option, kind) in numbers.items():
+        value = os.environ.get(name, "").strip()
+        if value:
+            jax.config.update(option, kind(value))

@@ -1,9 +1,17 @@
-"""Teaching's work off the loop's thread: a consolidation in a spawned process
+"""Teaching's work off the loop's thread: a consolidation in a process of its own
 (:class:`BackgroundConsolidation`) and a new model version's mirror system built and compiled
-in a thread (:class:`PreparedMirror`), so that a paced loop keeps its deadlines."""
+in a thread (:class:`PreparedMirror`), so that a paced loop keeps its deadlines.
+
+A consolidation's process is forked from a server process that has already imported JAX and
+the model's modules (:func:`process_context`; started ahead by :func:`start_process_server`):
+importing them takes about 1.4 s of CPU, which every spawned process would pay again. The
+server never starts JAX's backend, so each process forked from it starts its own, as a spawned
+one would. Where the platform cannot fork a server, each consolidation is a spawned process.
+"""
 
 from __future__ import annotations
 
+import math
 import os
 import time
 from collections.abc import Mapping
@@ -15,6 +23,41 @@ import numpy as np
 if TYPE_CHECKING:
     from rnnpb.model import TrainedModel
     from rnnpb.model.consolidation import ConsolidationConfig
+
+
+# What the server imports before it forks a consolidation: JAX and what the worker imports.
+PRELOAD = (
+    "jax",
+    "jax.numpy",
+    "optax",
+    "rnnpb.interaction.background",
+    "rnnpb.memory",
+    "rnnpb.model",
+    "rnnpb.model.consolidation",
+)
+
+
+def process_context():
+    """The multiprocessing context of a consolidation's process: ``forkserver`` with
+    :data:`PRELOAD` imported where the platform has it, else ``spawn``."""
+    import multiprocessing
+
+    if "forkserver" not in multiprocessing.get_all_start_methods():
+        return multiprocessing.get_context("spawn")
+    context = multiprocessing.get_context("forkserver")
+    context.set_forkserver_preload(list(PRELOAD))
+    return context
+
+
+def start_process_server() -> None:
+    """Start the server consolidations are forked from, if not yet running, without waiting
+    for it: it imports :data:`PRELOAD` while the loop runs, so that the first consolidation
+    starts at once. Nothing to do where consolidations are spawned."""
+    context = process_context()
+    if context.get_start_method() == "forkserver":
+        from multiprocessing import forkserver
+
+        forkserver.ensure_running()
 
 
 def teaching_consolidation(
@@ -32,6 +75,15 @@ def teaching_consolidation(
     return consolidation_config(
         model, "teach", iterations=iterations, overrides=overrides, origin=origin
     )
+
+
+# The environment variables a consolidation reads: XLA's, JAX's and rnnpb's own.
+SETTINGS = ("XLA_", "JAX_", "RNNPB_")
+
+
+def _settings() -> dict[str, str]:
+    """This process's :data:`SETTINGS` variables, for its consolidation's process."""
+    return {name: value for name, value in os.environ.items() if name.startswith(SETTINGS)}
 
 
 def _one_core() -> None:
@@ -65,14 +117,22 @@ def _consolidation_worker(
     iterations: int | None = None,
     overrides: Mapping[str, Mapping[str, Any]] | None = None,
     origin: str = "--config",
+    environment: Mapping[str, str] | None = None,
 ) -> None:
-    """In a spawned process: consolidate the episodes into the model, write the new version,
+    """In a process of its own: consolidate the episodes into the model, write the new version,
     record the consolidation in the memory; report progress and the outcome on ``queue``.
+    ``environment``: the settings of the process that started it (:func:`_settings`), which a
+    process forked from a server started earlier would not have.
 
     The matrix products of learning are too small to share between threads: one thread gives
     the same model for about a fifth less CPU, which the loop's process keeps."""
     from rnnpb import _xla
 
+    for name in [n for n in os.environ if n.startswith(SETTINGS)]:
+        if environment is not None and name not in environment:
+            del os.environ[name]
+    os.environ.update(environment or {})
+    _xla.follow_cache_settings()  # JAX was imported by the server, before this environment
     if not _xla.backend_started():  # the flag is read when the backend starts
         _xla.single_threaded()
         _one_core()
@@ -105,7 +165,7 @@ def _consolidation_worker(
                 rehearsed=[*rehearsed, *sequences],
                 seconds=seconds,
             )
-        queue.put(("done", out_path, seconds))
+        queue.put(("done", out_path, seconds, time.process_time()))
     except BaseException as error:  # the parent keeps its model and says why
         message = (
             f"{type(error).__name__}: {error}" if not str(error).startswith("rnnpb") else str(error)
@@ -125,13 +185,15 @@ def _consolidation_worker(
                 )
         except BaseException:  # noqa: BLE001 - the message to the parent matters more
             pass
-        queue.put(("failed", message))
+        queue.put(("failed", message, time.process_time()))
 
 
 @dataclass(frozen=True)
 class ConsolidationState:
     """Where a background consolidation is: ``running`` (``iteration`` of ``total``),
-    ``done`` (``model_path`` of the new version, ``seconds``) or ``failed`` (``message``)."""
+    ``done`` (``model_path`` of the new version, ``seconds``) or ``failed`` (``message``).
+    ``cpu_s``: once it has ended, the CPU seconds its process took until it reported (NaN if
+    the process ended without a word)."""
 
     state: str
     iteration: int = 0
@@ -139,6 +201,7 @@ class ConsolidationState:
     model_path: str = ""
     seconds: float = 0.0
     message: str = ""
+    cpu_s: float = math.nan
 
     def describe(self) -> str:
         if self.state == "running":
@@ -150,7 +213,8 @@ class ConsolidationState:
 
 
 class BackgroundConsolidation:
-    """A consolidation in a spawned process, so that the loop keeps its pace.
+    """A consolidation in a process of its own (:func:`process_context`), so that the loop
+    keeps its pace.
 
     The process loads the model, reads the episodes from the memory, runs
     :func:`rnnpb.model.consolidate` (rehearsal), writes the new version beside the model and
@@ -169,9 +233,7 @@ class BackgroundConsolidation:
         overrides: Mapping[str, Mapping[str, Any]] | None = None,
         origin: str = "--config",
     ) -> None:
-        import multiprocessing
-
-        context = multiprocessing.get_context("spawn")
+        context = process_context()
         self._queue = context.Queue()
         self.out_path = str(out_path)
         self._process = context.Process(
@@ -186,6 +248,7 @@ class BackgroundConsolidation:
                 iterations,
                 None if overrides is None else {k: dict(v) for k, v in overrides.items()},
                 origin,
+                _settings(),
             ),
         )
         self.state = ConsolidationState("running")
@@ -228,9 +291,11 @@ class BackgroundConsolidation:
             # Not joined here: the process takes a moment to end after it reported (its
             # interpreter and JAX shut down), and poll() must never hold up a paced loop.
             # ``ended`` tells when it has; ``wait`` and ``cancel`` join it.
-            self.state = ConsolidationState("done", model_path=message[1], seconds=message[2])
+            self.state = ConsolidationState(
+                "done", model_path=message[1], seconds=message[2], cpu_s=message[3]
+            )
         else:
-            self.state = ConsolidationState("failed", message=message[1])
+            self.state = ConsolidationState("failed", message=message[1], cpu_s=message[2])
 
     @property
     def ended(self) -> bool:

@@ -33,6 +33,7 @@ from rnnpb.interaction.background import (
     BackgroundConsolidation,
     ConsolidationState,
     PreparedMirror,
+    start_process_server,
     teaching_consolidation,
 )
 from rnnpb.interaction.episodes import (
@@ -174,6 +175,9 @@ class Teacher:
         self.events = self.keeper.events
         self.swapped_at: list[int] = []
         loop.subscribe(self._on_step)
+        # The consolidations' process server imports JAX now, beside the loop, so that the
+        # first consolidation does not wait for it.
+        start_process_server()
 
     @property
     def model_path(self) -> str:

@@ -51,9 +51,10 @@ class KeptEpisode:
 
 @dataclass(frozen=True)
 class ConsolidationTime:
-    """One background consolidation: ``cpu_s`` of its process (user + system, from the
-    process's start to its end), ``wall_s`` from its start to the swap, ``worker_s`` the time
-    the process itself recorded (from loading the model to writing the memory)."""
+    """One background consolidation: ``cpu_s`` of its process (user + system, from its start,
+    forked with JAX imported, to its report; NaN if it ended without one), ``wall_s`` from its
+    start to the swap, ``worker_s`` the time the process itself recorded (from loading the
+    model to writing the memory)."""
 
     started_at: int
     cpu_s: float

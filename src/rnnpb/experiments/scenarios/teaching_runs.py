@@ -11,7 +11,6 @@ steps. Each job copies its starting model into its own folder and never writes t
 from __future__ import annotations
 
 import math
-import resource
 import shutil
 import time
 from collections.abc import Iterator
@@ -44,15 +43,9 @@ from rnnpb.experiments.scenarios.teaching_scenario import (
 )
 
 
-def children_cpu() -> float:
-    """CPU seconds of this process's finished and reaped children (the consolidations)."""
-    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return usage.ru_utime + usage.ru_stime
-
-
 class Watch:
-    """Around a Teacher: times each consolidation (CPU of its process, wall) and records the
-    cutter's state and the consolidation per step."""
+    """Around a Teacher: times each consolidation (the CPU its process reported, wall) and
+    records the cutter's state and the consolidation per step."""
 
     def __init__(self, teacher, loop) -> None:
         self.teacher = teacher
@@ -60,46 +53,28 @@ class Watch:
         self.records: list = []
         self.cutter: list[str] = []
         self.times: list[tuple[int, float, float, float]] = []  # (step, cpu, wall, worker)
-        self._started: tuple[int, float, float] | None = None
+        self._started: tuple[int, float] | None = None
         self.stop_after: int | None = None
         self.step_limit: int | None = None
-        self._ending: list = []  # (job, step, cpu, wall) of consolidations whose process ends
 
     def started(self) -> None:
         """A consolidation was started outside a step (confirmed before the run)."""
-        self._started = (self.loop.steps, children_cpu(), time.perf_counter())
+        self._started = (self.loop.steps, time.perf_counter())
 
     def on_step(self, record) -> None:
         self.records.append(record)
         self.cutter.append(self.teacher.keeper.cutter.status.state)
         if self.teacher.job is not None and self._started is None:
-            self._started = (self.loop.steps, children_cpu(), time.perf_counter())
-
-    def _record_ended(self, block: bool = False) -> None:
-        """A finished consolidation's CPU time counts among the children's once its process
-        has ended and been reaped, a moment after it reported: recorded then, without
-        holding up the loop (``block``: after the run, wait for it)."""
-        for item in list(self._ending):
-            job, step, cpu, wall = item
-            process = getattr(job, "_process", None)
-            if process is not None and block:
-                process.join(120.0)
-            if process is None or not process.is_alive():
-                self._ending.remove(item)
-                self.times.append((step, children_cpu() - cpu, wall, job.state.seconds))
-
-    def finish(self) -> None:
-        """After the run: the consolidations still ending are waited for and recorded."""
-        self._record_ended(block=True)
+            self._started = (self.loop.steps, time.perf_counter())
 
     def between_steps(self, wait_s: float) -> None:
         job = self.teacher.job
         self.teacher.between_steps(wait_s)
         if job is not None and self.teacher.job is None and self._started is not None:
-            step, cpu, wall = self._started
+            step, wall = self._started
             self._started = None
-            self._ending.append((job, step, cpu, time.perf_counter() - wall))
-        self._record_ended()
+            state = job.state
+            self.times.append((step, state.cpu_s, time.perf_counter() - wall, state.seconds))
         if self.stop_after is not None and self.loop.steps >= self.stop_after:
             self.loop.stop()
         if self.step_limit is not None and self.loop.steps >= self.step_limit:
@@ -161,7 +136,6 @@ def teach_job(
         loop.run(on_step=watch.on_step, between_steps=watch.between_steps)
         if teacher.job is not None:  # kept on the last step: consolidate before measuring
             watch.between_steps(0.0)
-        watch.finish()
         labels = list(scenario.labels)
         episodes = kept_episodes(memory, teacher, labels)
     records = watch.records
@@ -344,7 +318,6 @@ def paced_job(
         loop.run(on_step=watch.on_step, between_steps=between)
         if teacher.job is not None:
             teacher.job.cancel()
-        watch.finish()
         summary = loop.summary()
     records = watch.records
     timing = paced_timing(records, config.dt)

@@ -251,6 +251,9 @@ def _consolidation_cpu(runs: list[TeachRun], paced: PacedRun | None) -> tuple[fl
         times.append(paced.consolidation.cpu_s)
     if not times:
         return math.nan, "no consolidation ran"
+    unknown = sum(1 for t in times if not math.isfinite(t))
+    if unknown:
+        return math.nan, f"{unknown} of {len(times)} consolidations ended without their CPU time"
     ordered = sorted(times)
     return ordered[-1], (
         f"longest {ordered[-1]:.1f} s CPU, median {statistics.median(ordered):.1f} s, over "
