@@ -245,16 +245,19 @@ def study_jobs(
     pool, config: TeachConfig, starts: dict[str, str], runs: Path
 ) -> Iterator[TeachRun | tuple[str, PaperMeasures]]:
     """Submit the study's jobs to ``pool`` — the paper's measures of each starting model, then
-    each learning set taught each shape, in ``runs/setK_SHAPE`` — and yield each result as
-    its job finishes."""
+    each learning set taught each shape, in ``runs/setK_SHAPE``, the larger sets first — and
+    yield each result as its job finishes."""
+    from rnnpb.demonstrator import learning_set_patterns
+
+    # The sets with the most patterns first: their jobs take longest, and a long job begun
+    # last keeps one worker busy while the other has nothing left to do.
+    sets = sorted(config.learning_sets, key=lambda name: -len(learning_set_patterns(name)))
     jobs = []
     if config.paper_measures:
-        jobs += [
-            pool.submit(before_job, name, starts[name], config) for name in config.learning_sets
-        ]
+        jobs += [pool.submit(before_job, name, starts[name], config) for name in sets]
     # Shape by shape: a run stopped early has every learning set of the first shapes.
     for k, shape in enumerate(config.shapes):
-        for name in config.learning_sets:
+        for name in sets:
             folder = str(runs / f"set{name}_{shape}")
             jobs.append(pool.submit(teach_job, name, shape, k, starts[name], config, folder))
     for future in as_completed(jobs):
