@@ -11,12 +11,12 @@ shape's first step. The models:
   algorithm (two demonstrations of 50 steps each, `rnnpb demo`'s learning);
 - ``taught-D-C``: learning set 1's model (``--model``) with the shape consolidated into it by
   teaching's policy from user draw D's two performances in the teach study's scenario, C whole
-  cycles (12 steps each) of each, beginning 21 steps into each performance (where teaching's
-  keeper begins its episode of three).
+  cycles (12 steps each) of each (``A+B``: A of the first, B of the second), beginning 21
+  steps into each performance (where teaching's keeper begins its episode of three).
 
     PYTHONPATH=src .venv/bin/python benchmarks/follow_after_unstructured.py \
-        --model results/demo/models/set1.npz [--shape figure-eight] [--taught 101,9100] \
-        [--cycles 3,6] [--draws 9000:40] [--out results/follow-after-unstructured]
+        --model results/demo/models/set1.npz [--shape figure-eight] [--taught 101,7320] \
+        [--cycles 3,6,6+3] [--draws 9000:40] [--out results/follow-after-unstructured]
 """
 
 from __future__ import annotations
@@ -45,7 +45,7 @@ def learned_from_start(shape: str, path: Path):
     return TrainedModel.load(path)
 
 
-def taught(model_path: str, shape: str, draw: int, cycles: int, path: Path):
+def taught(model_path: str, shape: str, draw: int, cycles: tuple[int, int], path: Path):
     """``shape`` consolidated into the model from draw ``draw``'s two performances."""
     from rnnpb.demonstrator import learning_set_patterns, make_scenario
     from rnnpb.experiments.scenarios.teaching_scenario import TeachConfig, segments
@@ -59,8 +59,8 @@ def taught(model_path: str, shape: str, draw: int, cycles: int, path: Path):
         starts = np.cumsum([0] + [n for _, n in performed])[:-1]
         firsts = [int(s) for s, (m, _) in zip(starts, performed, strict=True) if m == shape][:2]
         sequences = []
-        for first in firsts:
-            a, b = first + LEAD_IN, first + LEAD_IN + cycles * CYCLE
+        for first, count in zip(firsts, cycles, strict=True):
+            a, b = first + LEAD_IN, first + LEAD_IN + count * CYCLE
             sequences.append(Sequence(scenario.sensory[a:b], scenario.motor[a:b], "new-1"))
         model = TrainedModel.load(model_path)
         learned = consolidate(model, sequences, teaching_consolidation(model), grow=True)
@@ -100,8 +100,12 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=str(__doc__).splitlines()[0])
     parser.add_argument("--model", required=True, help="learning set 1's model (.npz)")
     parser.add_argument("--shape", default="figure-eight", help="a new shape of the demonstrator")
-    parser.add_argument("--taught", default="101,9100", help="user draws to teach the shape from")
-    parser.add_argument("--cycles", default="3,6", help="whole cycles taught of each performance")
+    parser.add_argument(
+        "--taught", default="101,7320,9100,9101", help="user draws to teach the shape from"
+    )
+    parser.add_argument(
+        "--cycles", default="3,6,6+3", help="whole cycles taught of each performance (A or A+B)"
+    )
     parser.add_argument("--draws", default="9000:40", help="FIRST:COUNT development draws")
     parser.add_argument("--out", default="results/follow-after-unstructured")
     args = parser.parse_args()
@@ -111,10 +115,12 @@ def main() -> None:
     out.mkdir(parents=True, exist_ok=True)
     cases = {"start": (learned_from_start(args.shape, out / f"start-{args.shape}.npz"), args.shape)}
     for draw in (int(d) for d in args.taught.split(",")):
-        for cycles in (int(c) for c in args.cycles.split(",")):
+        for cycles in args.cycles.split(","):
+            counts = [int(c) for c in cycles.split("+")]
             name = f"taught-{draw}-{cycles}"
             path = out / f"{name}-{args.shape}.npz"
-            cases[name] = (taught(args.model, args.shape, draw, cycles, path), "new-1")
+            pair = (counts[0], counts[-1])
+            cases[name] = (taught(args.model, args.shape, draw, pair, path), "new-1")
     results = {}
     print(f"| model | within 10 steps of {len(draws)} | sensory error median / p90 |")
     print("|---|---|---|")

@@ -49,6 +49,79 @@ def test_four_whole_cycles_of_a_novel_movement_are_kept_once():
     )
 
 
+def test_a_performance_that_goes_on_after_it_was_kept_comes_back_whole_when_it_ends():
+    _, sensory = _stream("3", 140, perfect=True)
+    words = [""] * 10 + ["novel"] * 100 + ["familiar"] * 30
+    cutter = EpisodeCutter()
+    out = []
+    for t in range(140):
+        episode = cutter.observe(t, sensory[t], words[t])
+        if episode is not None:
+            out.append((t, episode))
+    (_, kept), (ended, grown) = out
+    assert not kept.extends and kept.n_cycles == 3
+    # returned when the run ended (the interruption outlasted), after the last novel step
+    assert grown.extends and ended > 109
+    assert grown.first_step <= kept.first_step + 12 and grown.last_step <= 109
+    assert grown.n_cycles >= 7 and len(grown.sensory) == 12 * grown.n_cycles
+    assert np.array_equal(grown.sensory, sensory[grown.first_step : grown.last_step + 1])
+
+
+def test_a_kept_performance_grows_to_at_most_max_run_steps():
+    _, sensory = _stream("3", 300, perfect=True)
+    cutter = EpisodeCutter(TeachingConfig(max_run_steps=60))
+    out = [cutter.observe(t, sensory[t], "novel") for t in range(300)]
+    grown = [e for e in out if e is not None and e.extends]
+    (one,) = grown
+    assert 3 < one.n_cycles and len(one.sensory) <= 60
+    assert cutter.status.state == KEPT  # one performance, one episode: the run goes on
+
+
+def test_an_episode_a_consolidation_is_learning_does_not_grow(tmp_path):
+    from types import SimpleNamespace
+
+    from rnnpb.interaction.teaching import EpisodeKeeper
+    from rnnpb.memory import MemoryStore
+
+    _, shape = _stream("3", 80, seed=4)
+    rest = np.full((20, 4), 0.5)
+    stream = [(row, "novel") for row in shape] + [(row, "still") for row in rest]
+    for learning in (False, True):
+        with MemoryStore(tmp_path / f"m{learning}.npz") as memory:
+            keeper = EpisodeKeeper(memory, model="m.npz", source="s")
+            for t, (row, word) in enumerate(stream):
+                keeper(SimpleNamespace(step=t, observed=row, novelty=word))
+                if learning:  # as the teacher says once it starts a consolidation of it
+                    keeper.learning = frozenset(keeper.kept)
+            (episode,) = memory.episodes()
+        extended = [e for e in keeper.events if e.kind == "extended"]
+        assert (episode.n_cycles == 3 and not extended) if learning else episode.n_cycles > 3
+
+
+def test_a_grown_episode_stops_where_the_person_switched_though_the_detector_lagged(tmp_path):
+    from types import SimpleNamespace
+
+    from rnnpb.interaction.teaching import EpisodeKeeper, episode_steps
+    from rnnpb.memory import MemoryStore
+
+    _, shape = _stream("3", 84, seed=4)
+    _, other = _stream("1", 14, seed=4)
+    rest = np.full((10, 4), 0.5)
+    # the detector still says novel for the first 14 steps of the next movement
+    stream = [(row, "novel") for row in (*shape, *other)] + [(row, "still") for row in rest]
+    with MemoryStore(tmp_path / "m.npz") as memory:
+        keeper = EpisodeKeeper(memory, model="m.npz", source="s")
+        for t, (row, word) in enumerate(stream):
+            keeper(SimpleNamespace(step=t, observed=row, novelty=word))
+        (episode,) = memory.episodes()
+        steps = episode_steps(episode.note)
+        assert steps is not None and steps[1] < 84  # nothing of the other movement
+        assert episode.n_cycles > 3
+        back = memory.episode(episode.id)
+        assert np.array_equal(back.sensory, shape[steps[0] : steps[1] + 1])
+    assert [e.kind for e in keeper.events].count("extended") == 1
+
+
 def _statuses(sensory, words):
     cutter = EpisodeCutter()
     for t, word in enumerate(words):
@@ -159,7 +232,14 @@ def test_the_keeper_stores_each_novel_movement_once_and_merges_a_repeat(tmp_path
         assert merged_with(episodes[1].note) == episodes[0].id
         assert merged_with(episodes[0].note) is None and merged_with(episodes[2].note) is None
         assert memory.group("new-1") == [episodes[0].id, episodes[1].id]
-        assert all(e.status == "kept" and e.n_cycles == 3 for e in episodes)
+        assert all(e.status == "kept" for e in episodes)
+        # A performance that went on after it was kept holds every whole cycle of it once it
+        # ended; the last one, still going when the stream stops, holds the three it was kept
+        # with.
+        assert episodes[0].n_cycles > 3 and episodes[1].n_cycles > 3
+        assert episodes[2].n_cycles == 3
+        for e in episodes:
+            assert e.n_steps == memory.episode(e.id).sensory.shape[0]
         assert all(e.source == "scenario:held:3" and e.model == "m.npz" for e in episodes)
         # nothing from the unstructured stretches (steps 80-139 and 220-279)
         for e in episodes:
@@ -169,6 +249,9 @@ def test_the_keeper_stores_each_novel_movement_once_and_merges_a_repeat(tmp_path
             assert not (first <= 139 and last >= 80) and not (first <= 279 and last >= 220)
     kinds = [event.kind for event in keeper.events]
     assert kinds.count("kept") == 3 and "recording" in kinds
+    extended = [event for event in keeper.events if event.kind == "extended"]
+    assert [event.episode_id for event in extended] == [episodes[0].id, episodes[1].id]
+    assert f"({episodes[0].n_cycles} cycles, {episodes[0].n_steps} steps)" in extended[0].text
     kept = [event for event in keeper.events if event.kind == "kept"]
     assert [event.repeat_of for event in kept] == [None, episodes[0].id, None]
     assert [event.performances for event in kept] == [1, 2, 1]

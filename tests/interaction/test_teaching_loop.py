@@ -35,7 +35,8 @@ def test_a_new_shape_is_kept_and_random_movement_is_not(model, tmp_path):
     # whole cycles of the new shape only: nothing of the learned pattern before it, nothing
     # of the random walk after it
     assert set(truth[first : last + 1]) == {"figure-eight"}
-    assert episodes[0].n_cycles == 3 and episodes[0].pattern == "new-1"
+    # kept at three cycles, then grown by the cycles shown after that until the shape ended
+    assert episodes[0].n_cycles > 3 and episodes[0].pattern == "new-1"
 
 
 def test_teaching_consolidates_in_the_background_and_swaps_the_new_version_in(model, tmp_path):

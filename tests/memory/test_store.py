@@ -97,6 +97,24 @@ def test_a_consolidation_keeps_its_rehearsals_and_marks_its_episodes_learned(tmp
         assert len(memory.consolidations()) == 1
 
 
+def test_a_kept_episode_regrows_in_place_and_a_learned_one_never(tmp_path):
+    with MemoryStore(tmp_path / "m.npz") as memory:
+        first = memory.add_episode(
+            *_movement(24), source="s", model="v1.npz", pattern="new-1", n_cycles=2, note="a"
+        )
+        longer = _movement(48, seed=1)
+        assert memory.regrow(first, *longer, n_cycles=4, note="steps 0-47")
+        back = memory.episode(first)
+        assert back.summary.n_cycles == 4 and back.summary.note == "steps 0-47"
+        assert np.array_equal(back.sensory, longer[0]) and np.array_equal(back.motor, longer[1])
+        assert back.summary.pattern == "new-1" and back.summary.status == "kept"
+        memory.set_status(first, "learned")
+        assert not memory.regrow(first, *_movement(60, seed=2), n_cycles=5, note="b")
+        assert memory.episode(first).summary.n_steps == 48
+        with pytest.raises(RnnpbError):  # a bad movement is refused before anything is written
+            memory.regrow(first, np.full((10, 4), np.nan), np.zeros((10, 8)), 1, "c")
+
+
 def test_a_merge_joins_an_episode_to_a_movement_and_a_split_undoes_it(tmp_path):
     with MemoryStore(tmp_path / "m.npz") as memory:
         ids = [

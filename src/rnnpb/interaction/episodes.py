@@ -21,7 +21,13 @@ movement once it has been ``novel`` long enough to be sure and to hold whole cyc
    ``episode_cycles`` of them are the episode: their sensory values as seen and the robot's
    joint angles for them (3-D hands from the source when it gives them, else on the fixed
    plane; mirror mapping and inverse kinematics, as in the learning phase).
-3. The cutter then stays *kept* until the run ends, so one performance gives one episode.
+3. The cutter then stays *kept* until the run ends, so one performance gives one episode,
+   and goes on recording the performance: when the run ends (the person stops or changes
+   movement) or holds ``max_run_steps`` steps from the episode's start, it returns the same
+   performance again with every whole cycle seen since the episode began (``extends``), for
+   the memory to hold in its place while it has not been learned. A person who shows a
+   movement for longer teaches it with more of the variation they bring; the episode is
+   kept, and the person told, as soon as it holds ``episode_cycles`` cycles.
 
 It is pure bookkeeping (NumPy only, no clock or I/O), bounded per step: a principal component
 and an autocorrelation of at most ``max_run_steps`` steps.
@@ -63,7 +69,8 @@ class TeachingConfig:
     tolerance_steps : int
         Consecutive steps without evidence (``""``: a hand lost for a moment) a run survives.
     max_run_steps : int
-        The run's oldest steps are dropped beyond this many (bounds the cost per step).
+        The run's oldest steps are dropped beyond this many (bounds the cost per step); a
+        kept performance grows to at most this many steps.
     plane_x : float
         ``x`` (m) of the hands' plane for sources that give no 3-D hands.
     episode_cycles : int
@@ -120,6 +127,11 @@ class KeptMovement:
     n_cycles : int
     first_step, last_step : int
         The loop steps it spans (inclusive).
+    extends : bool
+        The performance the cutter kept last, grown by the whole cycles seen since: it takes
+        that movement's place.
+    cycles : tuple of (start, stop)
+        Its whole cycles, in steps from its first (stop exclusive).
     """
 
     sensory: np.ndarray
@@ -127,6 +139,8 @@ class KeptMovement:
     n_cycles: int
     first_step: int
     last_step: int
+    extends: bool = False
+    cycles: tuple[tuple[int, int], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -179,6 +193,13 @@ class EpisodeCutter:
         self._interrupted = 0
         self._cycles = 0
         self._kept = False
+        self._kept_from = 0  # where the kept episode begins in the run
+        self._grown = False  # the kept performance's growth was returned
+
+    @property
+    def extending(self) -> bool:
+        """Whether a kept performance goes on, to be returned grown when it ends."""
+        return self._kept and not self._grown
 
     @property
     def status(self) -> CutterStatus:
@@ -195,7 +216,8 @@ class EpisodeCutter:
         self, step: int, observed: np.ndarray, novelty: str, hands: np.ndarray | None = None
     ) -> KeptMovement | None:
         """One step: the hands seen (4,), the step's novelty word, optionally the 3-D hands
-        (2, 3); returns the episode on the step it is complete, else None."""
+        (2, 3); returns the episode on the step it is complete, the same performance grown
+        (``extends``) on the step its run ends or fills ``max_run_steps``, else None."""
         observed = np.asarray(observed, dtype=np.float64).reshape(4)
         seen = bool(np.isfinite(observed).all())
         config = self.config
@@ -211,9 +233,10 @@ class EpisodeCutter:
         ):
             self._interrupted += 1  # the detector hesitates: the run goes on
         else:
+            grown = self._growth() if self.extending else None
             self.reset()
-            return None
-        if self._kept:
+            return grown
+        if self._kept and self._grown:
             return None
         self._steps.append(int(step))
         self._novel.append(np.nan if novelty == "" else float(novelty == "novel"))
@@ -223,6 +246,11 @@ class EpisodeCutter:
             if hands is None
             else np.asarray(hands, dtype=np.float64).reshape(2, 3)
         )
+        if self._kept:
+            if len(self._steps) - self._kept_from < config.max_run_steps:
+                return None
+            grown, self._grown = self._growth(), True
+            return grown
         if len(self._steps) > config.max_run_steps:
             del self._steps[0], self._sensory[0], self._hands[0], self._novel[0]
         cycles = cycle_bounds(np.array(self._sensory))
@@ -230,17 +258,50 @@ class EpisodeCutter:
         if self._cycles < config.episode_cycles:
             return None
         start, stop = cycles[-config.episode_cycles][0], cycles[-1][1]
+        if not self._novel_enough(start, stop):
+            return None  # not novel enough yet: the run goes on, its window slides
+        self._kept, self._kept_from = True, start
+        return self._movement(cycles[-config.episode_cycles :])
+
+    def _novel_enough(self, start: int, stop: int) -> bool:
         said = np.array(self._novel[start:stop])
         said = said[np.isfinite(said)]
-        if not said.size or said.mean() < config.min_novel_share:
-            return None  # not novel enough yet: the run goes on, its window slides
+        return bool(said.size) and said.mean() >= self.config.min_novel_share
+
+    def _movement(self, cycles: list[tuple[int, int]], extends: bool = False) -> KeptMovement:
+        """The run's whole ``cycles`` (consecutive, in run steps) as a kept movement."""
+        start, stop = cycles[0][0], cycles[-1][1]
         sensory = np.array(self._sensory[start:stop])
         hands = np.array(self._hands[start:stop])
         missing = ~np.isfinite(hands).all(axis=(1, 2))
         if missing.any():
-            hands[missing] = hands_on_plane(sensory[missing], self.camera, config.plane_x)
+            hands[missing] = hands_on_plane(sensory[missing], self.camera, self.config.plane_x)
         motor = self.mapping.motor_from_hands(hands)  # safe by construction (MirrorMapping)
-        self._kept = True
         return KeptMovement(
-            sensory, motor, config.episode_cycles, self._steps[start], self._steps[stop - 1]
+            sensory,
+            motor,
+            len(cycles),
+            self._steps[start],
+            self._steps[stop - 1],
+            extends,
+            tuple((a - start, b - start) for a, b in cycles),
         )
+
+    def _growth(self) -> KeptMovement | None:
+        """The kept performance with every whole cycle seen since it began, up to its last
+        step called ``novel`` and at most ``max_run_steps`` steps; None when that adds no
+        cycle or is not novel enough."""
+        novel = [k for k in range(self._kept_from, len(self._novel)) if self._novel[k] == 1.0]
+        if not novel:
+            return None
+        # The cycles of the run as the keep found them (from its start), from the one the
+        # kept episode begins with.
+        found = cycle_bounds(np.array(self._sensory[: novel[-1] + 1]))
+        cycles = [c for c in found if c[1] > self._kept_from]
+        while cycles and cycles[-1][1] - cycles[0][0] > self.config.max_run_steps:
+            cycles.pop(0)
+        if len(cycles) <= self.config.episode_cycles:
+            return None
+        if not self._novel_enough(cycles[0][0], cycles[-1][1]):
+            return None
+        return self._movement(cycles, extends=True)

@@ -5,15 +5,16 @@ robot recognises but does not follow closely, as more data for that pattern."""
 
 from __future__ import annotations
 
+import re
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from rnnpb.demonstrator import MirrorMapping
 from rnnpb.errors import RnnpbError
 from rnnpb.interaction.episodes import RECORDING, EpisodeCutter, TeachingConfig
-from rnnpb.interaction.repeats import find_repeat
+from rnnpb.interaction.repeats import find_repeat, same_cycles
 from rnnpb.safety import SafetyChecker, SafetyLimits
 
 
@@ -24,8 +25,10 @@ class TeachingEvent:
     ``kind`` is ``recording`` (a novel movement is being recorded; ``text`` says which cycle),
     ``kept`` (an episode was stored; ``episode_id``, ``pattern``; ``repeat_of`` the episode
     it was merged with when it is another performance of a kept movement, and ``performances``
-    how many the memory holds of it) or ``refused`` (the memory would not take it, or its
-    joint angles are unsafe for the robot; ``text`` says why). The
+    how many the memory holds of it), ``extended`` (the performance went on after it was
+    kept, and the episode ``episode_id`` now holds every whole cycle of it) or ``refused``
+    (the memory would not take it, or its joint angles are unsafe for the robot; ``text``
+    says why). The
     :class:`~rnnpb.interaction.teaching.Teacher` adds its own kinds.
     """
 
@@ -118,6 +121,11 @@ class EpisodeKeeper:
     ``recognition`` (a :class:`~rnnpb.model.recognition.RecognitionConfig`, default the
     paper preset's) is how shapes are compared: the running mirror system's, set by the
     teacher.
+
+    A performance that goes on after it was kept is stored again, whole, when it ends
+    (:class:`~rnnpb.interaction.episodes.EpisodeCutter`): the episode grows in the memory
+    (``extended``) unless it is no longer ``kept`` or a running consolidation is learning it
+    (``learning``, the episodes' ids, set by the teacher): what is learned is what was kept.
     """
 
     def __init__(
@@ -137,12 +145,14 @@ class EpisodeKeeper:
         # novel movements: "novel" there is "recognised as ``_growing`` but not locked".
         self.grower = EpisodeCutter(config, mapping)
         self.taught: frozenset[str] = frozenset()
+        self.learning: frozenset[int] = frozenset()  # episodes a consolidation is learning
         self._growing = ""
         self._errors: deque[float] = deque(maxlen=LOCK_STEPS)
         self._checker: SafetyChecker | None = None  # made at the first episode
         self.hands_of = hands_of
         self.events: list[TeachingEvent] = []
         self.kept: list[int] = []
+        self._last_kept: dict[str, int | None] = {}  # per cutter, the episode it kept last
         self._last_text = ""
         self.recognition = None
         # What a scripted source says it performed, per recent step (a demonstrator's
@@ -172,7 +182,7 @@ class EpisodeKeeper:
         hands = self.hands_of(record) if self.hands_of is not None else None
         grown = self._grow(record, hands)
         if grown is not None:
-            self._store(record, grown, self._growing)
+            self._keep(record, grown, "grower", self._growing)
         episode = self.cutter.observe(
             record.step, record.observed, getattr(record, "novelty", ""), hands
         )
@@ -183,7 +193,60 @@ class EpisodeKeeper:
             self._last_text = text
             return
         self._last_text = text
-        self._store(record, episode)
+        self._keep(record, episode, "cutter")
+
+    def _keep(self, record, episode, cutter: str, grows: str = "") -> None:
+        """A movement ``cutter`` returned: stored, or the growth of the one it kept last."""
+        if episode.extends:
+            self._extend(record, episode, self._last_kept.get(cutter))
+        else:
+            self._last_kept[cutter] = self._store(record, episode, grows)
+
+    def _extend(self, record, episode, episode_id: int | None) -> None:
+        """The episode ``episode_id`` grown to ``episode``, while it is still only kept and no
+        consolidation is learning it."""
+        if episode_id is None or episode_id in self.learning:
+            return
+        try:
+            kept = self.memory.episode(episode_id)
+            # The same movement up to the first cycle unlike the kept one: the detector still
+            # says novel for a few steps after the person switches to another movement.
+            count = same_cycles(episode.sensory, episode.cycles, kept.sensory, self.recognition)
+            if count <= kept.summary.n_cycles:
+                return
+            stop = episode.cycles[count - 1][1]
+            episode = replace(
+                episode,
+                sensory=episode.sensory[:stop],
+                motor=episode.motor[:stop],
+                n_cycles=count,
+                last_step=episode.first_step + stop - 1,
+                cycles=episode.cycles[:count],
+            )
+            unsafe = self._unsafe(episode.motor)
+            if unsafe:  # the kept episode stays as it is
+                self.events.append(TeachingEvent(record.step, "refused", unsafe))
+                return
+            summary = kept.summary
+            steps = f"steps {episode.first_step}-{episode.last_step}"
+            note = re.sub(r"^steps \d+-\d+", steps, summary.note)
+            if not self.memory.regrow(
+                episode_id, episode.sensory, episode.motor, episode.n_cycles, note
+            ):
+                return
+        except RnnpbError as error:
+            self.events.append(TeachingEvent(record.step, "refused", str(error)))
+            return
+        size = f"{episode.n_cycles} cycles, {len(episode.sensory)} steps"
+        self.events.append(
+            TeachingEvent(
+                record.step,
+                "extended",
+                f"kept more of {summary.pattern}'s performance ({size})",
+                episode_id,
+                summary.pattern,
+            )
+        )
 
     def _grow(self, record, hands):
         """One step of the grower: the performance of a taught pattern it cuts, or None."""
@@ -203,15 +266,16 @@ class EpisodeKeeper:
         word = "familiar" if locked else "novel"
         return self.grower.observe(record.step, record.observed, word, hands)
 
-    def _store(self, record, episode, grows: str = "") -> None:
+    def _store(self, record, episode, grows: str = "") -> int | None:
         """Store a cut episode: under ``grows`` (a taught pattern it is more data for), else
-        merged with the movement it repeats, else as a new movement."""
+        merged with the movement it repeats, else as a new movement; its id, or None when
+        refused."""
         unsafe = self._unsafe(episode.motor)
         if unsafe:
             # Never learned: the network would learn to command it. The retargeting makes safe
             # angles, so this guards a mapping that was changed or bypassed.
             self.events.append(TeachingEvent(record.step, "refused", unsafe))
-            return
+            return None
         shown_as = self._shown_as(episode.first_step, episode.last_step)
         note = f"steps {episode.first_step}-{episode.last_step}" + (
             f"; {SHOWN_AS}{shown_as}" if shown_as else ""
@@ -235,7 +299,7 @@ class EpisodeKeeper:
             performances = len(self.memory.group(pattern))
         except RnnpbError as error:
             self.events.append(TeachingEvent(record.step, "refused", str(error)))
-            return
+            return None
         self.kept.append(episode_id)
         size = f"{episode.n_cycles} cycles, {len(episode.sensory)} steps"
         text = (
@@ -258,6 +322,7 @@ class EpisodeKeeper:
                 performances,
             )
         )
+        return episode_id
 
     def _unsafe(self, motor: np.ndarray) -> str:
         """Why the episode's joint angles must not be learned (a collision or a step faster

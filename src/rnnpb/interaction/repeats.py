@@ -16,6 +16,7 @@ NumPy only; the memory is read, never written.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -62,6 +63,35 @@ def shape_distance(a: np.ndarray, b: np.ndarray, config: RecognitionConfig | Non
     a = np.asarray(a, dtype=np.float64)
     b = np.asarray(b, dtype=np.float64)
     return max(_one_way(a, b, config), _one_way(b, a, config))
+
+
+def same_cycles(
+    sensory: np.ndarray,
+    cycles: Sequence[tuple[int, int]],
+    kept: np.ndarray,
+    config: RecognitionConfig | None = None,
+) -> int:
+    """How many of ``sensory``'s whole ``cycles`` (``(start, stop)`` steps, in order), from
+    the first, repeat ``kept``'s shape: every ``template_steps`` window within the cycle (the
+    one ending at its stop when it is shorter) nearer it than ``template_level``, as
+    :func:`find_repeat` decides a repeat. A performance that went on is the same movement up
+    to the first cycle unlike it (the detector calls a switch novel for a few steps)."""
+    config = config or RecognitionConfig()
+    sensory = np.asarray(sensory, dtype=np.float64)
+    stretches = taught_stretches({"kept": [np.asarray(kept, dtype=np.float64)]}, ("kept",), config)
+    steps = config.template_steps
+    if stretches is None or len(sensory) < steps:
+        return 0
+    count = 0
+    for start, stop in cycles:
+        firsts = range(max(0, min(start, stop - steps)), max(stop - steps, start, 0) + 1)
+        windows = [sensory[f : f + steps] for f in firsts if f + steps <= len(sensory)]
+        if not windows or any(
+            taught_distances(w, stretches)[0] >= config.template_level for w in windows
+        ):
+            break
+        count += 1
+    return count
 
 
 def find_repeat(

@@ -169,6 +169,7 @@ class Teacher:
         self._prepared: PreparedMirror | None = None
         self.job: BackgroundConsolidation | None = None
         self._job_patterns: tuple[str, ...] = ()
+        self._job_episodes: frozenset[int] = frozenset()
         self._patterns: dict[str, tuple[str, ...]] = {}  # a version's file -> its patterns
         self.pending: list[int] = []
         self._look = False  # whether a pending movement may have become ready
@@ -188,6 +189,8 @@ class Teacher:
         self.keeper.model = self.model_path
         self.keeper.recognition = getattr(self.loop.mirror, "recognition", None)
         self.keeper.taught = self.taught_patterns()
+        # A running consolidation learns its episodes as they were: they do not grow.
+        self.keeper.learning = self._job_episodes if self.job is not None else frozenset()
         self.keeper(record)
         new = self.keeper.kept[before:]
         self.pending.extend(new)
@@ -284,6 +287,7 @@ class Teacher:
             number += 1
             out = version_path(self.model_path, number)
         self.pending = [i for i in self.pending if i not in ids]
+        self._job_episodes = frozenset(ids)
         names = {e.id: e.pattern for e in self.memory.episodes()}
         self._job_patterns = tuple(dict.fromkeys(names.get(i, "?") for i in ids))
         self.job = BackgroundConsolidation(

@@ -396,6 +396,28 @@ class MemoryStore:
             )
         )
 
+    def regrow(
+        self, episode_id: int, sensory: np.ndarray, motor: np.ndarray, n_cycles: int, note: str
+    ) -> bool:
+        """Put a longer stretch of the same performance in a ``kept`` episode's place (one
+        transaction); False, and nothing changed, when the episode is no longer ``kept``
+        (learning began, it was learned or forgotten): what was learned stays what it was."""
+        if n_cycles < 0:
+            raise DataFileError(f"memory: n_cycles must be >= 0, got {n_cycles}")
+        s, m, n = _arrays(sensory, motor, f"memory episode {episode_id}")
+        row = (n, int(n_cycles), s, m, _digest(s, m), _text(note, "note"), int(episode_id))
+        return bool(
+            self._write(
+                lambda db: (
+                    db.execute(
+                        "UPDATE episodes SET n_steps = ?, n_cycles = ?, sensory = ?, motor = ?, "
+                        "digest = ?, note = ? WHERE id = ? AND status = 'kept'",
+                        row,
+                    ).rowcount
+                )
+            )
+        )
+
     def episodes(self, status: str | None = None) -> list[EpisodeSummary]:
         """Every episode (of one status), oldest first, without the arrays."""
         query = (
