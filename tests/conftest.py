@@ -20,6 +20,22 @@ rnnpb.configure_xla()
 _xla.compilation_cache()
 
 
+@pytest.fixture(autouse=True)
+def _no_models_from_the_checkout(monkeypatch, tmp_path_factory):
+    """A command given no model looks in the working directory first (``models/``,
+    ``results/demo/models/``: rnnpb.models.default_model); the suite runs in the checkout,
+    where ``make demo`` leaves its models. Here it looks in an empty folder instead, so that a
+    test gets the shipped model whatever was run in the checkout before."""
+    from rnnpb import models
+
+    empty = tmp_path_factory.getbasetemp() / "no-models-here"
+    empty.mkdir(exist_ok=True)
+    search = models.default_model
+    monkeypatch.setattr(
+        models, "default_model", lambda base=None: search(empty if base is None else base)
+    )
+
+
 # The real motion-capture takes: test data under a non-commercial licence, read where they are
 # (RNNPB_MOCAP_DIR, else ../shared/data/mocap beside the checkout), never copied into the project.
 MOCAP = Path(
