@@ -436,7 +436,7 @@ def run(args: argparse.Namespace) -> int:
 
 # The teaching events worth a line of their own (`recording` changes every cycle: the bar's
 # or the step lines' business would be too chatty).
-_TEACHING_LINES = ("kept", "waiting", "refused", "consolidating", "learned", "failed")
+_TEACHING_LINES = ("kept", "extended", "waiting", "refused", "consolidating", "learned", "failed")
 
 
 def _start_teaching(stack, loop, model_path, source, args, online, tables):
