@@ -128,10 +128,10 @@ def _consolidation_worker(
     the same model for about a fifth less CPU, which the loop's process keeps."""
     from rnnpb import _xla
 
-    for name in [n for n in os.environ if n.startswith(SETTINGS)]:
-        if environment is not None and name not in environment:
+    if environment is not None:
+        for name in [n for n in os.environ if n.startswith(SETTINGS) and n not in environment]:
             del os.environ[name]
-    os.environ.update(environment or {})
+        os.environ.update(environment)
     _xla.follow_cache_settings()  # JAX was imported by the server, before this environment
     if not _xla.backend_started():  # the flag is read when the backend starts
         _xla.single_threaded()

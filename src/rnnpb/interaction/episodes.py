@@ -291,12 +291,14 @@ class EpisodeCutter:
         """The kept performance with every whole cycle seen since it began, up to its last
         step called ``novel`` and at most ``max_run_steps`` steps; None when that adds no
         cycle or is not novel enough."""
-        novel = [k for k in range(self._kept_from, len(self._novel)) if self._novel[k] == 1.0]
-        if not novel:
+        end = len(self._novel)
+        while end > self._kept_from and self._novel[end - 1] != 1.0:
+            end -= 1  # after the last step called novel
+        if end <= self._kept_from:
             return None
         # The cycles of the run as the keep found them (from its start), from the one the
         # kept episode begins with.
-        found = cycle_bounds(np.array(self._sensory[: novel[-1] + 1]))
+        found = cycle_bounds(np.array(self._sensory[:end]))
         cycles = [c for c in found if c[1] > self._kept_from]
         while cycles and cycles[-1][1] - cycles[0][0] > self.config.max_run_steps:
             cycles.pop(0)

@@ -44,16 +44,20 @@ class Repeat:
         return f"shape distance {self.distance:.2f}"
 
 
+def _window_distances(seen: np.ndarray, stretches, config: RecognitionConfig) -> np.ndarray:
+    """The distance to the stretches' shape of each ``template_steps`` window of ``seen``, by
+    the window's first step."""
+    windows = np.lib.stride_tricks.sliding_window_view(seen, config.template_steps, axis=0)
+    return np.array([taught_distances(w.T, stretches)[0] for w in windows])  # w: (S, W)
+
+
 def _one_way(seen: np.ndarray, kept: np.ndarray, config: RecognitionConfig) -> float:
     """The median distance of ``seen``'s windows to ``kept``'s shape (1 when either is too
     short or does not move)."""
     stretches = taught_stretches({"kept": [kept]}, ("kept",), config)
-    steps = config.template_steps
-    if stretches is None or len(seen) < steps:
+    if stretches is None or len(seen) < config.template_steps:
         return 1.0
-    windows = np.lib.stride_tricks.sliding_window_view(seen, steps, axis=0)  # (n, S, W)
-    distances = [taught_distances(w.T, stretches)[0] for w in windows]
-    return float(np.median(distances))
+    return float(np.median(_window_distances(seen, stretches, config)))
 
 
 def shape_distance(a: np.ndarray, b: np.ndarray, config: RecognitionConfig | None = None) -> float:
@@ -82,13 +86,14 @@ def same_cycles(
     steps = config.template_steps
     if stretches is None or len(sensory) < steps:
         return 0
+    distances = _window_distances(sensory, stretches, config)
     count = 0
     for start, stop in cycles:
-        firsts = range(max(0, min(start, stop - steps)), max(stop - steps, start, 0) + 1)
-        windows = [sensory[f : f + steps] for f in firsts if f + steps <= len(sensory)]
-        if not windows or any(
-            taught_distances(w, stretches)[0] >= config.template_level for w in windows
-        ):
+        # the windows that begin in the cycle and end by its stop (the one ending at its stop
+        # when it is shorter than a window)
+        first = max(0, min(start, stop - steps))
+        within = distances[first : max(first, stop - steps) + 1]
+        if not within.size or within.max() >= config.template_level:
             break
         count += 1
     return count

@@ -401,7 +401,8 @@ class MemoryStore:
     ) -> bool:
         """Put a longer stretch of the same performance in a ``kept`` episode's place (one
         transaction); False, and nothing changed, when the episode is no longer ``kept``
-        (learning began, it was learned or forgotten): what was learned stays what it was."""
+        (learned, discarded or forgotten): what was learned stays what it was. The caller
+        keeps an episode a running consolidation reads from growing."""
         if n_cycles < 0:
             raise DataFileError(f"memory: n_cycles must be >= 0, got {n_cycles}")
         s, m, n = _arrays(sensory, motor, f"memory episode {episode_id}")
