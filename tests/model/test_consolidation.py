@@ -271,7 +271,7 @@ def test_a_warm_consolidation_learns_with_some_input_noise(two_patterns):
     [
         ("add", "paper", (20_000, 0.02, "first-half", "farthest")),
         ("add", "fast", (500, 0.02, "first-half", "farthest")),
-        ("teach", "paper", (20_000, 0.03, "off", "centre")),
+        ("teach", "paper", (30_000, 0.03, "off", "centre")),
         ("teach", "fast", (1_000, 0.03, "off", "centre")),
     ],
 )

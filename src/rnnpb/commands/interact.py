@@ -141,7 +141,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=int,
         metavar="N",
         help="with --learn: learning iterations of each consolidation "
-        "(default: 20,000 for the paper's learning, 1,000 for the fast preset's; "
+        "(default: 30,000 for the paper's learning, 1,000 for the fast preset's; "
         "docs/teaching.md)",
     )
     parser.add_argument(

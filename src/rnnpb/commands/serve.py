@@ -103,7 +103,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--consolidation-iterations",
         type=int,
         metavar="N",
-        help="learning iterations of each consolidation (default: 20,000 for the paper's "
+        help="learning iterations of each consolidation (default: 30,000 for the paper's "
         "learning, 1,000 for the fast preset's)",
     )
     parser.add_argument(
