@@ -86,17 +86,23 @@ def _settings() -> dict[str, str]:
     return {name: value for name, value in os.environ.items() if name.startswith(SETTINGS)}
 
 
-def _one_core() -> None:
-    """Keep this process on one core: the one the system started it on (so that two
-    consolidations at once seldom share one), else the last it may use. XLA sizes its thread
-    pools by the cores a process may use, and the flag of ``_xla.single_threaded`` leaves part
-    of a larger model's learning to several threads, which costs CPU without saving time."""
-    if not hasattr(os, "sched_getaffinity"):
-        return
-    cores = sorted(os.sched_getaffinity(0))
-    if len(cores) > 1:
+def _backend_on_one_core() -> None:
+    """Start JAX's backend while this process may use one core, then give the process back
+    every core it may use. XLA sizes its thread pools by the cores a process may use when its
+    backend starts, and the flag of ``_xla.single_threaded`` leaves part of a larger model's
+    learning to several threads, which costs CPU without saving time; kept to one core for
+    good, two consolidations started on the same core would share it to their end."""
+    import jax
+
+    allowed = os.sched_getaffinity(0) if hasattr(os, "sched_getaffinity") else set()
+    if len(allowed) > 1:
         current = _current_core()
-        os.sched_setaffinity(0, {current if current in cores else cores[-1]})
+        os.sched_setaffinity(0, {current if current in allowed else max(allowed)})
+    try:
+        jax.devices()
+    finally:
+        if len(allowed) > 1:
+            os.sched_setaffinity(0, allowed)
 
 
 def _current_core() -> int | None:
@@ -135,7 +141,7 @@ def _consolidation_worker(
     _xla.follow_cache_settings()  # JAX was imported by the server, before this environment
     if not _xla.backend_started():  # the flag is read when the backend starts
         _xla.single_threaded()
-        _one_core()
+        _backend_on_one_core()
     start = time.perf_counter()
     try:
         from rnnpb.memory import MemoryStore
