@@ -220,6 +220,29 @@ def test_one_step_of_other_evidence_does_not_change_the_answer():
     assert said[20:] == ["a"] * 40
 
 
+def test_the_structure_test_runs_only_where_no_pattern_is_recognised():
+    """While a learned pattern is recognised the structure test's answer is not used (it is not
+    measured: NaN); once no pattern fits, a repeating movement is measured and called novel."""
+    config = RecognitionConfig()
+    names = ("a", "b")
+    learned = np.array([[0.2, 0.2], [0.8, 0.8]])
+    rng = np.random.default_rng(1)
+    state = initial_recognition_state(1, 2, config)
+    answers = []
+    for t in range(160):
+        u = np.array([0.5 + 0.3 * np.sin(2 * np.pi * t / 12)]) + 0.005 * rng.standard_normal(1)
+        fits = t < 60
+        errors = np.array([1e-4, 0.01]) if fits else np.array([0.05, 0.05])
+        pb = learned[0] if fits else np.array([0.5, 0.1])
+        state, answer = recognise(state, u, np.ones(1, bool), errors, pb, learned, names, config)
+        answers.append(answer)
+    familiar = [a for a in answers[30:60] if a.novelty == "familiar"]
+    assert familiar and all(np.isnan(a.structure) for a in familiar)
+    novel = [a for a in answers[100:] if a.novelty == "novel"]
+    assert len(novel) > 40 and all(a.structure < config.structure_level for a in novel)
+    assert state.period in (11, 12, 13)
+
+
 def test_timeline_and_bad_settings():
     steps = [(None, ""), (None, ""), ("1", "familiar"), ("1", "familiar"), (None, "novel")]
     assert recognition_timeline(steps) == [

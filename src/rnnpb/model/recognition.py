@@ -251,7 +251,8 @@ class Recognition(NamedTuple):
         Each learned pattern's best-fit RMS distance (NaN while there is none).
     structure : float
         How unlike the cycle before it the last cycle is, at its best period (NaN when not
-        measured; :func:`rnnpb.structure.cycle_differences`): low repeats.
+        measured, as while a learned pattern is recognised;
+        :func:`rnnpb.structure.cycle_differences`): low repeats.
     """
 
     recognised: str | None
@@ -589,11 +590,20 @@ def recognise(
     total = likelihood.sum() + unknown
     shares = likelihood / total
     best = int(np.argmax(shares))
-    structure, every_lag, period = _structure(_this_movement(filled, paused, config), config)
+    # The structure test (a few dozen small array operations) runs only where its answer is
+    # used: no pattern recognised, or a new movement's period to keep.
+    measured: list[tuple[float, bool, int]] = []
+
+    def structure_test() -> tuple[float, bool, int]:
+        if not measured:
+            measured.append(_structure(_this_movement(filled, paused, config), config))
+        return measured[0]
+
     if shares[best] >= config.confidence_level:
         answer, confidence, novelty = names[best], float(shares[best]), "familiar"
     else:
         answer, confidence = None, float(unknown / total)
+        structure, every_lag, _ = structure_test()
         novelty = "novel" if structure < config.structure_level else "unstructured"
         if np.isnan(structure) or (novelty == "unstructured" and not every_lag):
             novelty = ""  # a longer lag may yet show the movement repeating
@@ -626,7 +636,7 @@ def recognise(
         novelty,
         moving_run,
         paused,
-        period if novelty == "novel" else 0,
+        structure_test()[2] if novelty == "novel" else 0,
     )
     return new, Recognition(
         answer,
@@ -634,7 +644,7 @@ def recognise(
         novelty,
         {name: float(c) for name, c in zip(names, shares, strict=True)},
         {name: float(x) for name, x in zip(names, d, strict=True)},
-        float(structure),
+        measured[0][0] if measured else float("nan"),
     )
 
 
