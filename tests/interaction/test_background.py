@@ -68,3 +68,35 @@ def test_a_failed_consolidation_says_why_and_how_much_cpu_it_took(set1_model, tm
     state = BackgroundConsolidation(path, path, [*ids, 999], tmp_path / "v2.npz").wait(120.0)
     assert state.state == "failed" and "999" in state.message
     assert math.isfinite(state.cpu_s)
+
+
+def test_a_script_that_starts_a_consolidation_unguarded_is_told_why_it_failed(
+    set1_model, tmp_path
+):
+    """The process starts by importing the main script; one that teaches at its top level
+    fails there, and the failure says what to change."""
+    import subprocess
+    import sys
+
+    path, ids = _kept_shape(set1_model, tmp_path)
+    script = tmp_path / "teach.py"
+    script.write_text(
+        "from rnnpb.interaction.background import BackgroundConsolidation\n"
+        f"job = BackgroundConsolidation({path!r}, {path!r}, {ids!r}, {path!r} + '.v2.npz', "
+        "iterations=5)\n"
+        "print('STATE', job.wait(120.0).state, job.state.message)\n"
+    )
+    run = subprocess.run(
+        [sys.executable, str(script)], capture_output=True, text=True, timeout=300, check=False
+    )
+    said = [line for line in run.stdout.splitlines() if line.startswith("STATE")]
+    assert said and said[0].startswith("STATE failed"), run.stdout + run.stderr
+    assert 'if __name__ == "__main__":' in said[0]
+
+
+def test_a_process_that_ended_after_it_began_is_not_blamed_on_the_script():
+    from rnnpb.interaction.background import ended_message
+
+    assert "__main__" not in ended_message(1, heard=True)
+    assert "__main__" not in ended_message(-9, heard=False)
+    assert "exit code -9" in ended_message(-9, heard=False)

@@ -218,6 +218,20 @@ class ConsolidationState:
         return f"consolidation failed: {self.message}"
 
 
+def ended_message(code: int | None, heard: bool) -> str:
+    """Why a consolidation failed whose process ended without its outcome (``code``: its
+    exit code; ``heard``: whether it reported anything before)."""
+    message = f"the consolidation process ended (exit code {code})"
+    if code == 1 and not heard:
+        # multiprocessing starts the process by importing the main script: one that starts
+        # teaching at its top level does so again in the new process, which then fails.
+        message += (
+            " before it began; if a script of yours started it, its code must run under "
+            "`if __name__ == \"__main__\":`"
+        )
+    return message
+
+
 class BackgroundConsolidation:
     """A consolidation in a process of its own (:func:`process_context`), so that the loop
     keeps its pace.
@@ -258,6 +272,7 @@ class BackgroundConsolidation:
             ),
         )
         self.state = ConsolidationState("running")
+        self._heard = False  # whether the process reported anything
         self._process.start()
 
     def poll(self) -> ConsolidationState:
@@ -269,11 +284,11 @@ class BackgroundConsolidation:
                 message = self._queue.get_nowait()
             except queues.Empty:
                 if not self._process.is_alive() and self._queue.empty():
-                    code = self._process.exitcode
                     self.state = ConsolidationState(
-                        "failed", message=f"the consolidation process ended (exit code {code})"
+                        "failed", message=ended_message(self._process.exitcode, self._heard)
                     )
                 break
+            self._heard = True
             self._take(message)
         return self.state
 
