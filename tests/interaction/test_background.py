@@ -70,9 +70,7 @@ def test_a_failed_consolidation_says_why_and_how_much_cpu_it_took(set1_model, tm
     assert math.isfinite(state.cpu_s)
 
 
-def test_a_script_that_starts_a_consolidation_unguarded_is_told_why_it_failed(
-    set1_model, tmp_path
-):
+def test_a_script_that_starts_a_consolidation_unguarded_is_told_why_it_failed(set1_model, tmp_path):
     """The process starts by importing the main script; one that teaches at its top level
     fails there, and the failure says what to change."""
     import subprocess

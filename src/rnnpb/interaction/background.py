@@ -227,7 +227,7 @@ def ended_message(code: int | None, heard: bool) -> str:
         # teaching at its top level does so again in the new process, which then fails.
         message += (
             " before it began; if a script of yours started it, its code must run under "
-            "`if __name__ == \"__main__\":`"
+            '`if __name__ == "__main__":`'
         )
     return message
 
