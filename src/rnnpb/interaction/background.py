@@ -97,7 +97,9 @@ def _backend_on_one_core() -> None:
     allowed = os.sched_getaffinity(0) if hasattr(os, "sched_getaffinity") else set()
     if len(allowed) > 1:
         current = _current_core()
-        os.sched_setaffinity(0, {current if current in allowed else max(allowed)})
+        os.sched_setaffinity(
+            0, {current if current is not None and current in allowed else max(allowed)}
+        )
     try:
         jax.devices()
     finally:
