@@ -45,23 +45,32 @@ def learned_from_start(shape: str, path: Path):
     return TrainedModel.load(path)
 
 
-def taught(model_path: str, shape: str, draw: int, cycles: tuple[int, int], path: Path):
-    """``shape`` consolidated into the model from draw ``draw``'s two performances."""
+def performances(set_name: str, shape: str, draw: int, cycles: tuple[int, int]) -> list:
+    """The first two performances of ``shape`` by user draw ``draw`` in the teach study's
+    scenario for learning set ``set_name``, ``cycles`` whole cycles of each from where the
+    keeper's episode begins (sequences named ``new-1``)."""
     from rnnpb.demonstrator import learning_set_patterns, make_scenario
     from rnnpb.experiments.scenarios.teaching_scenario import TeachConfig, segments
-    from rnnpb.interaction.background import teaching_consolidation
-    from rnnpb.model import TrainedModel, consolidate
     from rnnpb.sequences import Sequence
 
+    performed = segments(learning_set_patterns(set_name), shape, 0, TeachConfig())
+    scenario = make_scenario(performed, seed=draw)
+    starts = np.cumsum([0] + [n for _, n in performed])[:-1]
+    firsts = [int(s) for s, (m, _) in zip(starts, performed, strict=True) if m == shape][:2]
+    sequences = []
+    for first, count in zip(firsts, cycles, strict=True):
+        a, b = first + LEAD_IN, first + LEAD_IN + count * CYCLE
+        sequences.append(Sequence(scenario.sensory[a:b], scenario.motor[a:b], "new-1"))
+    return sequences
+
+
+def taught(model_path: str, shape: str, draw: int, cycles: tuple[int, int], path: Path):
+    """``shape`` consolidated into the model from draw ``draw``'s two performances."""
+    from rnnpb.interaction.background import teaching_consolidation
+    from rnnpb.model import TrainedModel, consolidate
+
     if not path.exists():
-        performed = segments(learning_set_patterns("1"), shape, 0, TeachConfig())
-        scenario = make_scenario(performed, seed=draw)
-        starts = np.cumsum([0] + [n for _, n in performed])[:-1]
-        firsts = [int(s) for s, (m, _) in zip(starts, performed, strict=True) if m == shape][:2]
-        sequences = []
-        for first, count in zip(firsts, cycles, strict=True):
-            a, b = first + LEAD_IN, first + LEAD_IN + count * CYCLE
-            sequences.append(Sequence(scenario.sensory[a:b], scenario.motor[a:b], "new-1"))
+        sequences = performances("1", shape, draw, cycles)
         model = TrainedModel.load(model_path)
         learned = consolidate(model, sequences, teaching_consolidation(model), grow=True)
         learned.save(path)

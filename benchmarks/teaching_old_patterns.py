@@ -34,10 +34,6 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-import numpy as np
-
-LEAD_IN = 21  # steps into a performance where the keeper's episode begins
-CYCLE = 12  # the demonstrator's period, steps
 CYCLES = (6, 3)  # whole cycles of the first and the second performance
 
 
@@ -49,23 +45,6 @@ def model_path(models: Path, set_name: str) -> Path:
                 return models / name
         raise SystemExit(f"{models}: no full.npz or full_seed0.npz")
     return models / f"set{set_name}.npz"
-
-
-def performances(set_name: str, shape: str, draw: int):
-    """The two performances of ``shape`` by user draw ``draw``, as teaching keeps them."""
-    from rnnpb.demonstrator import learning_set_patterns, make_scenario
-    from rnnpb.experiments.scenarios.teaching_scenario import TeachConfig, segments
-    from rnnpb.sequences import Sequence
-
-    performed = segments(learning_set_patterns(set_name), shape, 0, TeachConfig())
-    scenario = make_scenario(performed, seed=draw)
-    starts = np.cumsum([0] + [n for _, n in performed])[:-1]
-    firsts = [int(s) for s, (m, _) in zip(starts, performed, strict=True) if m == shape][:2]
-    out = []
-    for first, count in zip(firsts, CYCLES, strict=True):
-        a, b = first + LEAD_IN, first + LEAD_IN + count * CYCLE
-        out.append(Sequence(scenario.sensory[a:b], scenario.motor[a:b], "new-1"))
-    return out
 
 
 def consolidation(model, variant: str):
@@ -97,7 +76,8 @@ def one_case(models: Path, set_name: str, shape: str, draw: int, variant: str) -
     model = TrainedModel.load(model_path(models, set_name))
     config = consolidation(model, variant)
     start = time.process_time()
-    learned = consolidate(model, performances(set_name, shape, draw), config, grow=True)
+    taught = follow.performances(set_name, shape, draw, CYCLES)
+    learned = consolidate(model, taught, config, grow=True)
     cpu = time.process_time() - start
     learned = replace(learned, meta={**learned.meta, "taught": {"new-1": shape}})
     measures = paper_measures(learned, TeachConfig(), "new-1")

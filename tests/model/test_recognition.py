@@ -204,42 +204,57 @@ def test_bad_input_gives_an_empty_or_still_state_never_a_crash(mirror):
     assert {(r.recognised, r.novelty) for r in nothing} == {(None, "")}
 
 
-def test_one_step_of_other_evidence_does_not_change_the_answer():
+TWO_LEARNED = (("a", "b"), np.array([[0.2, 0.2], [0.8, 0.8]]))  # names, their PBs
+
+
+def _recognise_a_swing(steps: int, evidence, seed: int):
+    """Recognition over a 12-step swing of one value, each step's pattern errors and PB from
+    ``evidence(t)``; the last state and every step's answer."""
     config = RecognitionConfig()
-    names = ("a", "b")
-    learned = np.array([[0.2, 0.2], [0.8, 0.8]])
-    rng = np.random.default_rng(0)
+    names, learned = TWO_LEARNED
+    rng = np.random.default_rng(seed)
     state = initial_recognition_state(1, 2, config)
-    said = []
-    for t in range(60):
+    answers = []
+    for t in range(steps):
         u = np.array([0.5 + 0.3 * np.sin(2 * np.pi * t / 12)]) + 0.005 * rng.standard_normal(1)
-        errors = np.array([1e-4, 0.01]) if t != 40 else np.array([0.01, 1e-4])
-        pb = learned[0] if t != 40 else learned[1]
+        errors, pb = evidence(t)
         state, answer = recognise(state, u, np.ones(1, bool), errors, pb, learned, names, config)
-        said.append(answer.recognised)
-    assert said[20:] == ["a"] * 40
+        answers.append(answer)
+    return state, answers
+
+
+def test_one_step_of_other_evidence_does_not_change_the_answer():
+    _, learned = TWO_LEARNED
+
+    def evidence(t):
+        return (
+            (np.array([0.01, 1e-4]), learned[1])
+            if t == 40
+            else (np.array([1e-4, 0.01]), learned[0])
+        )
+
+    _, answers = _recognise_a_swing(60, evidence, seed=0)
+    assert [a.recognised for a in answers[20:]] == ["a"] * 40
 
 
 def test_the_structure_test_runs_only_where_no_pattern_is_recognised():
     """While a learned pattern is recognised the structure test's answer is not used (it is not
     measured: NaN); once no pattern fits, a repeating movement is measured and called novel."""
-    config = RecognitionConfig()
-    names = ("a", "b")
-    learned = np.array([[0.2, 0.2], [0.8, 0.8]])
-    rng = np.random.default_rng(1)
-    state = initial_recognition_state(1, 2, config)
-    answers = []
-    for t in range(160):
-        u = np.array([0.5 + 0.3 * np.sin(2 * np.pi * t / 12)]) + 0.005 * rng.standard_normal(1)
-        fits = t < 60
-        errors = np.array([1e-4, 0.01]) if fits else np.array([0.05, 0.05])
-        pb = learned[0] if fits else np.array([0.5, 0.1])
-        state, answer = recognise(state, u, np.ones(1, bool), errors, pb, learned, names, config)
-        answers.append(answer)
+    _, learned = TWO_LEARNED
+
+    def evidence(t):
+        return (
+            (np.array([1e-4, 0.01]), learned[0])
+            if t < 60
+            else (np.full(2, 0.05), np.array([0.5, 0.1]))
+        )
+
+    state, answers = _recognise_a_swing(160, evidence, seed=1)
     familiar = [a for a in answers[30:60] if a.novelty == "familiar"]
     assert familiar and all(np.isnan(a.structure) for a in familiar)
     novel = [a for a in answers[100:] if a.novelty == "novel"]
-    assert len(novel) > 40 and all(a.structure < config.structure_level for a in novel)
+    level = RecognitionConfig().structure_level
+    assert len(novel) > 40 and all(a.structure < level for a in novel)
     assert state.period in (11, 12, 13)
 
 
