@@ -141,11 +141,11 @@ def _consolidation_worker(
             del os.environ[name]
         os.environ.update(environment)
     _xla.follow_cache_settings()  # JAX was imported by the server, before this environment
-    if not _xla.backend_started():  # the flag is read when the backend starts
-        _xla.single_threaded()
-        _backend_on_one_core()
     start = time.perf_counter()
     try:
+        if not _xla.backend_started():  # the flag is read when the backend starts
+            _xla.single_threaded()
+            _backend_on_one_core()  # in here: a backend that cannot start is reported
         from rnnpb.memory import MemoryStore
         from rnnpb.model import TrainedModel, consolidate, rehearse
 
