@@ -177,7 +177,10 @@ def run(args: argparse.Namespace) -> int:
     routine_level = _routine_level()
     next_part()
 
-    # The on-line step costs the same for any weights: time it with a fresh network.
+    # The network's arithmetic costs the same for any weights: time it with a fresh network.
+    # It recognises no pattern, so recognition's structure test runs on every step: the step
+    # timed is the one of a movement the robot does not know (following a learned pattern
+    # skips that test).
     params = init_params(network, jax.random.PRNGKey(0))
     rng = np.random.default_rng(0)
     model = TrainedModel(
