@@ -129,6 +129,36 @@ def _statuses(sensory, words):
         yield cutter.status
 
 
+def test_a_run_begins_with_the_cycles_the_first_novel_call_rests_on():
+    # A movement shown for five cycles; the detector says novel from the third on, having
+    # found the last cycle repeating the one before it (24 steps, this one included).
+    _, sensory = _stream("3", 60, perfect=True)
+    words = [""] * 24 + ["novel"] * 36
+
+    def kept(words, repeating=24, data=sensory):
+        cutter = EpisodeCutter()
+        return [
+            e
+            for t, w in enumerate(words)
+            if (e := cutter.observe(t, data[t], w, repeating=repeating if w == "novel" else 0))
+        ]
+
+    (episode,) = kept(words)
+    assert episode.n_cycles == 3 and episode.first_step < 24
+    # without the evidence, the novel steps alone hold too few whole cycles to keep
+    assert kept(words, repeating=0) == []
+    # steps called familiar (a learned pattern) or still are never taken in, nor steps
+    # before a lost hand
+    assert kept(["familiar"] * 24 + ["novel"] * 36) == []
+    assert kept(["still"] * 24 + ["novel"] * 36) == []
+    lost = sensory.copy()
+    lost[23, 0] = np.nan
+    assert kept([""] * 23 + ["novel"] * 37, data=lost) == []
+    # only as many steps as the call rests on: the two cycles, not the whole history
+    (episode,) = kept([""] * 24 + ["novel"] * 36, repeating=13)
+    assert episode.first_step >= 12
+
+
 def test_unstructured_movement_is_never_kept():
     rng = np.random.default_rng(3)
     walk = np.clip(0.5 + np.cumsum(0.02 * rng.standard_normal((150, 4)), axis=0), 0, 1)

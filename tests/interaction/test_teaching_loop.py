@@ -193,3 +193,48 @@ def test_learning_from_the_shipped_model_works_on_a_copy_in_the_run_folder(tmp_p
     assert sorted(p.name for p in shipped.iterdir()) == before
     assert any(p.suffix == ".npz" for p in out.iterdir())
     assert any(p.name.endswith(".memory.sqlite") for p in out.iterdir())
+
+
+def test_a_person_s_wave_shown_for_a_few_cycles_is_kept_merged_and_learned_once(
+    model, tmp_path, mocap_dir
+):
+    """Three takes of a real person waving (five cycles each, slowed to a 12-step period),
+    learned patterns between them: the first is kept, the second merged with it and both
+    learned as one pattern; nothing else is kept."""
+    import numpy as np
+
+    from rnnpb.demonstrator import make_scenario
+    from rnnpb.experiments.scenarios.people import placed_body, record
+    from rnnpb.interaction.teaching import Teacher
+    from rnnpb.mocap import capture_stream
+    from rnnpb.sources import ArraySensorySource
+
+    class Setting:  # what the people study records with
+        dt, distance = 0.4, 1.5
+
+    def take(name: str) -> np.ndarray:
+        hands = capture_stream(
+            [str(mocap_dir / name)], dt=0.4, time_scale=4.0, body=placed_body(1.5)
+        ).hands
+        return record(hands, Setting, name).sensory
+
+    waves = sorted(p.name for p in mocap_dir.glob("*wave-both-hands*.bvh"))[:3]
+    learned = [
+        np.asarray(make_scenario([(p, n)], seed=k).sensory)
+        for k, (p, n) in enumerate([("1", 40), ("2", 60), ("3", 60)])
+    ]
+    stream = np.concatenate(
+        [learned[0], take(waves[0]), learned[1], take(waves[1]), learned[2], take(waves[2])]
+    )
+    path = tmp_path / "m.npz"
+    model.save(path)
+    with ArraySensorySource(stream) as source, MemoryStore(path) as memory:
+        loop = InteractionLoop(MirrorSystem(model), source, config=LoopConfig())
+        teacher = Teacher(
+            loop, path, memory, make_mirror=MirrorSystem, source="waves", iterations=20
+        )
+        loop.run(between_steps=teacher.between_steps)
+        episodes = memory.episodes()
+    assert [e.pattern for e in episodes] == ["new-1", "new-1"], [e.note for e in episodes]
+    assert [e.status for e in episodes] == ["learned", "learned"]
+    assert "new-1" in loop.mirror.model.patterns

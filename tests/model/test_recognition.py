@@ -253,9 +253,14 @@ def test_the_structure_test_runs_only_where_no_pattern_is_recognised():
     familiar = [a for a in answers[30:60] if a.novelty == "familiar"]
     assert familiar and all(np.isnan(a.structure) for a in familiar)
     novel = [a for a in answers[100:] if a.novelty == "novel"]
-    level = RecognitionConfig().structure_level
-    assert len(novel) > 40 and all(a.structure < level for a in novel)
+    config = RecognitionConfig()
+    assert len(novel) > 40 and all(a.structure < config.structure_level for a in novel)
     assert state.period in (11, 12, 13)
+    # A novel call says how many of the latest steps it rests on: the last cycle and the one
+    # before it; no other answer says any.
+    span = state.period + max(state.period, config.structure_steps)
+    assert novel[-1].repeating == span
+    assert all(a.repeating == 0 for a in answers if a.novelty != "novel")
 
 
 def test_timeline_and_bad_settings():

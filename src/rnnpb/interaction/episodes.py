@@ -6,11 +6,17 @@ learned pattern fits. :class:`EpisodeCutter` watches those words step by step an
 movement once it has been ``novel`` long enough to be sure and to hold whole cycles:
 
 1. A *run* starts on a step called ``novel`` and goes on while the detector keeps calling
-   the movement ``novel``: up to ``tolerance_steps`` consecutive steps without evidence
-   (``""`` — the detector says nothing while a hand is lost for a moment, but the hand
-   positions must be seen) and up to ``interruption_steps`` consecutive steps called
-   ``familiar``, ``unstructured`` or ``still`` (the detector hesitates now and then on a new
-   movement, and says ``still`` for a step where the hands turn) are forgiven. Anything
+   the movement ``novel``. It begins with the steps that call rests on: the detector says
+   ``novel`` once the movement's last cycle repeats the one before it, so those two cycles
+   (the step's ``repeating``) are the new movement already, and count as called ``novel`` —
+   as far back as the hands were seen without a break and no step was called ``familiar``
+   or ``still`` (a learned pattern or a pause is not the new movement). A person who shows a
+   movement five or six times has shown whole cycles enough. In the run, up to
+   ``tolerance_steps`` consecutive steps without evidence (``""`` — the detector says nothing
+   while a hand is lost for a moment, but the hand positions must be seen) and up to
+   ``interruption_steps`` consecutive steps called ``familiar``, ``unstructured`` or
+   ``still`` (the detector hesitates now and then on a new movement, and says ``still`` for
+   a step where the hands turn) are forgiven. Anything
    longer (a pause, another movement) or a hand lost ends the run and throws it away.
    An episode is kept only when at least ``min_novel_share`` of its own steps were called
    ``novel``, so ``unstructured`` movement — which the detector calls ``novel`` on almost no
@@ -35,6 +41,7 @@ and an autocorrelation of at most ``max_run_steps`` steps.
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Mapping
 from dataclasses import InitVar, dataclass, field
 from typing import Any
@@ -184,7 +191,7 @@ class EpisodeCutter:
         self.reset()
 
     def reset(self) -> None:
-        """Forget the current run."""
+        """Forget the current run and the steps seen before it."""
         self._steps: list[int] = []
         self._sensory: list[np.ndarray] = []
         self._hands: list[np.ndarray] = []
@@ -195,6 +202,11 @@ class EpisodeCutter:
         self._kept = False
         self._kept_from = 0  # where the kept episode begins in the run
         self._grown = False  # the kept performance's growth was returned
+        # The latest steps seen without a break (step, hands seen, 3-D hands, novelty word),
+        # for the start of the next run: the cycles the detector's first "novel" call rests on.
+        self._recent: deque[tuple[int, np.ndarray, np.ndarray, str]] = deque(
+            maxlen=self.config.max_run_steps
+        )
 
     @property
     def extending(self) -> bool:
@@ -213,15 +225,29 @@ class EpisodeCutter:
         return CutterStatus(state, self._cycles, config.episode_cycles)
 
     def observe(
-        self, step: int, observed: np.ndarray, novelty: str, hands: np.ndarray | None = None
+        self,
+        step: int,
+        observed: np.ndarray,
+        novelty: str,
+        hands: np.ndarray | None = None,
+        repeating: int = 0,
     ) -> KeptMovement | None:
         """One step: the hands seen (4,), the step's novelty word, optionally the 3-D hands
-        (2, 3); returns the episode on the step it is complete, the same performance grown
-        (``extends``) on the step its run ends or fills ``max_run_steps``, else None."""
+        (2, 3) and, on a step called ``novel``, how many of the latest steps (this one
+        included) the detector found repeating; returns the episode on the step it is
+        complete, the same performance grown (``extends``) on the step its run ends or fills
+        ``max_run_steps``, else None."""
         observed = np.asarray(observed, dtype=np.float64).reshape(4)
         seen = bool(np.isfinite(observed).all())
+        hands = (
+            np.full((2, 3), np.nan)
+            if hands is None
+            else np.asarray(hands, dtype=np.float64).reshape(2, 3)
+        )
         config = self.config
         going = bool(self._steps) and seen
+        before = self._before(step, repeating) if novelty == "novel" and not going else []
+        self._remember(step, observed, hands, seen, novelty)
         if novelty == "novel" and seen:
             self._quiet = self._interrupted = 0
         elif novelty == "" and going and self._quiet < config.tolerance_steps:
@@ -234,24 +260,19 @@ class EpisodeCutter:
             self._interrupted += 1  # the detector hesitates: the run goes on
         else:
             grown = self._growth() if self.extending else None
-            self.reset()
+            self._forget()
             return grown
         if self._kept and self._grown:
             return None
-        self._steps.append(int(step))
-        self._novel.append(np.nan if novelty == "" else float(novelty == "novel"))
-        self._sensory.append(observed)
-        self._hands.append(
-            np.full((2, 3), np.nan)
-            if hands is None
-            else np.asarray(hands, dtype=np.float64).reshape(2, 3)
-        )
+        for earlier, seen_then, hands_then, _ in before:
+            self._add(earlier, seen_then, 1.0, hands_then)
+        self._add(step, observed, np.nan if novelty == "" else float(novelty == "novel"), hands)
         if self._kept:
             if len(self._steps) - self._kept_from < config.max_run_steps:
                 return None
             grown, self._grown = self._growth(), True
             return grown
-        if len(self._steps) > config.max_run_steps:
+        while len(self._steps) > config.max_run_steps:
             del self._steps[0], self._sensory[0], self._hands[0], self._novel[0]
         cycles = cycle_bounds(np.array(self._sensory))
         self._cycles = len(cycles)
@@ -262,6 +283,41 @@ class EpisodeCutter:
             return None  # not novel enough yet: the run goes on, its window slides
         self._kept, self._kept_from = True, start
         return self._movement(cycles[-config.episode_cycles :])
+
+    def _add(self, step: int, observed: np.ndarray, novel: float, hands: np.ndarray) -> None:
+        self._steps.append(int(step))
+        self._novel.append(novel)
+        self._sensory.append(observed)
+        self._hands.append(hands)
+
+    def _forget(self) -> None:
+        """End the run; the steps seen lately stay for the next one."""
+        recent = self._recent
+        self.reset()
+        self._recent = recent
+
+    def _remember(
+        self, step: int, observed: np.ndarray, hands: np.ndarray, seen: bool, novelty: str
+    ) -> None:
+        """Keep the step among the latest seen without a break (a lost hand is a break)."""
+        if not seen or (self._recent and self._recent[-1][0] != step - 1):
+            self._recent.clear()
+        if seen:
+            self._recent.append((int(step), observed, hands, novelty))
+
+    def _before(self, step: int, repeating: int) -> list[tuple[int, np.ndarray, np.ndarray, str]]:
+        """The steps just before ``step`` among the ``repeating`` latest (``step`` is the
+        last of them), as far back as they were seen without a break and none was called
+        ``familiar`` or ``still``."""
+        wanted = max(0, int(repeating) - 1)
+        if not wanted or not self._recent or self._recent[-1][0] != step - 1:
+            return []
+        taken: list[tuple[int, np.ndarray, np.ndarray, str]] = []
+        for entry in reversed(self._recent):
+            if len(taken) == wanted or entry[3] in ("familiar", "still"):
+                break
+            taken.append(entry)
+        return taken[::-1]
 
     def _novel_enough(self, start: int, stop: int) -> bool:
         said = np.array(self._novel[start:stop])

@@ -184,7 +184,11 @@ class EpisodeKeeper:
         if grown is not None:
             self._keep(record, grown, "grower", self._growing)
         episode = self.cutter.observe(
-            record.step, record.observed, getattr(record, "novelty", ""), hands
+            record.step,
+            record.observed,
+            getattr(record, "novelty", ""),
+            hands,
+            getattr(record, "repeating", 0),
         )
         text = self.cutter.status.describe()
         if episode is None:

@@ -84,8 +84,8 @@ class StepRecord:
     ``observed`` (4,) the hands seen (NaN where lost); ``predicted`` (4,) what the network had
     predicted for this step one step before (NaN on the first step); ``motor`` (8,) the command
     sent, radians; ``pb`` (P,); ``timings`` seconds per section; ``recognised``,
-    ``confidence``, ``novelty``, ``pattern_confidence``: what the step recognised
-    (:class:`rnnpb.model.mirror.StepResult`).
+    ``confidence``, ``novelty``, ``pattern_confidence``, ``repeating``: what the step
+    recognised (:class:`rnnpb.model.mirror.StepResult`).
     """
 
     step: int
@@ -111,6 +111,7 @@ class StepRecord:
     confidence: float = 0.0
     novelty: str = ""
     pattern_confidence: dict[str, float] = field(default_factory=dict)
+    repeating: int = 0
     # The meta-level (docs/safety.md): what drove the motion and why the generated command
     # was held (empty when sent; ``motor`` is then the command before).
     regime: str = ""
@@ -241,6 +242,7 @@ class InteractionLoop:
             confidence=result.confidence,
             novelty=result.novelty,
             pattern_confidence=result.pattern_confidence,
+            repeating=getattr(result, "repeating", 0),
             regime=getattr(result, "regime", ""),
             inhibited=getattr(result, "inhibited", ""),
         )

@@ -75,6 +75,9 @@ class StepResult:
         How sure ``recognised`` is, in [0, 1] (for None: that no learned pattern fits).
     novelty : str
         ``familiar``, ``novel``, ``unstructured``, ``still``, or ``""`` (no evidence yet).
+    repeating : int
+        On a step called ``novel`` by the structure test: how many of the latest steps it
+        found repeating (:class:`rnnpb.model.recognition.Recognition`); else 0.
     pattern_confidence : dict of str to float
         Each learned pattern's share of the evidence, in [0, 1].
     pattern_errors : array, shape (K,)
@@ -104,6 +107,7 @@ class StepResult:
     novelty: str = ""
     pattern_confidence: dict[str, float] = field(default_factory=dict)
     pattern_errors: np.ndarray | None = None
+    repeating: int = 0
     regime: str = ""
     inhibited: str = ""
     generated: np.ndarray | None = None
@@ -484,5 +488,6 @@ class MirrorSystem:
             pattern_confidence=seen_now.confidences,
             pattern_errors=outputs.pattern_errors,
             regime=regime_of(seen, seen_now.novelty),
+            repeating=seen_now.repeating,
         )
         return result, recognition, outputs.predicted_sensory

@@ -253,6 +253,10 @@ class Recognition(NamedTuple):
         How unlike the cycle before it the last cycle is, at its best period (NaN when not
         measured, as while a learned pattern is recognised;
         :func:`rnnpb.structure.cycle_differences`): low repeats.
+    repeating : int
+        On a step the structure test calls ``novel``: how many of the latest steps it found
+        repeating — the last cycle and the one before it (``period + max(period,
+        structure_steps)``), the evidence the call rests on. 0 on every other step.
     """
 
     recognised: str | None
@@ -261,6 +265,7 @@ class Recognition(NamedTuple):
     confidences: dict[str, float]
     distances: dict[str, float]
     structure: float
+    repeating: int = 0
 
 
 class RecognitionState(NamedTuple):
@@ -624,6 +629,8 @@ def recognise(
             confidence, novelty = float(shares[names.index(answer)]), "familiar"
         else:
             confidence, novelty = float(unknown / total), state.novelty
+    period = structure_test()[2] if novelty == "novel" else 0
+    repeats = novelty == "novel" and measured[0][0] < config.structure_level
     new = RecognitionState(
         observed,
         pbs,
@@ -636,7 +643,7 @@ def recognise(
         novelty,
         moving_run,
         paused,
-        structure_test()[2] if novelty == "novel" else 0,
+        period,
     )
     return new, Recognition(
         answer,
@@ -645,6 +652,7 @@ def recognise(
         {name: float(c) for name, c in zip(names, shares, strict=True)},
         {name: float(x) for name, x in zip(names, d, strict=True)},
         measured[0][0] if measured else float("nan"),
+        period + max(period, config.structure_steps) if repeats else 0,
     )
 
 

@@ -378,6 +378,7 @@ class ReferenceMirrorSystem:
             pattern_confidence=seen_now.confidences,
             pattern_errors=errors,
             regime=regime_of(seen, seen_now.novelty),
+            repeating=seen_now.repeating,
         )
         if self.meta_level is not None:
             sent, why = self.meta_level.inhibit(result.regime, result.pb, result.motor)
