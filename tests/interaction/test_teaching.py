@@ -157,6 +157,9 @@ def test_a_run_begins_with_the_cycles_the_first_novel_call_rests_on():
     # only as many steps as the call rests on: the two cycles, not the whole history
     (episode,) = kept([""] * 24 + ["novel"] * 36, repeating=13)
     assert episode.first_step >= 12
+    # one call alone keeps nothing, however much it rests on: the detector must itself call a
+    # whole cycle novel
+    assert kept([""] * 48 + ["novel"] * 3 + ["unstructured"] * 9, repeating=48) == []
 
 
 def test_unstructured_movement_is_never_kept():

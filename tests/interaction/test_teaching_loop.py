@@ -198,9 +198,10 @@ def test_learning_from_the_shipped_model_works_on_a_copy_in_the_run_folder(tmp_p
 def test_a_person_s_wave_shown_for_a_few_cycles_is_kept_merged_and_learned_once(
     model, tmp_path, mocap_dir
 ):
-    """Three takes of a real person waving (five cycles each, slowed to a 12-step period),
-    learned patterns between them: the first is kept, the second merged with it and both
-    learned as one pattern; nothing else is kept."""
+    """Three takes of a real person waving (about five cycles each, slowed to a 12-step
+    period), learned patterns between them: two performances are kept, the second merged with
+    the first, and both learned as one pattern; nothing else is kept. (Without the cycles the
+    novel call rests on, none of these takes holds enough steps called novel to keep.)"""
     import numpy as np
 
     from rnnpb.demonstrator import make_scenario
@@ -223,9 +224,9 @@ def test_a_person_s_wave_shown_for_a_few_cycles_is_kept_merged_and_learned_once(
         np.asarray(make_scenario([(p, n)], seed=k).sensory)
         for k, (p, n) in enumerate([("1", 40), ("2", 60), ("3", 60)])
     ]
-    stream = np.concatenate(
-        [learned[0], take(waves[0]), learned[1], take(waves[1]), learned[2], take(waves[2])]
-    )
+    takes = [take(name) for name in waves]
+    parts = [learned[0], takes[0], learned[1], takes[1], learned[2], takes[2]]
+    stream = np.concatenate(parts)
     path = tmp_path / "m.npz"
     model.save(path)
     with ArraySensorySource(stream) as source, MemoryStore(path) as memory:
@@ -238,3 +239,9 @@ def test_a_person_s_wave_shown_for_a_few_cycles_is_kept_merged_and_learned_once(
     assert [e.pattern for e in episodes] == ["new-1", "new-1"], [e.note for e in episodes]
     assert [e.status for e in episodes] == ["learned", "learned"]
     assert "new-1" in loop.mirror.model.patterns
+    # each kept performance lies within one take: nothing of the learned patterns around them
+    ends = np.cumsum([len(part) for part in parts])
+    within = [(ends[k] - len(parts[k]), ends[k]) for k in (1, 3, 5)]  # the takes' steps
+    for episode in episodes:
+        first, last = episode_steps(episode.note)
+        assert any(a <= first and last < b for a, b in within), episode.note

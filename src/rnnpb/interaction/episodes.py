@@ -10,10 +10,10 @@ movement once it has been ``novel`` long enough to be sure and to hold whole cyc
    ``novel`` once the movement's last cycle repeats the one before it, so those two cycles
    (the step's ``repeating``) are the new movement already, and count as called ``novel`` —
    as far back as the hands were seen without a break and no step was called ``familiar``
-   or ``still`` (a learned pattern or a pause is not the new movement). A person who shows a
-   movement five or six times has shown whole cycles enough. In the run, up to
-   ``tolerance_steps`` consecutive steps without evidence (``""`` — the detector says nothing
-   while a hand is lost for a moment, but the hand positions must be seen) and up to
+   or ``still`` (a learned pattern or a pause before the movement is not part of it). A
+   person who shows a movement five or six times has shown whole cycles enough. In the run,
+   up to ``tolerance_steps`` consecutive steps without evidence (``""`` — the detector says
+   nothing while a hand is lost for a moment, but the hand positions must be seen) and up to
    ``interruption_steps`` consecutive steps called ``familiar``, ``unstructured`` or
    ``still`` (the detector hesitates now and then on a new movement, and says ``still`` for
    a step where the hands turn) are forgiven. Anything
@@ -22,8 +22,9 @@ movement once it has been ``novel`` long enough to be sure and to hold whole cyc
    ``novel``, so ``unstructured`` movement — which the detector calls ``novel`` on almost no
    step — is never kept, nor a learned pattern the detector calls ``familiar``.
 2. The whole cycles of the run are counted with :func:`rnnpb.interaction.learning_phase.
-   cycle_bounds`. From ``confirm_cycles`` whole cycles on the cutter is *recording* ("cycle
-   k of ``episode_cycles``"); when the run holds ``episode_cycles`` whole cycles, the last
+   cycle_bounds`. From ``confirm_cycles`` whole cycles the detector itself called ``novel``
+   (the cycles looked back on aside: one stray call keeps nothing) the cutter is *recording*
+   ("cycle k of ``episode_cycles``"); when the run holds ``episode_cycles`` whole cycles, the last
    ``episode_cycles`` of them are the episode: their sensory values as seen and the robot's
    joint angles for them (3-D hands from the source when it gives them, else on the fixed
    plane; mirror mapping and inverse kinematics, as in the learning phase).
@@ -72,7 +73,8 @@ class TeachingConfig:
     Attributes
     ----------
     confirm_cycles : int
-        Whole cycles called ``novel`` before the cutter says it is recording.
+        Whole cycles the detector itself called ``novel`` (the cycles a run opens with aside)
+        before the cutter says it is recording, and before it keeps anything.
     tolerance_steps : int
         Consecutive steps without evidence (``""``: a hand lost for a moment) a run survives.
     max_run_steps : int
@@ -201,6 +203,8 @@ class EpisodeCutter:
         self._cycles = 0
         self._kept = False
         self._kept_from = 0  # where the kept episode begins in the run
+        self._called_from = 0  # the run's first step the detector itself called (not looked back)
+        self._own_cycles = 0  # whole cycles from there
         self._grown = False  # the kept performance's growth was returned
         # The latest steps seen without a break (step, hands seen, 3-D hands, novelty word),
         # for the start of the next run: the cycles the detector's first "novel" call rests on.
@@ -218,7 +222,7 @@ class EpisodeCutter:
         config = self.config
         if self._kept:
             state = KEPT
-        elif self._cycles >= config.confirm_cycles:
+        elif self._own_cycles >= config.confirm_cycles:
             state = RECORDING
         else:
             state = WATCHING
@@ -264,6 +268,8 @@ class EpisodeCutter:
             return grown
         if self._kept and self._grown:
             return None
+        if not self._steps:
+            self._called_from = int(step)
         for earlier, seen_then, hands_then, _ in before:
             self._add(earlier, seen_then, 1.0, hands_then)
         self._add(step, observed, np.nan if novelty == "" else float(novelty == "novel"), hands)
@@ -276,7 +282,10 @@ class EpisodeCutter:
             del self._steps[0], self._sensory[0], self._hands[0], self._novel[0]
         cycles = cycle_bounds(np.array(self._sensory))
         self._cycles = len(cycles)
-        if self._cycles < config.episode_cycles:
+        self._own_cycles = sum(self._steps[a] >= self._called_from for a, _ in cycles)
+        # The cycles looked back on count toward the episode, but the detector must itself have
+        # called a whole cycle novel: one call alone is not a movement.
+        if self._cycles < config.episode_cycles or self._own_cycles < config.confirm_cycles:
             return None
         start, stop = cycles[-config.episode_cycles][0], cycles[-1][1]
         if not self._novel_enough(start, stop):
