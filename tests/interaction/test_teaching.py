@@ -129,37 +129,46 @@ def _statuses(sensory, words):
         yield cutter.status
 
 
-def test_a_run_begins_with_the_cycles_the_first_novel_call_rests_on():
-    # A movement shown for five cycles; the detector says novel from the third on, having
-    # found the last cycle repeating the one before it (24 steps, this one included).
-    _, sensory = _stream("3", 60, perfect=True)
-    words = [""] * 24 + ["novel"] * 36
+def test_a_short_performance_is_kept_when_it_ends_with_the_cycles_the_novel_call_rested_on():
+    # A movement shown for five cycles, then stopped (the detector says still); the detector
+    # says novel from the third cycle on, having found the last cycle repeating the one before
+    # it (24 steps, this one included).
+    _, sensory = _stream("3", 64, perfect=True)
+    words = [""] * 24 + ["novel"] * 36 + ["still"] * 4
 
     def kept(words, repeating=24, data=sensory):
         cutter = EpisodeCutter()
         return [
-            e
+            (t, e)
             for t, w in enumerate(words)
             if (e := cutter.observe(t, data[t], w, repeating=repeating if w == "novel" else 0))
         ]
 
-    (episode,) = kept(words)
-    assert episode.n_cycles == 3 and episode.first_step < 24
+    ((t, episode),) = kept(words)
+    # kept as the run ends (the stop outlasts a hesitation), with every whole cycle: some from
+    # before the first novel call
+    assert t == 60 + TeachingConfig().interruption_steps
+    assert episode.n_cycles >= 3 and episode.first_step < 24
+    assert not episode.extends and episode.last_step < 60
     # without the evidence, the novel steps alone hold too few whole cycles to keep
     assert kept(words, repeating=0) == []
     # steps called familiar (a learned pattern) or still are never taken in, nor steps
     # before a lost hand
-    assert kept(["familiar"] * 24 + ["novel"] * 36) == []
-    assert kept(["still"] * 24 + ["novel"] * 36) == []
+    assert kept(["familiar"] * 24 + words[24:]) == []
+    assert kept(["still"] * 24 + words[24:]) == []
     lost = sensory.copy()
     lost[23, 0] = np.nan
-    assert kept([""] * 23 + ["novel"] * 37, data=lost) == []
+    assert kept([""] * 23 + ["novel"] * 37 + ["still"] * 4, data=lost) == []
     # only as many steps as the call rests on: the two cycles, not the whole history
-    (episode,) = kept([""] * 24 + ["novel"] * 36, repeating=13)
+    ((_, episode),) = kept(words, repeating=13)
     assert episode.first_step >= 12
     # one call alone keeps nothing, however much it rests on: the detector must itself call a
     # whole cycle novel
-    assert kept([""] * 48 + ["novel"] * 3 + ["unstructured"] * 9, repeating=48) == []
+    assert kept([""] * 48 + ["novel"] * 3 + ["unstructured"] * 13, repeating=48) == []
+    # a performance long enough to keep on its own is kept as before, from its own cycles
+    _, longer = _stream("3", 100, perfect=True)
+    ((t, episode), *_) = kept([""] * 24 + ["novel"] * 76, data=longer)
+    assert t < 99 and episode.first_step >= 24
 
 
 def test_unstructured_movement_is_never_kept():

@@ -199,9 +199,10 @@ def test_a_person_s_wave_shown_for_a_few_cycles_is_kept_merged_and_learned_once(
     model, tmp_path, mocap_dir
 ):
     """Three takes of a real person waving (about five cycles each, slowed to a 12-step
-    period), learned patterns between them: two performances are kept, the second merged with
-    the first, and both learned as one pattern; nothing else is kept. (Without the cycles the
-    novel call rests on, none of these takes holds enough steps called novel to keep.)"""
+    period), learned patterns between them, then standing still: two performances are kept
+    as each ends, the second merged with the first, and both learned as one pattern; nothing
+    else is kept. (Without the cycles the novel call rests on, none of these takes holds
+    enough steps called novel to keep.)"""
     import numpy as np
 
     from rnnpb.demonstrator import make_scenario
@@ -225,7 +226,8 @@ def test_a_person_s_wave_shown_for_a_few_cycles_is_kept_merged_and_learned_once(
         for k, (p, n) in enumerate([("1", 40), ("2", 60), ("3", 60)])
     ]
     takes = [take(name) for name in waves]
-    parts = [learned[0], takes[0], learned[1], takes[1], learned[2], takes[2]]
+    rest = np.repeat(takes[2][-1:], 10, axis=0)  # then the person stands still
+    parts = [learned[0], takes[0], learned[1], takes[1], learned[2], takes[2], rest]
     stream = np.concatenate(parts)
     path = tmp_path / "m.npz"
     model.save(path)

@@ -49,8 +49,9 @@ learning preset's [online], [recognition] or [recognition_untaught] values for r
 --learn its [teaching.cutter], [teaching] and [consolidation] values.
 
 With --learn the robot learns new movements on-line (docs/teaching.md): when the novelty
-detector has called a structured movement `novel` for a few cycles, four whole cycles of it
-are kept in the model's short-term memory (MODEL.memory.sqlite) as pattern new-1, new-2, ....
+detector has called a structured movement `novel` for a few cycles, three whole cycles of it
+(a performance of five or six cycles: all of it, when it ends) are kept in the model's
+short-term memory (MODEL.memory.sqlite) as pattern new-1, new-2, ....
 A later performance of the same shape is merged with it (never a second pattern); once a
 movement has been seen twice ("new-1 seen twice") it is consolidated, from both performances,
 into a new model version (MODEL.v2.npz, ...; the old file stays) in a background process, and

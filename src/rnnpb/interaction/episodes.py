@@ -6,25 +6,18 @@ learned pattern fits. :class:`EpisodeCutter` watches those words step by step an
 movement once it has been ``novel`` long enough to be sure and to hold whole cycles:
 
 1. A *run* starts on a step called ``novel`` and goes on while the detector keeps calling
-   the movement ``novel``. It begins with the steps that call rests on: the detector says
-   ``novel`` once the movement's last cycle repeats the one before it, so those two cycles
-   (the step's ``repeating``) are the new movement already, and count as called ``novel`` —
-   as far back as the hands were seen without a break and no step was called ``familiar``
-   or ``still`` (a learned pattern or a pause before the movement is not part of it). A
-   person who shows a movement five or six times has shown whole cycles enough. In the run,
-   up to ``tolerance_steps`` consecutive steps without evidence (``""`` — the detector says
-   nothing while a hand is lost for a moment, but the hand positions must be seen) and up to
-   ``interruption_steps`` consecutive steps called ``familiar``, ``unstructured`` or
-   ``still`` (the detector hesitates now and then on a new movement, and says ``still`` for
-   a step where the hands turn) are forgiven. Anything
+   the movement ``novel``: up to ``tolerance_steps`` consecutive steps without evidence
+   (``""`` — the detector says nothing while a hand is lost for a moment, but the hand
+   positions must be seen) and up to ``interruption_steps`` consecutive steps called
+   ``familiar``, ``unstructured`` or ``still`` (the detector hesitates now and then on a new
+   movement, and says ``still`` for a step where the hands turn) are forgiven. Anything
    longer (a pause, another movement) or a hand lost ends the run and throws it away.
    An episode is kept only when at least ``min_novel_share`` of its own steps were called
    ``novel``, so ``unstructured`` movement — which the detector calls ``novel`` on almost no
    step — is never kept, nor a learned pattern the detector calls ``familiar``.
 2. The whole cycles of the run are counted with :func:`rnnpb.interaction.learning_phase.
-   cycle_bounds`. From ``confirm_cycles`` whole cycles the detector itself called ``novel``
-   (the cycles looked back on aside: one stray call keeps nothing) the cutter is *recording*
-   ("cycle k of ``episode_cycles``"); when the run holds ``episode_cycles`` whole cycles, the last
+   cycle_bounds`. From ``confirm_cycles`` whole cycles on the cutter is *recording* ("cycle
+   k of ``episode_cycles``"); when the run holds ``episode_cycles`` whole cycles, the last
    ``episode_cycles`` of them are the episode: their sensory values as seen and the robot's
    joint angles for them (3-D hands from the source when it gives them, else on the fixed
    plane; mirror mapping and inverse kinematics, as in the learning phase).
@@ -35,6 +28,17 @@ movement once it has been ``novel`` long enough to be sure and to hold whole cyc
    the memory to hold in its place while it has not been learned. A person who shows a
    movement for longer teaches it with more of the variation they bring; the episode is
    kept, and the person told, as soon as it holds ``episode_cycles`` cycles.
+4. **A short performance is kept when it ends.** The detector says ``novel`` once the
+   movement's last cycle repeats the one before it, so about two cycles go by before a run
+   starts, and a performance of five or six cycles ends before its run holds
+   ``episode_cycles``. The steps that first call rests on (the step's ``repeating``) are the
+   new movement already: when a run ends before it was kept, they are put in front of it
+   (counted as called ``novel``) — as far back as the hands were seen without a break and no
+   step was called ``familiar`` or ``still`` (a learned pattern or a pause before the
+   movement is not part of it) — and every whole cycle up to its last ``novel`` step is the
+   episode, when they are ``episode_cycles`` or more, at least ``confirm_cycles`` of them the
+   detector's own calls (one stray call keeps nothing), and novel enough. A performance long
+   enough to keep on its own is cut as above, from the detector's own calls alone.
 
 It is pure bookkeeping (NumPy only, no clock or I/O), bounded per step: a principal component
 and an autocorrelation of at most ``max_run_steps`` steps.
@@ -73,8 +77,8 @@ class TeachingConfig:
     Attributes
     ----------
     confirm_cycles : int
-        Whole cycles the detector itself called ``novel`` (the cycles a run opens with aside)
-        before the cutter says it is recording, and before it keeps anything.
+        Whole cycles called ``novel`` before the cutter says it is recording (and that a short
+        performance must hold of the detector's own calls to be kept).
     tolerance_steps : int
         Consecutive steps without evidence (``""``: a hand lost for a moment) a run survives.
     max_run_steps : int
@@ -203,8 +207,9 @@ class EpisodeCutter:
         self._cycles = 0
         self._kept = False
         self._kept_from = 0  # where the kept episode begins in the run
-        self._called_from = 0  # the run's first step the detector itself called (not looked back)
-        self._own_cycles = 0  # whole cycles from there
+        # The steps the run's first novel call rested on (step, hands seen, 3-D hands, novelty
+        # word): taken in only if the run ends before it was kept (_rescue).
+        self._looked_back: list[tuple[int, np.ndarray, np.ndarray, str]] = []
         self._grown = False  # the kept performance's growth was returned
         # The latest steps seen without a break (step, hands seen, 3-D hands, novelty word),
         # for the start of the next run: the cycles the detector's first "novel" call rests on.
@@ -222,7 +227,7 @@ class EpisodeCutter:
         config = self.config
         if self._kept:
             state = KEPT
-        elif self._own_cycles >= config.confirm_cycles:
+        elif self._cycles >= config.confirm_cycles:
             state = RECORDING
         else:
             state = WATCHING
@@ -263,15 +268,13 @@ class EpisodeCutter:
         ):
             self._interrupted += 1  # the detector hesitates: the run goes on
         else:
-            grown = self._growth() if self.extending else None
+            grown = self._growth() if self.extending else self._rescue()
             self._forget()
             return grown
         if self._kept and self._grown:
             return None
         if not self._steps:
-            self._called_from = int(step)
-        for earlier, seen_then, hands_then, _ in before:
-            self._add(earlier, seen_then, 1.0, hands_then)
+            self._looked_back = before
         self._add(step, observed, np.nan if novelty == "" else float(novelty == "novel"), hands)
         if self._kept:
             if len(self._steps) - self._kept_from < config.max_run_steps:
@@ -282,10 +285,7 @@ class EpisodeCutter:
             del self._steps[0], self._sensory[0], self._hands[0], self._novel[0]
         cycles = cycle_bounds(np.array(self._sensory))
         self._cycles = len(cycles)
-        self._own_cycles = sum(self._steps[a] >= self._called_from for a, _ in cycles)
-        # The cycles looked back on count toward the episode, but the detector must itself have
-        # called a whole cycle novel: one call alone is not a movement.
-        if self._cycles < config.episode_cycles or self._own_cycles < config.confirm_cycles:
+        if self._cycles < config.episode_cycles:
             return None
         start, stop = cycles[-config.episode_cycles][0], cycles[-1][1]
         if not self._novel_enough(start, stop):
@@ -351,6 +351,34 @@ class EpisodeCutter:
             extends,
             tuple((a - start, b - start) for a, b in cycles),
         )
+
+    def _rescue(self) -> KeptMovement | None:
+        """A run that ends before it was kept, with the steps its first novel call rested on
+        in front: every whole cycle up to its last step called ``novel`` (at most
+        ``max_run_steps`` steps), when they are ``episode_cycles`` or more, at least
+        ``confirm_cycles`` of them the detector's own calls, and novel enough; else None."""
+        config = self.config
+        if not self._looked_back:
+            return None  # nothing to add: the run alone did not hold enough
+        ahead = len(self._looked_back)
+        for entry in reversed(self._looked_back):
+            self._steps.insert(0, entry[0])
+            self._sensory.insert(0, entry[1])
+            self._hands.insert(0, entry[2])
+            self._novel.insert(0, 1.0)  # the call rested on them
+        self._looked_back = []
+        end = len(self._novel)
+        while end > ahead and self._novel[end - 1] != 1.0:
+            end -= 1  # after the last step called novel
+        cycles = cycle_bounds(np.array(self._sensory[:end]))
+        while cycles and cycles[-1][1] - cycles[0][0] > config.max_run_steps:
+            cycles.pop(0)
+        own = sum(start >= ahead for start, _ in cycles)  # the detector's own calls
+        if len(cycles) < config.episode_cycles or own < config.confirm_cycles:
+            return None
+        if not self._novel_enough(cycles[0][0], cycles[-1][1]):
+            return None
+        return self._movement(cycles)
 
     def _growth(self) -> KeptMovement | None:
         """The kept performance with every whole cycle seen since it began, up to its last
