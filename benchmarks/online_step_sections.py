@@ -6,8 +6,11 @@ shipped model (learning set 1, the fast preset):
 * the whole ``MirrorSystem.step`` under several regressions: the default, the paper's, the
   default without phase restarts, without restarts, with half and with no iterations (what is
   left with none is everything but the regression loop);
-* the default step by section: the hands checked, the compiled call and its one transfer
-  back, the outputs unpacked, recognition on the host, the motor command;
+* the default step by section, as ``MirrorSystem.step`` runs it: the hands checked, the
+  compiled call before the regression's loop (``native.prepare_block``, its block brought to
+  the host), the native loop, the compiled call after it (``_conclude_packed``, its outputs
+  brought back), the outputs unpacked, recognition on the host, the motor command (with
+  ``RNNPB_NATIVE=0``, or without llvmlite, the whole compiled step in place of the three);
 * ``BatchedMirror``: B sessions in one call against one session's step.
 
 Prints medians and 99th percentiles and the ratios of medians to the default's; quote the
@@ -39,7 +42,13 @@ def main() -> None:
 
     from rnnpb.demonstrator import learning_set
     from rnnpb.model import BatchedMirror, MirrorSystem, OnlineConfig, TrainedModel
-    from rnnpb.model.mirror import _online_step_packed, motor_command, normalized_hands
+    from rnnpb.model.mirror import (
+        _conclude_packed,
+        _online_step_packed,
+        motor_command,
+        normalized_hands,
+    )
+    from rnnpb.model.native import prepare_block
     from rnnpb.model.recognition import recognise
     from rnnpb.models import SHIPPED_MODEL
 
@@ -68,9 +77,12 @@ def main() -> None:
 
     whole: dict[str, list[float]] = {name: [] for name in systems}
     whole[f"{args.sessions} sessions in one call"] = []
+    native = systems["default"]._native
+    calls = (
+        ("call before the loop", "native loop", "call after it") if native else ("compiled step",)
+    )
     sections: dict[str, list[float]] = {
-        name: []
-        for name in ("hands checked", "compiled call", "unpacked", "recognition", "motor command")
+        name: [] for name in ("hands checked", *calls, "unpacked", "recognition", "motor command")
     }
     mirror = systems["default"]
     for t in range(args.steps):
@@ -87,18 +99,32 @@ def main() -> None:
         marks = [time.perf_counter()]
         u, seen = normalized_hands(u_raw, model.network.sensory_size)
         marks.append(time.perf_counter())
-        _, packed = _online_step_packed(
-            mirror._params,
-            mirror._state,
-            u.astype(np.float32),
-            seen,
-            mirror.config,
-            mirror._candidates,
-            mirror._phase_candidates,
-            mirror._meta,
-            mirror._pattern_rho,
-            mirror.recognition.recognition_steps,
-        )
+        arguments = (mirror._params, mirror._state, u.astype(np.float32), seen, mirror.config)
+        if native is not None:
+            start, block = prepare_block(*arguments, mirror._candidates, mirror._phase_candidates)
+            block = np.asarray(block)
+            marks.append(time.perf_counter())
+            regressed = native(block, mirror._meta)
+            marks.append(time.perf_counter())
+            _, packed = _conclude_packed(
+                mirror._params,
+                mirror._state,
+                start,
+                regressed,
+                mirror.config,
+                mirror._meta,
+                mirror._pattern_rho,
+                mirror.recognition.recognition_steps,
+            )
+        else:
+            _, packed = _online_step_packed(
+                *arguments,
+                mirror._candidates,
+                mirror._phase_candidates,
+                mirror._meta,
+                mirror._pattern_rho,
+                mirror.recognition.recognition_steps,
+            )
         packed = np.asarray(packed, dtype=np.float64)
         marks.append(time.perf_counter())
         outputs = mirror._layout.unpack(packed)
