@@ -171,6 +171,28 @@ def test_a_short_performance_is_kept_when_it_ends_with_the_cycles_the_novel_call
     assert t < 99 and episode.first_step >= 24
 
 
+def test_the_stream_s_end_ends_the_run_as_if_the_person_stopped():
+    _, sensory = _stream("3", 100, perfect=True)
+    # a short performance still going: kept at the end, with the cycles the call rested on
+    cutter = EpisodeCutter()
+    words = [""] * 24 + ["novel"] * 36
+    assert all(
+        cutter.observe(t, sensory[t], w, repeating=24 if w else 0) is None
+        for t, w in enumerate(words)
+    )
+    ended = cutter.end()
+    assert ended is not None and ended.n_cycles >= 3 and ended.first_step < 24
+    assert cutter.end() is None  # and the run is over
+    # a kept performance still going: given back grown, as when its run ends
+    cutter = EpisodeCutter()
+    kept = [e for t in range(100) if (e := cutter.observe(t, sensory[t], "novel"))]
+    assert len(kept) == 1 and not kept[0].extends
+    grown = cutter.end()
+    assert grown is not None and grown.extends and grown.n_cycles > kept[0].n_cycles
+    # nothing going: nothing
+    assert EpisodeCutter().end() is None
+
+
 def test_unstructured_movement_is_never_kept():
     rng = np.random.default_rng(3)
     walk = np.clip(0.5 + np.cumsum(0.02 * rng.standard_normal((150, 4)), axis=0), 0, 1)

@@ -195,21 +195,15 @@ def test_learning_from_the_shipped_model_works_on_a_copy_in_the_run_folder(tmp_p
     assert any(p.name.endswith(".memory.sqlite") for p in out.iterdir())
 
 
-def test_a_person_s_wave_shown_for_a_few_cycles_is_kept_merged_and_learned_once(
-    model, tmp_path, mocap_dir
-):
-    """Three takes of a real person waving (about five cycles each, slowed to a 12-step
-    period), learned patterns between them, then standing still: two performances are kept
-    as each ends, the second merged with the first, and both learned as one pattern; nothing
-    else is kept. (Without the cycles the novel call rests on, none of these takes holds
-    enough steps called novel to keep.)"""
+def _waves_between_learned_patterns(mocap_dir):
+    """Pattern 1, a real person's first wave take, pattern 2, the second take, pattern 3, the
+    third take (sensory arrays): each take slowed to a 12-step period, the person 1.5 m from
+    the robot, as the people study records them."""
     import numpy as np
 
     from rnnpb.demonstrator import make_scenario
     from rnnpb.experiments.scenarios.people import placed_body, record
-    from rnnpb.interaction.teaching import Teacher
     from rnnpb.mocap import capture_stream
-    from rnnpb.sources import ArraySensorySource
 
     class Setting:  # what the people study records with
         dt, distance = 0.4, 1.5
@@ -226,8 +220,23 @@ def test_a_person_s_wave_shown_for_a_few_cycles_is_kept_merged_and_learned_once(
         for k, (p, n) in enumerate([("1", 40), ("2", 60), ("3", 60)])
     ]
     takes = [take(name) for name in waves]
-    rest = np.repeat(takes[2][-1:], 10, axis=0)  # then the person stands still
-    parts = [learned[0], takes[0], learned[1], takes[1], learned[2], takes[2], rest]
+    return [learned[0], takes[0], learned[1], takes[1], learned[2], takes[2]]
+
+
+def test_a_person_s_wave_shown_for_a_few_cycles_is_kept_merged_and_learned_once(
+    model, tmp_path, mocap_dir
+):
+    """Three takes of a real person waving (about five cycles each, slowed to a 12-step
+    period), learned patterns between them; the stream ends during the last: two performances
+    are kept as each ends (the last as the stream ends), the second merged with the first, and
+    both learned as one pattern; nothing else is kept. (Without the cycles the novel call rests
+    on, none of these takes holds enough steps called novel to keep.)"""
+    import numpy as np
+
+    from rnnpb.interaction.teaching import Teacher
+    from rnnpb.sources import ArraySensorySource
+
+    parts = _waves_between_learned_patterns(mocap_dir)
     stream = np.concatenate(parts)
     path = tmp_path / "m.npz"
     model.save(path)
@@ -237,6 +246,10 @@ def test_a_person_s_wave_shown_for_a_few_cycles_is_kept_merged_and_learned_once(
             loop, path, memory, make_mirror=MirrorSystem, source="waves", iterations=20
         )
         loop.run(between_steps=teacher.between_steps)
+        # The stream ends while the last take is still being performed: nothing of it yet.
+        assert len(memory.episodes()) == 1
+        teacher.finish()  # as `rnnpb interact` does when its source ends
+        teacher.between_steps(0.0)
         episodes = memory.episodes()
     assert [e.pattern for e in episodes] == ["new-1", "new-1"], [e.note for e in episodes]
     assert [e.status for e in episodes] == ["learned", "learned"]
@@ -247,3 +260,30 @@ def test_a_person_s_wave_shown_for_a_few_cycles_is_kept_merged_and_learned_once(
     for episode in episodes:
         first, last = episode_steps(episode.note)
         assert any(a <= first and last < b for a, b in within), episode.note
+
+
+def test_interact_learn_keeps_a_recording_s_last_performance_when_the_file_ends(
+    model, tmp_path, mocap_dir, capsys
+):
+    """`rnnpb interact --learn` on a recording that ends while the person still waves: the
+    last wave is kept as the file ends, merged with the one before, and learned."""
+    import json
+
+    import numpy as np
+
+    from rnnpb.cli import main
+
+    stream = np.concatenate(_waves_between_learned_patterns(mocap_dir))
+    csv = tmp_path / "waves.csv"
+    rows = [f"{t}," + ",".join(f"{v:.6f}" for v in row) for t, row in enumerate(stream)]
+    csv.write_text("step,lhy,lhz,rhy,rhz\n" + "\n".join(rows) + "\n")
+    path = tmp_path / "m.npz"
+    model.save(path)
+    arguments = ["interact", "--model", str(path), "--source", f"csv:{csv}", "--learn"]
+    arguments += ["--consolidation-iterations", "20", "--no-progress", "--out", str(tmp_path)]
+    assert main(arguments) == 0
+    printed = capsys.readouterr().out
+    teaching = json.loads((tmp_path / "summary.json").read_text())["teaching"]
+    assert [e["pattern"] for e in teaching["episodes"]] == ["new-1", "new-1"]
+    assert [e["status"] for e in teaching["episodes"]] == ["learned", "learned"]
+    assert f"step {len(stream)}: kept another performance of new-1" in printed, printed

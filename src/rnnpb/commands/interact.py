@@ -57,9 +57,10 @@ movement has been seen twice ("new-1 seen twice") it is consolidated, from both 
 into a new model version (MODEL.v2.npz, ...; the old file stays) in a background process, and
 the new version is swapped in between two steps (--learn-from-one: from its first
 performance). A performance of a pattern learned this way that is kept again is more data for
-it: the pattern grows with use. Run as fast as
-possible (a file or scenario source, no --paced) the loop waits for each consolidation, so a
-scripted run repeats; paced it never waits. A failed consolidation keeps the running model
+it: the pattern grows with use. When a file or scenario source ends, a performance still
+going is kept as if the person had stopped. Run as fast as possible (a file or scenario
+source, no --paced) the loop waits for each consolidation, so a scripted run repeats; paced
+it never waits. A failed consolidation keeps the running model
 and says why. One line is printed for each episode kept and each consolidation's start and
 end; summary.json lists the episodes and the versions written.
 
@@ -361,6 +362,11 @@ def run(args: argparse.Namespace) -> int:
             summary = loop.run(
                 on_step=after_step, between_steps=between_steps if teacher is not None else None
             )
+            if teacher is not None:
+                # The source has ended: a performance still going is kept as if the person
+                # had stopped (a recording that ends mid-movement keeps its last one).
+                teacher.finish()
+                say_teaching()
             if teacher is not None and teacher.job is not None:
                 # An episode kept near the end: its consolidation finishes, so that the run
                 # leaves the version it started (paced too: the interaction is over).

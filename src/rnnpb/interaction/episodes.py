@@ -293,6 +293,13 @@ class EpisodeCutter:
         self._kept, self._kept_from = True, start
         return self._movement(cycles[-config.episode_cycles :])
 
+    def end(self) -> KeptMovement | None:
+        """The stream has ended: the run ends as if the person had stopped. Returns what its
+        end gives (a kept performance grown, or a short one kept), else None."""
+        ended = self._growth() if self.extending else self._rescue()
+        self.reset()
+        return ended
+
     def _add(self, step: int, observed: np.ndarray, novel: float, hands: np.ndarray) -> None:
         self._steps.append(int(step))
         self._novel.append(novel)

@@ -155,6 +155,7 @@ class EpisodeKeeper:
         self._last_kept: dict[str, int | None] = {}  # per cutter, the episode it kept last
         self._last_text = ""
         self.recognition = None
+        self._last_record = None  # the latest step seen, for finish()
         # What a scripted source says it performed, per recent step (a demonstrator's
         # pattern): only written into an episode's note, for the person; never used to learn.
         self._shown: deque[tuple[int, str]] = deque(maxlen=SHOWN_STEPS)  # (step, pattern)
@@ -174,7 +175,22 @@ class EpisodeKeeper:
         best = max(set(names), key=names.count) if names else ""
         return best if best and names.count(best) * 2 > len(names) else ""
 
+    def finish(self) -> None:
+        """The stream has ended: a performance still going is kept (or its kept episode
+        grown) as if the person had stopped."""
+        record = self._last_record
+        if record is None:
+            return
+        if self._growing:
+            grown = self.grower.end()
+            if grown is not None:
+                self._keep(record, grown, "grower", self._growing)
+        episode = self.cutter.end()
+        if episode is not None:
+            self._keep(record, episode, "cutter")
+
     def __call__(self, record) -> None:
+        self._last_record = record
         truth = getattr(record, "truth", None)
         shown = truth.get("pattern", "") if isinstance(truth, dict) else ""
         if shown:

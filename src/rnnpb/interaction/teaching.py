@@ -24,6 +24,7 @@ from __future__ import annotations
 import os
 import re
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -185,13 +186,23 @@ class Teacher:
         return self.versions[-1]
 
     def _on_step(self, record) -> None:
+        self._watch(lambda: self.keeper(record))
+
+    def finish(self) -> None:
+        """The stream has ended (a file or scenario source): a performance still going is
+        kept, or its kept episode grown, as if the person had stopped; and learned when that
+        makes it ready, as on a step."""
+        self._watch(self.keeper.finish)
+
+    def _watch(self, observe: Callable[[], None]) -> None:
+        """``observe`` (the keeper watching a step, or the stream's end), then what it kept."""
         before = len(self.keeper.kept)
         self.keeper.model = self.model_path
         self.keeper.recognition = getattr(self.loop.mirror, "recognition", None)
         self.keeper.taught = self.taught_patterns()
         # A running consolidation learns its episodes as they were: they do not grow.
         self.keeper.learning = self._job_episodes if self.job is not None else frozenset()
-        self.keeper(record)
+        observe()
         new = self.keeper.kept[before:]
         self.pending.extend(new)
         if new:
