@@ -281,7 +281,7 @@ class EpisodeCutter:
                 return None
             grown, self._grown = self._growth(), True
             return grown
-        while len(self._steps) > config.max_run_steps:
+        if len(self._steps) > config.max_run_steps:
             del self._steps[0], self._sensory[0], self._hands[0], self._novel[0]
         cycles = cycle_bounds(np.array(self._sensory))
         self._cycles = len(cycles)
@@ -363,10 +363,11 @@ class EpisodeCutter:
         """A run that ends before it was kept, with the steps its first novel call rested on
         in front: every whole cycle up to its last step called ``novel`` (at most
         ``max_run_steps`` steps), when they are ``episode_cycles`` or more, at least
-        ``confirm_cycles`` of them the detector's own calls, and novel enough; else None."""
+        ``confirm_cycles`` of them the detector's own calls, and novel enough; else None. The
+        run is over: its steps are changed."""
         config = self.config
-        if not self._looked_back:
-            return None  # nothing to add: the run alone did not hold enough
+        if not self._looked_back or self._steps[0] != self._looked_back[-1][0] + 1:
+            return None  # nothing to add, or the run's first steps were dropped (a long run)
         ahead = len(self._looked_back)
         for entry in reversed(self._looked_back):
             self._steps.insert(0, entry[0])
