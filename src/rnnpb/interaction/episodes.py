@@ -375,12 +375,7 @@ class EpisodeCutter:
             self._hands.insert(0, entry[2])
             self._novel.insert(0, 1.0)  # the call rested on them
         self._looked_back = []
-        end = len(self._novel)
-        while end > ahead and self._novel[end - 1] != 1.0:
-            end -= 1  # after the last step called novel
-        cycles = cycle_bounds(np.array(self._sensory[:end]))
-        while cycles and cycles[-1][1] - cycles[0][0] > config.max_run_steps:
-            cycles.pop(0)
+        cycles = self._cycles_to_last_novel(0)
         own = sum(start >= ahead for start, _ in cycles)  # the detector's own calls
         if len(cycles) < config.episode_cycles or own < config.confirm_cycles:
             return None
@@ -388,21 +383,27 @@ class EpisodeCutter:
             return None
         return self._movement(cycles)
 
+    def _cycles_to_last_novel(self, first: int) -> list[tuple[int, int]]:
+        """The run's whole cycles (counted from its start) up to its last step called
+        ``novel``, those that end after step ``first`` of the run, the oldest dropped beyond
+        ``max_run_steps`` steps; none when no step from ``first`` on was called novel."""
+        end = len(self._novel)
+        while end > first and self._novel[end - 1] != 1.0:
+            end -= 1  # after the last step called novel
+        if end <= first:
+            return []
+        cycles = [c for c in cycle_bounds(np.array(self._sensory[:end])) if c[1] > first]
+        while cycles and cycles[-1][1] - cycles[0][0] > self.config.max_run_steps:
+            cycles.pop(0)
+        return cycles
+
     def _growth(self) -> KeptMovement | None:
         """The kept performance with every whole cycle seen since it began, up to its last
         step called ``novel`` and at most ``max_run_steps`` steps; None when that adds no
         cycle or is not novel enough."""
-        end = len(self._novel)
-        while end > self._kept_from and self._novel[end - 1] != 1.0:
-            end -= 1  # after the last step called novel
-        if end <= self._kept_from:
-            return None
         # The cycles of the run as the keep found them (from its start), from the one the
         # kept episode begins with.
-        found = cycle_bounds(np.array(self._sensory[:end]))
-        cycles = [c for c in found if c[1] > self._kept_from]
-        while cycles and cycles[-1][1] - cycles[0][0] > self.config.max_run_steps:
-            cycles.pop(0)
+        cycles = self._cycles_to_last_novel(self._kept_from)
         if len(cycles) <= self.config.episode_cycles:
             return None
         if not self._novel_enough(cycles[0][0], cycles[-1][1]):
