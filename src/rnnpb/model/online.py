@@ -202,14 +202,23 @@ def _phase_restart(
         )
         return window.mean_squared(*window.prediction_errors(predictions, short))
 
-    errors = jax.lax.map(candidate_error, phase_candidates)
-    best = jnp.argmin(errors)
+    def best_candidate(_: None) -> tuple[jax.Array, jax.Array]:
+        errors = jax.lax.map(candidate_error, phase_candidates)
+        best = jnp.argmin(errors)
+        return errors[best], best
+
     current = _recent_error(params, state, config, recent)
-    accept = (
-        (state.n >= span)
-        & (errors[best] < config.phase_restart_ratio * current)
-        & (current > config.phase_restart_level**2)
+    # Where the window predicts the recent steps within the level (most steps of a movement
+    # followed), no candidate can be taken: they are scored only where one could be (under
+    # vmap both branches run, with the same outcome).
+    possible = (state.n >= span) & (current > config.phase_restart_level**2)
+    best_error, best = jax.lax.cond(
+        possible,
+        best_candidate,
+        lambda _: (jnp.asarray(jnp.inf, jnp.float32), jnp.asarray(0, jnp.int32)),
+        None,
     )
+    accept = possible & (best_error < config.phase_restart_ratio * current)
     chosen = phase_candidates[best]
     index = jnp.minimum(jnp.arange(length) + start, length - 1)
     restarted = state._replace(
