@@ -11,7 +11,10 @@ shipped model (learning set 1, the fast preset):
   the host), the native loop, the compiled call after it (``_conclude_packed``, its outputs
   brought back), the outputs unpacked, recognition on the host, the motor command (with
   ``RNNPB_NATIVE=0``, or without llvmlite, the whole compiled step in place of the three);
-* ``BatchedMirror``: B sessions in one call against one session's step.
+* ``BatchedMirror``: B sessions in one call against one session's step;
+* then the default step of one mirror system stepped alone, with nothing between its steps
+  (in the alternating runs above, every step follows other systems' steps, which push its
+  data out of the caches: the compiled calls take about twice as long there).
 
 Prints medians and 99th percentiles and the ratios of medians to the default's; quote the
 ratios from one run (other processes change the absolute figures).
@@ -161,6 +164,16 @@ def main() -> None:
     print("the default step by section:")
     for name, times in sections.items():
         print(line(name, times))
+    alone = MirrorSystem(model, default)
+    for t in range(40):
+        alone.step(stream[t])
+    times = []
+    for t in range(args.steps):
+        t0 = time.perf_counter()
+        alone.step(stream[(40 + t) % len(stream)])
+        times.append(time.perf_counter() - t0)
+    print("one mirror system stepped alone:")
+    print(line("default", times))
 
 
 if __name__ == "__main__":
