@@ -1,5 +1,6 @@
 """The on-line mirror system: recognition by PB regression, synchronous generation."""
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -184,6 +185,22 @@ def test_phase_restart_starts_the_window_over_after_a_switch_not_while_locked(tr
     assert min(lengths[45:52]) == 4, lengths[45:]
     assert max(errors[52:]) < 0.05, np.round(errors[45:], 3)
     assert trained.nearest_pattern(mirror.pb)[0] == "2"
+
+
+def test_phase_restarts_step_with_64_bit_floats(trained):
+    # Scored or not, the phase restarts give one type: a program that turns on JAX's 64-bit
+    # floats steps too (the JAX step; the native loop is float32 by design).
+    first, second = make_sequences(n_samples=1, n_steps=10, seed=3, kinds=(2, 0))
+    sensory = np.concatenate([first.sensory, second.sensory])
+    config = OnlineConfig(window=8, iterations=5).with_tuning(phase_restarts=3)
+    with jax.enable_x64(True):
+        mirror = MirrorSystem(trained, config, native=False)
+        results, lengths = [], []
+        for u in sensory:
+            results.append(mirror.step(u))
+            lengths.append(len(mirror.pb_profile))
+    assert all(np.isfinite(r.pb).all() and not r.held for r in results)
+    assert min(lengths[config.window :]) < config.window, lengths  # the window started over
 
 
 def test_phase_candidates_lie_on_each_learned_cycle(trained):

@@ -205,7 +205,7 @@ def _phase_restart(
     def best_candidate(_: None) -> tuple[jax.Array, jax.Array]:
         errors = jax.lax.map(candidate_error, phase_candidates)
         best = jnp.argmin(errors)
-        return errors[best], best
+        return errors[best].astype(current.dtype), best.astype(jnp.int32)
 
     current = _recent_error(params, state, config, recent)
     # Where the window predicts the recent steps within the level (most steps of a movement
@@ -215,7 +215,7 @@ def _phase_restart(
     best_error, best = jax.lax.cond(
         possible,
         best_candidate,
-        lambda _: (jnp.asarray(jnp.inf, jnp.float32), jnp.asarray(0, jnp.int32)),
+        lambda _: (jnp.full((), jnp.inf, current.dtype), jnp.zeros((), jnp.int32)),
         None,
     )
     accept = possible & (best_error < config.phase_restart_ratio * current)
