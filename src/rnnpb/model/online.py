@@ -202,12 +202,13 @@ def _phase_restart(
         )
         return window.mean_squared(*window.prediction_errors(predictions, short))
 
+    current = _recent_error(params, state, config, recent)
+
     def best_candidate(_: None) -> tuple[jax.Array, jax.Array]:
         errors = jax.lax.map(candidate_error, phase_candidates)
         best = jnp.argmin(errors)
         return errors[best].astype(current.dtype), best.astype(jnp.int32)
 
-    current = _recent_error(params, state, config, recent)
     # Where the window predicts the recent steps within the level (most steps of a movement
     # followed), no candidate can be taken: they are scored only where one could be (under
     # vmap both branches run, with the same outcome).
