@@ -38,7 +38,18 @@ ALLOWED: dict[str, set[str]] = {
     "perception": {"demonstrator", "robot", "sources", "sequences"},
     "mocap": {"demonstrator", "robot", "sources", "sequences"},
     "analysis": {"demonstrator", "robot", "sequences", "structure"},
+    "learning_phase": {
+        "demonstrator",
+        "mocap",
+        "perception",
+        "robot",
+        "safety",
+        "sequences",
+        "sources",
+        "structure",
+    },
     "interaction": {
+        "learning_phase",
         "bridge",
         "model",
         "presets",
@@ -52,6 +63,7 @@ ALLOWED: dict[str, set[str]] = {
         "structure",
     },
     "experiments": {
+        "learning_phase",
         "analysis",
         "mocap",
         "interaction",
@@ -67,6 +79,7 @@ ALLOWED: dict[str, set[str]] = {
         "sequences",
     },
     "web": {
+        "learning_phase",
         "interaction",
         "models",
         "model",
@@ -81,6 +94,7 @@ ALLOWED: dict[str, set[str]] = {
         "analysis",
     },
     "sweeps": {
+        "learning_phase",
         "experiments",
         "analysis",
         "interaction",
@@ -92,6 +106,7 @@ ALLOWED: dict[str, set[str]] = {
         "sequences",
     },
     "commands": {
+        "learning_phase",
         "mocap",
         "bridge",
         "models",

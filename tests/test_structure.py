@@ -25,8 +25,11 @@ from rnnpb.demonstrator import (
     PatternConfig,
     make_scenario,
 )
-from rnnpb.interaction.learning_phase import MAX_PERIOD, MIN_PERIOD, cycle_bounds
+from rnnpb.learning_phase import cycle_bounds
 from rnnpb.model.recognition import RecognitionConfig, _structure
+
+# The range the old cycle cutter looked for a period in (its references below).
+MIN_PERIOD, MAX_PERIOD = 4, 60
 
 
 # --- the references: the three detectors as they were ---------------------------------------

@@ -212,3 +212,86 @@ def periodicity(x: np.ndarray, max_period: int, tolerance: float) -> Periodicity
         if error < tolerance:
             return Periodicity(period, error, period)
     return Periodicity(None, best_error, best_period)
+
+
+def local_cycle_differences(x: np.ndarray, lags: np.ndarray, steps: int) -> np.ndarray:
+    """:func:`cycle_differences` at every step: entry ``[t, i]`` is how unlike the cycle
+    before it the cycle of lag ``lags[i]`` ending at step ``t`` is (the last
+    ``max(k, steps)`` steps up to ``t`` against the same steps ``k`` earlier, relative to
+    twice the variance of all the steps compared); shape (T, len(lags)), NaN where step ``t``
+    has not enough history or those steps do not vary. ``x`` shape (T, D) or (T,)."""
+    x = _as_steps(x)
+    size, width = x.shape
+    out = np.full((size, len(lags)), np.nan)
+    # Sums from the start, centred first so that they stay exact.
+    centred = x - x.mean(axis=0)
+    first = np.concatenate([np.zeros((1, width)), np.cumsum(centred, axis=0)])
+    second = np.concatenate([np.zeros((1, width)), np.cumsum(centred * centred, axis=0)])
+    for i, k in enumerate(np.asarray(lags, dtype=int)):
+        window = max(int(k), steps)
+        span = window + int(k)
+        if span > size:
+            continue
+        squared = np.zeros(size)
+        squared[k:] = np.sum((x[k:] - x[:-k]) ** 2, axis=1)
+        summed = np.concatenate([[0.0], np.cumsum(squared)])
+        ends = np.arange(span - 1, size)
+        difference = (summed[ends + 1] - summed[ends + 1 - window]) / window / width
+        s1 = first[ends + 1] - first[ends + 1 - span]
+        s2 = second[ends + 1] - second[ends + 1 - span]
+        variance = np.mean(s2 / span - (s1 / span) ** 2, axis=1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            out[ends, i] = np.where(variance > 1e-12, difference / (2.0 * variance), np.nan)
+    return out
+
+
+@dataclass(frozen=True)
+class Stretch:
+    """Steps ``start`` … ``stop - 1`` of a trajectory repeat themselves every ``period`` steps
+    (a whole number: the median of the periods found along it)."""
+
+    start: int
+    stop: int
+    period: int
+
+
+def repeating_stretches(
+    x: np.ndarray, min_period: int, max_period: int, *, steps: int = 12, level: float = 0.33
+) -> list[Stretch]:
+    """Where a trajectory repeats itself, and at which period (shape (T, D) or (T,)).
+
+    At every step and every whole lag ``k`` in [``min_period``, ``max_period``] the last cycle
+    is compared with the one before (:func:`local_cycle_differences`, the measure the on-line
+    novelty detector uses); a step whose cycle of some lag differs by less than ``level``
+    repeats, at the shortest such lag that is a local minimum of the difference (its
+    multiples repeat too). The steps of both cycles compared are covered; covered steps next
+    to each other form a stretch, whose period is the median of its steps' periods. A
+    movement, a rest, another movement: each repeating part is its own stretch, and what lies
+    between (a raise before a wave, the join of two takes) is in none.
+    """
+    x = _as_steps(x)
+    lags = np.arange(max(2, min_period), max_period + 1)
+    if len(x) < 2 * lags[0] or not len(lags):
+        return []
+    differences = local_cycle_differences(x, lags, steps)
+    filled = np.where(np.isfinite(differences), differences, np.inf)
+    period = np.zeros(len(x), dtype=int)
+    for t in range(len(x)):
+        row = filled[t]
+        below = np.flatnonzero(row < level)
+        if not below.size:
+            continue
+        i = int(below[0])
+        while i + 1 < len(row) and row[i + 1] <= row[i]:
+            i += 1  # down to the local minimum
+        k = int(lags[i])
+        first = t - max(k, steps) - k + 1
+        period[max(first, 0) : t + 1] = np.where(
+            period[max(first, 0) : t + 1] == 0, k, period[max(first, 0) : t + 1]
+        )
+    stretches: list[Stretch] = []
+    covered = period > 0
+    edges = np.diff(np.concatenate([[0], covered.astype(int), [0]]))
+    for start, stop in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True):
+        stretches.append(Stretch(int(start), int(stop), int(np.median(period[start:stop]))))
+    return stretches

@@ -9,8 +9,8 @@ import pytest
 from rnnpb.demonstrator import routine_scenario, routine_segments
 from rnnpb.errors import ConfigError
 from rnnpb.interaction import open_source
-from rnnpb.interaction.learning_phase import cut_sequences, record_demonstration
 from rnnpb.interaction.sources import parse_scenario
+from rnnpb.learning_phase import PhaseOptions, from_source, learning_phase
 
 DANCE = [("1", 3), ("3", 2), ("2", 4)]
 
@@ -42,6 +42,6 @@ def test_the_source_spec_names_a_routine_and_bad_ones_are_one_line():
 
 def test_cut_whole_keeps_a_routine_as_one_sequence():
     with open_source("scenario:routine:1*2,2*2", seed=1) as source:
-        demonstration = record_demonstration(source)
-    sequences = cut_sequences(demonstration, "dance", mode="whole")
-    assert len(sequences) == 1 and sequences[0].n_steps == demonstration.n_steps
+        performance = from_source(source)
+    recording = learning_phase(performance, "dance", PhaseOptions(cut="whole"))
+    assert len(recording.sequences) == 1 and recording.sequences[0].n_steps == recording.n_steps

@@ -2,11 +2,13 @@
 
 One file per folder, beside the sequence CSVs, with one entry per pattern recorded into it::
 
-    {"format": "rnnpb-recording", "format_version": 1, "dt": 0.4,
+    {"format": "rnnpb-recording", "format_version": 1, "dt": 0.4, "framing_m": 1.5,
      "recordings": {"wave": {"source": ..., "steps": ..., "sequences": [...], ...}}}
 
-A folder holds data of one step time: recording at another ``dt`` into it is refused, and
-`rnnpb train` learns a model at the ``dt`` its folders' files agree on.
+A folder holds data of one step time and one framing (where a person's body stood in the
+robot camera's view; absent or null when every recording was framed by the camera itself):
+recording at another ``dt`` into it is refused, a person recorded into it is framed as the
+folder is, and `rnnpb train` learns a model at the ``dt`` and framing its folders agree on.
 """
 
 from __future__ import annotations
@@ -49,11 +51,22 @@ def read_recording(folder: Path) -> dict[str, Any] | None:
         raise DataFileError(f"{path}: 'dt' is not a positive number of seconds")
     if not isinstance(data.get("recordings"), dict):
         raise DataFileError(f"{path}: 'recordings' is not an object")
+    framing = data.get("framing_m")
+    if framing is not None and (
+        not isinstance(framing, (int, float))
+        or isinstance(framing, bool)
+        or not math.isfinite(framing)
+        or not 0.5 <= framing <= 3.0
+    ):
+        raise DataFileError(f"{path}: 'framing_m' is not a distance from 0.5 to 3 m")
     return data
 
 
-def write_recording(folder: Path, pattern: str, dt: float, entry: dict[str, Any]) -> Path:
-    """Add (or replace) ``pattern``'s entry in the folder's recording.json, atomically."""
+def write_recording(
+    folder: Path, pattern: str, dt: float, entry: dict[str, Any], framing: float | None = None
+) -> Path:
+    """Add (or replace) ``pattern``'s entry in the folder's recording.json, atomically;
+    ``framing`` (metres) is the folder's framing once a person's body was framed into it."""
     folder = Path(folder)
     data = read_recording(folder) or {
         "format": RECORDING_FORMAT,
@@ -62,6 +75,13 @@ def write_recording(folder: Path, pattern: str, dt: float, entry: dict[str, Any]
         "recordings": {},
     }
     check_folder_dt(folder, dt, data)
+    if framing is not None:
+        held = data.get("framing_m")
+        if held is not None and not math.isclose(held, framing, rel_tol=1e-9):
+            raise ConfigError(
+                f"{folder / RECORDING_FILE}: the folder is framed at {held:g} m, not {framing:g} m"
+            )
+        data["framing_m"] = framing
     data["recordings"][pattern] = entry
     path = folder / RECORDING_FILE
     with atomic_write(path, encoding="utf-8") as handle:
@@ -101,3 +121,32 @@ def data_dt(paths: list[str]) -> tuple[float, list[Path]] | None:
                 "at one --dt"
             )
     return dt, [path for _, path in found]
+
+
+def folder_framing(folder: Path) -> float | None:
+    """The framing (metres) a folder's recordings of a person's body share, None when it has
+    none (no recording.json, or only camera-framed data)."""
+    data = read_recording(folder) if Path(folder).is_dir() else None
+    return None if data is None else data.get("framing_m")
+
+
+def data_framing(paths: list[str]) -> tuple[float, list[Path]] | None:
+    """The framing the data folders agree on, and the recording files that give it; None when
+    none gives one. Folders framed differently raise :class:`ConfigError` naming two."""
+    folders = dict.fromkeys(Path(p) if Path(p).is_dir() else Path(p).parent for p in paths)
+    found: list[tuple[float, Path]] = []
+    for folder in folders:
+        framing = folder_framing(folder)
+        if framing is not None:
+            found.append((float(framing), folder / RECORDING_FILE))
+    if not found:
+        return None
+    framing, first = found[0]
+    for other_framing, other in found[1:]:
+        if not math.isclose(other_framing, framing, rel_tol=1e-9):
+            raise ConfigError(
+                f"the data frame the person differently ({first}: {framing:g} m, {other}: "
+                f"{other_framing:g} m); a model learns one framing: record them into one folder, "
+                f"or again with --framing {max(framing, other_framing):g}"
+            )
+    return framing, [path for _, path in found]

@@ -128,6 +128,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--seed", type=int, default=0, help="seed for scenario sources")
     parser.add_argument(
+        "--time-scale",
+        type=float,
+        default=1.0,
+        metavar="S",
+        help="bvh: play the motion capture S times slower (default 1: the person's tempo)",
+    )
+    parser.add_argument(
         "--render",
         action="store_true",
         help="also write session.mp4: camera frame | simulated robot",
@@ -242,6 +249,8 @@ def run(args: argparse.Namespace) -> int:
         colors=args.colors,
         steps=args.steps,
         perception=args.perception,
+        framing=model.framing,
+        time_scale=args.time_scale,
     )
     from rnnpb.commands.robot import open_robot
 
@@ -304,7 +313,9 @@ def run(args: argparse.Namespace) -> int:
             loop.subscribe(video.add)
         teacher = None
         if args.learn:
-            teacher = _start_teaching(stack, loop, model_path, source, args, online, tables)
+            teacher = _start_teaching(
+                stack, loop, model_path, source, args, online, tables, model.framing
+            )
         # One line, printed just before the first compilation starts.
         print(
             f"interacting: {args.source} -> {model_path} ({online_name} on-line regression"
@@ -446,9 +457,9 @@ def run(args: argparse.Namespace) -> int:
 _TEACHING_LINES = ("kept", "extended", "waiting", "refused", "consolidating", "learned", "failed")
 
 
-def _start_teaching(stack, loop, model_path, source, args, online, tables):
+def _start_teaching(stack, loop, model_path, source, args, online, tables, framing):
     """Open the model's short-term memory and subscribe a Teacher to the loop (with the
-    --config file's ``tables``)."""
+    --config file's ``tables``); a person's 3-D hands stand at ``framing`` metres."""
     from pathlib import Path
 
     import rnnpb.models
@@ -479,6 +490,7 @@ def _start_teaching(stack, loop, model_path, source, args, online, tables):
         ),
         source=args.source,
         hands_of=tracked_hands(source),
+        framing=framing,
         iterations=args.consolidation_iterations,
         tables=tables,
         performances=1 if args.learn_from_one else PERFORMANCES,

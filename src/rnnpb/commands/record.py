@@ -10,46 +10,46 @@ from rnnpb.commands._perception import add_perception_argument
 NAME = "record"
 HELP = "record a demonstration from a camera or a stream and write sequence CSVs"
 DESCRIPTION = """\
-The learning phase of the paper (its Fig. 2a) from a camera: the two coloured balls give the
-user's hands in the image and, from their apparent size, their depth; the 3-D hand positions
-are mirrored onto the robot's hand targets and, by inverse kinematics, its joint angles.
-Sources without depth (a sensory CSV, a scenario) put the hands on the plane x = --plane-x
-metres in front of the robot (default 0.68 m, where the synthetic user's hands move).
-With --perception pose the hands are bare: a pose model finds the wrists and shoulders, the
-hands are scaled by the shoulder span to a standard body, and their depth is the model's wrist
-depth scaled the same way (pip install 'rnnpb[hands]').
+The learning phase of the paper (its Fig. 2a), the same for every source: the person moves,
+the robot records the hands it sees and its own joint angles for them, cut into whole cycles,
+and writes sequence CSVs for `rnnpb train` (docs/teaching.md, docs/design.md):
 
-The recording is cut into training sequences, written as DIR/PATTERN_1.csv, PATTERN_2.csv …
-(columns step, lhy lhz rhy rhz, lshp … relp, pattern) for `rnnpb train`:
-  --cut cycles   (default) --cycles N whole cycles per sequence; a cycle runs from one upward
-                 crossing of the movement's main component through its mean to the next
-  --cut length   consecutive sequences of --length steps
-  --cut whole    each stretch with both hands seen as one sequence (a routine, for
-                 `rnnpb train-routines`)
-A hand lost for more than a few steps splits the recording; no sequence spans the gap.
+  1. the step: the recording played --time-scale times slower, averaged over each --dt;
+     a movement with fewer than 4 steps a cycle is played slower by the least factor that
+     gives it 4 (said so, with the --dt that would follow it at the person's tempo)
+  2. framing: a person whose body the source knows (motion capture, --perception pose) is
+     placed where the robot's camera sees the whole movement, as near as it can (--framing M
+     gives the distance in metres); a folder holds one framing; a hand outside the view is
+     put on its edge and counted
+  3. the robot's joints: mirror mapping and safe retargeting (never through its own body);
+     where the servos could not follow the person, the movement is made smaller, at the
+     person's tempo, and said so
+  4. whole cycles: where the movement repeats (4-80 steps a cycle), cut into cycles; rests,
+     a raise before a wave, joins between takes are left out, and said so
+  5. the one check `rnnpb train` makes, on the values as written: nothing it would refuse
+     is ever written
 
-SOURCE is one of webcam:INDEX, video:PATH, images:DIR, synthetic:PATTERN, csv:FILE,
-scenario:held:P (see `rnnpb interact --help`), or bvh:FILE[,FILE...] (motion capture).
+Sources: webcam:INDEX, video:PATH, images:DIR, synthetic:PATTERN, csv:FILE, scenario:...
+(see `rnnpb interact --help`), or bvh:FILE[,FILE...] (motion capture: the files played in
+order as one stream, each blending into the next over 0.5 s; the hands found by the joints'
+names, --hands LEFT,RIGHT names them; units and up axis read from the skeleton).
+With --perception pose a camera's hands are bare: a pose model finds the wrists and shoulders
+(pip install 'rnnpb[hands]'). Coloured balls give depth from their size; a source without
+depth puts the hands on the plane x = --plane-x metres in front of the robot.
 
-Motion capture (bvh:FILE,FILE...; docs/motion-capture.md): the files are played in order as one
-stream, each blending into the next over 0.5 s. The hands are found by the joints' names
-(--hands LEFT,RIGHT names them), taken relative to the person's own shoulders and scaled by
-their arm length onto the standard user's body, so people of every size reach the same
-workspace; units and up axis are read from the skeleton (--units, --up-axis give them). The
-stream is resampled to --dt; --time-scale S plays it S times slower. A movement with fewer
-than 4 steps per cycle is refused with the --time-scale or --dt that would work. A hand outside
-the robot camera's view is not seen; --distance M stands the person further from the robot
-(default 1 m), and the command says which distance keeps every step in view.
+Cutting (--cut): cycles (default) takes sequences of --cycles whole cycles (default: as many
+as make about 48 steps, at least 2); length takes consecutive --length steps; whole keeps
+each stretch seen whole (a routine, for `rnnpb train-routines`). A hand lost for more than a
+few steps splits the recording; no sequence spans the gap.
 
-Every recording also writes DIR/recording.json: the source, the step time, the body's
-measures and the scaling; `rnnpb train` learns the model at that step time. A folder holds
-data of one step time.
+Every recording writes DIR/recording.json: the source, the step time, the framing and what
+each step changed; `rnnpb train` learns at that step time and framing.
 
 Examples:
   rnnpb record synthetic:3 --steps 120 --pattern three --out data/three
   rnnpb record webcam:0 --steps 150 --colors colors.json --pattern wave --out data/wave
-  rnnpb record bvh:wave1.bvh,wave2.bvh --time-scale 3 --pattern wave --out data/wave
-  rnnpb record webcam:0 --steps 150 --perception pose --pattern wave --out data/wave
+  rnnpb record video:exercise.mp4 --perception pose --dt 0.1 --pattern exercise --out data/ex
+  rnnpb record bvh:wave1.bvh,wave2.bvh --dt 0.1 --pattern wave --out data/wave
   rnnpb train --data data/three data/wave --out model.npz --preset fast
 """
 
@@ -78,9 +78,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--cycles",
         type=int,
-        default=4,
         metavar="N",
-        help="whole cycles per sequence with --cut cycles (default 4)",
+        help="whole cycles per sequence with --cut cycles (default: as many as make about 48 "
+        "steps, at least 2)",
     )
     parser.add_argument(
         "--length",
@@ -120,7 +120,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         type=float,
         default=1.0,
         metavar="S",
-        help="bvh: play the capture S times slower (0.5: twice as fast; default 1)",
+        help="play the recording S times slower (0.5: twice as fast; default 1: the person's "
+        "own tempo)",
+    )
+    parser.add_argument(
+        "--framing",
+        metavar="reach|fit|M",
+        help="where a person's body is placed in the robot camera's view: reach (the whole "
+        "reach of the body in view, 1.55 m: the default, or the folder's framing), fit (the "
+        "nearest that keeps this recording in view) or metres from the robot",
     )
     parser.add_argument(
         "--hands",
@@ -131,13 +139,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--units",
         choices=("m", "cm", "mm", "in"),
         help="bvh: the file's length unit (default: the one in which the arms are a person's)",
-    )
-    parser.add_argument(
-        "--distance",
-        type=float,
-        metavar="M",
-        help="bvh: how far from the robot the person's shoulders are, metres (default 1.0, "
-        "the standard user's; further keeps raised or wide hands in the robot camera's view)",
     )
     parser.add_argument(
         "--up-axis",
@@ -151,14 +152,10 @@ def run(args: argparse.Namespace) -> int:
     import datetime
     from pathlib import Path
 
-    import numpy as np
-
     from rnnpb.commands._checks import finite_seconds
-    from rnnpb.commands._recording import check_folder_dt, write_recording
-    from rnnpb.demonstrator import MirrorMapping
-    from rnnpb.errors import ConfigError, RnnpbError
-    from rnnpb.interaction.learning_phase import cut_sequences, demonstration_from_hands
-    from rnnpb.safety import check_data
+    from rnnpb.commands._recording import check_folder_dt, folder_framing, write_recording
+    from rnnpb.errors import ConfigError
+    from rnnpb.learning_phase import PhaseOptions, learning_phase
     from rnnpb.sequences import pattern_name_problem, write_sequence
 
     problem = pattern_name_problem(args.pattern)
@@ -168,14 +165,89 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise ConfigError(f"--out {out}: exists and is not a directory")
+    framing = _framing(args.framing)
     if out.is_dir():
         check_folder_dt(out, args.dt)
-    kind, _, argument = str(args.source).partition(":")
-    capture = None
-    body = None
-    if kind.strip().lower() == "bvh":
-        from rnnpb.mocap import capture_stream
+        held = folder_framing(out)
+        if args.framing is None and held is not None:
+            framing = held
+    options = PhaseOptions(
+        dt=args.dt,
+        time_scale=args.time_scale,
+        framing=framing,
+        cut=args.cut,
+        cycles=args.cycles,
+        length=args.length,
+    )
+    performance = _performance(args)
+    recording = learning_phase(performance, args.pattern, options)
+    out.mkdir(parents=True, exist_ok=True)
+    names = []
+    for i, sequence in enumerate(recording.sequences, 1):
+        write_sequence(out / f"{args.pattern}_{i}.csv", sequence)
+        names.append(f"{args.pattern}_{i}.csv")
+    entry = {
+        "source": str(args.source),
+        "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        "dt": args.dt,
+        "sequences": names,
+        **recording.to_json(),
+        "capture": recording.capture,
+    }
+    write_recording(out, args.pattern, args.dt, entry, recording.framing.distance)
+    seen = int(recording.seen.sum())
+    depth_words = {
+        "size": "ball size",
+        "pose": "the pose model",
+        "plane": "a fixed plane",
+        "3-d": "motion capture",
+    }
+    print(
+        f"recorded {recording.n_steps} steps of {args.dt:g} s from {recording.source} "
+        f"(depth from {depth_words[recording.depth]}); {seen} with both hands seen"
+    )
+    if recording.capture is not None:
+        take = recording.capture["takes"][0]["body"]
+        print(
+            f"body: arm {take['arm_length_m']:.3f} m, shoulders {take['shoulder_width_m']:.3f} m "
+            f"apart (units {take['units']}, {take['up_axis']} up); hands scaled by "
+            f"{take['scale']:.3f}; {len(recording.capture['takes'])} take(s)"
+        )
+    for line in recording.report(args.dt):
+        print(line)
+    print(
+        f"{len(recording.sequences)} sequences of pattern {args.pattern!r} "
+        f"({', '.join(str(s.n_steps) for s in recording.sequences)} steps) -> {out}"
+    )
+    return 0
 
+
+def _framing(text: str | None) -> float | str:
+    """``--framing``: reach (default), fit, or metres."""
+    import math
+
+    from rnnpb.errors import ConfigError
+
+    if text is None or text.strip().lower() == "reach":
+        return "reach"
+    if text.strip().lower() == "fit":
+        return "fit"
+    try:
+        value = float(text)
+    except ValueError:
+        raise ConfigError(f"--framing must be reach, fit or metres, got {text!r}") from None
+    if not math.isfinite(value):
+        raise ConfigError(f"--framing must be reach, fit or metres, got {text!r}")
+    return value
+
+
+def _performance(args: argparse.Namespace):
+    """The person's movement from the source, as timed samples."""
+    from rnnpb.errors import ConfigError
+    from rnnpb.learning_phase import from_capture, from_source
+
+    kind, _, argument = str(args.source).partition(":")
+    if kind.strip().lower() == "bvh":
         files = [f.strip() for f in argument.split(",")]
         if not argument or not all(files):
             raise ConfigError(f"source {args.source!r}: expected bvh:FILE[,FILE...]")
@@ -187,158 +259,69 @@ def run(args: argparse.Namespace) -> int:
             if len(names) != 2 or not all(names):
                 raise ConfigError(f"--hands {args.hands!r}: expected LEFT,RIGHT joint names")
             hands = (names[0], names[1])
-        body = _placed_body(args.distance)
-        capture = capture_stream(
-            files,
-            dt=args.dt,
-            time_scale=args.time_scale,
-            hands=hands,
-            units=args.units,
-            up_axis=args.up_axis,
-            body=body,
-        )
-        hand_steps = capture.hands if args.steps is None else capture.hands[: args.steps]
-        mapping = MirrorMapping(body=body, dt=args.dt)
-        demonstration = demonstration_from_hands(hand_steps, mapping=mapping, source=args.source)
-    else:
-        mapping = MirrorMapping(dt=args.dt)
-        for option in ("hands", "units", "up_axis", "distance"):
-            if getattr(args, option) is not None:
-                raise ConfigError(f"--{option.replace('_', '-')} applies to bvh: sources")
-        if args.time_scale != 1.0:
-            raise ConfigError("--time-scale applies to bvh: sources")
-        demonstration = _record_from_source(args, mapping)
-    out_of_view = ""
-    if capture is not None and not demonstration.valid.all():
-        out_of_view = (
-            f"a hand was outside the robot camera's view on {int((~demonstration.valid).sum())} "
-            f"of {demonstration.n_steps} steps (not seen: they split the recording); "
-            + _distance_in_view(demonstration.hands, body)
-        )
-    try:
-        sequences = cut_sequences(
-            demonstration,
-            args.pattern,
-            mode=args.cut,
-            cycles_per_sequence=args.cycles,
-            length=args.length,
-        )
-    except RnnpbError as error:
-        if not out_of_view:
-            raise
-        raise RnnpbError(f"{error}; {out_of_view}") from None
-    safety = check_data(sequences, dt=args.dt)
-    out.mkdir(parents=True, exist_ok=True)
-    names = []
-    for i, sequence in enumerate(sequences, 1):
-        write_sequence(out / f"{args.pattern}_{i}.csv", sequence)
-        names.append(f"{args.pattern}_{i}.csv")
-    entry = {
-        "source": str(args.source),
-        "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
-        "dt": args.dt,
-        "steps": demonstration.n_steps,
-        "depth": demonstration.depth,
-        "sequences": names,
-        "mapping": {
-            "user_body": {
-                k: getattr(mapping.body, k)
-                for k in ("distance", "shoulder_height", "shoulder_half_width", "arm_reach")
-            },
-            "scale": round(mapping.effective_scale, 6),
-        },
-        "capture": None if capture is None else capture.to_json(),
-        "safety": {
-            "steps": safety.steps,
-            "collision": safety.collision,
-            "speed": safety.speed,
-            "limit": safety.limit,
-            "adjusted": int(np.sum(demonstration.adjusted)),
-        },
-    }
-    write_recording(out, args.pattern, args.dt, entry)
-    valid = demonstration.valid
-    reach = demonstration.ik_residual[valid]
-    depth_words = {
-        "size": "ball size",
-        "pose": "the pose model",
-        "plane": "a fixed plane",
-        "3-d": "motion capture",
-    }
-    print(
-        f"recorded {demonstration.n_steps} steps from {demonstration.source} "
-        f"(depth from {depth_words[demonstration.depth]}); "
-        f"{int(valid.sum())} with both hands recovered"
-    )
-    if out_of_view:
-        print(out_of_view)
-    if capture is not None:
-        body = capture.takes[0].body
-        print(
-            f"body: arm {body.arm_length_m:.3f} m, shoulders {body.shoulder_width_m:.3f} m apart "
-            f"(units {body.units}, {body.up_axis} up); hands scaled by {body.scale:.3f}; "
-            f"{len(capture.takes)} take(s) at time scale {capture.time_scale:g}, shortest "
-            f"cycle {capture.period:.2f} s = {capture.period / args.dt:.1f} steps of {args.dt:g} s"
-        )
-    if len(reach):
-        print(
-            f"robot hands within {float(np.max(reach)) * 100:.1f} cm of their targets (median "
-            f"{float(np.median(reach)) * 100:.1f} cm); {int(np.sum(demonstration.adjusted))} "
-            "steps moved to a safe posture near the one asked for"
-        )
-    print(f"safety of the written data: {safety.describe()}")
-    print(
-        f"{len(sequences)} sequences of pattern {args.pattern!r} "
-        f"({', '.join(str(s.n_steps) for s in sequences)} steps) -> {out}"
-    )
-    return 0
+        performance = from_capture(files, hands=hands, units=args.units, up_axis=args.up_axis)
+        if args.steps is not None:
+            from dataclasses import replace
 
+            keep = performance.times < args.steps * args.dt / args.time_scale
+            performance = replace(
+                performance, times=performance.times[keep], hands=performance.hands[keep]
+            )
+        return performance
+    for option in ("hands", "units", "up_axis"):
+        if getattr(args, option) is not None:
+            raise ConfigError(f"--{option.replace('_', '-')} applies to bvh: sources")
+    import math
 
-def _placed_body(distance: float | None):
-    """The standard user, at ``distance`` metres from the robot when given."""
-    from rnnpb.demonstrator import UserBody
-    from rnnpb.errors import ConfigError
-
-    if distance is None:
-        return UserBody()
-    if not 0.5 <= distance <= 3.0:
-        raise ConfigError(f"--distance must be from 0.5 to 3 m, got {distance}")
-    return UserBody(distance=distance, hand_depth=min(UserBody().hand_depth, 0.9 * distance))
-
-
-def _distance_in_view(hands, body) -> str:
-    """Which --distance would keep every hand in the robot camera's view."""
-    import numpy as np
-
-    from rnnpb.robot.camera import RobotCamera
-
-    camera = RobotCamera()
-    for distance in np.arange(0.5, 3.001, 0.1):
-        moved = hands + np.array([distance - body.distance, 0.0, 0.0])
-        seen = camera.sensory_from_hands(moved)
-        if np.all((seen >= 0) & (seen <= 1)):
-            return f"--distance {distance:.1f} keeps every step in view"
-    return "no --distance up to 3 m keeps every step in view"
-
-
-def _record_from_source(args: argparse.Namespace, mapping):
     from rnnpb.interaction import open_source
-    from rnnpb.interaction.learning_phase import record_demonstration
-    from rnnpb.perception import MOUSE_PLANE_X, DepthConfig
+    from rnnpb.learning_phase import SUBSTEPS
+    from rnnpb.perception import DepthConfig
 
+    frame_time = _frame_time(args)
+    samples = args.steps
+    stride = None
+    if frame_time is not None:
+        # Enough frames for a quarter of a step (the fastest cycle is looked for there), no more:
+        # the pose model's time goes by frame.
+        stride = max(1, math.floor(args.dt / args.time_scale / SUBSTEPS / frame_time))
+        if args.steps is not None:
+            samples = math.ceil(args.steps * args.dt / args.time_scale / (frame_time * stride)) + 1
+        frame_time *= stride
     source = open_source(
         args.source,
         seed=args.seed,
         dt=args.dt,
         colors=args.colors,
-        steps=args.steps,
+        steps=args.steps if frame_time is None else None,
         perception=args.perception,
+        frame_step=stride,
     )
     with source:
-        return record_demonstration(
+        return from_source(
             source,
-            steps=args.steps,
-            mapping=mapping,
+            steps=samples,
+            frame_time=frame_time,
+            step_time=args.dt,
+            plane_x=args.plane_x,
             depth=DepthConfig(ball_radius_m=args.ball_radius),
-            plane_x=MOUSE_PLANE_X if args.plane_x is None else args.plane_x,
+            live=str(args.source).strip().lower().startswith("webcam:"),
         )
+
+
+def _frame_time(args: argparse.Namespace) -> float | None:
+    """Seconds between a video's frames (read from the file), None for other sources."""
+    import math
+
+    kind, _, argument = str(args.source).partition(":")
+    if kind.strip().lower() != "video":
+        return None
+    import cv2
+
+    capture = cv2.VideoCapture(argument)
+    try:
+        fps = capture.get(cv2.CAP_PROP_FPS) if capture.isOpened() else 0.0
+    finally:
+        capture.release()
+    if not fps or not math.isfinite(fps) or fps <= 0:
+        return None
+    return 1.0 / fps

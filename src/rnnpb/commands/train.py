@@ -26,14 +26,18 @@ Options given explicitly override the preset; --config FILE overrides any of its
 values (the optimizer, the rates, the PB update's coefficients: docs/model.md). The model
 records the preset's name and version (`rnnpb info`).
 
-The robot's own safety checker reads every step of the data first: a step whose joint angles
-put an arm through the body or the other arm, or move a joint faster than its servo can, is
-refused (one line naming the file and the step) unless --allow-unsafe; `rnnpb record`
-retargets safely, so its data pass.
+Every step of the data is checked first, by the check `rnnpb record` writes by: a hand outside
+the view ([0, 1]) or a joint outside its limits, and the robot's own safety checker: a step
+whose joint angles put an arm through the body or the other arm, or move a joint faster than
+its servo can, is refused (one line naming the file and the step) unless --allow-unsafe (which
+still refuses values outside their ranges); `rnnpb record`'s data always pass.
 
 Step time: a model is learned at one step time and plays at it only (`rnnpb interact` and
 `serve` refuse another). It is the dt the data folders' recording.json files (written by
 `rnnpb record`) agree on, else --dt, else the paper's 0.4 s; `rnnpb info` shows it.
+Framing: data recorded from a person's body (motion capture, bare hands) were framed at a
+distance in the robot camera's view; the folders must agree on it, the model keeps it, and a
+person the model watches is framed alike.
 
 A checkpoint is written next to the model (MODEL.checkpoint.npz) every
 --checkpoint-every iterations; --resume continues from it. Once the model is written the
@@ -122,6 +126,7 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb import _interrupt
     from rnnpb.commands._checks import step_count
     from rnnpb.commands._config import read_config
+    from rnnpb.commands._recording import data_framing
     from rnnpb.commands.progress import progress_bar
     from rnnpb.errors import DataFileError
     from rnnpb.model import NetworkConfig, TrainConfig, train
@@ -136,6 +141,7 @@ def run(args: argparse.Namespace) -> int:
     overrides = read_config(args.config, CONFIG_SECTIONS, NAME)
     sequences = read_sequence_files(args.data)
     dt, dt_origin = _step_time(args.dt, args.data)
+    framing = data_framing(args.data)
     safety = check_data(sequences, dt=dt)
     if safety.unsafe and not args.allow_unsafe:
         raise DataFileError(
@@ -190,6 +196,8 @@ def run(args: argparse.Namespace) -> int:
         bar.close()
     _interrupt.check()  # interrupted during the last chunk: no model file
     model = replace(model, meta={**model.meta, "dt": dt})
+    if framing is not None:
+        model.meta["framing_m"] = framing[0]
     model.meta["data_safety"] = {
         "steps": safety.steps,
         "collision": safety.collision,
@@ -208,6 +216,8 @@ def run(args: argparse.Namespace) -> int:
     names = (*SENSORY_NAMES, *MOTOR_NAMES)
     print(f"wrote {args.out} after {info['iterations']} iterations in {info['seconds']:.1f} s")
     print(f"learned at dt {dt:g} s ({dt_origin}); it plays at that step")
+    if framing is not None:
+        print(f"a person is framed at {framing[0]:g} m, as the data were (from {framing[1][0]})")
     print(
         f"final mean squared error per output: max {mse.max():.2e}, mean {mse.mean():.2e} "
         f"(RMS max {np.sqrt(mse.max()):.2e}); worst output: {names[int(mse.argmax())]}"

@@ -15,9 +15,9 @@ movement once it has been ``novel`` long enough to be sure and to hold whole cyc
    An episode is kept only when at least ``min_novel_share`` of its own steps were called
    ``novel``, so ``unstructured`` movement — which the detector calls ``novel`` on almost no
    step — is never kept, nor a learned pattern the detector calls ``familiar``.
-2. The whole cycles of the run are counted with :func:`rnnpb.interaction.learning_phase.
-   cycle_bounds`. From ``confirm_cycles`` whole cycles on the cutter is *recording* ("cycle
-   k of ``episode_cycles``"); when the run holds ``episode_cycles`` whole cycles, the last
+2. The whole cycles of the run are counted with :func:`rnnpb.learning_phase.cycle_bounds`.
+   From ``confirm_cycles`` whole cycles on the cutter is *recording* ("cycle k of
+   ``episode_cycles``"); when the run holds ``episode_cycles`` whole cycles, the last
    ``episode_cycles`` of them are the episode: their sensory values as seen and the robot's
    joint angles for them (3-D hands from the source when it gives them, else on the fixed
    plane; mirror mapping and inverse kinematics, as in the learning phase).
@@ -55,7 +55,7 @@ import numpy as np
 
 from rnnpb.demonstrator import MirrorMapping
 from rnnpb.errors import ConfigError
-from rnnpb.interaction.learning_phase import cycle_bounds
+from rnnpb.learning_phase import cycle_bounds
 from rnnpb.model._tuned import Tuning, section_values, settle
 from rnnpb.model._tuned import with_tuning as _with_tuning
 from rnnpb.perception import MOUSE_PLANE_X, hands_on_plane
@@ -283,7 +283,7 @@ class EpisodeCutter:
             return grown
         if len(self._steps) > config.max_run_steps:
             del self._steps[0], self._sensory[0], self._hands[0], self._novel[0]
-        cycles = cycle_bounds(np.array(self._sensory))
+        cycles = cycle_bounds(np.array(self._sensory), growing=True)
         self._cycles = len(cycles)
         if self._cycles < config.episode_cycles:
             return None
@@ -392,7 +392,9 @@ class EpisodeCutter:
             end -= 1  # after the last step called novel
         if end <= first:
             return []
-        cycles = [c for c in cycle_bounds(np.array(self._sensory[:end])) if c[1] > first]
+        # The run was cut where the detector stopped saying novel, not where a cycle ends.
+        sensory = np.array(self._sensory[:end])
+        cycles = [c for c in cycle_bounds(sensory, growing=True) if c[1] > first]
         while cycles and cycles[-1][1] - cycles[0][0] > self.config.max_run_steps:
             cycles.pop(0)
         return cycles

@@ -361,12 +361,15 @@ class EpisodeKeeper:
 
 
 def tracked_hands(source):
-    """For :class:`EpisodeKeeper`'s ``hands_of``: the 3-D hands a camera source's tracker found
-    for the step just read (depth from the balls' size, unfiltered: on-line there is no later
-    frame to filter with), or None when ``source`` has no tracker."""
+    """For :class:`EpisodeKeeper`'s ``hands_of``: the 3-D hands the source knows for the step
+    just read — a camera's tracker (depth from the balls' size or the pose model, unfiltered:
+    on-line there is no later frame to filter with), or motion capture (``last_hands``) — or
+    None when it knows none."""
     inner = getattr(source, "inner", source)  # a FrameStepSource keeps the camera inside
 
     def hands_of(record) -> np.ndarray | None:
+        if hasattr(inner, "last_hands"):
+            return inner.last_hands
         result = getattr(inner, "last_result", None)
         return None if result is None else result.hands_3d
 

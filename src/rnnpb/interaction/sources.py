@@ -15,6 +15,8 @@
 ``webcam:INDEX``           a webcam, through the tracker
 ``synthetic:P``            a rendered synthetic camera of pattern ``P``, through the tracker
 ``zenoh:KEY[@ENDPOINT]``   hands published on a Zenoh bus by a camera node (docs/bridge.md)
+``bvh:FILE[,FILE…]``       motion capture, as ``rnnpb record`` reads it, at the model's step
+                           and framing (docs/motion-capture.md)
 =========================  ================================================================
 
 This module is the only place a spec string is taken apart: it sits above every kind of
@@ -44,6 +46,7 @@ SOURCE_FORMS = {
     "webcam": "webcam:INDEX",
     "synthetic": "synthetic:PATTERN",
     "zenoh": "zenoh:KEY[@ENDPOINT]",
+    "bvh": "bvh:FILE[,FILE...]",
 }
 """Every kind of source, with the form of its spec string (for messages)."""
 
@@ -168,6 +171,8 @@ def open_source(
     colors: str | None = None,
     steps: int | None = None,
     perception: str = "balls",
+    framing: float | None = None,
+    time_scale: float = 1.0,
 ) -> UserSource:
     """Open the user source a specification string names (see the module doc).
 
@@ -187,6 +192,12 @@ def open_source(
     perception : str
         How a camera's frames become hands: ``"balls"`` (the colour-ball tracker) or
         ``"pose"`` (bare hands, the pose model of ``rnnpb[hands]``). Camera sources only.
+    framing : float, optional
+        Metres from the robot at which a person's body is placed in the camera's view (the
+        model's framing: :mod:`rnnpb.learning_phase`), for sources that know the body (bare
+        hands, motion capture); None: the standard user's place.
+    time_scale : float
+        Motion capture: play it this many times slower.
     """
     parsed = parse_source_spec(spec)
     if perception != "balls" and parsed.kind not in CAMERA_KINDS:
@@ -200,6 +211,14 @@ def open_source(
         return ScenarioSource(parse_scenario(str(parsed.argument), seed))
     if parsed.kind == "csv":
         return CsvSensorySource(str(parsed.argument))
+    if parsed.kind == "bvh":
+        from rnnpb.learning_phase import STANDARD_DISTANCE, CaptureSource
+
+        files = [f.strip() for f in str(parsed.argument).split(",")]
+        if not all(files):
+            raise ConfigError(f"source {spec!r}: expected bvh:FILE[,FILE...]")
+        distance = STANDARD_DISTANCE if framing is None else framing
+        return CaptureSource(files, dt, distance, time_scale)
     if parsed.kind == "zenoh":
         from rnnpb.bridge import ZenohHandsSource, parse_bus_spec
 
@@ -209,8 +228,20 @@ def open_source(
         return ZenohHandsSource(key, dt=dt, bus=bus)
     from rnnpb.perception import open_camera_source
 
+    pose_config = None
+    if perception == "pose" and framing is not None:
+        from rnnpb.learning_phase import placed_body
+        from rnnpb.perception import PoseConfig
+
+        pose_config = PoseConfig(body=placed_body(framing))
     source = open_camera_source(
-        parsed.kind, parsed.argument, colors=colors, steps=steps, seed=seed, perception=perception
+        parsed.kind,
+        parsed.argument,
+        colors=colors,
+        steps=steps,
+        seed=seed,
+        perception=perception,
+        pose_config=pose_config,
     )
     if frame_step is None and parsed.kind == "video":
         frame_step = _video_frame_step(str(parsed.argument), dt)

@@ -28,7 +28,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from rnnpb.demonstrator import MirrorMapping
+from rnnpb.demonstrator import MirrorMapping, UserBody
 from rnnpb.errors import ConfigError
 from rnnpb.interaction.background import (
     BackgroundConsolidation,
@@ -59,6 +59,7 @@ from rnnpb.interaction.keeper import (
 )
 from rnnpb.interaction.repeats import Repeat, find_repeat, shape_distance
 from rnnpb.interaction.settings import ConfigTables
+from rnnpb.learning_phase import placed_body
 
 if TYPE_CHECKING:
     from rnnpb.model.consolidation import ConsolidationConfig
@@ -129,6 +130,8 @@ class Teacher:
     (default: the policy's) how long each consolidation learns; ``tables``, a ``--config``
     file's, changes both: ``[teaching.cutter]`` the config's tuned values, ``[teaching]`` and
     ``[consolidation]`` the policy each consolidation takes (:meth:`consolidation`).
+    ``framing`` (metres; None: the standard user's place) is where the 3-D hands a source gives
+    of a person's body stand: the model's framing (:mod:`rnnpb.learning_phase`).
     """
 
     def __init__(
@@ -147,6 +150,7 @@ class Teacher:
         prepare: bool | None = None,
         tables: ConfigTables | None = None,
         performances: int = PERFORMANCES,
+        framing: float | None = None,
     ) -> None:
         if performances < 1:
             raise ConfigError(f"performances must be >= 1, got {performances}")
@@ -158,8 +162,10 @@ class Teacher:
         self.memory = memory
         self.make_mirror = make_mirror
         self.versions: list[str] = [str(model_path)]
-        # Taught joint angles are retargeted at the loop's step time (the servo's speed limit).
-        mapping = MirrorMapping(dt=loop.config.dt)
+        # Taught joint angles are retargeted at the loop's step time (the servo's speed limit),
+        # from 3-D hands of a person framed as the model frames one.
+        body = UserBody() if framing is None else placed_body(framing)
+        mapping = MirrorMapping(body, dt=loop.config.dt)
         self.keeper = EpisodeKeeper(memory, str(model_path), source, config, hands_of, mapping)
         self.auto = auto
         self.wait = (not loop.config.paced) if wait is None else wait

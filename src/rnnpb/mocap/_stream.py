@@ -138,6 +138,69 @@ def check_sampling(period: float, dt: float, time_scale: float, what: str) -> No
     )
 
 
+@dataclass(frozen=True)
+class Capture:
+    """BVH takes joined into one recording on its finest frame grid, not resampled.
+
+    Attributes
+    ----------
+    times : array, shape (n,)
+        Seconds of the recording.
+    hands : array, shape (n, 2, 3)
+        Left, right hand on the standard user's body (at 1 m), robot frame, metres.
+    takes : tuple of Take
+    crossfade : float
+        Seconds each join blends over.
+    """
+
+    times: np.ndarray
+    hands: np.ndarray
+    takes: tuple[Take, ...]
+    crossfade: float
+
+    @property
+    def period(self) -> float:
+        """The shortest period over the takes, seconds of the recording."""
+        return min(t.period for t in self.takes)
+
+    def to_json(self) -> dict:
+        return {
+            "crossfade_s": self.crossfade,
+            "duration_s": round(float(self.times[-1]), 4),
+            "shortest_period_s": round(self.period, 4),
+            "takes": [t.to_json() for t in self.takes],
+        }
+
+
+def capture_takes(
+    paths: list[str] | tuple[str, ...],
+    *,
+    crossfade: float = CROSSFADE_S,
+    hands: tuple[str, str] | None = None,
+    units: str | None = None,
+    up_axis: str | None = None,
+    body: UserBody | None = None,
+) -> Capture:
+    """Read the BVH files, put their hands on the standard body and join them (module doc),
+    at the finest frame time of the takes."""
+    if not paths:
+        raise ConfigError("no BVH file given")
+    if not (math.isfinite(crossfade) and crossfade >= 0):
+        raise ConfigError(f"the cross-fade must be >= 0 s, got {crossfade}")
+    takes: list[Take] = []
+    motions: list[np.ndarray] = []
+    for path in paths:
+        bvh = read_bvh(path)
+        if bvh.n_frames < 2:
+            raise ConfigError(f"{path}: one frame is no movement")
+        take_hands, scale = body_hands(bvh, hands=hands, units=units, up_axis=up_axis, body=body)
+        period = movement_period(take_hands, bvh.frame_time)
+        takes.append(Take(str(path), bvh.n_frames, bvh.frame_time, bvh.duration, period, scale))
+        motions.append(take_hands)
+    joined, fine, crossfade = _joined(motions, takes, crossfade)
+    return Capture(np.arange(len(joined)) * fine, joined, tuple(takes), crossfade)
+
+
 def capture_stream(
     paths: list[str] | tuple[str, ...],
     *,

@@ -673,6 +673,8 @@ def consolidate(
         created=datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         details=details,
     )
-    if "dt" in model.meta:  # the new version plays at the step its data were taught at
-        learned = replace(learned, meta={**learned.meta, "dt": model.meta["dt"]})
+    # The new version plays at the step its data were taught at, and frames a person alike.
+    kept = {k: model.meta[k] for k in ("dt", "framing_m") if model.meta.get(k) is not None}
+    if kept:
+        learned = replace(learned, meta={**learned.meta, **kept})
     return learned.with_history((*model.history, entry))

@@ -13,7 +13,10 @@ record implies (one ``train`` entry, time unknown). Format 3 added the hands as 
 them.
 
 A model records the step time it was learned at (``meta["dt"]``, seconds; it plays at that step
-only); a file without it was learned at the paper's 0.4 s (:data:`DEFAULT_DT`).
+only); a file without it was learned at the paper's 0.4 s (:data:`DEFAULT_DT`). It also records
+where a person's body was framed in the robot camera's view when it learned
+(``meta["framing_m"]``, metres: :mod:`rnnpb.learning_phase`); a person it watches is framed
+alike; a file without it learned at the standard user's place, :data:`DEFAULT_FRAMING`.
 
 Reading trusts nothing in the file. Before an array is decompressed the zip's central directory
 is checked: only the members the format names (``meta.json`` and, for a model, exactly the
@@ -84,6 +87,9 @@ JOINT_LIMIT_TOLERANCE = 1e-9
 DEFAULT_DT = 0.4
 """Seconds per step of a model that records none: the paper's step, all older files' step."""
 MAX_DT = 60.0
+DEFAULT_FRAMING = 1.0
+"""Metres: the framing of a model that records none, the standard user's place
+(:class:`rnnpb.demonstrator.UserBody`'s distance, where the demonstrator stands)."""
 _NPY_MAGIC = b"\x93NUMPY"
 
 
@@ -219,6 +225,23 @@ def model_dt(meta: dict[str, Any]) -> float:
     return DEFAULT_DT if dt is None else float(dt)
 
 
+def model_framing(meta: dict[str, Any]) -> float:
+    """Metres from the robot at which a person's body was framed when the model learned:
+    ``meta["framing_m"]``, or :data:`DEFAULT_FRAMING` (the standard user's place, where the
+    demonstrator stands) for a model that records none."""
+    framing = meta.get("framing_m")
+    return DEFAULT_FRAMING if framing is None else float(framing)
+
+
+def framing_problem(framing: object) -> str | None:
+    """Why ``framing`` is no framing (metres in [0.5, 3]), or None."""
+    if isinstance(framing, bool) or not isinstance(framing, (int, float)):
+        return f"is {type(framing).__name__}, not a distance in metres"
+    if not math.isfinite(framing) or not 0.5 <= framing <= 3.0:
+        return f"{framing!r} is not a distance from 0.5 to 3 m"
+    return None
+
+
 def dt_problem(dt: object) -> str | None:
     """Why ``dt`` is no model step time (a number of seconds in (0, :data:`MAX_DT`]), or
     None."""
@@ -320,6 +343,11 @@ class TrainedModel:
     def dt(self) -> float:
         """Seconds per step the model was learned at, and plays at (:func:`model_dt`)."""
         return model_dt(self.meta)
+
+    @property
+    def framing(self) -> float:
+        """Metres at which a person's body is framed for this model (:func:`model_framing`)."""
+        return model_framing(self.meta)
 
     @property
     def mean_initial_context(self) -> np.ndarray:
@@ -465,6 +493,8 @@ class TrainedModel:
         history = _checked_history(path, meta)
         if "dt" in meta and (problem := dt_problem(meta["dt"])):
             raise ModelFileError(f"{path}: meta.json's step time dt {problem}")
+        if meta.get("framing_m") is not None and (problem := framing_problem(meta["framing_m"])):
+            raise ModelFileError(f"{path}: meta.json's framing_m {problem}")
         for name in expected:
             if name != "taught_sensory":
                 check_numeric(path, name, arrays[name])

@@ -16,7 +16,7 @@ from rnnpb.safety._check import (
     SequenceSafety,
     unsettled_steps,
 )
-from rnnpb.safety._data import DataSafety, check_data
+from rnnpb.safety._data import DataSafety, as_written, check_data
 from rnnpb.safety._explore import (
     Experience,
     ExplorationConfig,
@@ -55,6 +55,7 @@ __all__ = [
     "SAFETY_FORMAT_VERSION",
     "CommandFilter",
     "DataSafety",
+    "as_written",
     "check_data",
     "Experience",
     "ExplorationConfig",

@@ -98,14 +98,41 @@ def stream_hands(files: list[Path], config: PeopleConfig, scale: float):
     return capture_stream(paths * repeats, dt=config.dt, time_scale=scale, body=body)
 
 
-def record(hands: np.ndarray, config: PeopleConfig, name: str):
-    """The learning phase of ``rnnpb record bvh:``: a demonstration from 3-D hands (a hand
-    outside the camera's view is not seen)."""
-    from rnnpb.demonstrator import MirrorMapping
-    from rnnpb.interaction.learning_phase import demonstration_from_hands
+@dataclass(frozen=True)
+class Recorded:
+    """What the robot's camera sees of a stream of hands (NaN out of view) and its joint angles."""
 
-    mapping = MirrorMapping(placed_body(config.distance), dt=config.dt)
-    return demonstration_from_hands(hands, mapping=mapping, source=name)
+    sensory: np.ndarray
+    motor: np.ndarray
+
+
+def record(hands: np.ndarray, config: PeopleConfig, name: str) -> Recorded:
+    """A stream of 3-D hands (on the standard body placed at ``config.distance``) as the
+    robot's camera sees it (a hand outside the view is not seen) and the robot's joint angles
+    for it by the safe retargeting."""
+    from rnnpb.demonstrator import MirrorMapping
+    from rnnpb.robot.camera import RobotCamera
+
+    sensory = RobotCamera().sensory_from_hands(hands).reshape(-1, 2, 2)
+    with np.errstate(invalid="ignore"):
+        sensory[((sensory < 0) | (sensory > 1)).any(axis=2)] = np.nan
+    motor = MirrorMapping(placed_body(config.distance), dt=config.dt).retarget(hands).joints
+    return Recorded(sensory.reshape(-1, 4), motor)
+
+
+def length_sequences(recorded: Recorded, pattern: str, length: int):
+    """Consecutive sequences of ``length`` steps with both hands seen."""
+    from rnnpb.sequences import Sequence
+
+    valid = np.isfinite(recorded.sensory).all(axis=1) & np.isfinite(recorded.motor).all(axis=1)
+    edges = np.diff(np.concatenate([[0], valid.astype(int), [0]]))
+    out = []
+    for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1), strict=True):
+        for s in range(a, b - length + 1, length):
+            out.append(
+                Sequence(recorded.sensory[s : s + length], recorded.motor[s : s + length], pattern)
+            )
+    return out
 
 
 def path_safety(motor: np.ndarray, dt: float, checker=None) -> dict[str, int]:

@@ -78,7 +78,6 @@ def _plan(data: Path, options: StudyOptions, exam: Exam) -> dict[str, Any]:
 
 def run(out: Path, options: StudyOptions) -> StudyOutcome:
     from rnnpb.analysis.figures import plot_following
-    from rnnpb.interaction.learning_phase import cut_sequences
     from rnnpb.model import TrainConfig, train
     from rnnpb.robot import JOINT_LIMITS
     from rnnpb.safety import SafetyChecker, SafetyLimits
@@ -106,7 +105,7 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
         stream = scenario.stream_hands(files, config, scales[movement])
         demo = scenario.record(stream.hands, config, movement)
         recordings[f"learn {movement}"] = scenario.path_safety(demo.motor, config.dt, checker)
-        sequences += cut_sequences(demo, movement, mode="length", length=config.sequence_length)
+        sequences += scenario.length_sequences(demo, movement, config.sequence_length)
     model = train(sequences, JOINT_LIMITS, config=TrainConfig.fast(seed=seed))
     model.save(out / "people.npz")
     runs: dict[str, dict[str, Any]] = {}
