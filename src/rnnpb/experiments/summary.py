@@ -42,13 +42,25 @@ def within(values: Sequence[Any], limit: float) -> int:
 
 @dataclass(frozen=True)
 class Target:
-    """One of the paper's figures: met or not, and by how much."""
+    """One of the paper's figures: met or not, and by how much. ``value``: the measured figure
+    the verdict compared with its limit, where there is one number (an exam's targets: what
+    the exam ledger records); None where the verdict reads several."""
 
     met: bool
     detail: str
+    value: float | None = None
 
     def to_json(self) -> dict[str, Any]:
-        return {"met": self.met, "detail": self.detail}
+        out: dict[str, Any] = {"met": self.met, "detail": self.detail}
+        if self.value is not None:
+            out["value"] = _finite_or_none(self.value)
+        return out
+
+
+def _finite_or_none(value: float) -> float | None:
+    """``value`` as JSON holds it: NaN or an infinity (a figure that could not be taken) as
+    None."""
+    return float(value) if math.isfinite(value) else None
 
 
 @dataclass(frozen=True)

@@ -145,7 +145,7 @@ class Exam:
 
         met = self.judge({key: measures[key] for key in self.targets})
         return {
-            key: Target(met[key], detail(target, measures[key]))
+            key: Target(met[key], detail(target, measures[key]), _figure(measures[key]))
             for key, target in self.targets.items()
         }
 
@@ -168,6 +168,13 @@ class Exam:
             "learning_sets": list(self.learning_sets),
             **({"names": {k: list(v) for k, v in self.names.items()}} if self.names else {}),
         }
+
+
+def _figure(value: Any) -> float | None:
+    """A measured value as a target records it: a number, or None where none was taken."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return None
+    return value
 
 
 def exam_names() -> tuple[str, ...]:
