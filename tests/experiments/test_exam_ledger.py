@@ -1,4 +1,5 @@
-"""The exam ledger: every exam run is written in it, and a judged version is never run again."""
+"""The exam ledger: every exam run is written in it, a judged version is never run again, and
+the runs recorded from the notes name their notes and hold their exams' fingerprints."""
 
 from __future__ import annotations
 
@@ -10,12 +11,13 @@ import pytest
 
 from rnnpb.cli import main
 from rnnpb.errors import ConfigError
+from rnnpb.experiments.exams import exam_names, load_exam, recorded_versions
 from rnnpb.experiments.exams import ledger as exam_ledger
-from rnnpb.experiments.exams import load_exam
 from rnnpb.experiments.studies import StudyOutcome
 from rnnpb.experiments.summary import Target
 
 ROOT = Path(__file__).resolve().parents[2]
+LEDGER = ROOT / "src" / "rnnpb" / "experiments" / "exams" / "ledger.jsonl"
 
 
 def _fake_study(monkeypatch, run):
@@ -50,6 +52,30 @@ def _entry(**changes) -> exam_ledger.LedgerEntry:
         "draws": exam_ledger.exam_draws(exam),
     }
     return exam_ledger.LedgerEntry(**(values | changes))
+
+
+def test_the_committed_ledger_reads_and_names_where_each_run_comes_from():
+    entries = exam_ledger.read(LEDGER)
+    assert entries, "the ledger holds the runs the notes report"
+    assert len({e.run for e in entries}) == len(entries)
+    recorded = recorded_versions()
+    for entry in entries:
+        assert entry.status in exam_ledger.STATUSES
+        if entry.study in exam_names():
+            # The version judged is the one versions.toml records, with the same values.
+            assert recorded[entry.study, entry.version].fingerprint == entry.fingerprint, entry.run
+        if entry.recorded == "notes":
+            source = ROOT / entry.source.split(" ")[0]
+            assert source.is_file(), (entry.run, entry.source)
+        if entry.study in exam_names() and entry.version == load_exam(entry.study).version:
+            # Each target recorded is one the exam defines (an older version's may differ).
+            assert {t.name for t in entry.targets} <= set(load_exam(entry.study).targets)
+    # The runs the notes report, as the ledger holds them.
+    assert exam_ledger.judged_versions("people", [LEDGER]) >= {1}
+    people = [e for e in entries if e.study == "people" and e.version == 1]
+    (recognised,) = [t for t in people[0].targets if t.name == "followed_recognised"]
+    assert recognised.value == pytest.approx(0.376) and recognised.met is False
+    assert "dyad" not in {e.study for e in entries if e.judged}  # dyad was never judged
 
 
 def test_the_ledger_is_installed_with_the_package():
