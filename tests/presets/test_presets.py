@@ -2,10 +2,18 @@
 
 from __future__ import annotations
 
+import re
+
 import pytest
 
 from rnnpb.errors import ConfigError
-from rnnpb.presets import PRESET_NAMES, load_preset, read_overrides, read_preset
+from rnnpb.presets import (
+    PRESET_NAMES,
+    load_preset,
+    read_overrides,
+    read_preset,
+    recorded_versions,
+)
 from rnnpb.presets import __file__ as presets_init
 
 SECTIONS = (
@@ -34,6 +42,27 @@ def test_every_value_has_evidence_from_a_named_source(name):
             assert all(isinstance(draw, int) for draw in source.draws)
             used.add(source.id)
     assert used == set(preset.sources), f"sources no value names: {set(preset.sources) - used}"
+
+
+@pytest.mark.parametrize("name", PRESET_NAMES)
+def test_a_preset_s_values_do_not_change_without_a_new_version(name):
+    preset = load_preset(name)
+    recorded = recorded_versions().get((name, preset.version))
+    assert recorded is not None and recorded.fingerprint == preset.fingerprint, (
+        f"the {name} preset's values changed under version {preset.version}: raise its "
+        f'version and record it in presets/versions.toml: fingerprint = "{preset.fingerprint}"'
+    )
+    versions = sorted(v for (n, v) in recorded_versions() if n == name)
+    assert versions == list(range(1, preset.version + 1))
+
+
+def test_the_fingerprint_covers_the_values_not_the_evidence(tmp_path):
+    text = _shipped_text()
+    path = tmp_path / "paper.toml"
+    path.write_text(text.replace("draws = [100]", "draws = [100, 101]", 1), encoding="utf-8")
+    assert read_preset(path).fingerprint == load_preset("paper").fingerprint
+    path.write_text(text.replace("window = 30", "window = 31", 1), encoding="utf-8")
+    assert read_preset(path).fingerprint != load_preset("paper").fingerprint
 
 
 @pytest.mark.parametrize("name", PRESET_NAMES)
@@ -69,6 +98,13 @@ def test_an_unknown_preset_is_one_line():
     assert "\n" not in str(error.value)
 
 
+def _version(text: str, value: str) -> str:
+    """The preset file's text with its version written as ``value``."""
+    changed = re.sub(r"(?m)^version = \d+$", f"version = {value}", text, count=1)
+    assert changed != text
+    return changed
+
+
 def _shipped_text() -> str:
     from pathlib import Path
 
@@ -78,8 +114,8 @@ def _shipped_text() -> str:
 @pytest.mark.parametrize(
     ("change", "message"),
     [
-        (lambda t: t.replace("version = 1", 'version = "1"'), "'version' must be a whole number"),
-        (lambda t: t.replace("version = 1", "version = true"), "'version' must be a whole number"),
+        (lambda t: _version(t, '"2"'), "'version' must be a whole number"),
+        (lambda t: _version(t, "true"), "'version' must be a whole number"),
         (lambda t: t.replace("[learning]\n", "[learning\n", 1), "not TOML"),
         (
             lambda t: t.replace('surprise_gate = "surprise-gate"', ""),
