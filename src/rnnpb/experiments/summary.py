@@ -50,17 +50,17 @@ class Target:
     detail: str
     value: float | None = None
 
+    def __post_init__(self) -> None:
+        # A figure that could not be taken (NaN, an infinity) is none: a verdict recomputed
+        # from results.json then equals the one first given.
+        if self.value is not None and not math.isfinite(self.value):
+            object.__setattr__(self, "value", None)
+
     def to_json(self) -> dict[str, Any]:
         out: dict[str, Any] = {"met": self.met, "detail": self.detail}
         if self.value is not None:
-            out["value"] = _finite_or_none(self.value)
+            out["value"] = self.value
         return out
-
-
-def _finite_or_none(value: float) -> float | None:
-    """``value`` as JSON holds it: NaN or an infinity (a figure that could not be taken) as
-    None."""
-    return float(value) if math.isfinite(value) else None
 
 
 @dataclass(frozen=True)
