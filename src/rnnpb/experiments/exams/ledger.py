@@ -28,6 +28,15 @@ one process at a time.
 
 >>> judged_versions("people")                      # doctest: +SKIP
 frozenset({1})
+
+A run reported elsewhere (a note) is added as an entry of its own::
+
+    append(LedgerEntry(
+        run="notes-teach-v3-1", study="teach", version=3, fingerprint=exam.fingerprint,
+        status="judged", recorded="notes", date="2026-12-08", commit="abc1234", dirty=None,
+        rnnpb=None, processor=None, draws=exam_draws(exam),
+        targets=(TargetRecord("follow_next_performance", True, 0.95, "19 of 20"),),
+        source="notes/2026-12-08-teach.md", note="rnnpb study teach --exam, 180 s"))
 """
 
 from __future__ import annotations
