@@ -12,7 +12,16 @@ from pathlib import Path
 
 import rnnpb
 
-FOUNDATION = {"rnnpb", "errors", "vectors", "_atomic", "_reading", "_xla", "_interrupt"}
+FOUNDATION = {
+    "rnnpb",
+    "errors",
+    "vectors",
+    "_atomic",
+    "_fingerprint",
+    "_reading",
+    "_xla",
+    "_interrupt",
+}
 
 # part -> the parts it may import (besides itself and the foundation). The model never imports
 # the robot, the camera, the screen or the memory store.
@@ -21,6 +30,7 @@ ALLOWED: dict[str, set[str]] = {
     "errors": set(),
     "vectors": set(),
     "_atomic": set(),
+    "_fingerprint": set(),
     "_reading": set(),
     "_xla": set(),
     "_interrupt": set(),

@@ -48,7 +48,7 @@ def test_the_exam_names_its_own_seeds_and_sizes():
 
     exam = load_exam("dyad")
     seeds = DyadSeeds.from_exam(exam)
-    assert seeds.starts == exam.seed_list("starts") and seeds.training == 7200
+    assert seeds.starts == exam.seed_list("starts") and seeds.training == 7700
     size = seeds.sized(DyadStudySize.for_options(StudyOptions()))
     assert (size.start_seeds, size.grid_seeds, size.subject_seeds) == (5, 3, 12)
     default = DyadSeeds.from_first(size, 0)

@@ -100,9 +100,19 @@ def test_an_unknown_exam_names_the_known_ones():
 
 
 def test_no_preset_chose_a_setting_on_an_exam_draw():
+    """Neither the exams' draws of today nor those of any study's run the exam ledger holds
+    (older versions too) are among a preset evidence's draws (scenario and learning seeds;
+    the mirror game's judged draws in the ledger seed a browser's pointer player instead)."""
+    from rnnpb.experiments.exams import ledger
     from rnnpb.presets import PRESET_NAMES, load_preset
 
     exams = {name: load_exam(name).draws() for name in exam_names()}
+    for entry in ledger.entries():
+        if entry.study not in exam_names():
+            continue
+        key = f"{entry.study} version {entry.version} (ledger)"
+        exams[key] = exams.get(key, frozenset()) | entry.seeds()
+    assert any(key.endswith("(ledger)") and draws for key, draws in exams.items())
     for preset_name in PRESET_NAMES:
         preset = load_preset(preset_name)
         assert preset.sources, f"preset {preset_name} names no evidence"

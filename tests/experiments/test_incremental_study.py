@@ -4,6 +4,7 @@ configuration. Whether the study meets its targets (and how much fine-tuning for
 by `rnnpb study incremental --exam`, not here."""
 
 import json
+import math
 from dataclasses import replace
 
 import pytest
@@ -39,10 +40,23 @@ def test_quick_study_writes_its_measures_report_and_verdicts(tmp_path):
         for name, p in measured["pattern"].items():
             assert p["nearest_pb"] in measured["patterns"], (method, name)
             assert p["recognized"] is None or p["recognized"] in measured["patterns"]
-    # Every method measures how far the old patterns moved; the new one has no "before".
+    # Every method measures how far each old pattern moved (a distance > 0: every weight
+    # changed); the new pattern, which the starting model lacked, and only it, has no "before".
+    old = results["before"]["1"]["patterns"]
     for method, measured in after.items():
-        moved = [p["generation_vs_before"] for p in measured["pattern"].values()]
-        assert None in moved and worst_old(method) >= 0, (method, moved)
+        moved = {name: p["generation_vs_before"] for name, p in measured["pattern"].items()}
+        added = [name for name in measured["patterns"] if name not in old]
+        assert len(added) == 1 and [n for n, v in moved.items() if v is None] == added, method
+        assert all(math.isfinite(moved[n]) and moved[n] > 0 for n in old), (method, moved)
+    # The verdict reads the same figure: the worst old pattern after rehearsal, over the sets.
+    worst = max(
+        p["generation_vs_before"]
+        for measured in results["after"].values()
+        for name, p in measured["rehearsal"]["pattern"].items()
+        if p["generation_vs_before"] is not None
+    )
+    assert worst == worst_old("rehearsal") or len(results["after"]) > 1
+    assert outcome.targets["rehearsal_old_generation"].value == pytest.approx(worst)
     assert results["config"]["quick"] is True and results["versions"]["jax"]
     assert [m["patterns"] for m in results["chain"]] == [["1"], ["1", "2"]]
     # The larger set (learned here: the quick form has no demo models) and a new shape added.

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 from dataclasses import replace
 
+import numpy as np
 import pytest
 
 from rnnpb.analysis import metrics
@@ -49,7 +50,22 @@ def test_the_new_shapes_next_performance_is_measured_and_judged(study):
     steps), and the verdict on following is the one the judge gives those figures."""
     _, outcome, results = study
     (run,) = results["runs"]
-    assert run["lock_next"] is None or run["lock_next"] >= 0
+    # The next performance is the run's last segment; its lock-on is counted from its start
+    # and is a lock by the measure's definition: the robot's motor error under the lock
+    # threshold for LOCK_HOLD steps from there, and no sooner by the motor error alone.
+    shape, again = run["segments"][-1]
+    assert shape == run["shape"]
+    start = sum(steps for _, steps in run["segments"]) - again
+    motor = np.asarray(run["motor_error"], dtype=float)
+    assert len(motor) == start + again
+    if run["lock_next"] is None:
+        assert run["follow_s"] is None and run["follow_steps"] == {}
+    else:
+        locked = start + run["lock_next"]
+        assert 0 <= run["lock_next"] <= again - metrics.LOCK_HOLD
+        assert np.all(motor[locked : locked + metrics.LOCK_HOLD] < metrics.MOTOR_LOCK_THRESHOLD)
+        assert metrics.steps_to_lock(motor, None, start, len(motor)) <= run["lock_next"]
+        assert run["follow_steps"]["lock_on"] == run["lock_next"]
     assert run["follow_s"] == pytest.approx(sum(run["follow_steps"].values()) * 0.4)
     target = load_exam("teach").target("follow_within_90s")
     seconds = target.parameter("seconds")
@@ -92,7 +108,13 @@ def test_the_paced_run_and_the_files(study):
     out, outcome, results = study
     paced = results["paced"]
     assert paced["steps"] == 8 and paced["dt"] == 0.4
-    assert paced["missed_deadlines"] >= 0 and paced["max_lateness_ms"] >= 0
+    # A missed deadline is a step whose own work took longer than dt, a late step one that
+    # started more than 40 ms after its slot: each count agrees with the longest time it
+    # rests on, and no count exceeds the steps.
+    assert (paced["missed_deadlines"] > 0) == (paced["max_step_ms"] > paced["dt"] * 1e3)
+    assert (paced["late_steps"] > 0) == (paced["max_lateness_ms"] > 40.0)
+    assert 0 <= paced["late_steps"] < paced["steps"] and paced["overrun_steps"] < paced["steps"]
+    assert 0 < paced["p99_step_ms"] <= paced["max_step_ms"]
     assert set(outcome.targets) == {
         "follow_within_90s",
         "follow_next_performance",

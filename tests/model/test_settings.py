@@ -146,13 +146,18 @@ def test_a_recorded_learning_reads_back_as_the_preset_its_optimizer_implies():
 
 
 def test_a_model_records_its_preset_and_what_its_learning_changed():
-    assert preset_record(TrainConfig.fast(iterations=5, seed=3)) == {"name": "fast", "version": 1}
+    fast = load_preset("fast")
+    assert preset_record(TrainConfig.fast(iterations=5, seed=3)) == {
+        "name": "fast",
+        "version": fast.version,
+        "fingerprint": fast.fingerprint,
+    }
     changed = TrainConfig.paper().with_tuning(learning_rate=0.5, pb={"k_nb": 0.0})
     assert preset_record(changed)["changed"] == ["learning_rate", "pb"]
 
 
 def test_the_on_line_choice_follows_the_recorded_preset(trained):
-    assert learning_preset(trained.meta) == ("fast", 1)
+    assert learning_preset(trained.meta) == ("fast", load_preset("fast").version)
     # The preset recorded decides, not the optimizer...
     recorded = dataclasses.replace(trained, meta={**trained.meta, "preset": {"name": "paper"}})
     choice = OnlineConfig.for_model(recorded)
@@ -208,16 +213,51 @@ def test_train_takes_a_config_file_and_info_shows_the_preset(
     model = TrainedModel.load(model_path)
     assert model.meta["train_config"]["learning_rate"] == 0.02
     assert model.meta["train_config"]["pb"]["k_nb"] == 0.0
+    fast = load_preset("fast")
     assert model.meta["preset"] == {
         "name": "fast",
-        "version": 1,
+        "version": fast.version,
+        "fingerprint": fast.fingerprint,
         "changed": ["learning_rate", "pb"],
     }
     capsys.readouterr()
     assert main(["info", str(model_path)]) == 0
-    assert (
-        "learning preset: fast, version 1, with other learning_rate, pb" in capsys.readouterr().out
-    )
+    shown = f"learning preset: fast, version {fast.version}, with other learning_rate, pb\n"
+    assert shown in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("recorded", "shown"),
+    [
+        # Learned before the fingerprints were recorded: version 1, whose values changed.
+        (
+            {"name": "fast", "version": 1},
+            "fast, version 1 (the fast preset is at version 2 now; version 1's values changed "
+            "while it was current)",
+        ),
+        # Learned with version 1's first values, the fingerprint recorded.
+        (
+            {"name": "paper", "version": 1, "fingerprint": "27140656dee47093"},
+            "paper, version 1 (the paper preset is at version 2 now; learned with earlier "
+            "values of version 1)",
+        ),
+        ({"name": "paper", "version": 2, "fingerprint": "c9fc8abe565ee980"}, "paper, version 2"),
+        (
+            {"name": "paper", "version": 2, "fingerprint": "0000000000000000"},
+            "paper, version 2 (values that version 2 never held (fingerprint 0000000000000000))",
+        ),
+    ],
+)
+def test_a_model_of_an_older_preset_version_loads_and_says_so(
+    trained, tmp_path, capsys, recorded, shown
+):
+    path = tmp_path / "older.npz"
+    dataclasses.replace(trained, meta={**trained.meta, "preset": recorded}).save(path)
+    model = TrainedModel.load(path)
+    assert model.learning_preset == (recorded["name"], recorded["version"])
+    capsys.readouterr()
+    assert main(["info", str(path)]) == 0
+    assert f"learning preset: {shown}\n" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize(

@@ -2,10 +2,19 @@
 
 from __future__ import annotations
 
+import re
+
 import pytest
 
 from rnnpb.errors import ConfigError
-from rnnpb.presets import PRESET_NAMES, load_preset, read_overrides, read_preset
+from rnnpb.presets import (
+    PRESET_NAMES,
+    Source,
+    load_preset,
+    read_overrides,
+    read_preset,
+    recorded_versions,
+)
 from rnnpb.presets import __file__ as presets_init
 
 SECTIONS = (
@@ -16,6 +25,122 @@ SECTIONS = (
     "consolidation",
     "teaching",
 )
+
+# The values whose evidence cannot be repeated (:func:`_not_kept`): a figure measured by a
+# search or harness that was not kept, or a command that repeats only *such* a search. This
+# list may only shrink: a value chosen from now on names the command that measured it, and a
+# value whose measure becomes repeatable leaves the list.
+NOT_KEPT = {
+    "paper": {
+        "learning": ("learning_rate",),
+        "learning.pb": ("learning_rate", "k_nb"),
+        "online": (
+            "optimize_onset",
+            "onset_learning_rate",
+            "restart_span",
+            "motor_input",
+            "surprise_gate",
+            "gate_power",
+            "phase_restarts",
+            "phase_restart_ratio",
+            "phase_restart_level",
+        ),
+        "online.pb": ("learning_rate", "k_nb", "integration_length"),
+        "recognition": (
+            "evidence_steps",
+            "match_scale",
+            "match_level",
+            "pb_steps",
+            "pb_scale",
+            "pb_level",
+            "confidence_level",
+            "structure_level",
+            "switch_steps",
+            "release_steps",
+            "template_scale",
+            "template_level",
+        ),
+        "recognition_untaught": (
+            "evidence_steps",
+            "match_scale",
+            "match_level",
+            "pb_steps",
+            "pb_scale",
+            "pb_level",
+            "confidence_level",
+            "structure_level",
+            "switch_steps",
+            "release_steps",
+        ),
+        "consolidation": (
+            "iterations",
+            "input_noise",
+            "function_rehearsal_input_noise",
+            "hold_old_pb",
+            "new_pb_start",
+            "rehearsal_target",
+        ),
+    },
+    "fast": {
+        "learning": ("iterations", "optimizer", "learning_rate", "input_noise"),
+        "learning.pb": ("learning_rate", "k_nb"),
+        "online": (
+            "optimize_onset",
+            "onset_learning_rate",
+            "restart_span",
+            "motor_input",
+            "surprise_gate",
+            "gate_power",
+            "phase_restarts",
+            "phase_restart_ratio",
+            "phase_restart_level",
+        ),
+        "online.pb": ("learning_rate", "k_nb", "integration_length"),
+        "recognition": (
+            "evidence_steps",
+            "match_scale",
+            "match_level",
+            "pb_steps",
+            "pb_scale",
+            "pb_level",
+            "confidence_level",
+            "structure_level",
+            "switch_steps",
+            "release_steps",
+            "template_scale",
+            "template_level",
+        ),
+        "recognition_untaught": (
+            "evidence_steps",
+            "match_scale",
+            "match_level",
+            "pb_steps",
+            "pb_scale",
+            "pb_level",
+            "confidence_level",
+            "switch_steps",
+            "release_steps",
+        ),
+        "consolidation": (
+            "input_noise",
+            "function_rehearsal_input_noise",
+            "hold_old_pb",
+            "new_pb_start",
+            "rehearsal_target",
+        ),
+    },
+}
+
+
+def _claims_a_measure(source: Source) -> bool:
+    """Whether a source says a value was measured: it gives a figure or the draws."""
+    return bool(source.figure or source.draws)
+
+
+def _not_kept(source: Source) -> bool:
+    """Evidence that cannot be repeated: a measure with no command, or a command that only
+    repeats a search like the one that chose the value, which was not kept."""
+    return (not source.command and _claims_a_measure(source)) or "not kept" in source.note
 
 
 @pytest.mark.parametrize("name", PRESET_NAMES)
@@ -29,11 +154,59 @@ def test_every_value_has_evidence_from_a_named_source(name):
         for key in preset.section(section):
             source = preset.evidence(section, key)
             assert source.id in preset.sources
-            # A source without a command must say where the choice was made.
+            # Every source says where the value comes from: the command that measured it, or
+            # a note. A note alone is evidence only for a value that claims no measure (the
+            # paper's, a reading of it, set when built, unused: no figure, no draws) or one
+            # of the known values whose measure was not kept (NOT_KEPT, below).
             assert source.command or source.note, (section, key)
+            if not source.command and _claims_a_measure(source):
+                assert key in NOT_KEPT[name].get(section, ()), (
+                    f"[{section}] {key}: its evidence {source.id!r} gives a figure but no "
+                    "command that measures it"
+                )
             assert all(isinstance(draw, int) for draw in source.draws)
             used.add(source.id)
     assert used == set(preset.sources), f"sources no value names: {set(preset.sources) - used}"
+
+
+@pytest.mark.parametrize("name", PRESET_NAMES)
+def test_values_whose_evidence_was_not_kept_are_a_list_that_only_shrinks(name):
+    preset = load_preset(name)
+    found = {
+        (section, key)
+        for section in preset.sections
+        for key in preset.section(section)
+        if _not_kept(preset.evidence(section, key))
+    }
+    known = {(section, key) for section, keys in NOT_KEPT[name].items() for key in keys}
+    new = sorted(found - known)
+    assert not new, (
+        f"values of the {name} preset chosen on evidence that was not kept: {new}; name the "
+        "command that measures them"
+    )
+    gone = sorted(known - found)
+    assert not gone, f"the {name} preset's {gone} can be repeated now: drop them from NOT_KEPT"
+
+
+@pytest.mark.parametrize("name", PRESET_NAMES)
+def test_a_preset_s_values_do_not_change_without_a_new_version(name):
+    preset = load_preset(name)
+    recorded = recorded_versions().get((name, preset.version))
+    assert recorded is not None and recorded.fingerprint == preset.fingerprint, (
+        f"the {name} preset's values changed under version {preset.version}: raise its "
+        f'version and record it in presets/versions.toml: fingerprint = "{preset.fingerprint}"'
+    )
+    versions = sorted(v for (n, v) in recorded_versions() if n == name)
+    assert versions == list(range(1, preset.version + 1))
+
+
+def test_the_fingerprint_covers_the_values_not_the_evidence(tmp_path):
+    text = _shipped_text()
+    path = tmp_path / "paper.toml"
+    path.write_text(text.replace("draws = [100]", "draws = [100, 101]", 1), encoding="utf-8")
+    assert read_preset(path).fingerprint == load_preset("paper").fingerprint
+    path.write_text(text.replace("window = 30", "window = 31", 1), encoding="utf-8")
+    assert read_preset(path).fingerprint != load_preset("paper").fingerprint
 
 
 @pytest.mark.parametrize("name", PRESET_NAMES)
@@ -69,6 +242,13 @@ def test_an_unknown_preset_is_one_line():
     assert "\n" not in str(error.value)
 
 
+def _version(text: str, value: str) -> str:
+    """The preset file's text with its version written as ``value``."""
+    changed = re.sub(r"(?m)^version = \d+$", f"version = {value}", text, count=1)
+    assert changed != text
+    return changed
+
+
 def _shipped_text() -> str:
     from pathlib import Path
 
@@ -78,8 +258,8 @@ def _shipped_text() -> str:
 @pytest.mark.parametrize(
     ("change", "message"),
     [
-        (lambda t: t.replace("version = 1", 'version = "1"'), "'version' must be a whole number"),
-        (lambda t: t.replace("version = 1", "version = true"), "'version' must be a whole number"),
+        (lambda t: _version(t, '"2"'), "'version' must be a whole number"),
+        (lambda t: _version(t, "true"), "'version' must be a whole number"),
         (lambda t: t.replace("[learning]\n", "[learning\n", 1), "not TOML"),
         (
             lambda t: t.replace('surprise_gate = "surprise-gate"', ""),

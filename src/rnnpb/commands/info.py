@@ -61,10 +61,31 @@ def recorded_preset(meta: dict[str, Any]) -> str:
     if version is None:
         return f"{name} (by its optimizer; the file records no preset version)"
     changed = meta["preset"].get("changed")
+    text = f"{name}, version {version}"
     if isinstance(changed, list) and changed:
-        shown = ", ".join(str(key) for key in changed)
-        return f"{name}, version {version}, with other {shown}"
-    return f"{name}, version {version}"
+        text += f", with other {', '.join(str(key) for key in changed)}"
+    return text + _preset_version_note(name, version, meta["preset"].get("fingerprint"))
+
+
+def _preset_version_note(name: str, version: int, fingerprint: object) -> str:
+    """What a reader of an older model needs to know of the version it records: that the
+    preset has moved on, or that the version's values changed while it was current."""
+    from rnnpb.presets import load_preset, recorded_versions
+
+    current = load_preset(name)
+    recorded = recorded_versions().get((name, version))
+    notes = []
+    if version != current.version:
+        notes.append(f"the {name} preset is at version {current.version} now")
+    if recorded is not None and recorded.earlier:
+        if fingerprint is None:
+            notes.append(f"version {version}'s values changed while it was current")
+        elif fingerprint != recorded.fingerprint and fingerprint in recorded.earlier:
+            notes.append(f"learned with earlier values of version {version}")
+    if isinstance(fingerprint, str) and recorded is not None:
+        if fingerprint != recorded.fingerprint and fingerprint not in recorded.earlier:
+            notes.append(f"values that version {version} never held (fingerprint {fingerprint})")
+    return f" ({'; '.join(notes)})" if notes else ""
 
 
 def suited_regression(model: Any) -> str:

@@ -11,8 +11,10 @@ Run one study and write OUT/report.md (figures embedded from OUT/figures/) and
 OUT/results.json (every measure, with the config, seeds and versions). --quick is the short
 form, the one the test suite runs; the full form is the one whose figures docs/ quote.
 --exam runs the full form on the study's exam: the draws named in its exam file, never used
-to choose a setting, every target judged by the file's definitions. A study learns the
-models it needs unless --models names a directory that holds them.
+to choose a setting, every target judged by the file's definitions. The run is written in the
+exam ledger (the checkout's src/rnnpb/experiments/exams/ledger.jsonl, or --ledger FILE, which
+an installed rnnpb needs), and a version with a judged run is refused: a version is judged
+once. A study learns the models it needs unless --models names a directory that holds them.
 
 Examples:
   rnnpb study novelty --quick --out results/novelty
@@ -40,6 +42,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--exam",
         action="store_true",
         help="run the full form on the study's exam draws and judge every target by its exam",
+    )
+    parser.add_argument(
+        "--ledger",
+        metavar="FILE",
+        help="with --exam: the exam ledger to write the run in (default: the checkout's "
+        "src/rnnpb/experiments/exams/ledger.jsonl; an installed rnnpb needs this)",
+    )
+    parser.add_argument(
+        "--rerun-unjudged",
+        action="store_true",
+        help="with --exam: run a version again whose earlier runs all stopped before their "
+        "verdicts (never one with a judged run)",
     )
     parser.add_argument(
         "--models",
@@ -70,6 +84,8 @@ def run(args: argparse.Namespace) -> int:
         if not takes_exam(study):
             raise ConfigError(f"the {args.name} study does not run its exam yet")
         exam = load_exam(args.name)
+    elif args.ledger is not None or args.rerun_unjudged:
+        raise ConfigError("--ledger and --rerun-unjudged go with --exam")
     options = StudyOptions(
         quick=args.quick,
         workers=args.workers,
@@ -78,10 +94,22 @@ def run(args: argparse.Namespace) -> int:
         exam=exam,
         data=args.data,
     )
-    outcome = study.run(Path(args.out), options)
+    record = None
+    if exam is None:
+        outcome = study.run(Path(args.out), options)
+    else:
+        from rnnpb.experiments.exams.ledger import exam_run
+
+        # The ledger is checked and the run's start written before the study starts; its end
+        # (the verdicts, or the error that stopped it) after.
+        with exam_run(exam, args.out, args.ledger, args.rerun_unjudged) as record:
+            outcome = study.run(Path(args.out), options)
+            record.judged(outcome.targets)
     print(f"wrote {args.out}/report.md and {args.out}/results.json in {outcome.runtime_s:.0f} s")
     if exam is not None:
         print(f"exam {exam.study} version {exam.version}:")
     for key, target in outcome.targets.items():
         print(f"  {key}: {'met' if target.met else 'NOT met'} ({target.detail})")
+    if record is not None:
+        print(f"written in the exam ledger {record.path} as run {record.entry.run}")
     return 0

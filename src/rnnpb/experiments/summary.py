@@ -42,13 +42,25 @@ def within(values: Sequence[Any], limit: float) -> int:
 
 @dataclass(frozen=True)
 class Target:
-    """One of the paper's figures: met or not, and by how much."""
+    """One of the paper's figures: met or not, and by how much. ``value``: the measured figure
+    the verdict compared with its limit, where there is one number (an exam's targets: what
+    the exam ledger records); None where the verdict reads several."""
 
     met: bool
     detail: str
+    value: float | None = None
+
+    def __post_init__(self) -> None:
+        # A figure that could not be taken (NaN, an infinity) is none: a verdict recomputed
+        # from results.json then equals the one first given.
+        if self.value is not None and not math.isfinite(self.value):
+            object.__setattr__(self, "value", None)
 
     def to_json(self) -> dict[str, Any]:
-        return {"met": self.met, "detail": self.detail}
+        out: dict[str, Any] = {"met": self.met, "detail": self.detail}
+        if self.value is not None:
+            out["value"] = self.value
+        return out
 
 
 @dataclass(frozen=True)

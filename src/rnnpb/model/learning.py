@@ -155,12 +155,17 @@ class TrainConfig:
 
 
 def preset_record(config: TrainConfig) -> dict[str, Any]:
-    """What a model records of its learning preset (``meta["preset"]``): the preset's name and
-    version, and the tuned values its learning changed from the preset's, if any."""
+    """What a model records of its learning preset (``meta["preset"]``): the preset's name,
+    version and fingerprint (of its values: which values the version held), and the tuned
+    values its learning changed from the preset's, if any."""
     preset = load_preset(config.preset)
     own = _preset_tuning(config.preset)
     changed = [key for key, value in config.tuning.items() if _plain(value) != _plain(own[key])]
-    record: dict[str, Any] = {"name": preset.name, "version": preset.version}
+    record: dict[str, Any] = {
+        "name": preset.name,
+        "version": preset.version,
+        "fingerprint": preset.fingerprint,
+    }
     if changed:
         record["changed"] = changed
     return record

@@ -21,6 +21,12 @@ section's values are hashable, as the compiled code needs its static settings to
 :func:`load_preset` reads a preset by name (cached); :func:`read_preset` any file in the same
 format; :meth:`Preset.overridden` applies a ``--config`` file's values over a preset. Every
 malformed file, unknown name or unknown setting is a one-line :class:`ConfigError`.
+
+A preset's ``version`` rises whenever a value changes, and ``versions.toml`` beside the presets
+records each version's fingerprint (:attr:`Preset.fingerprint`, a hash of the values, not of
+the evidence or the comments; :func:`recorded_versions`): a value changed without a new
+version fails the tests. Version 1's values changed while it was current (the record began
+with version 2), so a model that records version 1 may have learned with any of them.
 """
 
 from __future__ import annotations
@@ -34,10 +40,13 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
+from rnnpb._fingerprint import values_fingerprint
 from rnnpb.errors import ConfigError
 
 PRESET_NAMES: tuple[str, ...] = ("paper", "fast")
 """The learning presets, as ``rnnpb train --preset`` and the model files name them."""
+REGISTRY = "versions.toml"
+"""The file of this package that records each preset version's fingerprint."""
 
 _RESERVED = ("name", "version", "description", "evidence", "sources")
 _SOURCE_FIELDS = {"command": str, "draws": list, "figure": str, "note": str}
@@ -86,6 +95,12 @@ class Preset:
     sources: Mapping[str, Source]
     _sections: Mapping[str, Mapping[str, Any]] = field(repr=False)
     _evidence: Mapping[str, Mapping[str, str]] = field(repr=False)
+
+    @property
+    def fingerprint(self) -> str:
+        """A hash of the preset's values (every section's, not the evidence): what a
+        changed value changes (:mod:`rnnpb._fingerprint`)."""
+        return values_fingerprint({name: dict(values) for name, values in self._sections.items()})
 
     @property
     def sections(self) -> tuple[str, ...]:
@@ -146,6 +161,54 @@ def load_preset(name: str) -> Preset:
     if preset.name != name:
         raise ConfigError(f"preset {name}.toml: names itself {preset.name!r}")
     return preset
+
+
+@dataclass(frozen=True)
+class RecordedVersion:
+    """One preset version as ``versions.toml`` records it: the fingerprint of its values, and
+    the fingerprints of other values it held (``earlier``, oldest first, with ``note`` saying
+    when): version 1's values changed while it was current."""
+
+    preset: str
+    version: int
+    fingerprint: str
+    earlier: tuple[str, ...] = ()
+    note: str = ""
+
+
+@functools.cache
+def recorded_versions() -> Mapping[tuple[str, int], RecordedVersion]:
+    """Every preset version ``versions.toml`` records, by (preset, version)."""
+    where = f"preset {REGISTRY}"
+    try:
+        data = tomllib.loads(resources.files(__name__).joinpath(REGISTRY).read_text("utf-8"))
+    except (OSError, UnicodeDecodeError) as error:
+        raise ConfigError(f"{where}: cannot read it ({error})") from None
+    except tomllib.TOMLDecodeError as error:
+        raise ConfigError(f"{where}: not TOML ({error})") from None
+    recorded: dict[tuple[str, int], RecordedVersion] = {}
+    for name, versions in data.items():
+        if not isinstance(versions, list):
+            raise ConfigError(f"{where}: [[{name}]] must be a list of tables")
+        for entry in versions:
+            version, fingerprint = entry.get("version"), entry.get("fingerprint")
+            earlier, note = entry.get("earlier", []), entry.get("note", "")
+            if (
+                isinstance(version, bool)
+                or not isinstance(version, int)
+                or not isinstance(fingerprint, str)
+                or not isinstance(earlier, list)
+                or not isinstance(note, str)
+                or (earlier and not note)
+            ):
+                raise ConfigError(
+                    f"{where}: [[{name}]] needs a whole version, a fingerprint string, and a "
+                    "note beside any earlier fingerprints"
+                )
+            recorded[name, version] = RecordedVersion(
+                name, version, fingerprint, tuple(map(str, earlier)), note
+            )
+    return MappingProxyType(recorded)
 
 
 def read_preset(path: str | Path) -> Preset:
@@ -276,4 +339,14 @@ def _freeze_sections(
     return MappingProxyType({name: MappingProxyType(dict(v)) for name, v in sections.items()})
 
 
-__all__ = ["PRESET_NAMES", "Preset", "Source", "load_preset", "read_overrides", "read_preset"]
+__all__ = [
+    "PRESET_NAMES",
+    "REGISTRY",
+    "Preset",
+    "RecordedVersion",
+    "Source",
+    "load_preset",
+    "read_overrides",
+    "read_preset",
+    "recorded_versions",
+]

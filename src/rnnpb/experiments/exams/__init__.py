@@ -30,10 +30,19 @@ An exam is a TOML file of this package, ``<study>.toml``, installed with rnnpb::
 ``rnnpb study NAME --exam --out DIR`` runs the study on its exam's draws (:func:`load_exam`)
 and judges every target by the exam's definitions (:meth:`Exam.judge`). A study judges its
 targets by the same definitions on any draws; only an exam's draws make the verdict an exam.
+
+Each exam has a fingerprint (:attr:`Exam.fingerprint`): a hash of its parsed ``[draws]``,
+``[parameters]`` and ``[targets]`` (:func:`exam_fingerprint`; not of its comments, its version
+or its ``[[excluded]]`` draws, which may grow as more draws are used elsewhere).
+``versions.toml`` beside the exams records every version's fingerprint
+(:func:`recorded_versions`): a value changed without a new version is caught by the tests and
+refused by ``--exam`` (:func:`check_recorded`). Every exam run is written in the exam ledger
+(:mod:`rnnpb.experiments.exams.ledger`), and a version is judged once.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 import tomllib
 from collections.abc import Callable, Mapping
@@ -42,12 +51,17 @@ from importlib import resources
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any
 
+from rnnpb._fingerprint import values_fingerprint
 from rnnpb.errors import ConfigError
 
 if TYPE_CHECKING:
     from rnnpb.experiments.summary import Target
 
 COMPARISONS = (">=", "<=")
+REGISTRY = "versions.toml"
+"""The file of this package that records every exam version's fingerprint (not an exam)."""
+FINGERPRINTED = ("draws", "parameters", "targets")
+"""The tables of an exam file its fingerprint covers."""
 
 
 @dataclass(frozen=True)
@@ -103,6 +117,7 @@ class Exam:
     targets: Mapping[str, ExamTarget]
     parameters: Mapping[str, float] = field(default_factory=dict)
     names: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
+    fingerprint: str = ""
 
     def draws(self) -> frozenset[int]:
         """Every seed the exam runs on."""
@@ -145,7 +160,7 @@ class Exam:
 
         met = self.judge({key: measures[key] for key in self.targets})
         return {
-            key: Target(met[key], detail(target, measures[key]))
+            key: Target(met[key], detail(target, measures[key]), _figure(measures[key]))
             for key, target in self.targets.items()
         }
 
@@ -167,13 +182,98 @@ class Exam:
             "shapes": list(self.shapes),
             "learning_sets": list(self.learning_sets),
             **({"names": {k: list(v) for k, v in self.names.items()}} if self.names else {}),
+            "fingerprint": self.fingerprint,
         }
+
+
+def _figure(value: Any) -> float | None:
+    """A measured value as a target records it: a number, or None where none was taken."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return None
+    return value
 
 
 def exam_names() -> tuple[str, ...]:
     """The studies with an exam file."""
     files = resources.files(__name__).iterdir()
-    return tuple(sorted(f.name[:-5] for f in files if f.name.endswith(".toml")))
+    names = (f.name for f in files if f.name.endswith(".toml") and f.name != REGISTRY)
+    return tuple(sorted(name[:-5] for name in names))
+
+
+def exam_fingerprint(data: Mapping[str, Any]) -> str:
+    """The fingerprint of a parsed exam file's values: its draws, parameters and targets."""
+    return values_fingerprint({key: data.get(key, {}) for key in FINGERPRINTED})
+
+
+@dataclass(frozen=True)
+class RecordedVersion:
+    """One exam version as ``versions.toml`` records it: the fingerprint of its values, any
+    earlier fingerprint the same version had before it was first run (``earlier``, with
+    ``note`` saying why), and ``commit``, one where an older version's file can be read
+    (``""``: the file in this package)."""
+
+    study: str
+    version: int
+    fingerprint: str
+    commit: str
+    earlier: tuple[str, ...] = ()
+    note: str = ""
+
+
+@functools.cache
+def recorded_versions() -> Mapping[tuple[str, int], RecordedVersion]:
+    """Every exam version ``versions.toml`` records, by (study, version)."""
+    where = f"exam {REGISTRY}"
+    try:
+        data = tomllib.loads(resources.files(__name__).joinpath(REGISTRY).read_text("utf-8"))
+    except (OSError, UnicodeDecodeError) as error:
+        raise ConfigError(f"{where}: cannot read it ({error})") from None
+    except tomllib.TOMLDecodeError as error:
+        raise ConfigError(f"{where}: not TOML ({error})") from None
+    recorded: dict[tuple[str, int], RecordedVersion] = {}
+    for study, versions in data.items():
+        for i, entry in enumerate(_list(versions, f"{where}: {study}")):
+            at = f"{where}: {study}[{i}]"
+            entry = _table(entry, at)
+            _keys(
+                entry,
+                at,
+                {"version", "fingerprint", "commit", "earlier", "note"},
+                {"version", "fingerprint"},
+            )
+            version = _whole(entry["version"], at + ".version")
+            if (study, version) in recorded:
+                raise ConfigError(f"{at}: version {version} is recorded twice")
+            earlier = tuple(_text(f, at + ".earlier") for f in _list(entry.get("earlier", []), at))
+            if earlier and not entry.get("note"):
+                raise ConfigError(f"{at}: earlier fingerprints need a note saying why")
+            recorded[study, version] = RecordedVersion(
+                study,
+                version,
+                _text(entry["fingerprint"], at + ".fingerprint"),
+                str(entry.get("commit", "")),
+                earlier,
+                str(entry.get("note", "")),
+            )
+    return MappingProxyType(recorded)
+
+
+def check_recorded(exam: Exam) -> None:
+    """Raise :class:`ConfigError` unless ``versions.toml`` records ``exam``'s version with
+    the fingerprint of the values it holds now: a value changed without a new version."""
+    recorded = recorded_versions().get((exam.study, exam.version))
+    if recorded is None:
+        raise ConfigError(
+            f"the {exam.study} exam's version {exam.version} is not recorded in "
+            f"rnnpb/experiments/exams/{REGISTRY}: record its fingerprint {exam.fingerprint} "
+            "before it is run"
+        )
+    if recorded.fingerprint != exam.fingerprint:
+        raise ConfigError(
+            f"the {exam.study} exam's values changed under version {exam.version} "
+            f"(fingerprint {exam.fingerprint}, recorded {recorded.fingerprint}): a changed "
+            "value is a new version, with fresh draws"
+        )
 
 
 def load_exam(name: str) -> Exam:
@@ -277,6 +377,7 @@ def parse_exam(data: Mapping[str, Any]) -> Exam:
         MappingProxyType(targets),
         MappingProxyType(_parameters(data.get("parameters", {}), "[parameters]")),
         MappingProxyType(names),
+        exam_fingerprint(data),
     )
 
 
@@ -324,4 +425,16 @@ def _number(value: Any, where: str) -> float:
     return value
 
 
-__all__ = ["Exam", "ExamTarget", "ExcludedDraws", "exam_names", "load_exam", "parse_exam"]
+__all__ = [
+    "REGISTRY",
+    "Exam",
+    "ExamTarget",
+    "ExcludedDraws",
+    "RecordedVersion",
+    "check_recorded",
+    "exam_fingerprint",
+    "exam_names",
+    "load_exam",
+    "parse_exam",
+    "recorded_versions",
+]

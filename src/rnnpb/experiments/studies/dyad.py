@@ -161,18 +161,21 @@ def judge_results(results: dict[str, Any], exam: Exam) -> dict[str, Target]:
             f"{starts['locked']}/{starts['runs']} same-set runs coherent within "
             f"{lock.parameter('steps')} steps (target ≥ {lock.limit:.0%}; by the patterns as "
             f"taught only {starts['by_templates']}/{starts['runs']})",
+            starts["value"],
         ),
         "phase_diagram_both_regimes": Target(
             met["phase_diagram_both_regimes"],
             f"{regimes['holding']} settings with joint attention holding (coherent ≥ "
             f"{target.parameter('hold_share'):.0%}), {regimes['shifting']} shifting ≥ "
             f"{target.parameter('shift_rate'):g}/200 steps with the lead on both sides",
+            regimes["value"],
         ),
         "subject_finds_all": Target(
             met["subject_finds_all"],
             f"{subject['in_time']}/{subject['sessions']} sessions found all three patterns "
             f"within {found.parameter('minutes'):g} simulated minutes (target ≥ "
             f"{found.limit:.0%})",
+            subject["value"],
         ),
     }
 

@@ -154,7 +154,7 @@ def judge(
             f"after {len(chained) - 1} consolidation(s): {locks}",
         )
     return {
-        name: Target(exam.target(name).met(value), detail)
+        name: Target(exam.target(name).met(value), detail, value)
         for name, (value, detail) in measured.items()
     }
 

@@ -171,7 +171,7 @@ def judge_results(results: dict[str, Any], exam: Exam) -> dict[str, Target]:
         COST: f"lock-on <= {lock}, switching <= {switch}, recognised as unguarded: "
         f"{sum(kept)} of {len(kept)} sets",
     }
-    return {name: Target(met[name], details[name]) for name in exam.targets}
+    return {name: Target(met[name], details[name], values[name]) for name in exam.targets}
 
 
 # --- the report --------------------------------------------------------------------------------

@@ -154,7 +154,7 @@ def judge(
     # The exam's targets, each by its definition (an earlier version defines fewer).
     measured = {name: measures[name](exam.target(name)) for name in exam.targets}
     return {
-        name: Target(exam.target(name).met(value), detail)
+        name: Target(exam.target(name).met(value), detail, value)
         for name, (value, detail) in ((k, m) for k, m in measured.items() if m is not None)
     }
 
