@@ -15,6 +15,9 @@ An exam is a TOML file of this package, ``<study>.toml``, installed with rnnpb::
     [parameters]                    # optional: numbers every target's definition shares
     settle_steps = 24
 
+    [sources]                       # optional: data the exam reads, where to get each
+    clip_a = "owner/name@commit:path/in/repository.mp4"
+
     [[excluded]]                    # draws already used to choose or check a setting
     first = 0
     last = 1
@@ -32,7 +35,7 @@ and judges every target by the exam's definitions (:meth:`Exam.judge`). A study 
 targets by the same definitions on any draws; only an exam's draws make the verdict an exam.
 
 Each exam has a fingerprint (:attr:`Exam.fingerprint`): a hash of its parsed ``[draws]``,
-``[parameters]`` and ``[targets]`` (:func:`exam_fingerprint`; not of its comments, its version
+``[parameters]`` and ``[targets]`` (and ``[sources]``) (:func:`exam_fingerprint`; not of its comments, its version
 or its ``[[excluded]]`` draws, which may grow as more draws are used elsewhere).
 ``versions.toml`` beside the exams records every version's fingerprint
 (:func:`recorded_versions`): a value changed without a new version is caught by the tests and
@@ -61,7 +64,7 @@ COMPARISONS = (">=", "<=")
 REGISTRY = "versions.toml"
 """The file of this package that records every exam version's fingerprint (not an exam)."""
 FINGERPRINTED = ("draws", "parameters", "targets")
-"""The tables of an exam file its fingerprint covers."""
+"""The tables of an exam file its fingerprint covers (and ``[sources]`` where it has one)."""
 
 
 @dataclass(frozen=True)
@@ -117,6 +120,7 @@ class Exam:
     targets: Mapping[str, ExamTarget]
     parameters: Mapping[str, float] = field(default_factory=dict)
     names: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
+    sources: Mapping[str, str] = field(default_factory=dict)
     fingerprint: str = ""
 
     def draws(self) -> frozenset[int]:
@@ -202,7 +206,10 @@ def exam_names() -> tuple[str, ...]:
 
 def exam_fingerprint(data: Mapping[str, Any]) -> str:
     """The fingerprint of a parsed exam file's values: its draws, parameters and targets."""
-    return values_fingerprint({key: data.get(key, {}) for key in FINGERPRINTED})
+    values = {key: data.get(key, {}) for key in FINGERPRINTED}
+    if "sources" in data:
+        values["sources"] = data["sources"]
+    return values_fingerprint(values)
 
 
 @dataclass(frozen=True)
@@ -300,7 +307,7 @@ def load_exam(name: str) -> Exam:
 
 def parse_exam(data: Mapping[str, Any]) -> Exam:
     """An :class:`Exam` from a parsed exam file; a malformed one raises :class:`ConfigError`."""
-    known = {"exam", "draws", "parameters", "excluded", "targets"}
+    known = {"exam", "draws", "parameters", "excluded", "targets", "sources"}
     _keys(data, "the file", known, {"exam", "draws", "targets"})
     head = _table(data["exam"], "[exam]")
     _keys(head, "[exam]", {"study", "version"}, {"study", "version"})
@@ -377,6 +384,12 @@ def parse_exam(data: Mapping[str, Any]) -> Exam:
         MappingProxyType(targets),
         MappingProxyType(_parameters(data.get("parameters", {}), "[parameters]")),
         MappingProxyType(names),
+        MappingProxyType(
+            {
+                key: _text(value, f"sources.{key}")
+                for key, value in _table(data.get("sources", {}), "[sources]").items()
+            }
+        ),
         exam_fingerprint(data),
     )
 
