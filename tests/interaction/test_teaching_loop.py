@@ -197,22 +197,18 @@ def test_learning_from_the_shipped_model_works_on_a_copy_in_the_run_folder(tmp_p
 
 def _waves_between_learned_patterns(mocap_dir):
     """Pattern 1, a real person's first wave take, pattern 2, the second take, pattern 3, the
-    third take (sensory arrays): each take slowed to a 12-step period, the person 1.5 m from
-    the robot, as the people study records them."""
+    third take (sensory arrays): each take slowed to a 12-step period, the person framed 1.5 m
+    from the robot (hands out of view not seen)."""
     import numpy as np
 
     from rnnpb.demonstrator import make_scenario
-    from rnnpb.experiments.scenarios.people import placed_body, record
-    from rnnpb.mocap import capture_stream
-
-    class Setting:  # what the people study records with
-        dt, distance = 0.4, 1.5
+    from rnnpb.learning_phase import from_capture, projected, resampled
 
     def take(name: str) -> np.ndarray:
-        hands = capture_stream(
-            [str(mocap_dir / name)], dt=0.4, time_scale=4.0, body=placed_body(1.5)
-        ).hands
-        return record(hands, Setting, name).sensory
+        steps = resampled(from_capture([str(mocap_dir / name)]), 0.4, 4.0)
+        sensory = projected(steps.hands, 1.5)
+        sensory[~((sensory >= 0) & (sensory <= 1)).all(axis=1)] = np.nan
+        return sensory
 
     waves = sorted(p.name for p in mocap_dir.glob("*wave-both-hands*.bvh"))[:3]
     learned = [

@@ -407,6 +407,7 @@ def run(args: argparse.Namespace) -> int:
             out / "session.png",
             title=f"{args.source} — {model_path}",
             joint_limits=JOINT_LIMITS,
+            dt=args.dt,
         )
     document = {
         "rnnpb_version": __version__,

@@ -37,7 +37,7 @@ movement once it has been ``novel`` long enough to be sure and to hold whole cyc
    step was called ``familiar`` or ``still`` (a learned pattern or a pause before the
    movement is not part of it) — and every whole cycle up to its last ``novel`` step is the
    episode, when they are ``episode_cycles`` or more, at least ``confirm_cycles`` of them the
-   detector's own calls (one stray call keeps nothing), and novel enough. A performance long
+   detector's own calls reach into, and novel enough. A performance long
    enough to keep on its own is cut as above, from the detector's own calls alone.
 
 It is pure bookkeeping (NumPy only, no clock or I/O), bounded per step: a principal component
@@ -55,7 +55,7 @@ import numpy as np
 
 from rnnpb.demonstrator import MirrorMapping
 from rnnpb.errors import ConfigError
-from rnnpb.learning_phase import cycle_bounds
+from rnnpb.learning_phase import cycle_bounds, whole_cycles
 from rnnpb.model._tuned import Tuning, section_values, settle
 from rnnpb.model._tuned import with_tuning as _with_tuning
 from rnnpb.perception import MOUSE_PLANE_X, hands_on_plane
@@ -324,13 +324,16 @@ class EpisodeCutter:
     def _before(self, step: int, repeating: int) -> list[tuple[int, np.ndarray, np.ndarray, str]]:
         """The steps just before ``step`` among the ``repeating`` latest (``step`` is the
         last of them), as far back as they were seen without a break and none was called
-        ``familiar`` or ``still``."""
+        ``still``. Steps called ``familiar`` are taken: the last recognised pattern is held a
+        few steps into the next movement (hysteresis), while the structure test already
+        found the new one repeating over them; a learned pattern before the new movement is
+        left out when its cycles are cut (:meth:`_cycles_to_last_novel`)."""
         wanted = max(0, int(repeating) - 1)
         if not wanted or not self._recent or self._recent[-1][0] != step - 1:
             return []
         taken: list[tuple[int, np.ndarray, np.ndarray, str]] = []
         for entry in reversed(self._recent):
-            if len(taken) == wanted or entry[3] in ("familiar", "still"):
+            if len(taken) == wanted or entry[3] == "still":
                 break
             taken.append(entry)
         return taken[::-1]
@@ -376,7 +379,8 @@ class EpisodeCutter:
             self._novel.insert(0, 1.0)  # the call rested on them
         self._looked_back = []
         cycles = self._cycles_to_last_novel(0)
-        own = sum(start >= ahead for start, _ in cycles)  # the detector's own calls
+        # The cycles the detector's own calls reach into (not only those the look back holds).
+        own = sum(stop > ahead for _, stop in cycles)
         if len(cycles) < config.episode_cycles or own < config.confirm_cycles:
             return None
         if not self._novel_enough(cycles[0][0], cycles[-1][1]):
@@ -392,9 +396,12 @@ class EpisodeCutter:
             end -= 1  # after the last step called novel
         if end <= first:
             return []
-        # The run was cut where the detector stopped saying novel, not where a cycle ends.
+        # The run was cut where the detector stopped saying novel, not where a cycle ends;
+        # its movement is the last run of cycles that repeat one another (a learned pattern
+        # before it, a look back too far, are other stretches).
         sensory = np.array(self._sensory[:end])
-        cycles = [c for c in cycle_bounds(sensory, growing=True) if c[1] > first]
+        runs = [r for r in whole_cycles(sensory, growing=True).runs if r[-1][1] > first]
+        cycles = [c for c in (runs[-1] if runs else ()) if c[1] > first]
         while cycles and cycles[-1][1] - cycles[0][0] > self.config.max_run_steps:
             cycles.pop(0)
         return cycles

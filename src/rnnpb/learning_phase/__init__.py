@@ -17,6 +17,7 @@ from rnnpb.learning_phase._framing import (
     choose_distance,
     frame_hands,
     placed_body,
+    projected,
     reach_distance,
     resolve,
 )
@@ -69,6 +70,7 @@ __all__ = [
     "from_source",
     "learning_phase",
     "placed_body",
+    "projected",
     "reach_distance",
     "resampled",
     "resolve",

@@ -21,7 +21,7 @@ from rnnpb.model._tuned import Tuning, section_values, settle, tuning_of, user_n
 from rnnpb.model._tuned import with_tuning as _with_tuning
 from rnnpb.model.io import learning_preset
 from rnnpb.model.parametric_bias import PBUpdateConfig
-from rnnpb.model.recognition import RecognitionConfig
+from rnnpb.model.recognition import PRESET_DT, RecognitionConfig
 from rnnpb.presets import Preset, load_preset
 
 _DEFAULT = section_values("paper", "online")
@@ -259,7 +259,8 @@ def suggested_online_config(model: Any) -> OnlineChoice:
     regression, ``OnlineConfig.ungated()``; one learned by the paper's algorithm, or one that
     records no learning, the paper preset's, ``OnlineConfig()`` (docs/model.md, "On-line
     interaction"). The recognition settings come from the same preset, those for models
-    without taught hands where the model kept none. The preset is the one the model records
+    without taught hands where the model kept none, with a person's durations kept in seconds
+    at the model's step (:meth:`RecognitionConfig.at_step`). The preset is the one the model records
     (:func:`rnnpb.model.io.learning_preset`; a file from before presets were recorded is
     read by its recorded optimizer).
 
@@ -274,7 +275,9 @@ def suggested_online_config(model: Any) -> OnlineChoice:
     # of format 1 or 2) by the network's evidence alone, each with the settings chosen for it.
     taught = getattr(model, "taught_sensory", None) is not None
     name = learned[0] if learned is not None else "paper"
-    recognition = RecognitionConfig.for_preset(name, taught=taught)
+    # The durations a preset counts in the paper's steps are kept in seconds at the model's.
+    dt = getattr(model, "dt", PRESET_DT)
+    recognition = RecognitionConfig.for_preset(name, taught=taught).at_step(dt)
     if learned is None:
         reason = "the model does not record how it was learned"
     elif name == "fast":

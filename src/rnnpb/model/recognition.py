@@ -92,6 +92,12 @@ from rnnpb.presets import Preset
 
 NOVELTY_STATES: tuple[str, ...] = ("familiar", "novel", "unstructured", "still")
 """The words of the novelty state (besides ``""``, no evidence yet), as recordings carry them."""
+PRESET_DT = 0.4
+"""Seconds per step the presets' durations are counted in: the paper's step."""
+DURATIONS = ("still_steps", "hold_steps")
+"""The settings that count a duration of the person's, not a part of a movement's cycle: how
+long hands must stay put to be still, and how long a rest inside a movement may last. They are
+kept in seconds at another step (:meth:`RecognitionConfig.at_step`)."""
 
 
 @dataclass(frozen=True)
@@ -180,6 +186,21 @@ class RecognitionConfig:
         """These settings with some changed, for research: e.g.
         ``RecognitionConfig().with_tuning(switch_steps=2)``."""
         return _with_tuning(self, changes)
+
+    def at_step(self, dt: float) -> RecognitionConfig:
+        """These settings for a model that plays at ``dt`` seconds a step: the presets count
+        a person's durations (:data:`DURATIONS`: being still, resting inside a movement) in
+        steps of the paper's 0.4 s; at another step they are kept in seconds. The rest are
+        parts of a movement's cycle and stay in steps: a person moving at their own tempo at
+        0.1 s a step makes as many steps a cycle as the paper's slow demonstrator at 0.4 s."""
+        if not dt > 0:
+            raise ConfigError(f"dt must be > 0, got {dt}")
+        factor = PRESET_DT / dt
+        if abs(factor - 1.0) < 1e-9:
+            return self
+        return self.with_tuning(
+            **{name: max(1, round(getattr(self, name) * factor)) for name in DURATIONS}
+        )
 
     @classmethod
     def from_preset(cls, preset: Preset | str, section: str = "recognition") -> RecognitionConfig:

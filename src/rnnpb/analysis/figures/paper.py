@@ -57,8 +57,10 @@ def plot_session(
     marks: SequenceABC[tuple[int, str]] = (),
     pattern_pb: dict[str, np.ndarray] | None = None,
     caption: str | None = None,
+    dt: float = 0.4,
 ) -> None:
-    """The paper's Figure 5/6 layout: target hands, predicted hands, robot joints, PB.
+    """The paper's Figure 5/6 layout: target hands, predicted hands, robot joints, PB; the
+    steps are ``dt`` seconds each (the model's step).
 
     Jumps of the PB (more than :data:`PB_JUMP` in one step: the regression's restarts) are
     marked ▼. With ``pattern_pb`` (the learned PB of each pattern) a strip under the PB names
@@ -164,7 +166,7 @@ def plot_session(
         axes[0].text(
             step, 1.12, text, fontsize=8, ha="center", transform=axes[0].get_xaxis_transform()
         )
-    axes[3].set_xlabel("step (0.4 s each)")
+    axes[3].set_xlabel(f"step ({dt:g} s each)")
     if title:
         fig.suptitle(title, y=1.0)
     fig.align_ylabels(axes)

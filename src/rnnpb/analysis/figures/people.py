@@ -16,10 +16,12 @@ def plot_following(
     movements: SequenceABC[str],
     path: str | os.PathLike[str],
     settle_steps: int,
+    dt: float = 0.4,
 ) -> None:
     """Per performer followed: the movement performed (thick bar) and the pattern the robot
-    recognised (dots) over the steps, the unjudged first ``settle_steps`` of each movement
-    shaded, and the steps whose command the safety filter changed marked in red."""
+    recognised (dots) over the steps (``dt`` seconds each), the unjudged first
+    ``settle_steps`` of each movement shaded, and the steps whose command the safety filter
+    changed marked in red."""
     fig = Figure(figsize=(9.0, 1.1 + 1.0 * max(len(runs), 1)))
     axes = fig.subplots(max(len(runs), 1), 1, squeeze=False, sharex=True)[:, 0]
     rows = {name: k for k, name in enumerate(movements)}
@@ -40,6 +42,8 @@ def plot_following(
         ax.set_yticks(range(len(movements)), list(movements), fontsize=7)
         ax.set_ylim(-0.9, len(movements) - 0.4)
         ax.set_ylabel(performer, fontsize=8)
-    axes[-1].set_xlabel("step (grey: performed; blue: recognised; red: command filtered)")
+    axes[-1].set_xlabel(
+        f"step, {dt:g} s each (grey: performed; blue: recognised; red: command filtered)"
+    )
     fig.suptitle("Another performer's movements, followed", y=1.0)
     save(fig, path)

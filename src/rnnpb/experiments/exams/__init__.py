@@ -35,8 +35,9 @@ and judges every target by the exam's definitions (:meth:`Exam.judge`). A study 
 targets by the same definitions on any draws; only an exam's draws make the verdict an exam.
 
 Each exam has a fingerprint (:attr:`Exam.fingerprint`): a hash of its parsed ``[draws]``,
-``[parameters]`` and ``[targets]`` (and ``[sources]``) (:func:`exam_fingerprint`; not of its comments, its version
-or its ``[[excluded]]`` draws, which may grow as more draws are used elsewhere).
+``[parameters]`` and ``[targets]``, and ``[sources]`` where it has one (:func:`exam_fingerprint`;
+not of its comments, its version or its ``[[excluded]]`` draws, which may grow as more draws
+are used elsewhere).
 ``versions.toml`` beside the exams records every version's fingerprint
 (:func:`recorded_versions`): a value changed without a new version is caught by the tests and
 refused by ``--exam`` (:func:`check_recorded`). Every exam run is written in the exam ledger

@@ -85,6 +85,7 @@ class TeachRun:
 
     learning_set: str
     shape: str
+    dt: float
     new_pattern: str  # the name it was learned as ("" when nothing was learned)
     segments: list[tuple[str, int]]
     detection_delay: int | None  # steps from the new shape's start until "novel"

@@ -1,9 +1,9 @@
-"""The teach study's jobs: one learning set taught one shape as fast as possible, the paper's
-measures of a starting model, and the paced run (each runs in a worker process).
+"""The teach study's jobs: one learning set taught one movement as fast as possible, the
+paper's measures of a starting model, and the paced run (each runs in a worker process).
 
 The interaction loop runs with the :class:`rnnpb.interaction.teaching.Teacher` subscribed, as
 fast as possible — so the loop waits between two steps for each consolidation, and a run
-repeats. The paced run plays the new shape at dt 0.4 while the background process
+repeats. The paced run plays the new movement at the run's step while the background process
 consolidates the kept episodes of one run again, and the new model is swapped in between two
 steps. Each job copies its starting model into its own folder and never writes the original.
 """
@@ -38,7 +38,9 @@ from rnnpb.experiments.scenarios.teaching_measures import (
 from rnnpb.experiments.scenarios.teaching_scenario import (
     UNSTRUCTURED_MOVEMENTS,
     TeachConfig,
+    period_of,
     segments,
+    showing_stream,
     source_spec,
 )
 
@@ -112,11 +114,18 @@ def teacher_for(loop, path: Path, memory, config: TeachConfig, **options) -> Any
 
 
 def teach_job(
-    set_name: str, shape: str, index: int, start_path: str, config: TeachConfig, folder: str
+    set_name: str,
+    shape: str,
+    index: int,
+    start_path: str,
+    config: TeachConfig,
+    folder: str,
+    seed: int | None = None,
 ) -> TeachRun:
-    """One learning set taught one shape, as fast as possible (module doc)."""
+    """One learning set taught one shape, the ``index``-th, as fast as possible (module doc);
+    the scripted user's draw is ``seed`` (None: ``config.scenario_seed + index``)."""
     from rnnpb import _xla
-    from rnnpb.demonstrator import ScenarioSource, learning_set_patterns, make_scenario
+    from rnnpb.demonstrator import ScenarioSource, learning_set_patterns
     from rnnpb.interaction import InteractionLoop, LoopConfig
     from rnnpb.memory import MemoryStore
     from rnnpb.model import MirrorSystem, TrainedModel
@@ -127,7 +136,8 @@ def teach_job(
     path = fresh_copy(start_path, folder)
     model = TrainedModel.load(path)
     performed = segments(learning_set_patterns(set_name), shape, index, config)
-    scenario = make_scenario(performed, seed=config.scenario_seed + index)
+    seed = config.scenario_seed + index if seed is None else seed
+    scenario = showing_stream(performed, seed, config.dt)
     online = config.online
     with ScenarioSource(scenario) as source, MemoryStore(path) as memory:
         loop = InteractionLoop(MirrorSystem(model, online), source, config=LoopConfig(config.dt))
@@ -144,7 +154,7 @@ def teach_job(
     sensory_error = metrics.sensory_error(
         np.array([r.predicted for r in records]), np.array([r.observed for r in records])
     )
-    new_start = config.lead_steps
+    new_start = performed[0][1]
     novelty = [r.novelty for r in records]
     final = TrainedModel.load(teacher.model_path)
     new_names = [p for p in final.patterns if p not in model.patterns]
@@ -155,10 +165,12 @@ def teach_job(
         # Which demonstrator movement each taught pattern is, for the paper's measures.
         taught = {e.pattern: most_performed(e) for e in episodes}
         final = replace(final, meta={**final.meta, "taught": taught})
-    again_start = len(labels) - config.again_steps
+    again_start = len(labels) - performed[-1][1]
     lock_next = metrics.steps_to_lock(motor_error, sensory_error, again_start, len(labels))
+    # Judged from one cycle of the third showing on (at least 12 steps: the detector's cycle).
+    settle = max(12, period_of(shape))
     recognised_next = (
-        float(np.mean([r.recognised == new_pattern for r in records[again_start:]]))
+        float(np.mean([r.recognised == new_pattern for r in records[again_start + settle :]]))
         if new_pattern
         else 0.0
     )
@@ -197,6 +209,7 @@ def teach_job(
             for c in consolidations
         ],
         "swaps": list(teacher.swapped_at),
+        "third_showing": again_start,
         "unstructured": list(UNSTRUCTURED_MOVEMENTS),
         # The movement each newly learned pattern was taught from (its colour in the figure).
         "taught": {e.pattern: most_performed(e) for e in episodes if e.pattern in new_names},
@@ -204,9 +217,10 @@ def teach_job(
     return TeachRun(
         learning_set=set_name,
         shape=shape,
+        dt=config.dt,
         new_pattern=new_pattern,
         segments=performed,
-        detection_delay=detection_delay(novelty, new_start, config.new_steps),
+        detection_delay=detection_delay(novelty, new_start, performed[1][1]),
         episodes=episodes,
         consolidations=consolidations,
         swaps=list(teacher.swapped_at),
@@ -237,7 +251,7 @@ def before_job(set_name: str, start_path: str, config: TeachConfig) -> tuple[str
 
 def job_count(config: TeachConfig) -> int:
     """The study's jobs: those of :func:`study_jobs` and the paced run."""
-    per_set = len(config.shapes) + int(config.paper_measures)
+    per_set = len(config.movements) + int(config.paper_measures)
     return len(config.learning_sets) * per_set + int(config.paced is not None)
 
 
@@ -255,25 +269,30 @@ def study_jobs(
     jobs = []
     if config.paper_measures:
         jobs += [pool.submit(before_job, name, starts[name], config) for name in sets]
-    # Shape by shape: a run stopped early has every learning set of the first shapes.
-    for k, shape in enumerate(config.shapes):
+    # Shape by shape: a run stopped early has every learning set of the first shapes. Run k
+    # of the step time (over the learning sets in their order, then the movements) draws the
+    # user ``seed + k``.
+    order = {name: i for i, name in enumerate(config.learning_sets)}
+    movements = config.movements
+    for k, shape in enumerate(movements):
         for name in sets:
             folder = str(runs / f"set{name}_{shape}")
-            jobs.append(pool.submit(teach_job, name, shape, k, starts[name], config, folder))
+            seed = config.scenario_seed + order[name] * len(movements) + k
+            jobs.append(pool.submit(teach_job, name, shape, k, starts[name], config, folder, seed))
     for future in as_completed(jobs):
         yield future.result()
 
 
 def paced_job(
-    set_name: str, shape: str, start_path: str, config: TeachConfig, runs: Path
+    set_name: str, shape: str, start_path: str, config: TeachConfig, runs: Path, seed: int
 ) -> PacedRun:
-    """At dt 0.4, paced, in ``runs/paced_setK_SHAPE``: the user keeps performing ``shape``
-    while the episodes the fast run (``runs/setK_SHAPE``) kept of it are consolidated again in
-    the background, and the new model is swapped in."""
+    """At the run's step, paced, in ``runs/paced_setK_SHAPE``: the user keeps performing
+    ``shape`` while the episodes the fast run (``runs/setK_SHAPE``) kept of it are consolidated
+    again in the background, and the new model is swapped in."""
     run_folder = runs / f"set{set_name}_{shape}"
     folder = str(runs / f"paced_set{set_name}_{shape}")
     from rnnpb import _xla
-    from rnnpb.demonstrator import ScenarioSource, make_scenario
+    from rnnpb.demonstrator import ScenarioSource
     from rnnpb.interaction import InteractionLoop, LoopConfig
     from rnnpb.memory import MemoryStore
     from rnnpb.model import MirrorSystem, TrainedModel
@@ -284,7 +303,7 @@ def paced_job(
     model = TrainedModel.load(path)
     with MemoryStore(Path(run_folder) / "model.npz", create=False) as taught:
         movements = [taught.episode(i) for i in taught.group("new-1")]
-    scenario = make_scenario([(shape, 120)], seed=config.scenario_seed + 7)
+    scenario = showing_stream([(shape, 120)], seed, config.dt)
     online = config.online
     with ScenarioSource(scenario, loop=True) as source, MemoryStore(path) as memory:
         episode_ids = [
