@@ -295,7 +295,7 @@ def open_camera_source(
     in_worker : bool, optional
         Perceive in a worker thread (:class:`TrackedUserSource`); by default the pose tracker
         does (17 ms a frame and more on a busy machine, a paced step's deadline matters) and
-        the colour-ball tracker does not (2 ms, less than handing the frame to a thread).
+        the colour-ball tracker does not (2 ms a frame: it cannot hold a step up).
     steps, seed, **synthetic
         See :func:`open_frame_source`.
 
