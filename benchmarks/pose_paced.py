@@ -10,11 +10,12 @@ delivers them. The two ways run in alternate blocks of ``--block`` steps, each c
 where its last block ended, so that both see the same machine; ``--busy N`` adds N processes
 that keep a core busy, as other people's jobs do.
 
-Per way: missed deadlines (a step's sections over dt), the steps that reused an observation
-because the frame's perception was late, the frames perceived late, the pose tracker's own
-time per frame, and each section's median, p95, p99 and max. The first step of each way (the
-network's compilation and the pose graph's first frame) is left out of the sections' figures
-but not of the deadlines.
+Per way: missed deadlines (a step's sections over dt), each put down to the section that took
+longest in it, the steps that reused an observation because the frame's perception was late,
+the frames perceived late, the pose tracker's own time per frame, and each section's median,
+p95, p99 and max; the load average (1 minute) before each block, for the machine's share. The
+first step of each way (the network's compilation and the pose graph's first frame) is left
+out of the sections' figures but not of the deadlines.
 
 Run: ``PYTHONPATH=src .venv-hands/bin/python benchmarks/pose_paced.py [--video FILE]
 [--steps 1000] [--dt 0.1] [--block 100] [--busy 0] [--json FILE]``.
@@ -30,6 +31,7 @@ import os
 import platform
 import tempfile
 import time
+from collections import Counter
 from dataclasses import replace
 from pathlib import Path
 
@@ -174,7 +176,13 @@ def main() -> None:
                     LoopConfig(dt=args.dt, paced=True, max_steps=0),
                     command_filter=safety.command_filter,
                 )
-                runs[way] = {"loop": loop, "source": source, "tracker": tracker, "records": []}
+                runs[way] = {
+                    "loop": loop,
+                    "source": source,
+                    "tracker": tracker,
+                    "records": [],
+                    "load": [],
+                }
             while any(run["loop"].steps < args.steps for run in runs.values()):
                 for run in runs.values():
                     loop = run["loop"]
@@ -182,6 +190,7 @@ def main() -> None:
                         continue
                     end = min(args.steps, loop.steps + args.block)
                     loop.config = replace(loop.config, max_steps=end)
+                    run["load"].append(os.getloadavg()[0])
                     loop.run(on_step=run["records"].append)
                     time.sleep(3 * args.dt)  # a frame still in perception ends before the next
     finally:
@@ -201,9 +210,17 @@ def main() -> None:
             )
             for name in SECTIONS
         }
+        missed = [r for r in run["records"] if sum(r.timings.values()) > args.dt]
+        causes = Counter(max(r.timings, key=lambda name: r.timings[name]) for r in missed)
         figures[way] = {
             "steps": loop.steps,
             "missed_deadlines": loop.missed_deadlines,
+            "missed_by_longest_section": dict(causes),
+            "missed_section_ms_median": {
+                name: float(np.median([1e3 * r.timings[name] for r in missed])) if missed else 0.0
+                for name in SECTIONS[:-1]
+            },
+            "load_average_per_block": run["load"],
             "reused_observations": loop.reused_observations,
             "late_frames": source.late_frames,
             "frames_perceived": source.n_frames,
@@ -212,10 +229,19 @@ def main() -> None:
         }
         pose = figures[way]["pose_ms"]
         print(
-            f"{way}: {loop.steps} steps, missed deadlines {loop.missed_deadlines}, observations "
-            f"reused {loop.reused_observations}, frames perceived late {source.late_frames} "
-            f"(of {source.n_frames})"
+            f"{way}: {loop.steps} steps, missed deadlines {loop.missed_deadlines} ("
+            + ", ".join(f"{n} {name}" for name, n in causes.most_common())
+            + f" the longest), observations reused {loop.reused_observations}, frames perceived "
+            f"late {source.late_frames} (of {source.n_frames}); load average per block "
+            f"{min(run['load']):.1f}-{max(run['load']):.1f}"
         )
+        if missed:
+            print(
+                "  the missed steps' sections, median ms: "
+                + ", ".join(
+                    f"{k} {v:.1f}" for k, v in figures[way]["missed_section_ms_median"].items()
+                )
+            )
         rows = {"pose tracker, per frame": pose} | {f"section {k}": v for k, v in sections.items()}
         for name, v in rows.items():
             print(
