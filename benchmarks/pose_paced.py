@@ -144,8 +144,9 @@ def main() -> None:
 
     model = TrainedModel.load(SHIPPED_MODEL, joint_limits=JOINT_LIMITS)
     online = OnlineConfig.for_model(model).config
-    stop = multiprocessing.Event()
-    busy = [multiprocessing.Process(target=busy_core, args=(stop,)) for _ in range(args.busy)]
+    spawn = multiprocessing.get_context("spawn")  # not forked: JAX's threads are running
+    stop = spawn.Event()
+    busy = [spawn.Process(target=busy_core, args=(stop,)) for _ in range(args.busy)]
     for process in busy:
         process.start()
     print(
