@@ -59,16 +59,33 @@ def paced_run(model, online, in_worker: bool):
     return summary, records, source
 
 
-def test_a_slow_frame_is_reused_not_waited_for(set1_model, online):
-    summary, records, source = paced_run(set1_model, online, in_worker=True)
-    assert summary.steps == STEPS
-    assert summary.missed_deadlines == 0
+@pytest.fixture(scope="module")
+def runs(set1_model, online):
+    """The same frames paced through the loop, perceived in the worker and read directly."""
+    return {way: paced_run(set1_model, online, way == "worker") for way in ("worker", "direct")}
+
+
+def test_the_steps_do_not_wait_for_a_slow_frame(runs):
+    (worker, worker_records, _), (direct, direct_records, _) = runs["worker"], runs["direct"]
+    # Read directly, each slow frame holds its step past the deadline.
+    assert direct.missed_deadlines >= len(SLOW_FRAMES)
+    assert max(r.timings["perceive"] for r in direct_records) >= SLOW_S
+    assert direct.reused_observations == 0 and not any(r.reused for r in direct_records)
+    # In the worker, a step waits for its frame until half the step at most (the margin is a
+    # busy machine's late wake-up), so the slow frames miss no deadline: on a quiet machine
+    # none is missed; on a busy one the network's step alone may overrun now and then.
+    assert max(r.timings["perceive"] for r in worker_records) < PERCEPTION_SHARE * DT + 0.1
+    assert worker.steps == STEPS
+    assert worker.missed_deadlines < direct.missed_deadlines
+
+
+def test_a_step_whose_frame_is_late_reuses_the_latest_observation_and_says_so(runs):
+    summary, records, source = runs["worker"]
     # Each slow frame outlasts at least one step's deadline; the steps say which.
     reused = [r.step for r in records if r.reused]
     assert summary.reused_observations == len(reused) == source.reused_reads
     assert len(reused) >= len(SLOW_FRAMES)
     for r in records:
-        assert r.timings["perceive"] < PERCEPTION_SHARE * DT + 0.05
         if r.reused:  # the latest observation again
             np.testing.assert_array_equal(r.observed, records[r.step - 1].observed)
     # The frames come in order; none is skipped but the late ones the next frame overtook.
@@ -79,9 +96,3 @@ def test_a_slow_frame_is_reused_not_waited_for(set1_model, online):
     motor = np.array([r.motor for r in records])
     assert np.isfinite(motor).all() and not any(r.held for r in records)
     assert (motor >= JOINT_LIMITS[:, 0] - 1e-9).all() and (motor <= JOINT_LIMITS[:, 1] + 1e-9).all()
-
-
-def test_read_directly_the_slow_frames_make_the_loop_miss(set1_model, online):
-    summary, records, _ = paced_run(set1_model, online, in_worker=False)
-    assert summary.missed_deadlines >= len(SLOW_FRAMES) and summary.reused_observations == 0
-    assert not any(r.reused for r in records)
