@@ -1,12 +1,10 @@
 """Bare hands: the pose tracker's normalisation to the body (no model needed), the learning
-phase through it, the commands without the extra, and the model itself on real photographs
-(only with the ``rnnpb[hands]`` extra)."""
+phase through it, and the commands without the extra. The model itself: test_pose_model.py."""
 
 from __future__ import annotations
 
 import sys
 
-import cv2
 import numpy as np
 import pytest
 
@@ -32,11 +30,9 @@ from rnnpb.perception import (
     synthetic_user_hands,
 )
 from rnnpb.robot.camera import RobotCamera
-from rnnpb.sequences import read_sensory_stream
 from rnnpb.web._protocol import ProtocolError, parse_client_message
 
 SIZE = (640, 480)
-NO_EXTRA = f"the pose model is not installed ({HANDS_INSTALL})"
 
 
 def seen_by_robot(hands: np.ndarray, body: UserBody | None = None) -> BodyLandmarks:
@@ -240,69 +236,6 @@ def test_without_the_extra_one_line_names_the_install_command(without_extra, tmp
     assert not out.exists()
 
 
-# --- the model itself: only with the extra ----------------------------------------------
-
-needs_model = pytest.mark.skipif(not pose_available(), reason=NO_EXTRA)
-
-
-def _photo(path) -> np.ndarray:
-    image = cv2.imread(str(path), cv2.IMREAD_COLOR)
-    assert image is not None, path
-    return image
-
-
-@needs_model
-def test_a_photographed_person_shoulders_found_hands_out_of_view_lost():
-    from matplotlib import cbook
-
-    photo = _photo(cbook.get_sample_data("grace_hopper.jpg", asfileobj=False))
-    result = PoseTracker(static_images=True).track(photo)
-    assert photo.shape == (600, 512, 3)
-    # Grace Hopper's portrait, 512x600: her shoulders at the frame's lower corners (labelled
-    # by eye: her left on the image's right), her hands out of the picture.
-    np.testing.assert_allclose(result.shoulders_px, [[456, 428], [96, 423]], atol=25)
-    assert result.status == ("lost", "lost") and np.isnan(result.sensory).all()
-
-
-@needs_model
-def test_a_photographed_person_a_wrist_found_and_one_hidden():
-    data = pytest.importorskip(
-        "skimage.data", reason="the astronaut photograph ships with scikit-image"
-    )
-    photo = cv2.cvtColor(data.astronaut(), cv2.COLOR_RGB2BGR)
-    # Eileen Collins: her right hand at the picture's lower left, her left behind the helmet.
-    # The model is unsure of a wrist half out of the frame: accept it from 0.3.
-    result = PoseTracker(PoseConfig(min_visibility=0.3), static_images=True).track(photo)
-    np.testing.assert_allclose(result.shoulders_px, [[306, 257], [113, 240]], atol=20)
-    assert result.status == ("lost", "tracked")
-    np.testing.assert_allclose(result.balls[1].center_px, [140, 480], atol=25)
-    assert 0.0 < result.sensory[2] < 0.5 and 0.0 < result.sensory[3] < 1.0
-
-
-@needs_model
-def test_the_synthetic_render_gives_nan_hands_not_a_failure(tmp_path):
-    """The pose model finds no body in the synthetic renders (flat shapes, the head cut by
-    the frame): the hands are lost, as the balls are when unseen."""
-    with open_camera_source("synthetic", "1", steps=5, perception="pose") as source:
-        rows = [observation.sensory for observation in iter(source.read, None)]
-    assert len(rows) == 5
-    assert source.lost_frames.tolist() == [5, 5] and np.isnan(rows).all()
-
-
-@needs_model
-def test_track_writes_bare_hands_from_an_image_folder(tmp_path, capsys):
-    from rnnpb.perception import person_frame
-
-    folder = tmp_path / "frames"
-    folder.mkdir()
-    for i in range(3):
-        cv2.imwrite(str(folder / f"{i}.png"), np.roll(person_frame(), 4 * i, axis=1))
-    out = tmp_path / "bare.csv"
-    assert main(["track", f"images:{folder}", "--perception", "pose", "--out", str(out)]) == 0
-    assert read_sensory_stream(out).shape == (3, 4)
-    assert "left hand lost in 3 of 3 frames" in capsys.readouterr().out
-
-
 def test_the_dashboard_switch_says_what_to_install_and_keeps_the_balls(without_extra, tmp_path):
     from rnnpb.models import default_model
     from rnnpb.web import find_models
@@ -315,19 +248,5 @@ def test_the_dashboard_switch_says_what_to_install_and_keeps_the_balls(without_e
         assert session.perception == "balls"
         session._apply({"type": "perception", "perception": "balls"})  # unchanged: nothing to do
         assert session.perception == "balls"
-    finally:
-        session.close()
-
-
-@needs_model
-def test_the_dashboard_switches_to_bare_hands(tmp_path):
-    from rnnpb.models import default_model
-    from rnnpb.web import find_models
-    from rnnpb.web._session import Session
-
-    session = Session(find_models(default_model()), workdir=tmp_path)
-    try:
-        session._apply({"type": "perception", "perception": "pose"})
-        assert session.perception == "pose"  # the webcam opens with the pose tracker
     finally:
         session.close()

@@ -13,6 +13,13 @@ start at once (missed steps are not made up). A controller — the dashboard —
 applies its commands (:meth:`~InteractionLoop.set_dt`, :meth:`~InteractionLoop.stop`, a new
 source); it never steps the loop itself.
 
+A source that perceives in a worker thread (the pose tracker:
+:class:`rnnpb.perception.TrackedUserSource` with ``in_worker``) is given a deadline by a paced
+loop: :data:`PERCEPTION_SHARE` of the step. A frame whose perception has not finished by then
+does not hold the step up: the step takes the latest observation again, marked ``reused``
+(counted in :attr:`LoopSummary.reused_observations`), and the frame's perception goes on beside
+the network's step.
+
 Subscribers (the dashboard, the session video) receive every :class:`StepRecord` once the step
 is complete: its four timings and the loop's counters are filled in before they are called, so
 what they publish is this step's. Their own time is outside the sections and the deadline
@@ -41,6 +48,9 @@ if TYPE_CHECKING:  # only annotated here: importing the loop does not import JAX
 
 SECTIONS = ("perceive", "mirror", "act", "record")
 TIMING_WINDOW = 10_000
+PERCEPTION_SHARE = 0.5
+"""The share of a paced step that the loop waits for a source perceiving in a worker thread;
+the other half is the network's, the robot's and the recording's (a few ms each)."""
 
 
 @dataclass(frozen=True)
@@ -85,7 +95,8 @@ class StepRecord:
     predicted for this step one step before (NaN on the first step); ``motor`` (8,) the command
     sent, radians; ``pb`` (P,); ``timings`` seconds per section; ``recognised``,
     ``confidence``, ``novelty``, ``pattern_confidence``, ``repeating``: what the step
-    recognised (:class:`rnnpb.model.mirror.StepResult`).
+    recognised (:class:`rnnpb.model.mirror.StepResult`). ``reused``: the frame's perception was
+    not finished by the paced step's deadline, and ``observed`` is the latest observation again.
     """
 
     step: int
@@ -116,6 +127,7 @@ class StepRecord:
     # was held (empty when sent; ``motor`` is then the command before).
     regime: str = ""
     inhibited: str = ""
+    reused: bool = False
 
 
 @dataclass
@@ -125,6 +137,7 @@ class LoopSummary:
     section_ms: dict[str, dict[str, float]]
     lost_steps: int
     held_steps: int
+    reused_observations: int = 0
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -133,6 +146,7 @@ class LoopSummary:
             "section_ms": self.section_ms,
             "lost_steps": self.lost_steps,
             "held_steps": self.held_steps,
+            "reused_observations": self.reused_observations,
         }
 
     def describe(self) -> str:
@@ -140,11 +154,16 @@ class LoopSummary:
             f"{name} {v['median']:.2f} ms (p99 {v['p99']:.2f})"
             for name, v in self.section_ms.items()
         ]
+        reused = (
+            f"; observations reused (perception late): {self.reused_observations}"
+            if self.reused_observations
+            else ""
+        )
         return (
             f"{self.steps} steps; per step: "
             + ", ".join(parts)
             + f"; missed deadlines: {self.missed_deadlines}; steps with a hand lost: "
-            f"{self.lost_steps}"
+            f"{self.lost_steps}" + reused
         )
 
 
@@ -188,6 +207,7 @@ class InteractionLoop:
         self.missed_deadlines = 0
         self.lost_steps = 0
         self.held_steps = 0
+        self.reused_observations = 0
         self.command_filter = command_filter
         self.prevented_commands = 0
         self.inhibited_commands = 0
@@ -205,9 +225,11 @@ class InteractionLoop:
         if self._start is None:
             self._start = time.perf_counter()
         t0 = time.perf_counter()
+        self._give_perception_deadline(t0)
         observation = self.source.read()
         if observation is None:
             return None
+        reused = getattr(observation, "reused", False) is True
         t1 = time.perf_counter()
         result = self.mirror.step(observation.sensory)
         t2 = time.perf_counter()
@@ -245,6 +267,7 @@ class InteractionLoop:
             repeating=getattr(result, "repeating", 0),
             regime=getattr(result, "regime", ""),
             inhibited=getattr(result, "inhibited", ""),
+            reused=reused,
         )
         self.inhibited_commands += int(bool(record.inhibited))
         self._predicted = result.predicted_hands.copy()
@@ -257,12 +280,28 @@ class InteractionLoop:
         self.steps += 1
         self.lost_steps += int(not np.all(np.isfinite(observation.sensory)))
         self.held_steps += int(result.held)
+        self.reused_observations += int(reused)
         if t4 - t0 > self.config.dt:
             self.missed_deadlines += 1
         # Last, so that subscribers publish this step's complete timings and counts.
         for callback in list(self._subscribers):
             callback(record)
         return record
+
+    def _give_perception_deadline(self, t0: float) -> None:
+        """Tell a source that perceives in a worker thread (``perceive_by``; also inside a
+        ``FrameStepSource``) until when this step waits for it: paced, :data:`PERCEPTION_SHARE`
+        of the step; otherwise for as long as it takes."""
+        deadline = t0 + PERCEPTION_SHARE * self.config.dt if self.config.paced else None
+        source = self.source
+        for _ in range(4):  # a source wrapped by a few others at most
+            perceive_by = getattr(source, "perceive_by", None)
+            if callable(perceive_by):
+                perceive_by(deadline)
+                return
+            source = getattr(source, "inner", None)
+            if source is None:
+                return
 
     def run(
         self,
@@ -338,5 +377,10 @@ class InteractionLoop:
             else:
                 stats[name] = {"median": math.nan, "p99": math.nan, "max": math.nan}
         return LoopSummary(
-            self.steps, self.missed_deadlines, stats, self.lost_steps, self.held_steps
+            self.steps,
+            self.missed_deadlines,
+            stats,
+            self.lost_steps,
+            self.held_steps,
+            self.reused_observations,
         )

@@ -83,6 +83,7 @@ from rnnpb.perception._tracker import (
     split_disk,
 )
 from rnnpb.perception._user_source import (
+    PerceivedObservation,
     TrackedUserSource,
     open_camera_source,
     open_frame_source,
@@ -122,6 +123,7 @@ __all__ = [
     "FrameSource",
     "ImageFolderSource",
     "LimitedSource",
+    "PerceivedObservation",
     "SceneConfig",
     "SceneScore",
     "SyntheticCamera",
