@@ -121,22 +121,28 @@ class CsvSensorySource(ArraySensorySource):
 
 class FrameStepSource(UserSource):
     """Keeps every ``frame_step``-th observation of a camera source (the others are read and
-    dropped), so that a video recorded at camera rate drives the network at its own step."""
+    dropped), so that a video recorded at camera rate drives the network at its own step. A
+    source that can drop frames itself, untracked (``skip_frames``: a camera with a tracker),
+    is told to: the tracker then sees only the frames kept."""
 
     def __init__(self, inner: UserSource, frame_step: int) -> None:
         if frame_step < 1:
             raise ConfigError(f"frame step must be >= 1, got {frame_step}")
         self.inner = inner
         self.frame_step = frame_step
+        self._skips = hasattr(inner, "skip_frames")
+        if self._skips:
+            cast(Any, inner).skip_frames = frame_step - 1
 
     def connect(self) -> None:
         self.inner.connect()
 
     def read(self) -> Observation | None:
         observation = self.inner.read()
-        for _ in range(self.frame_step - 1):
-            if self.inner.read() is None:
-                break
+        if not self._skips:
+            for _ in range(self.frame_step - 1):
+                if self.inner.read() is None:
+                    break
         return observation
 
     def close(self) -> None:

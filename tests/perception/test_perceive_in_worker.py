@@ -159,3 +159,21 @@ def test_closing_waits_for_the_frame_in_perception():
     assert closed == [2]
     with pytest.raises(RnnpbError, match="before connect"):
         source.read()
+
+
+@pytest.mark.parametrize("in_worker", [False, True])
+def test_a_video_sampled_every_nth_frame_tracks_only_the_frames_kept(in_worker):
+    """Every third frame kept (a 30 frames/s video at dt 0.1): the frames between are read
+    and dropped untracked, so the tracker's time goes to the kept frames alone."""
+    from rnnpb.sources import FrameStepSource
+
+    tracker = NumberTracker()
+    source = FrameStepSource(
+        TrackedUserSource(numbered_frames(10), tracker, in_worker=in_worker), 3
+    )
+    with source:
+        observations = []
+        while (observation := source.read()) is not None:
+            observations.append(observation)
+    assert frame_numbers(observations) == [0, 3, 6, 9]
+    assert tracker.tracked == [0, 3, 6, 9]

@@ -205,10 +205,11 @@ def from_source(
     )
     from rnnpb.sources import FrameStepSource
 
+    # A camera sampled every N-th frame drops the others itself, untracked: its reads are the
+    # frames kept, each paired with its own tracking result.
     reader = source
-    stride = 1
     if isinstance(source, FrameStepSource) and isinstance(source.inner, TrackedUserSource):
-        reader, stride = source.inner, source.frame_step
+        reader = source.inner
     tracked = isinstance(reader, TrackedUserSource)
     posed = tracked and reader.perception == "pose"
     sensory, stamps, centers, radii, pose_hands, offsets = [], [], [], [], [], []
@@ -219,8 +220,6 @@ def from_source(
         if observation is None:
             break
         index += 1
-        if index % stride:
-            continue
         stamps.append(
             index * frame_time if frame_time else (clock() if live else index * step_time)
         )

@@ -88,6 +88,10 @@ class TrackedUserSource(UserSource):
 
     Attributes
     ----------
+    skip_frames : int
+        Frames read and dropped, untracked, after each frame tracked (a video sampled every
+        N-th frame: :class:`rnnpb.sources.FrameStepSource` sets it to N - 1), so that the
+        tracker's time goes only to the frames used.
     reused_reads : int
         Reads that returned the latest observation again (:attr:`PerceivedObservation.reused`).
     late_frames : int
@@ -105,6 +109,7 @@ class TrackedUserSource(UserSource):
         self.frames = frames
         self.tracker = tracker or BallTracker()
         self.in_worker = in_worker
+        self.skip_frames = 0
         self.last_result: TrackingResult | None = None
         self.lost_frames = np.zeros(2, dtype=int)
         self.n_frames = 0
@@ -160,7 +165,11 @@ class TrackedUserSource(UserSource):
         frame = self.frames.read()
         if frame is None:
             return None
-        return frame, self.tracker.track(frame), dict(self.frames.last_truth)
+        perceived = frame, self.tracker.track(frame), dict(self.frames.last_truth)
+        for _ in range(self.skip_frames):
+            if self.frames.read() is None:
+                break
+        return perceived
 
     def _take(self) -> _Perceived | None:
         job, self._pending = self._pending, None
