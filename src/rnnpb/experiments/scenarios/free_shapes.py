@@ -6,8 +6,10 @@ shape* is drawn from a wider family: each hand traces a Lissajous figure in the 
 frequency ratios 1:1 (an ellipse or a tilted line), 1:2 and 2:1 (two-loop figures: an eight,
 a lying eight) or 2:3 — of its own size (0.5 to 1.5 times the demonstrator's swing) about a
 centre moved by up to 5 cm; the hands move mirrored, in step, in opposite phase, one still and
-the other moving, or each its own figure; the period is 10 to 30 steps (slow circles
-included), the same at every step time. A person's imperfection rides on it: each cycle a
+the other moving, or each its own figure; the period is the same in steps at every step time: 10 to 30 steps for
+a 1:1 figure (slow circles included), and for the others long enough that their faster part
+turns in no fewer than 8 steps, as a person's arm does at a natural speed (16 to 30 steps for
+1:2 and 2:1, 24 to 39 for 2:3). A person's imperfection rides on it: each cycle a
 little larger or smaller (±8 %) and longer or shorter (±5 %), and the camera's noise.
 """
 
@@ -25,8 +27,8 @@ COUPLINGS = ("mirrored", "in step", "opposite", "one hand", "each its own")
 """How the two hands' figures relate."""
 SWING = 0.12
 """Metres: the demonstrator's swing (PatternConfig's amplitudes), the unit of a figure's size."""
-PERIODS = (10, 30)
-"""Steps per cycle, the shortest and the longest."""
+PERIODS = {1: (10, 30), 2: (16, 30), 3: (24, 39)}
+"""Steps per cycle, the shortest and the longest, by the figure's highest frequency."""
 
 
 @dataclass(frozen=True)
@@ -83,7 +85,6 @@ def free_shape(seed: int) -> FreeShape:
     """The free shape drawn by ``seed`` (module doc)."""
     rng = np.random.default_rng(seed)
     coupling = COUPLINGS[int(rng.integers(len(COUPLINGS)))]
-    period = int(rng.integers(PERIODS[0], PERIODS[1] + 1))
     left = _figure(rng)
     if coupling == "each its own":
         right: HandFigure | None = _figure(rng)
@@ -91,7 +92,9 @@ def free_shape(seed: int) -> FreeShape:
         left, right = (left, None) if rng.random() < 0.5 else (None, left)
     else:
         right = left
-    return FreeShape(seed, coupling, period, left, right)
+    fastest = max(max(f.ratio) for f in (left, right) if f is not None)
+    low, high = PERIODS[fastest]
+    return FreeShape(seed, coupling, int(rng.integers(low, high + 1)), left, right)
 
 
 def perform_free(
