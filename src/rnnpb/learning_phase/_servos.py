@@ -35,7 +35,7 @@ import numpy as np
 from rnnpb.demonstrator import MirrorMapping
 from rnnpb.robot import SHOULDERS, joint_step_limit, retarget
 
-SERVO_MARGIN = 0.95
+SERVO_MARGIN = 0.75
 """Share of the servo's step a learned step may use: the rest absorbs the rounding of written
 data and a network's small overshoot."""
 ROUNDS = 6
