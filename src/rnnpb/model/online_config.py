@@ -39,6 +39,13 @@ def _preset_tuning(preset: Preset | str, section: str) -> Tuning:
     return Tuning(preset.name, {k: v for k, v in values.items() if k not in _USER})
 
 
+TUNED_MOVEMENT = 0.04
+"""The RMS change of a seen value from one step to the next (view units) on which the surprise
+gate's and the phase restarts' levels were tuned: the demonstrator's four patterns move 0.031 to
+0.040 a step (median over their cycles), its new shapes up to 0.053. A movement that moves
+further a step has its levels raised in proportion (:func:`rnnpb.model.online.level_scale`)."""
+
+
 @dataclass(frozen=True)
 class OnlineConfig:
     """How the PB is regressed on-line.
@@ -68,8 +75,12 @@ class OnlineConfig:
     started ``phase_restarts + 1`` steps back from states on the learned cycles; where one
     predicts the last ``phase_restarts`` observations better than the window by the factor
     ``phase_restart_ratio``, and the window is off by more than ``phase_restart_level``
-    there, the window starts over from that state. The guard: ``"barrier"`` adds
-    ``barrier_weight * softplus(risk logit - logit(risk_level))`` per step of the window's
+    there, the window starts over from that state. Both levels were tuned on the
+    demonstrator, whose hands move about :data:`TUNED_MOVEMENT` a step: where the hands move
+    further in the same steps (a person's own tempo, a large movement), each level grows in
+    proportion, so that an error is judged against the movement it is made on. The guard:
+    ``"barrier"`` adds ``barrier_weight * softplus(risk logit - logit(risk_level))`` per step
+    of the window's
     newest ``barrier_span`` steps (0: all) to the error of eq. 1; ``"projection"`` moves each
     regressed PB down the risk gradient (at most ``projection_steps`` steps of
     ``projection_rate`` in rho) until its risk is below ``risk_level``.
