@@ -4,8 +4,13 @@ are not made up. On a clock of its own, so that the times are exact."""
 
 from __future__ import annotations
 
+import time
+
+import numpy as np
 import pytest
 
+from rnnpb.demonstrator import UserBody
+from rnnpb.interaction.dyad import AgentStep, Dyad
 from rnnpb.interaction.pacing import Pacer
 
 
@@ -80,3 +85,26 @@ def test_a_stop_ends_the_wait():
     pacer.stepped(1.0)
     pacer.wait(True, lambda wait_s: clock.sleep(0.1), stopped=lambda: clock.now >= 0.3)
     assert clock.now == pytest.approx(0.3)
+
+
+class Still:
+    """An agent that holds its hands still; ``slow`` steps take ``seconds``."""
+
+    def __init__(self, name: str, slow: set[int] | None = None, seconds: float = 0.0) -> None:
+        self.name = name
+        self.hands = UserBody().hand_centres.copy()
+        self.slow, self.seconds, self.steps = slow or set(), seconds, 0
+
+    def act(self, view: np.ndarray) -> AgentStep:
+        if self.steps in self.slow:
+            time.sleep(self.seconds)
+        self.steps += 1
+        return AgentStep(hands=self.hands, view=view)
+
+
+def test_a_paced_dyad_counts_its_slow_step_as_the_loop_does():
+    dyad = Dyad(Still("a", slow={2}, seconds=0.2), Still("b"))
+    run = dyad.run(5, dt=0.05, paced=True)
+    assert len(run) == 5
+    assert run["seconds"][2] > 0.05
+    assert dyad.missed_deadlines >= 1

@@ -21,7 +21,8 @@ half a turn (``view="physical"``): left and right swap sides and the circles of 
 right, as in a mirror.
 
 Timing: the agents see each other one step late (the other's body as it was after the last
-step), so both can act at once; a subject and a robot alike.
+step), so both can act at once; a subject and a robot alike. Paced, the dyad keeps the
+deadlines as the interaction loop does (:class:`rnnpb.interaction.pacing.Pacer`).
 
 What an agent may vary (:class:`AgentConfig`): its *adaptation* — how fast its PB follows what
 it sees (a scale on the regression's learning rates; 0: the PB never follows, the robot plays
@@ -43,6 +44,7 @@ import numpy as np
 
 from rnnpb.demonstrator import PATTERNS, PatternConfig, UserBody, pattern_offsets
 from rnnpb.errors import ConfigError
+from rnnpb.interaction.pacing import Pacer
 from rnnpb.model.generation import generate
 from rnnpb.model.io import TrainedModel
 from rnnpb.model.mirror import MirrorSystem, StepResult
@@ -675,6 +677,12 @@ class Dyad:
         self.side_by_side = side_by_side
         self._thread: ThreadPoolExecutor | None = None
         self._shown: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self._pacer = Pacer()
+
+    @property
+    def missed_deadlines(self) -> int:
+        """Steps of :meth:`run` that took longer than its ``dt``."""
+        return self._pacer.missed_deadlines
 
     def view(self, of: Agent) -> np.ndarray:
         """What a robot's camera sees of an agent now, (4,)."""
@@ -722,28 +730,24 @@ class Dyad:
         between_steps: Callable[[float], None] | None = None,
         should_stop: Callable[[], bool] | None = None,
     ) -> DyadRun:
-        """``n_steps`` steps, as fast as possible or one every ``dt`` seconds (the pacing of
-        :class:`rnnpb.interaction.InteractionLoop`: a late step starts the next at once;
-        ``between_steps(wait_s)`` is called while waiting)."""
+        """``n_steps`` steps, as fast as possible or one every ``dt`` seconds, paced as
+        :class:`rnnpb.interaction.InteractionLoop` is (:class:`~rnnpb.interaction.pacing.Pacer`:
+        a late step counts a missed deadline and starts the next at once). Paced,
+        ``between_steps(wait_s)`` is called while waiting; ``should_stop()`` ends the run
+        before its next step."""
         records = []
-        deadline = time.perf_counter()
+        self._pacer.start()
         for _ in range(n_steps):
-            while paced:
-                wait_s = max(0.0, deadline - time.perf_counter())
-                if between_steps is not None:
-                    between_steps(wait_s)
-                elif wait_s > 0:
-                    time.sleep(wait_s)
-                if (should_stop is not None and should_stop()) or time.perf_counter() >= deadline:
-                    break
+            if paced:
+                self._pacer.wait(True, between_steps, should_stop)
             if should_stop is not None and should_stop():
                 break
             record = self.step()
+            self._pacer.took(record.seconds, dt)
             records.append(record)
             if on_step is not None:
                 on_step(record)
-            if paced:
-                deadline = max(deadline + dt, time.perf_counter())
+            self._pacer.stepped(dt)
         return DyadRun.from_steps(records)
 
 
