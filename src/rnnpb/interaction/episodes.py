@@ -30,12 +30,15 @@ movement once it has been ``novel`` long enough to be sure and to hold whole cyc
    kept, and the person told, as soon as it holds ``episode_cycles`` cycles.
 4. **A short performance is kept when it ends.** The detector says ``novel`` once the
    movement's last cycle repeats the one before it, so about two cycles go by before a run
-   starts, and a performance of five or six cycles ends before its run holds
+   starts, and a performance of three or four cycles ends before its run holds
    ``episode_cycles``. The steps that first call rests on (the step's ``repeating``) are the
    new movement already: when a run ends before it was kept, they are put in front of it
    (counted as called ``novel``) — as far back as the hands were seen without a break and no
-   step was called ``familiar`` or ``still`` (a learned pattern or a pause before the
-   movement is not part of it) — and every whole cycle up to its last ``novel`` step is the
+   step was called ``still`` (a pause before the movement is not part of it). Steps called
+   ``familiar`` are looked back through (recognition of the movement before holds a few steps
+   into a new one), but leading cycles that are a learned pattern's shape (``EpisodeCutter.learned``,
+   the running mirror system's judgement) are left out — and every whole cycle up to its last
+   ``novel`` step is the
    episode, when they are ``episode_cycles`` or more, at least ``confirm_cycles`` of them the
    detector's own calls reach into, and novel enough. A performance long
    enough to keep on its own is cut as above, from the detector's own calls alone.
