@@ -35,10 +35,10 @@ movement once it has been ``novel`` long enough to be sure and to hold whole cyc
    new movement already: when a run ends before it was kept, they are put in front of it
    (counted as called ``novel``) — as far back as the hands were seen without a break and no
    step was called ``still`` (a pause before the movement is not part of it). Steps called
-   ``familiar`` are looked back through (recognition of the movement before holds a few steps
-   into a new one), but leading cycles that are a learned pattern's shape (``EpisodeCutter.learned``,
-   the running mirror system's judgement) are left out — and every whole cycle up to its last
-   ``novel`` step is the
+   ``familiar`` are looked back through (recognition of the movement before holds a few
+   steps into a new one), but leading cycles that are a learned pattern's shape
+   (``EpisodeCutter.learned``, the running mirror system's judgement) are left out — and
+   every whole cycle up to its last ``novel`` step is the
    episode, when they are ``episode_cycles`` or more, at least ``confirm_cycles`` of them the
    detector's own calls reach into, and novel enough. A performance long
    enough to keep on its own is cut as above, from the detector's own calls alone.
