@@ -233,7 +233,8 @@ def run(args: argparse.Namespace) -> int:
         online_name, online = choice.name, choice.config
         why = f", chosen as {choice.reason}; --online overrides"
     else:
-        online_name, online = args.online, OnlineConfig.preset(args.online)
+        # the named preset's regression, its effort per second kept at the model's step
+        online_name, online = args.online, OnlineConfig.preset(args.online).at_step(model.dt)
         why = ""
     if overrides is not None:
         online = tables.online(online)

@@ -179,6 +179,22 @@ class OnlineConfig:
         ``OnlineConfig().with_tuning(surprise_gate=0.0, pb={"k_nb": 0.1})``."""
         return _with_tuning(self, changes)
 
+    def at_step(self, dt: float) -> OnlineConfig:
+        """This regression for a model that plays at ``dt`` seconds a step. The presets count
+        its effort, ``iterations``, per step of the paper's 0.4 s; at another step it is kept
+        per second (25 iterations a 0.1 s step, at least 1): the PB relaxes toward what the
+        window says at the same pace in seconds, not four times as fast — it would follow
+        each new step's evidence and jump — and a second of interaction costs what it costs
+        at 0.4 s. The window, the restarts and the gate count steps of a movement's cycle and
+        stay: a person at their own tempo at 0.1 s makes as many steps a cycle as the paper's
+        slow demonstrator at 0.4 s."""
+        if not dt > 0:
+            raise ConfigError(f"dt must be > 0, got {dt}")
+        iterations = max(1, round(self.iterations * dt / PRESET_DT))
+        if iterations == self.iterations:
+            return self
+        return replace(self, iterations=iterations, _tuning=tuning_of(self))
+
     @classmethod
     def from_preset(cls, preset: Preset | str, section: str = "online") -> OnlineConfig:
         """The regression a preset's ``section`` describes (``[online]``, or the paper
@@ -270,8 +286,9 @@ def suggested_online_config(model: Any) -> OnlineChoice:
     regression, ``OnlineConfig.ungated()``; one learned by the paper's algorithm, or one that
     records no learning, the paper preset's, ``OnlineConfig()`` (docs/model.md, "On-line
     interaction"). The recognition settings come from the same preset, those for models
-    without taught hands where the model kept none, with a person's durations kept in seconds
-    at the model's step (:meth:`RecognitionConfig.at_step`). The preset is the one the model records
+    without taught hands where the model kept none, with a person's durations and the
+    regression's effort kept in seconds at the model's step (:meth:`RecognitionConfig.at_step`,
+    :meth:`OnlineConfig.at_step`). The preset is the one the model records
     (:func:`rnnpb.model.io.learning_preset`; a file from before presets were recorded is
     read by its recorded optimizer).
 
@@ -296,5 +313,5 @@ def suggested_online_config(model: Any) -> OnlineChoice:
     else:
         reason = "the model was learned with momentum descent, the paper's algorithm"
     if name == "fast":
-        return OnlineChoice("ungated", OnlineConfig.ungated(), reason, recognition)
-    return OnlineChoice("default", OnlineConfig(), reason, recognition)
+        return OnlineChoice("ungated", OnlineConfig.ungated().at_step(dt), reason, recognition)
+    return OnlineChoice("default", OnlineConfig().at_step(dt), reason, recognition)
