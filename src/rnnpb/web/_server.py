@@ -31,7 +31,8 @@ from starlette.websockets import WebSocket, WebSocketDisconnect
 from rnnpb.web._access import ANY_ADDRESS, AccessPolicy, SecurityHeadersMiddleware, normalize_host
 from rnnpb.web._game import GameSession
 from rnnpb.web._protocol import ProtocolError, parse_client_message
-from rnnpb.web._session import RecordingLimits, Session
+from rnnpb.web._recording import RecordingLimits
+from rnnpb.web._session import Session
 from rnnpb.web._teaching import TeachingSettings
 
 log = logging.getLogger("rnnpb.web")
