@@ -16,7 +16,14 @@ from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
 from rnnpb.errors import ConfigError
-from rnnpb.web import MAX_MESSAGE_BYTES, WS_MAX_SIZE, DemonstratorSource, PointerSource, find_models
+from rnnpb.web import (
+    MAX_MESSAGE_BYTES,
+    STATIC_DIR,
+    WS_MAX_SIZE,
+    DemonstratorSource,
+    PointerSource,
+    find_models,
+)
 
 
 def _ws(server):
@@ -48,15 +55,18 @@ def test_page_and_vendored_assets_are_served_with_no_internet_reference(server):
     assert status == 200 and "text/html" in kind
     html = body.decode()
     assert "/static/app.js" in html
+    # The page's script is ES modules, one per part of the page, loaded from the server.
+    scripts = sorted(p.name for p in STATIC_DIR.glob("*.js"))
+    assert "app.js" in scripts and len(scripts) > 5
     for path in (
-        "/static/app.js",
+        *(f"/static/{name}" for name in scripts),
         "/static/style.css",
         "/static/vendor/three.module.min.js",
         "/static/vendor/three-LICENSE.txt",
     ):
         assert _get(server, path)[0] == 200, path
-    app = _get(server, "/static/app.js")[1].decode()
-    for text in (html, app):
+    texts = [html, *(_get(server, f"/static/{name}")[1].decode() for name in scripts)]
+    for text in texts:
         assert "http://" not in text and "https://" not in text  # nothing from the internet
 
 

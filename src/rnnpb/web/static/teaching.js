@@ -1,0 +1,128 @@
+// The teaching panel (docs/dashboard.md, "Teaching"): what the novelty detector says,
+// "recording a new movement (cycle 2 of 4)", the consolidation's progress, the result and its
+// rename, the kept episodes and the model versions, Confirm and Undo.
+import { $, dash, el } from "./dash.js";
+import { send, showError } from "./connection.js";
+
+const NOVELTY_WORDS = { familiar: "a learned pattern", novel: "a new movement",
+  unstructured: "no repeating pattern", still: "hands still" };
+export function showTeachingStatus(status, step) {
+  const teaching = dash.state && dash.state.teaching;
+  if (!status || !teaching) return;
+  const job = status.consolidation;
+  let phase = status.phase, badge, text = status.text || "", progress = null, note = "";
+  if (job && job.state === "running") {
+    phase = "consolidating";
+    badge = "consolidating";
+    text = "learning the kept movement in the background — the robot keeps moving";
+    progress = job.total ? job.iteration / job.total : null;
+    note = `${Math.round(job.seconds)} s${job.total ? ` · iteration ${job.iteration} of `
+      + `${job.total}` : ""}`;
+  } else if (phase === "recording") {
+    badge = "recording";
+    progress = Math.min(status.cycles, status.episode_cycles) / status.episode_cycles;
+    note = `${Math.min(status.cycles, status.episode_cycles)} of ${status.episode_cycles} whole `
+      + "cycles";
+  } else if (phase === "kept") {
+    badge = "kept";
+    text = `new movement kept in the short-term memory${seenText(teaching)}`;
+  } else if (phase === "off") {
+    badge = "off";
+    text = teaching.available ? "learning is off: nothing is kept"
+      : (teaching.unavailable || status.text || "");
+  } else {
+    const novelty = step ? step.novelty : "";
+    phase = novelty === "novel" ? "novel" : novelty === "familiar" ? "familiar" : "watching";
+    badge = "watching";
+    // Recording can start only when nothing waits (no kept movement before Confirm, no
+    // learning, no swap of the model) and learning is on.
+    const canRecord = teaching.available && teaching.mode !== "off" && !job
+      && !teaching.waiting && !(dash.state && dash.state.loading);
+    text = !step ? "start the robot and perform a movement"
+      : NOVELTY_WORDS[novelty] ? `the robot sees ${NOVELTY_WORDS[novelty]}`
+        + (novelty === "novel" && canRecord ? " — keep performing it: whole cycles are counted"
+          : "")
+        : "the robot is not sure yet what it sees";
+    if (step) text += seenText(teaching);
+  }
+  const box = $("teach-phase");
+  box.dataset.phase = phase;
+  $("teach-badge").textContent = badge;
+  $("teach-text").textContent = text;
+  const bar = $("teach-progress");
+  if (progress === null) bar.removeAttribute("value"); else bar.value = progress;
+  bar.hidden = !(phase === "recording" || phase === "consolidating");
+  $("teach-progress-text").textContent = note;
+  dash.teachPhase = phase;
+  const canConfirm = teaching.available && !job && (teaching.pending || 0) > 0;
+  $("teach-confirm").disabled = !dash.connected || !canConfirm;
+}
+
+// How many performances the kept movements have: a new movement is learned from two (Confirm
+// learns it from what was seen).
+const TIMES = { 1: "once", 2: "twice" };
+function seenText(teaching) {
+  const seen = Object.entries(teaching.seen || {});
+  if (!seen.length) return "";
+  const needed = teaching.performances || 2;
+  return " — " + seen.map(([pattern, n]) => `${pattern} seen ${TIMES[n] || `${n} times`}: `
+    + (n < needed ? "show it again to learn it"
+      + (teaching.mode === "confirm" ? " (or press Confirm to learn it from one)" : "")
+      : teaching.mode === "confirm" ? "learn it now? press Confirm" : "learning it"))
+    .join("; ");
+}
+
+export function showTeaching(state) {
+  const teaching = state.teaching;
+  if (!teaching) return;
+  if (document.activeElement !== $("teach-mode")) $("teach-mode").value = teaching.mode;
+  const result = $("teach-result");
+  result.textContent = teaching.result || "";
+  result.hidden = !teaching.result;
+  const failure = $("teach-failure");
+  failure.textContent = teaching.failure ? `${teaching.failure} — the running model stays` : "";
+  failure.hidden = !teaching.failure;
+  $("teach-undo").disabled = !dash.connected || !teaching.can_undo;
+  $("teach-undo").title = teaching.can_undo
+    ? `go back to ${teaching.versions[teaching.versions.length - 2].name}`
+    : "nothing to undo: the robot runs its first version";
+  // Rename: the patterns teaching learned, and the kept movements not learned yet.
+  const names = [...(teaching.taught || []), ...(teaching.episodes || [])
+    .filter((e) => e.status === "kept").map((e) => e.pattern)];
+  const unique = [...new Set(names)];
+  const select = $("rename-pattern");
+  if (select.dataset.names !== JSON.stringify(unique)) {
+    select.dataset.names = JSON.stringify(unique);
+    select.replaceChildren(...unique.map((n) => new Option(n, n)));
+  }
+  $("rename").hidden = unique.length === 0;
+  const rows = (teaching.episodes || []).map((e) => el("tr", {},
+    el("td", {}, `#${e.id}`), el("td", {}, e.pattern),
+    el("td", { className: `status-${e.status}` }, e.status),
+    el("td", {}, `${e.n_cycles} cycles, ${e.n_steps} steps`),
+    el("td", {}, e.merged ? `another performance of #${e.merged}` : ""), el("td", {}, e.source),
+    el("td", {}, e.when)));
+  $("teach-episodes").replaceChildren(rows.length
+    ? el("tr", {}, ...["", "pattern", "status", "movement", "merged", "from", "kept"].map((h) =>
+      el("th", {}, h)))
+    : el("tr", {}, el("td", {}, "nothing kept yet")), ...rows);
+  $("teach-versions").replaceChildren(...(teaching.versions || []).map((v) => {
+    const item = el("li", { className: v.running ? "running" : "" }, v.name,
+      el("small", {}, ` — ${v.patterns.join(", ")}${v.running ? " (running)" : ""}`));
+    return item;
+  }));
+  $("teach-folder").textContent = [teaching.folder,
+    teaching.memory ? `Short-term memory: ${teaching.memory}.` : ""].filter(Boolean).join(". ");
+  showTeachingStatus(teaching.status, dash.lastStep && dash.run === state.run
+    ? dash.lastStep : null);
+}
+
+$("teach-mode").onchange = (e) => send({ type: "teach_mode", mode: e.target.value });
+$("teach-confirm").onclick = () => send({ type: "teach", action: "confirm" });
+$("teach-undo").onclick = () => send({ type: "teach", action: "undo" });
+$("rename-apply").onclick = () => {
+  const name = $("rename-name").value.trim();
+  const pattern = $("rename-pattern").value;
+  if (!name || !pattern) { showError("rename: choose a pattern and type its new name"); return; }
+  if (send({ type: "rename", pattern, name })) $("rename-name").value = "";
+};
