@@ -5,7 +5,7 @@ import { answered, connect, setControlsEnabled, showProblems } from "./connectio
 import { showDrive, onFrame } from "./drive.js";
 import { drawPB, showSafety } from "./pbspace.js";
 import { drawPlots, jointLegend } from "./plots.js";
-import { drawPointerPanel } from "./pointer.js";
+import { drawPointerPanel, showPointerNote } from "./pointer.js";
 import { clearReadouts, showReadouts, showReadoutsState, showRoutine } from "./readouts.js";
 import { robotView } from "./robot3d.js";
 import { showTeaching, showTeachingStatus } from "./teaching.js";
@@ -29,6 +29,7 @@ function onState(state) {
   showToolbar(state);
   showReadoutsState(state);
   showTeaching(state);
+  showPointerNote();
   showProblems();
   updateStatus();
   drawAll();
@@ -74,6 +75,7 @@ function onStep(step) {
   showSafety(step);
   showRoutine(step);
   showTeachingStatus(step.teaching, step);
+  showPointerNote();
 }
 
 jointLegend();

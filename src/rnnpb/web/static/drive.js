@@ -27,7 +27,7 @@ export function showDrive(state) {
 }
 
 // The demonstrator performs patterns 1-4 only: those are its buttons, each saying whether the
-// model learned it. Learned patterns it cannot perform are listed, for the mouse or webcam.
+// model learned it. Learned patterns it cannot perform are listed, for the pointer or webcam.
 function buildPatternButtons(state) {
   const box = $("patterns");
   const key = JSON.stringify([state.patterns, state.demonstrator_patterns,
@@ -60,7 +60,7 @@ function buildPatternButtons(state) {
   $("patterns-note").textContent = shown + (others.length
     ? `This model also learned ${others.join(", ")}: the demonstrator cannot perform `
       + `${others.length > 1 ? "them" : "it"}; trace ${others.length > 1 ? "them" : "it"} with `
-      + "the mouse or in front of the webcam."
+      + "the pointer or in front of the webcam."
     : "");
 }
 

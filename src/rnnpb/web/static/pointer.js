@@ -2,11 +2,20 @@
 // two markers (your hands); the robot perceives their latest positions each step.
 import { $, BLUE, RED, dash } from "./dash.js";
 import { send } from "./connection.js";
+import { follow } from "./hands.js";
 
 // The panel is the robot's camera view: x = Y (0 left .. 1 right), y = 1 - Z.
 const pointerCanvas = $("pointer");
 const grabs = new Map();   // pointerId -> hand index (0 left/red, 1 right/blue)
+let anchors = null;        // both hands where the one dragging pointer took them
 let pendingSend = false;
+
+// The dragged hand at (y, z); with one pointer, the other hand as "Other hand" says (two
+// fingers each drag their own).
+function moveHand(hand, y, z) {
+  const coupling = grabs.size === 1 ? $("other-hand").value : "still";
+  dash.markers = follow(dash.markers, anchors, hand, y, z, coupling);
+}
 
 function panelToHand(e) {
   const rect = pointerCanvas.getBoundingClientRect();
@@ -36,8 +45,8 @@ pointerCanvas.addEventListener("pointerdown", (e) => {
   if (best < 0) return;
   grabs.set(e.pointerId, best);
   pointerCanvas.setPointerCapture(e.pointerId);
-  dash.markers[2 * best] = y;
-  dash.markers[2 * best + 1] = z;
+  anchors = dash.markers.slice();
+  moveHand(best, y, z);
   sendMarkers();
   drawPointerPanel();
 });
@@ -45,12 +54,11 @@ pointerCanvas.addEventListener("pointermove", (e) => {
   if (!grabs.has(e.pointerId)) return;
   const hand = grabs.get(e.pointerId);
   const [y, z] = panelToHand(e);
-  dash.markers[2 * hand] = y;
-  dash.markers[2 * hand + 1] = z;
+  moveHand(hand, y, z);
   sendMarkers();
   drawPointerPanel();
 });
-const release = (e) => grabs.delete(e.pointerId);
+const release = (e) => { grabs.delete(e.pointerId); anchors = dash.markers.slice(); };
 pointerCanvas.addEventListener("pointerup", release);
 pointerCanvas.addEventListener("pointercancel", release);
 
@@ -111,3 +119,25 @@ dash.panelRect = () => {
   const r = pointerCanvas.getBoundingClientRect();
   return { left: r.left, top: r.top, width: r.width, height: r.height };
 };
+
+// What teaching does with the pointer's movement, said where the person is looking: a new
+// movement being recorded, or kept (never silently: a movement made with one hand while
+// trying a two-hand pattern is kept as a new one).
+export function showPointerNote() {
+  const state = dash.state, step = dash.lastStep;
+  const note = $("pointer-note");
+  const teaching = state && state.teaching;
+  if (!teaching || state.mode !== "pointer" || !teaching.available) { note.textContent = ""; return; }
+  const status = (step && step.teaching) || {};
+  const kept = (teaching.episodes || []).find((e) => e.status === "kept" && e.source === "pointer");
+  const oneHand = $("other-hand").value === "still" ? " (one hand moved, the other held still)" : "";
+  if (status.phase === "recording") {
+    note.textContent = "The robot sees a new movement and is recording it "
+      + `(${Math.min(status.cycles, status.episode_cycles)} of ${status.episode_cycles} whole `
+      + "cycles): see Teach it a new movement, below.";
+  } else if (kept) {
+    note.textContent = `Kept as a new movement, ${kept.pattern}${oneHand}: Confirm in Teach it `
+      + "a new movement, below, learns it. To perform a learned two-hand pattern, let Other "
+      + "hand move the second hand.";
+  } else note.textContent = "";
+}

@@ -79,7 +79,7 @@ export function showReadouts(step) {
   $("pred-error").textContent = step.prediction_error === null ? "—"
     : step.prediction_error.toExponential(1);
   $("truth").textContent = step.mode === "demonstrator" ? step.truth
-    : step.mode === "pointer" ? "you (mouse)" : "you (webcam)";
+    : step.mode === "pointer" ? "you (pointer)" : "you (webcam)";
 }
 export function clearReadouts() {
   for (const id of ["nearest", "pred-error", "truth"]) $(id).textContent = "—";
