@@ -40,6 +40,7 @@ import numpy as np
 from rnnpb.errors import ConfigError, RnnpbError
 from rnnpb.interaction.settings import ConfigTables
 from rnnpb.web._broadcast import RECENT_STEPS, Broadcast
+from rnnpb.web._handover import Handover
 from rnnpb.web._models import ModelShelf, ReadyModel, find_models, offered_models
 from rnnpb.web._recording import Recording, RecordingLimits, Recordings
 from rnnpb.web._routines import RoutineLevel
@@ -128,6 +129,7 @@ class Session:
         self.teaching = SessionTeaching(self, teaching or TeachingSettings())
         self._source = SwitchableSource(self.demonstrator)
         self._user_view = UserView()
+        self._last_command: np.ndarray | None = None  # the run's last motor command sent
         # Names this server's runs, so a page that reconnects to a restarted server knows
         # its plots belong to another run even when the run numbers coincide.
         self._token = secrets.token_hex(4)
@@ -330,11 +332,21 @@ class Session:
         return self.webcam.hands_3d()
 
     def swap(self, ready: ReadyModel) -> None:
-        """Run ``ready`` (a version teaching made ready) from the next step on: the loop goes
-        on with its mirror system (between two steps, on the session thread)."""
+        """Run ``ready`` (a version teaching made ready, gone on from the running interaction)
+        from the next step on, between two steps on the session thread: the running loop hands
+        over to its mirror system over a few steps, so the arm does not jump
+        (:mod:`rnnpb.web._handover`)."""
+        from rnnpb.robot import joint_step_limit
+
+        old = self.shelf.running
         self.shelf.run(ready)
-        if self.loop is not None:
+        if self.loop is None:
+            return
+        if old is None or old.mirror is ready.mirror:
             self.loop.mirror = ready.mirror
+            return
+        step = joint_step_limit(self.loop.config.dt)
+        self.loop.mirror = Handover(old.mirror, ready.mirror, self._last_command, step)
 
     def report(self, text: str) -> None:
         """Say ``text`` on every page as the session's error (and in the log)."""
@@ -436,6 +448,7 @@ class Session:
             return
         running.mirror.reset()
         self.routines.reset()
+        self._last_command = None
         run = self.broadcast.new_run()
         try:
             self.recorder = self.recordings.start(run, running.model.network.pb_size, self.report)
@@ -475,6 +488,7 @@ class Session:
         self._thread.source_name = mode
 
     def _publish_step(self, record) -> None:
+        self._last_command = record.motor
         model = self.model
         message = step_message(
             record, model=model, loop=self.loop, mode=self.mode, dt=self.dt, view=self._user_view
