@@ -411,7 +411,7 @@ class Session:
             self.teaching.set_mode(command["mode"])
         elif kind == "teach":
             if command["action"] == "confirm":
-                self.teaching.confirm()
+                self.teaching.confirm(command.get("pattern"))
             else:
                 self.teaching.undo()
         elif kind == "rename":

@@ -200,6 +200,12 @@ class SessionTeaching:
         self._shapes: dict[str, str] = {}  # demonstrator shape -> the pattern it was learned as
         self._started_at = 0.0
         self._pending_use: ReadyModel | None = None
+        self._kept: dict[str, list[int]] = {}  # kept movement -> its episodes, oldest first
+        self._learning: set[str] = set()  # the movements a consolidation is learning
+        # Every version this teaching has run (undone ones too: the model list offers them),
+        # in the order learned, and the name the model list gives each.
+        self._versions: list[str] = []
+        self._names: dict[str, str] = {}
 
     # --- life cycle -----------------------------------------------------------------------
     def open(self, ready: ReadyModel, name: str = "") -> None:
@@ -223,6 +229,9 @@ class SessionTeaching:
             self.unavailable = f"teaching is off for this model: {error}"
             log.warning("%s", self.unavailable)
             return
+        self._versions = [str(path)]
+        self._names = {str(path): name or Path(ready.path).name}
+        self._learning = set()
         self.teacher = Teacher(
             self._view,
             path,
@@ -337,7 +346,10 @@ class SessionTeaching:
         if len(teacher.versions) == 1:
             shelf.name = self._first_name or shelf.name
             return
-        shelf.name = shelf.offer(teacher.model_path)
+        path = teacher.model_path
+        shelf.name = self._names[path] = shelf.offer(path)
+        if path not in self._versions:
+            self._versions.append(path)
 
     def _holding(self) -> bool:
         """Nothing more is kept while a movement seen often enough waits for Confirm or is
@@ -407,6 +419,8 @@ class SessionTeaching:
                 self.host.report(f"teaching: {event.text}; the running model stays")
             else:
                 log.info("teaching: step %d: %s", event.step, event.text)
+            if event.kind in ("learned", "failed", "refused"):
+                self._learning = set()
             if event.kind in ("learned", "undone"):
                 self.failure = None
             if event.kind in ("learned", "undone", "renamed"):
@@ -423,6 +437,7 @@ class SessionTeaching:
                 )
             if event.kind == "consolidating":
                 self._started_at = time.monotonic()
+                self._learning = {p for p in (event.pattern or "").split(", ") if p}
         self._refresh()
         self.host.publish_state()
 
@@ -437,21 +452,44 @@ class SessionTeaching:
         if self.teacher is not None:
             self.teacher.auto = mode == "auto"
             if mode == "auto" and self.teacher.job is None:
-                self.confirm(quiet=True)
+                self.confirm(quiet=True)  # what waits for a Confirm is learned now
 
-    def confirm(self, quiet: bool = False) -> None:
-        """Consolidate the memory's kept episodes (those not learned yet)."""
+    def asks(self) -> str:
+        """The movement Confirm learns now (the panel asks about it and its button names it):
+        of the kept movements not being learned, the newest seen often enough to learn, else
+        the newest kept; ``""`` when nothing is kept."""
+        teacher = self.teacher
+        if teacher is None or teacher.job is not None:
+            return ""
+        waiting = {p: ids for p, ids in self._kept.items() if p not in self._learning}
+        newest = sorted(waiting, key=lambda p: max(waiting[p]), reverse=True)
+        seen = self._lists.get("seen", {})
+        ready = [p for p in newest if seen.get(p, 0) >= teacher.performances]
+        return (ready or newest or [""])[0]
+
+    def confirm(self, pattern: str | None = None, quiet: bool = False) -> None:
+        """Consolidate one kept movement: ``pattern``, or the one the panel asks about
+        (:meth:`asks`). Only its episodes are learned — a movement kept by accident before
+        stays kept — also those a failed consolidation or an earlier session left; a
+        movement seen fewer times than the Teacher waits for is learned from what was seen."""
         teacher = self._need()
         if teacher.job is not None:
             raise ConfigError("a consolidation is running already")
-        if not teacher.pending:
-            # Also what a failed consolidation left, and what an earlier session kept.
-            teacher.pending = [e.id for e in reversed(self.memory.episodes("kept"))]
-        if not teacher.pending:
+        self._refresh()
+        chosen = pattern or self.asks()
+        if not chosen:
             if quiet:
                 return
             raise ConfigError("no kept movement to learn: perform a new movement first")
+        ids = self._kept.get(chosen)
+        if not ids:
+            kept = ", ".join(self._kept) or "none"
+            raise ConfigError(f"no kept movement {chosen!r} to learn (kept: {kept})")
+        others = [i for i in teacher.pending if i not in ids]
+        teacher.pending = list(ids)
         teacher.confirm()
+        teacher.pending = [*others, *teacher.pending]
+        self._learning = {chosen}
         self._take_events()
 
     def undo(self) -> None:
@@ -475,6 +513,7 @@ class SessionTeaching:
         if self.memory is None:
             self._lists = {"episodes": [], "pending": 0}
             self._shapes = {}
+            self._kept = {}
             return
         try:
             episodes = self.memory.episodes()
@@ -502,6 +541,10 @@ class SessionTeaching:
             if e.status in ("kept", "learned"):
                 seen[e.pattern] = seen.get(e.pattern, 0) + 1
         waiting = {e.pattern: seen[e.pattern] for e in episodes if e.status == "kept"}
+        self._kept = {}
+        for e in episodes:
+            if e.status == "kept":
+                self._kept.setdefault(e.pattern, []).append(e.id)
         self._lists = {
             "episodes": shown,
             "pending": pending,
@@ -574,21 +617,28 @@ class SessionTeaching:
         first = set(self._patterns_of(teacher.versions[0]))
         shelf = self.host.shelf
         running = list(shelf.running.model.patterns) if shelf.running is not None else []
+        learning = self._learning if teacher.job is not None else set()
         out.update(
-            memory=str(self.memory.path),
+            memory=str(self.memory.path) if self.memory is not None else "",
             folder=self.folder_note,
+            # The model list offers every version learned (an undone one too): so does this.
             versions=[
                 {
-                    "name": Path(v).name,
+                    "name": self._names.get(v, Path(v).name),
                     "patterns": self._patterns_of(v),
-                    "running": i == len(teacher.versions) - 1,
+                    "running": v == teacher.model_path,
+                    "undone": v not in teacher.versions,
                 }
-                for i, v in enumerate(teacher.versions)
+                for v in self._versions
             ],
             taught=[p for p in running if p not in first],
             taught_shapes={k: v for k, v in self._shapes.items() if v in running},
             can_undo=len(teacher.versions) > 1 and teacher.job is None,
             consolidating=teacher.job is not None,
+            # What is being learned is not asked about again (nor counted as waiting).
+            learning=sorted(learning),
+            seen={p: n for p, n in self._lists.get("seen", {}).items() if p not in learning},
+            asks=self.asks(),
             waiting=self.mode == "confirm" and teacher.waiting_for_confirm(),
         )
         return out

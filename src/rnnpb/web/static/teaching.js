@@ -2,7 +2,12 @@
 // "recording a new movement (cycle 2 of 4)", the consolidation's progress, the result and its
 // rename, the kept episodes and the model versions, Confirm and Undo.
 import { $, dash, el } from "./dash.js";
-import { send, showError } from "./connection.js";
+import { onError, send, showError } from "./connection.js";
+
+// The movement the person confirmed, from their click until the server's answer: the panel
+// says at once that it is being learned, never asks again.
+let confirming = null;
+onError(() => { confirming = null; });
 
 const NOVELTY_WORDS = { familiar: "a learned pattern", novel: "a new movement",
   unstructured: "no repeating pattern", still: "hands still" };
@@ -10,11 +15,27 @@ export function showTeachingStatus(status, step) {
   const teaching = dash.state && dash.state.teaching;
   if (!status || !teaching) return;
   const job = status.consolidation;
+  if (confirming && (teaching.consolidating || teaching.result !== confirming.result)) {
+    confirming = null;
+  }
   let phase = status.phase, badge, text = status.text || "", progress = null, note = "";
-  if (job && job.state === "running") {
+  if (confirming && !job) {
     phase = "consolidating";
     badge = "consolidating";
-    text = "learning the kept movement in the background — the robot keeps moving";
+    text = `learning ${confirming.pattern}: starting — the robot keeps moving`;
+  } else if (job && job.state === "done") {
+    // Learned; the new version's network is compiled before it takes over (seconds).
+    phase = "consolidating";
+    badge = "consolidating";
+    text = "learned — making the new version ready (compiling its network); the robot keeps "
+      + "moving";
+    progress = 1;
+    note = `${Math.round(job.seconds)} s`;
+  } else if (job) {
+    phase = "consolidating";
+    badge = "consolidating";
+    const learning = (teaching.learning || []).join(", ") || "the kept movement";
+    text = `learning ${learning} in the background — the robot keeps moving`;
     progress = job.total ? job.iteration / job.total : null;
     note = `${Math.round(job.seconds)} s${job.total ? ` · iteration ${job.iteration} of `
       + `${job.total}` : ""}`;
@@ -54,21 +75,24 @@ export function showTeachingStatus(status, step) {
   bar.hidden = !(phase === "recording" || phase === "consolidating");
   $("teach-progress-text").textContent = note;
   dash.teachPhase = phase;
-  const canConfirm = teaching.available && !job && (teaching.pending || 0) > 0;
+  const canConfirm = teaching.available && !job && !confirming && !!teaching.asks;
   $("teach-confirm").disabled = !dash.connected || !canConfirm;
 }
 
 // How many performances the kept movements have: a new movement is learned from two (Confirm
 // learns it from what was seen).
 const TIMES = { 1: "once", 2: "twice" };
+// Only the movement Confirm would learn (teaching.asks) is offered to it.
 function seenText(teaching) {
   const seen = Object.entries(teaching.seen || {});
-  if (!seen.length) return "";
+  if (!seen.length || confirming) return "";
   const needed = teaching.performances || 2;
+  const confirm = (pattern) => teaching.mode === "confirm" && pattern === teaching.asks;
   return " — " + seen.map(([pattern, n]) => `${pattern} seen ${TIMES[n] || `${n} times`}: `
     + (n < needed ? "show it again to learn it"
-      + (teaching.mode === "confirm" ? " (or press Confirm to learn it from one)" : "")
-      : teaching.mode === "confirm" ? "learn it now? press Confirm" : "learning it"))
+      + (confirm(pattern) ? " (or press Confirm to learn it from one)" : "")
+      : confirm(pattern) ? "learn it now? press Confirm"
+        : teaching.mode === "confirm" ? "waits to be confirmed" : "learning it"))
     .join("; ");
 }
 
@@ -106,11 +130,19 @@ export function showTeaching(state) {
     ? el("tr", {}, ...["", "pattern", "status", "movement", "merged", "from", "kept"].map((h) =>
       el("th", {}, h)))
     : el("tr", {}, el("td", {}, "nothing kept yet")), ...rows);
+  // Every version the model list offers, the one running marked as there.
   $("teach-versions").replaceChildren(...(teaching.versions || []).map((v) => {
-    const item = el("li", { className: v.running ? "running" : "" }, v.name,
-      el("small", {}, ` — ${v.patterns.join(", ")}${v.running ? " (running)" : ""}`));
+    const item = el("li", { className: v.running ? "running" : v.undone ? "undone" : "" },
+      v.name, el("small", {}, ` — ${v.patterns.join(", ")}${v.running ? " (running)"
+        : v.undone ? " (undone; choose it in Model to run it again)" : ""}`));
+    item.dataset.name = v.name;
     return item;
   }));
+  const asks = teaching.asks || "";
+  $("teach-confirm").textContent = `✓ Confirm: learn ${asks || "it"}`;
+  $("teach-confirm").title = asks ? `learn ${asks} into a new model version (a movement seen `
+    + "once is learned from that one performance); other kept movements stay kept"
+    : "nothing kept to learn: perform a new movement first";
   $("teach-folder").textContent = [teaching.folder,
     teaching.memory ? `Short-term memory: ${teaching.memory}.` : ""].filter(Boolean).join(". ");
   showTeachingStatus(teaching.status, dash.lastStep && dash.run === state.run
@@ -118,7 +150,15 @@ export function showTeaching(state) {
 }
 
 $("teach-mode").onchange = (e) => send({ type: "teach_mode", mode: e.target.value });
-$("teach-confirm").onclick = () => send({ type: "teach", action: "confirm" });
+$("teach-confirm").onclick = () => {
+  const teaching = dash.state && dash.state.teaching;
+  const pattern = teaching && teaching.asks;
+  if (!pattern) return;
+  if (send({ type: "teach", action: "confirm", pattern })) {
+    confirming = { pattern, result: teaching.result };
+    showTeachingStatus(teaching.status, dash.lastStep);
+  }
+};
 $("teach-undo").onclick = () => send({ type: "teach", action: "undo" });
 $("rename-apply").onclick = () => {
   const name = $("rename-name").value.trim();
