@@ -16,7 +16,12 @@ export function showModels(state) {
 
 
 export function updateStatus() {
-  const el = $("status"), s = dash.state;
+  const el = $("status");
+  showStatus(el);
+  el.title = el.textContent;  // the line may be cut short on a narrow toolbar
+}
+function showStatus(el) {
+  const s = dash.state;
   el.className = "status";
   if (!dash.connected) {
     el.textContent = "disconnected — reconnecting… (controls are off until then)";
