@@ -27,6 +27,10 @@ function send(message) {
 function receive(message) {
   if (message.type === "game_state") {
     $("status").textContent = message.status + (message.model ? ` — ${message.model}` : "");
+    // One game at a time: Start while none runs, Stop while one does.
+    const playing = message.status === "running" || message.status === "starting";
+    $("start").disabled = playing;
+    $("stop").disabled = !playing;
     const select = $("model");
     if (select.options.length === 0) {
       for (const name of message.models) {
