@@ -136,6 +136,7 @@ def test_confirm_learns_only_what_it_names_and_the_new_version_takes_over_smooth
         )
 
         # Undo: the version list and the model list name the same versions, the same running.
+        assert page.get_attribute("#teach-undo", "title") == "go back to set1.npz"
         _mouse_click(page, "#teach-undo")
         _wait_state(page, 'JSON.stringify(rnnpbDashboard.state.patterns) === \'["1","2","3"]\'')
         _shot(page, "flow-3-undone", "#teach")

@@ -107,8 +107,11 @@ export function showTeaching(state) {
   failure.textContent = teaching.failure ? `${teaching.failure} — the running model stays` : "";
   failure.hidden = !teaching.failure;
   $("teach-undo").disabled = !dash.connected || !teaching.can_undo;
-  $("teach-undo").title = teaching.can_undo
-    ? `go back to ${teaching.versions[teaching.versions.length - 2].name}`
+  // Undo goes back to the version run before this one (an undone one is not gone back to).
+  const versions = teaching.versions || [];
+  const back = versions.slice(0, versions.findIndex((v) => v.running))
+    .filter((v) => !v.undone).at(-1);
+  $("teach-undo").title = teaching.can_undo && back ? `go back to ${back.name}`
     : "nothing to undo: the robot runs its first version";
   // Rename: the patterns teaching learned, and the kept movements not learned yet.
   const names = [...(teaching.taught || []), ...(teaching.episodes || [])
