@@ -17,7 +17,14 @@ game); ``--realtime`` is the check of that: the game at 0.4 s a step, the player
 clock (25 pointer moves a second, as a mouse), performing the first pattern of its draw until
 it is found.
 
-    PYTHONPATH=src python benchmarks/game_players.py --draws benchmarks/game_players_final.json
+``--draws benchmarks/game_players_final.json`` plays the judged draws: an exam the exam ledger
+knows (study ``game``; :func:`game_exam`), refused when its version was judged (make a new
+version with fresh seeds, the old ones under ``excluded``, and record its fingerprint in
+``src/rnnpb/experiments/exams/versions.toml``), written in the ledger when it starts and ends,
+as ``rnnpb study NAME --exam`` is (``--ledger FILE``, ``--rerun-unjudged``).
+
+    PYTHONPATH=src python benchmarks/game_players.py --draws benchmarks/game_players_final.json \
+        --out results/game-exam.json
     PYTHONPATH=src python benchmarks/game_players.py --seeds 0 5          # development draws
     PYTHONPATH=src python benchmarks/game_players.py --realtime --seeds 7 1
 """
@@ -230,9 +237,75 @@ def stalled_share(table: str, start: int) -> float:
     return round(sum(same) / len(same), 3) if same else 0.0
 
 
+# The game's targets (the ledger's names for them), each the summary's share it reads.
+TARGETS = {
+    "together within 20 s in >= 90 % of games": (
+        "the share of players' games together with the robot within 20 s of game time",
+        ">=",
+        0.9,
+    ),
+    "every learned movement found within 3 minutes in >= 90 % of games": (
+        "the share of players' games in which every learned movement was found within 180 s",
+        ">=",
+        0.9,
+    ),
+    "scribbler together on <= 5 % of its steps": (
+        "the scribblers' steps together with the robot, as a share of all their steps",
+        "<=",
+        0.05,
+    ),
+}
+SUMMARY_KEYS = {
+    "together within 20 s in >= 90 % of games": "together_within_20s_share",
+    "every learned movement found within 3 minutes in >= 90 % of games": (
+        "all_found_within_3min_share"
+    ),
+    "scribbler together on <= 5 % of its steps": "scribbler_together_share",
+}
+
+
+def game_exam(path: Path):
+    """The judged draws of ``path`` as an exam the exam ledger knows: study ``game``, the
+    file's ``version``, its player and scribbler seeds, the targets above, and the fingerprint
+    the ledger records for the game (a hash of the two seed lists). A seed among the file's
+    ``excluded`` draws, or a fingerprint ``exams/versions.toml`` does not record for the
+    version, is refused."""
+    from types import MappingProxyType
+
+    from rnnpb._fingerprint import values_fingerprint
+    from rnnpb.errors import ConfigError
+    from rnnpb.experiments.exams import Exam, ExamTarget, ExcludedDraws, check_recorded
+
+    data = json.loads(path.read_text(encoding="utf-8"))
+    seeds = {k: [int(s) for s in data[k]] for k in ("player_seeds", "scribbler_seeds")}
+    excluded = tuple(ExcludedDraws(int(a), int(b), str(why)) for a, b, why in data["excluded"])
+    used = sorted(s for v in seeds.values() for s in v if any(s in r for r in excluded))
+    if used:
+        raise SystemExit(f"{path}: draws {used} are excluded: they were used before")
+    exam = Exam(
+        "game",
+        int(data["version"]),
+        MappingProxyType({k: tuple(v) for k, v in seeds.items()}),
+        (),
+        (),
+        excluded,
+        MappingProxyType({k: ExamTarget(k, *v) for k, v in TARGETS.items()}),
+        fingerprint=values_fingerprint(seeds),
+    )
+    try:
+        check_recorded(exam)
+    except ConfigError as error:
+        raise SystemExit(f"{path}: {error}") from None
+    return exam
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=(__doc__ or "").split("\n\n")[0])
-    parser.add_argument("--draws", type=Path, help="a JSON file naming the seeds to play")
+    parser.add_argument(
+        "--draws",
+        type=Path,
+        help="the judged draws (benchmarks/game_players_final.json): the exam, in the ledger",
+    )
     parser.add_argument("--seeds", type=int, nargs=2, metavar=("FIRST", "COUNT"))
     parser.add_argument("--dt", type=float, default=0.2, help="seconds a game step takes")
     parser.add_argument("--realtime", action="store_true", help="0.4 s a step, wall clock")
@@ -240,19 +313,55 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--scribblers", type=int, default=None, help="scribbler games")
     parser.add_argument("--out", type=Path, default=None, help="write the results as JSON")
     parser.add_argument("--logs", type=Path, default=None, help="keep the games' logs here")
+    parser.add_argument(
+        "--ledger", type=Path, default=None, help="with --draws: the exam ledger to write in"
+    )
+    parser.add_argument(
+        "--rerun-unjudged",
+        action="store_true",
+        help="with --draws: run again a version whose earlier runs stopped before their verdicts",
+    )
     args = parser.parse_args(argv)
+    exam = None
     if args.draws:
-        chosen = json.loads(args.draws.read_text())
-        seeds, scribblers = chosen["player_seeds"], chosen["scribbler_seeds"]
+        if args.realtime or args.deaf or args.scribblers is not None or args.dt != 0.2:
+            parser.error(
+                "--draws plays the judged draws as the exam defines them: no --realtime, "
+                "--deaf, --scribblers or --dt"
+            )
+        if args.out is None:
+            parser.error("--draws judges the games: give --out FILE for their figures")
+        exam = game_exam(args.draws)
+        seeds = list(exam.seed_list("player_seeds"))
+        scribblers = list(exam.seed_list("scribbler_seeds"))
     elif args.seeds:
         seeds = list(range(args.seeds[0], args.seeds[0] + args.seeds[1]))
         scribblers = list(range(args.seeds[0], args.seeds[0] + (args.scribblers or 0)))
     else:
         parser.error("give --draws FILE or --seeds FIRST COUNT")
-    if args.scribblers is not None and args.draws:
-        scribblers = scribblers[: args.scribblers]
-    dt = 0.4 if args.realtime else args.dt
+    if exam is None:
+        games, scribbles = play_games(args, seeds, scribblers)
+        report(args, games, scribbles)
+        return 0
+    from rnnpb.experiments.exams.ledger import exam_run
 
+    # As `rnnpb study --exam`: refused when the version was judged, written in the ledger.
+    with exam_run(exam, args.out, args.ledger, args.rerun_unjudged) as record:
+        games, scribbles = play_games(args, seeds, scribblers)
+        summary = report(args, games, scribbles)
+        record.judged(
+            exam.verdicts(
+                {name: summary[key] for name, key in SUMMARY_KEYS.items()},
+                lambda target, value: f"{value} ({target.compare} {target.limit:g})",
+            )
+        )
+    print(f"written in the exam ledger {record.path} as run {record.entry.run}")
+    return 0
+
+
+def play_games(args: argparse.Namespace, seeds: list[int], scribblers: list[int]):
+    """Each player's game and each scribbler's, as the module says."""
+    dt = 0.4 if args.realtime else args.dt
     from playwright.sync_api import sync_playwright
 
     from rnnpb.web import DashboardServer, find_models
@@ -320,6 +429,12 @@ def main(argv: list[str] | None = None) -> int:
                 browser.close()
         finally:
             server.stop()
+    return games, scribbles
+
+
+def report(args: argparse.Namespace, games: list, scribbles: list) -> dict:
+    """The games' shares, printed, and written to ``--out``."""
+    dt = 0.4 if args.realtime else args.dt
     summary = {
         "dt": dt,
         "realtime": args.realtime,
@@ -366,7 +481,7 @@ def main(argv: list[str] | None = None) -> int:
         args.out.write_text(
             json.dumps({"summary": summary, "games": games, "scribblers": scribbles}, indent=1)
         )
-    return 0
+    return summary
 
 
 if __name__ == "__main__":

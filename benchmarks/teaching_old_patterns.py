@@ -9,7 +9,9 @@ by side on the same data:
   6 whole cycles of the first and 3 of the second (what teaching learns when the second
   performance is kept while the first has grown), beginning 21 steps into each;
 - consolidated by teaching's policy (``policy``), by it with another iteration count
-  (``iterations:N``), or with Adam at a learning rate for N iterations (``adam:RATExN``);
+  (``iterations:N``), with Adam at a learning rate for N iterations (``adam:RATExN``), or
+  with other values of the preset's ``[teaching]`` table, as a ``--config`` file sets them
+  (``teaching:input_noise=0.02``, ``teaching:hold_old_pb=first-half+new_pb_start=farthest``);
 - measured as the study measures: the old patterns' lock-ons and switches beyond the
   paper's limits, the new pattern's lock-on from rest, the new shape followed within 10
   steps after 60 steps of jerky movement (20 development draws of the user, 9000-9019),
@@ -31,6 +33,7 @@ import argparse
 import json
 import statistics
 import time
+import tomllib
 from dataclasses import replace
 from pathlib import Path
 
@@ -62,7 +65,20 @@ def consolidation(model, variant: str):
         rate, iterations = value.split("x")
         learning = config.train.with_tuning(optimizer="adam", learning_rate=float(rate))
         return replace(config, train=replace(learning, iterations=int(iterations)))
-    raise SystemExit(f"unknown variant {variant!r}: policy, iterations:N or adam:RATExN")
+    if kind == "teaching":
+        # another of the preset's [teaching] values, as a --config file would set it
+        table = {}
+        for pair in value.split("+"):
+            key, _, text = pair.partition("=")
+            try:
+                table[key] = tomllib.loads(f"v = {text}")["v"]
+            except tomllib.TOMLDecodeError:
+                table[key] = text
+        return teaching_consolidation(model, overrides={"teaching": table}, origin=variant)
+    raise SystemExit(
+        f"unknown variant {variant!r}: policy, iterations:N, adam:RATExN or "
+        "teaching:KEY=VALUE[+KEY=VALUE]"
+    )
 
 
 def one_case(models: Path, set_name: str, shape: str, draw: int, variant: str) -> dict:

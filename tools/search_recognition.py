@@ -280,6 +280,8 @@ def fragment(
     )
     lines += [
         f"[sources.{source}]",
+        # A seeded search repeats its trials: the command reproduces the figure.
+        'kind = "measured"',
         f"command = {_toml(command)}",
         f"draws = {_toml(list(draws))}",
         f"figure = {_toml(figure)}",

@@ -9,7 +9,9 @@ it at every speed) and the random movements' (which must stay above). The script
 kind and speed, the distribution of the least value over the periods on each judged step, and
 the gap between the shapes' highest and the random movements' lowest, with its midpoint: the
 value `[recognition]` and `[recognition_untaught]`'s ``structure_level`` take
-(`[sources.structure-periods]` in the presets).
+(`[sources.structure-periods]` in the presets). ``--json FILE`` writes every figure, and the
+gap's ends as ``shapes_max`` and ``random_min`` (what ``rnnpb presets evidence --check`` holds
+to the presets' expectation).
 
     .venv/bin/python tools/structure_periods.py --draws 0,1,2,3,4,5 [--lags 5,40] [--steps 300]
 
@@ -113,7 +115,10 @@ def main(argv: list[str] | None = None) -> int:
         )
     )
     if args.json:
-        args.json.write_text(json.dumps({"lags": [low, high], "draws": draws, **figures}, indent=1))
+        gap = {"shapes_max": round(shapes, 4), "random_min": round(random, 4)}
+        args.json.write_text(
+            json.dumps({"lags": [low, high], "draws": draws, **gap, **figures}, indent=1)
+        )
     return 0
 
 

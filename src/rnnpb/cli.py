@@ -30,6 +30,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "rnnpb.commands.train_routines",
     "rnnpb.commands.consolidate",
     "rnnpb.commands.info",
+    "rnnpb.commands.presets",
     "rnnpb.commands.generate",
     "rnnpb.commands.interact",
     "rnnpb.commands.robot",

@@ -40,7 +40,10 @@ def test_a_model_is_learned_at_its_datas_step_and_plays_only_at_it(tmp_path, cap
     assert "learned at dt 0.2 s (from " in capsys.readouterr().out
     assert TrainedModel.load(model).dt == 0.2
     assert main(["info", str(model)]) == 0
-    assert "step time: dt 0.2 s" in capsys.readouterr().out
+    shown = capsys.readouterr().out
+    assert "step time: dt 0.2 s" in shown
+    # the demonstrator stands where the camera frames it: the standard user's place
+    assert "framing: a person's body placed 1 m from the robot's camera" in shown
     out = str(tmp_path / "run")
     assert (
         main(

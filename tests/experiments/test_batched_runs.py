@@ -5,13 +5,14 @@ import numpy as np
 
 from rnnpb.experiments import paper
 from rnnpb.model import OnlineConfig
+from rnnpb.robot import JOINT_LIMITS
 
 # A short regression keeps the compiled step and the runs cheap.
 SHORT = OnlineConfig(window=8, iterations=5)
 
 
 def test_runs_stepped_together_are_the_runs_alone(set1_model, monkeypatch):
-    limits = paper._limits()
+    limits = JOINT_LIMITS
     scenarios = [
         paper._pause_scenario("1", seed=100),
         paper._switch_scenario(("2", "3"), seed=200),
@@ -37,16 +38,16 @@ def test_runs_stepped_together_are_the_runs_alone(set1_model, monkeypatch):
 def test_draws_come_back_by_draw_with_every_pattern_and_pair(set1_model):
     # Few steps: the runs go one by one (the pooled runs are the test above's), in the order
     # draws() hands them back.
-    by_seed = paper.draws(set1_model, SHORT, paper._limits(), (100, 200))
+    by_seed = paper.draws(set1_model, SHORT, JOINT_LIMITS, (100, 200))
     assert list(by_seed) == [100, 200]
     for draw in by_seed.values():
         assert [s.pattern for s in draw.synchronization] == list(set1_model.patterns)
         assert set(draw.switching.pairs) == {"1->2", "1->3", "2->1", "2->3", "3->1", "3->2"}
-    alone = paper.synchronization(set1_model, "2", SHORT, paper._limits(), seed=200)
+    alone = paper.synchronization(set1_model, "2", SHORT, JOINT_LIMITS, seed=200)
     together = by_seed[200].synchronization[1]
     assert together.pause_start == alone.pause_start
     np.testing.assert_array_equal(together.run.pb, alone.run.pb)
-    switched = paper.switching(set1_model, SHORT, paper._limits(), seed=100)
+    switched = paper.switching(set1_model, SHORT, JOINT_LIMITS, seed=100)
     assert by_seed[100].switching == switched
 
 

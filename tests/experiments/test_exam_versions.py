@@ -102,12 +102,23 @@ def _exam_seeds(study: str, kinds: dict[str, list[int]] | dict[str, tuple[int, .
     return out
 
 
+GAME_DRAWS = ROOT / "benchmarks" / "game_players_final.json"
+
+
+def _game() -> dict:
+    """The mirror game's judged draws as their file holds them (its current version)."""
+    return json.loads(GAME_DRAWS.read_text(encoding="utf-8"))
+
+
 def _all_versions() -> dict[tuple[str, int], set[int]]:
-    """Each study's current exam and every judged version in the ledger, with its seeds."""
+    """Each study's current exam, the mirror game's current draws and every judged version in
+    the ledger, with its seeds."""
     versions: dict[tuple[str, int], set[int]] = {}
     for name in exam_names():
         exam = load_exam(name)
         versions[name, exam.version] = _exam_seeds(name, dict(exam.seeds))
+    game = _game()
+    versions["game", game["version"]] = set(game["player_seeds"]) | set(game["scribbler_seeds"])
     for entry in exam_ledger.entries():
         if entry.judged:
             kinds = {
@@ -158,9 +169,48 @@ def test_the_dyad_exam_left_the_safety_exam_s_draws():
     assert all(any(s in r for r in dyad.excluded) for s in range(7200, 7212))
 
 
-def test_the_mirror_game_s_judged_draws_keep_the_fingerprint_the_ledger_holds():
-    game = json.loads((ROOT / "benchmarks" / "game_players_final.json").read_text())
+def test_the_mirror_game_s_draws_are_versioned_as_the_ledger_records_them():
+    """The game's judged runs carry the fingerprint its versions.toml entry records for their
+    version; the draws file's version is recorded with the fingerprint of its seed lists,
+    was never judged, and excludes every judged version's seeds."""
+    game = _game()
     draws = {k: game[k] for k in ("player_seeds", "scribbler_seeds")}
+    recorded = recorded_versions()
+    assert recorded["game", game["version"]].fingerprint == values_fingerprint(draws)
     runs = [e for e in exam_ledger.entries("game") if e.judged]
-    assert runs and all(e.fingerprint == values_fingerprint(draws) for e in runs)
-    assert all(e.draws == draws for e in runs)
+    assert runs and all(e.fingerprint == recorded["game", e.version].fingerprint for e in runs)
+    judged = exam_ledger.judged_versions("game")
+    assert game["version"] not in judged and game["version"] == max(judged) + 1
+    excluded = [range(first, last + 1) for first, last, _ in game["excluded"]]
+    for entry in runs:
+        assert all(any(s in r for r in excluded) for s in entry.seeds()), entry.run
+    assert not any(s in r for r in excluded for v in draws.values() for s in v)
+
+
+def test_the_mirror_game_is_an_exam_the_ledger_knows(tmp_path):
+    """benchmarks/game_players.py --draws reads the file as an exam of study "game": its
+    version may run; version 1's draws, judged twice, are refused."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "game_players", ROOT / "benchmarks" / "game_players.py"
+    )
+    assert spec is not None and spec.loader is not None
+    players = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(players)
+    exam = players.game_exam(GAME_DRAWS)
+    assert exam.study == "game" and exam.version == _game()["version"]
+    assert exam_ledger.check_may_run(exam, exam_ledger.ledger_paths()) == ()
+    first = {
+        "version": 1,
+        "player_seeds": list(range(1000, 1020)),
+        "scribbler_seeds": list(range(1000, 1006)),
+        "excluded": [[0, 9, "development"]],
+    }
+    old = tmp_path / "game_v1.json"
+    old.write_text(json.dumps(first), encoding="utf-8")
+    with pytest.raises(ConfigError, match="game exam's version 1 was judged already"):
+        exam_ledger.check_may_run(players.game_exam(old), exam_ledger.ledger_paths())
+    old.write_text(json.dumps({**first, "player_seeds": [1000, 1001]}), encoding="utf-8")
+    with pytest.raises(SystemExit, match="values changed under version 1"):
+        players.game_exam(old)

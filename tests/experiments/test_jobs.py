@@ -123,7 +123,7 @@ def test_the_missing_case_explanation_counts_the_closed_loop_cycles():
 
 
 def test_the_larger_sets_seeds_learn_together_one_group_per_worker_first(tmp_path):
-    from rnnpb.experiments.report import run_jobs
+    from rnnpb.experiments.jobs import run_jobs
 
     seen = []
 
@@ -140,7 +140,7 @@ def test_the_larger_sets_seeds_learn_together_one_group_per_worker_first(tmp_pat
 
 
 def test_the_papers_regression_runs_only_on_the_first_seeds_networks(tmp_path):
-    from rnnpb.experiments.report import run_jobs
+    from rnnpb.experiments.jobs import run_jobs
 
     seen = []
 

@@ -51,9 +51,9 @@ def test_the_seeds_of_a_first_seed_and_of_the_exam():
     assert seeds.map_users == tuple(range(3, 3 + len(USERS)))
     assert seeds.users == tuple(range(1003, 1003 + len(USERS)))
     exam = load_exam("safety")
-    assert exam.version == 2
+    assert exam.version == 3
     from_exam = SafetySeeds.from_exam(exam)
-    assert from_exam.users == exam.seed_list("users") and from_exam.model == 7200
+    assert from_exam.users == exam.seed_list("users") and from_exam.model == 11200
     development = SafetySeeds.from_first(0)
     used = {
         development.model,
@@ -95,7 +95,7 @@ def test_a_changed_definition_changes_the_verdict():
     exam = load_exam("safety")
     study = load_study("safety")
     data = {
-        "exam": {"study": "safety", "version": 3},
+        "exam": {"study": "safety", "version": 4},
         "draws": {k: list(v) for k, v in exam.seeds.items()},
         "targets": {
             name: {

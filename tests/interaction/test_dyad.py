@@ -10,18 +10,10 @@ from rnnpb.analysis import dyad as measures
 from rnnpb.analysis.metrics import LOCK_LIMIT
 from rnnpb.demonstrator import MirrorMapping, learning_set
 from rnnpb.errors import ConfigError
-from rnnpb.interaction.dyad import (
-    AgentConfig,
-    Dyad,
-    RobotAgent,
-    ScriptedSubject,
-    SubjectConfig,
-    pattern_references,
-    person_hands,
-    robot_and_subject,
-    robot_to_person_scale,
-)
+from rnnpb.interaction.dyad import AgentConfig, Dyad, RobotAgent
+from rnnpb.interaction.person_space import pattern_references, person_hands, robot_to_person_scale
 from rnnpb.interaction.recorder import DyadRecorder, dyad_columns, read_dyad_session
+from rnnpb.interaction.subject import ScriptedSubject, SubjectConfig, robot_and_subject
 from rnnpb.model import OnlineConfig
 from rnnpb.robot.camera import RobotCamera
 

@@ -118,9 +118,14 @@ def test_interact_learn_keeps_a_new_shape_writes_a_version_and_nothing_from_rand
     )
     printed = capsys.readouterr().out
     teaching = json.loads((out / "summary.json").read_text())["teaching"]
-    (episode,) = teaching["episodes"]
-    assert episode["pattern"] == "new-1" and episode["status"] == "learned"
-    assert teaching["versions_written"] == [str(version_path(path, 2))]
+    # kept at two cycles and learned; the cycles shown after that, followed loosely by the
+    # freshly learned pattern, are more data for it
+    episodes = teaching["episodes"]
+    assert {(e["pattern"], e["status"]) for e in episodes} == {("new-1", "learned")}
+    assert "grows" not in episodes[0]["note"]
+    assert all("grows new-1" in e["note"] for e in episodes[1:])
+    assert teaching["versions_written"][0] == str(version_path(path, 2))
+    assert len(teaching["versions_written"]) == len(episodes)
     assert version_path(path, 2).exists() and teaching["memory"] == str(memory_path_for(path))
     for words in (
         "kept a new movement as new-1",
@@ -149,7 +154,7 @@ def test_interact_learn_keeps_a_new_shape_writes_a_version_and_nothing_from_rand
     )
     teaching = json.loads((out / "summary.json").read_text())["teaching"]
     assert teaching["episodes"] == [] and teaching["versions_written"] == []
-    assert not version_path(path, 3).exists()
+    assert len(list(tmp_path.glob("m.v*.npz"))) == len(episodes)
 
 
 def test_consolidation_iterations_need_learn_and_a_positive_count(tmp_path, capsys):
@@ -223,10 +228,10 @@ def test_a_person_s_wave_shown_for_a_few_cycles_is_kept_merged_and_learned_once(
     model, tmp_path, mocap_dir
 ):
     """Three takes of a real person waving (about five cycles each, slowed to a 12-step
-    period), learned patterns between them; the stream ends during the last: two performances
-    are kept as each ends (the last as the stream ends), the second merged with the first, and
-    both learned as one pattern; nothing else is kept. (Without the cycles the novel call rests
-    on, none of these takes holds enough steps called novel to keep.)"""
+    period), learned patterns between them: the first two are kept as each ends, the second
+    merged with the first, and both learned as one pattern; the third is recognised as it and,
+    followed loosely, is more data for it; nothing else is kept. (Without the cycles the novel
+    call rests on, none of these takes holds enough steps called novel to keep.)"""
     import numpy as np
 
     from rnnpb.interaction.teaching import Teacher
@@ -242,13 +247,13 @@ def test_a_person_s_wave_shown_for_a_few_cycles_is_kept_merged_and_learned_once(
             loop, path, memory, make_mirror=MirrorSystem, source="waves", iterations=20
         )
         loop.run(between_steps=teacher.between_steps)
-        # The stream ends while the last take is still being performed: nothing of it yet.
-        assert len(memory.episodes()) == 1
         teacher.finish()  # as `rnnpb interact` does when its source ends
         teacher.between_steps(0.0)
         episodes = memory.episodes()
-    assert [e.pattern for e in episodes] == ["new-1", "new-1"], [e.note for e in episodes]
-    assert [e.status for e in episodes] == ["learned", "learned"]
+    assert [e.pattern for e in episodes] == ["new-1"] * 3, [e.note for e in episodes]
+    assert [e.status for e in episodes] == ["learned"] * 3
+    assert "merged with episode 1" in episodes[1].note
+    assert "grows new-1" in episodes[2].note and "grows" not in episodes[1].note
     assert "new-1" in loop.mirror.model.patterns
     # each kept performance lies within one take: nothing of the learned patterns around them
     ends = np.cumsum([len(part) for part in parts])
@@ -258,11 +263,12 @@ def test_a_person_s_wave_shown_for_a_few_cycles_is_kept_merged_and_learned_once(
         assert any(a <= first and last < b for a, b in within), episode.note
 
 
-def test_interact_learn_keeps_a_recording_s_last_performance_when_the_file_ends(
+def test_interact_learn_learns_a_wave_shown_twice_and_grows_it_with_the_third(
     model, tmp_path, mocap_dir, capsys
 ):
-    """`rnnpb interact --learn` on a recording that ends while the person still waves: the
-    last wave is kept as the file ends, merged with the one before, and learned."""
+    """`rnnpb interact --learn` on a recording of three waves between learned patterns: the
+    second wave is kept, merged with the first and learned; the third is recognised as it and
+    is more data for it."""
     import json
 
     import numpy as np
@@ -280,6 +286,8 @@ def test_interact_learn_keeps_a_recording_s_last_performance_when_the_file_ends(
     assert main(arguments) == 0
     printed = capsys.readouterr().out
     teaching = json.loads((tmp_path / "summary.json").read_text())["teaching"]
-    assert [e["pattern"] for e in teaching["episodes"]] == ["new-1", "new-1"]
-    assert [e["status"] for e in teaching["episodes"]] == ["learned", "learned"]
-    assert f"step {len(stream)}: kept another performance of new-1" in printed, printed
+    assert [e["pattern"] for e in teaching["episodes"]] == ["new-1"] * 3
+    assert [e["status"] for e in teaching["episodes"]] == ["learned"] * 3
+    assert "kept another performance of new-1" in printed, printed
+    assert "learned as pattern new-1 (seen twice" in printed, printed
+    assert "kept a performance of new-1 the robot did not follow closely" in printed, printed

@@ -405,7 +405,8 @@ def test_a_model_file_of_format_1_still_loads(tmp_path):
 def test_a_bad_history_is_refused(tmp_path, change, message):
     import json
 
-    from rnnpb.model.io import MODEL_FORMAT_VERSION, load_archive, save_archive
+    from rnnpb.model.archive import load_archive, save_archive
+    from rnnpb.model.io import MODEL_FORMAT_VERSION
 
     model = TrainedModel.load(__file__.rsplit("/", 1)[0] + "/data/model_format1.npz")
     model.save(tmp_path / "m.npz")

@@ -8,7 +8,7 @@ import pytest
 
 from rnnpb.errors import ModelFileError
 from rnnpb.model import MirrorSystem, TrainedModel, generate
-from rnnpb.model.io import save_archive
+from rnnpb.model.archive import save_archive
 
 
 def test_save_load_gives_identical_outputs(trained, tmp_path):

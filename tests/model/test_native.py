@@ -139,7 +139,11 @@ def test_sessions_regressed_together_are_each_regressed_alone(trained):
     for b, block in enumerate(blocks):
         alone = kernel(block)
         for name, part, one in zip(alone._fields, together, alone, strict=True):
-            np.testing.assert_array_equal(part[b], one, err_msg=f"{name}, session {b}")
+            # The same arithmetic to the last bit or two: the kernels of four sessions and of
+            # one may contract a product and a sum into one fused operation differently.
+            np.testing.assert_allclose(
+                part[b], one, rtol=1e-6, atol=1e-9, err_msg=f"{name}, session {b}"
+            )
 
 
 def test_a_mirror_system_with_the_native_loop_steps_as_the_jax_one(trained):

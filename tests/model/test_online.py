@@ -324,3 +324,32 @@ def test_a_mirror_of_another_window_starts_afresh(trained):
     other = MirrorSystem(trained, OnlineConfig(window=running.config.window + 5))
     assert not other.continue_from(running)
     assert other.steps == 0 and len(other.pb_profile) == 0
+
+
+def test_the_levels_grow_with_how_far_the_hands_move_a_step():
+    """The surprise gate's and the phase restarts' levels are judged against the movement: a
+    window whose hands move as far a step as the movement they were tuned on, or less, keeps
+    them as they are; one that moves three times as far has them three times higher."""
+    from rnnpb.model.online import OnlineState, level_scale
+    from rnnpb.model.online_config import TUNED_MOVEMENT
+
+    def state(step: float) -> OnlineState:
+        t = np.arange(8, dtype=np.float32)
+        sensory = np.stack([0.5 + step * t * (-1) ** np.arange(4)[:, None]][0], axis=1)
+        return OnlineState(
+            sensory=jnp.asarray(np.where(np.arange(8)[:, None] < 6, sensory, 0.0), jnp.float32),
+            seen=jnp.asarray(np.broadcast_to(np.arange(8)[:, None] < 6, (8, 4))),
+            motor_sent=jnp.zeros((8, 8), jnp.float32),
+            n=jnp.asarray(6, jnp.int32),
+            rho=jnp.zeros((8, 4), jnp.float32),
+            rho_velocity=jnp.zeros((8, 4), jnp.float32),
+            onset_context=jnp.zeros(3, jnp.float32),
+            onset_motor=jnp.zeros(8, jnp.float32),
+            next_onset_context=jnp.zeros(3, jnp.float32),
+            next_onset_motor=jnp.zeros(8, jnp.float32),
+            predicted_sensory=jnp.full(4, 0.5, jnp.float32),
+        )
+
+    assert float(level_scale(state(0.0), 4)) == 1.0  # still hands: the levels as tuned
+    assert float(level_scale(state(0.5 * TUNED_MOVEMENT), 4)) == 1.0
+    assert float(level_scale(state(3 * TUNED_MOVEMENT), 4)) == pytest.approx(3.0, rel=1e-5)

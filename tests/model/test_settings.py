@@ -226,25 +226,32 @@ def test_train_takes_a_config_file_and_info_shows_the_preset(
     assert shown in capsys.readouterr().out
 
 
+_NOW = {name: load_preset(name).version for name in ("paper", "fast")}
+
+
 @pytest.mark.parametrize(
     ("recorded", "shown"),
     [
         # Learned before the fingerprints were recorded: version 1, whose values changed.
         (
             {"name": "fast", "version": 1},
-            "fast, version 1 (the fast preset is at version 2 now; version 1's values changed "
-            "while it was current)",
+            f"fast, version 1 (the fast preset is at version {_NOW['fast']} now; version 1's "
+            "values changed while it was current)",
         ),
         # Learned with version 1's first values, the fingerprint recorded.
         (
             {"name": "paper", "version": 1, "fingerprint": "27140656dee47093"},
-            "paper, version 1 (the paper preset is at version 2 now; learned with earlier "
-            "values of version 1)",
+            f"paper, version 1 (the paper preset is at version {_NOW['paper']} now; learned with "
+            "earlier values of version 1)",
         ),
-        ({"name": "paper", "version": 2, "fingerprint": "c9fc8abe565ee980"}, "paper, version 2"),
+        (
+            {"name": "paper", "version": 2, "fingerprint": "c9fc8abe565ee980"},
+            f"paper, version 2 (the paper preset is at version {_NOW['paper']} now)",
+        ),
         (
             {"name": "paper", "version": 2, "fingerprint": "0000000000000000"},
-            "paper, version 2 (values that version 2 never held (fingerprint 0000000000000000))",
+            f"paper, version 2 (the paper preset is at version {_NOW['paper']} now; values that "
+            "version 2 never held (fingerprint 0000000000000000))",
         ),
     ],
 )

@@ -8,6 +8,7 @@ import pytest
 
 from rnnpb.errors import ConfigError
 from rnnpb.presets import (
+    KINDS,
     PRESET_NAMES,
     Source,
     load_preset,
@@ -26,26 +27,13 @@ SECTIONS = (
     "teaching",
 )
 
-# The values whose evidence cannot be repeated (:func:`_not_kept`): a figure measured by a
-# search or harness that was not kept, or a command that repeats only *such* a search. This
-# list may only shrink: a value chosen from now on names the command that measured it, and a
-# value whose measure becomes repeatable leaves the list.
-NOT_KEPT = {
+# The values whose evidence is ``unmeasured`` and yet gives a figure or draws: chosen on a
+# measure that cannot be repeated (a search or harness that was not kept; a command, where one
+# is given, repeats only *such* a search, whose figure may differ). This list may only shrink:
+# a value chosen from now on names the harness that measured it (kind "measured"), and a value
+# whose measure becomes repeatable leaves the list.
+UNMEASURED = {
     "paper": {
-        "learning": ("learning_rate",),
-        "learning.pb": ("learning_rate", "k_nb"),
-        "online": (
-            "optimize_onset",
-            "onset_learning_rate",
-            "restart_span",
-            "motor_input",
-            "surprise_gate",
-            "gate_power",
-            "phase_restarts",
-            "phase_restart_ratio",
-            "phase_restart_level",
-        ),
-        "online.pb": ("learning_rate", "k_nb", "integration_length"),
         "recognition": (
             "evidence_steps",
             "match_scale",
@@ -71,31 +59,9 @@ NOT_KEPT = {
             "structure_level",
             "switch_steps",
             "release_steps",
-        ),
-        "consolidation": (
-            "iterations",
-            "input_noise",
-            "function_rehearsal_input_noise",
-            "hold_old_pb",
-            "new_pb_start",
-            "rehearsal_target",
         ),
     },
     "fast": {
-        "learning": ("iterations", "optimizer", "learning_rate", "input_noise"),
-        "learning.pb": ("learning_rate", "k_nb"),
-        "online": (
-            "optimize_onset",
-            "onset_learning_rate",
-            "restart_span",
-            "motor_input",
-            "surprise_gate",
-            "gate_power",
-            "phase_restarts",
-            "phase_restart_ratio",
-            "phase_restart_level",
-        ),
-        "online.pb": ("learning_rate", "k_nb", "integration_length"),
         "recognition": (
             "evidence_steps",
             "match_scale",
@@ -120,27 +86,15 @@ NOT_KEPT = {
             "confidence_level",
             "switch_steps",
             "release_steps",
-        ),
-        "consolidation": (
-            "input_noise",
-            "function_rehearsal_input_noise",
-            "hold_old_pb",
-            "new_pb_start",
-            "rehearsal_target",
         ),
     },
 }
 
 
-def _claims_a_measure(source: Source) -> bool:
-    """Whether a source says a value was measured: it gives a figure or the draws."""
-    return bool(source.figure or source.draws)
-
-
-def _not_kept(source: Source) -> bool:
-    """Evidence that cannot be repeated: a measure with no command, or a command that only
-    repeats a search like the one that chose the value, which was not kept."""
-    return (not source.command and _claims_a_measure(source)) or "not kept" in source.note
+def _measured_once(source: Source) -> bool:
+    """Evidence that cannot be repeated: a measure made once, by a search or harness that was
+    not kept."""
+    return source.kind == "unmeasured" and source.claims_a_measure
 
 
 @pytest.mark.parametrize("name", PRESET_NAMES)
@@ -154,38 +108,40 @@ def test_every_value_has_evidence_from_a_named_source(name):
         for key in preset.section(section):
             source = preset.evidence(section, key)
             assert source.id in preset.sources
-            # Every source says where the value comes from: the command that measured it, or
-            # a note. A note alone is evidence only for a value that claims no measure (the
-            # paper's, a reading of it, set when built, unused: no figure, no draws) or one
-            # of the known values whose measure was not kept (NOT_KEPT, below).
-            assert source.command or source.note, (section, key)
-            if not source.command and _claims_a_measure(source):
-                assert key in NOT_KEPT[name].get(section, ()), (
-                    f"[{section}] {key}: its evidence {source.id!r} gives a figure but no "
-                    "command that measures it"
+            assert source.kind in KINDS, (section, key)
+            # A value claims a measure only as "measured", with the command that repeats it,
+            # or as one of the known values measured once by what was not kept (UNMEASURED).
+            if source.kind == "measured":
+                assert source.command and source.figure, (section, key)
+            elif source.claims_a_measure:
+                assert key in UNMEASURED[name].get(section, ()), (
+                    f"[{section}] {key}: its evidence {source.id!r} gives a figure or draws but "
+                    "no harness that repeats them: measure it, or say it claims none"
                 )
+            else:
+                assert source.note, (section, key)
             assert all(isinstance(draw, int) for draw in source.draws)
             used.add(source.id)
     assert used == set(preset.sources), f"sources no value names: {set(preset.sources) - used}"
 
 
 @pytest.mark.parametrize("name", PRESET_NAMES)
-def test_values_whose_evidence_was_not_kept_are_a_list_that_only_shrinks(name):
+def test_values_measured_once_are_a_list_that_only_shrinks(name):
     preset = load_preset(name)
     found = {
         (section, key)
         for section in preset.sections
         for key in preset.section(section)
-        if _not_kept(preset.evidence(section, key))
+        if _measured_once(preset.evidence(section, key))
     }
-    known = {(section, key) for section, keys in NOT_KEPT[name].items() for key in keys}
+    known = {(section, key) for section, keys in UNMEASURED[name].items() for key in keys}
     new = sorted(found - known)
     assert not new, (
-        f"values of the {name} preset chosen on evidence that was not kept: {new}; name the "
-        "command that measures them"
+        f"values of the {name} preset chosen on evidence that cannot be repeated: {new}; name "
+        "the harness that measures them"
     )
     gone = sorted(known - found)
-    assert not gone, f"the {name} preset's {gone} can be repeated now: drop them from NOT_KEPT"
+    assert not gone, f"the {name} preset's {gone} can be repeated now: drop them from UNMEASURED"
 
 
 @pytest.mark.parametrize("name", PRESET_NAMES)
@@ -249,6 +205,18 @@ def _version(text: str, value: str) -> str:
     return changed
 
 
+def _source_field(text: str, source: str, key: str, value: str) -> str:
+    """The preset file's text with ``[sources.<source>]``'s ``key`` set to ``value`` (TOML)."""
+    head = f"[sources.{source}]\n"
+    start = text.index(head) + len(head)
+    end = text.find("\n[", start)
+    block = text[start:end]
+    changed, count = re.subn(rf"(?m)^{key} = .*$", f"{key} = {value}", block)
+    if not count:
+        changed = block + f"{key} = {value}\n"
+    return text[:start] + changed + text[end:]
+
+
 def _shipped_text() -> str:
     from pathlib import Path
 
@@ -275,7 +243,52 @@ def _shipped_text() -> str:
             lambda t: t.replace("[evidence.online]\n", '[evidence.online]\nwindw = "paper"\n'),
             "evidence for 'windw'",
         ),
-        (lambda t: t.replace('figure = ""\n', "", 1), "must hold exactly command, draws"),
+        (lambda t: t.replace('figure = ""\n', "", 1), "must hold exactly kind, command, draws"),
+        (lambda t: t.replace('\nkind = "paper"', '\nkind = "guessed"', 1), "kind must be one of"),
+        (
+            lambda t: t.replace(
+                'kind = "documented"\ncommand = ""',
+                'kind = "documented"\ncommand = "python tools/structure_periods.py"',
+                1,
+            ),
+            "is documented: it claims no measure",
+        ),
+        (
+            lambda t: _source_field(t, "structure-periods", "command", '""'),
+            "is measured: it needs the command and the figure",
+        ),
+        (
+            lambda t: _source_field(t, "structure-periods", "command", '"rnnpb study novelty"'),
+            "command must run a harness of the checkout",
+        ),
+        (
+            lambda t: _source_field(t, "structure-periods", "cost", '"free"'),
+            "cost must be one of cheap, costly",
+        ),
+        (
+            lambda t: _source_field(
+                t, "structure-periods", "command", '"python tools/structure_periods.py"'
+            ),
+            "expect needs the command to name JSON",
+        ),
+        (
+            lambda t: _source_field(
+                t, "structure-periods", "expect", "{ shapes_max = 0.244, tolerance = -1 }"
+            ),
+            "expect.tolerance must be a number >= 0",
+        ),
+        (
+            lambda t: _source_field(t, "structure-periods", "expect", "{ shapes_max = [1] }"),
+            "expect.shapes_max must be a number",
+        ),
+        (
+            lambda t: t.replace(
+                'kind = "unmeasured"\ncommand = ""',
+                'kind = "unmeasured"\ncost = "cheap"\ncommand = ""',
+                1,
+            ),
+            "only a measured source has a cost",
+        ),
     ],
 )
 def test_a_malformed_preset_file_is_one_line(tmp_path, change, message):

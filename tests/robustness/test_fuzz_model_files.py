@@ -12,7 +12,8 @@ from hypothesis import strategies as st
 
 from rnnpb.errors import ModelFileError
 from rnnpb.model import TrainConfig, TrainedModel
-from rnnpb.model.io import MODEL_FORMAT, MODEL_FORMAT_VERSION, load_archive, save_archive
+from rnnpb.model.archive import load_archive, save_archive
+from rnnpb.model.io import MODEL_FORMAT, MODEL_FORMAT_VERSION
 from rnnpb.model.learning import init_state, prepare_data
 from rnnpb.model.training import load_checkpoint, save_checkpoint
 from rnnpb.robot import JOINT_LIMITS

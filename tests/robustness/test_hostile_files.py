@@ -23,7 +23,8 @@ from rnnpb.errors import ConfigError, DataFileError, ModelFileError
 from rnnpb.interaction import SessionRecorder, read_session
 from rnnpb.interaction.loop import StepRecord
 from rnnpb.model import TrainedModel
-from rnnpb.model.io import MAX_ARCHIVE_BYTES, check_joint_limits
+from rnnpb.model.archive import MAX_ARCHIVE_BYTES
+from rnnpb.model.io import check_joint_limits
 from rnnpb.perception import ImageFolderSource, load_ball_colors
 from rnnpb.robot import JOINT_LIMITS
 from rnnpb.sequences import (
@@ -139,7 +140,7 @@ def test_checkpoint_total_size_is_capped(tmp_path):
         _zeros_member(
             archive, "state/0000", (MAX_ARCHIVE_BYTES // 8 + 2**17,), MAX_ARCHIVE_BYTES + 2**20
         )
-    from rnnpb.model.io import load_archive
+    from rnnpb.model.archive import load_archive
 
     tracemalloc.start()
     try:

@@ -10,7 +10,7 @@ import pytest
 from rnnpb.demonstrator import held_scenario, learning_set
 from rnnpb.errors import ModelFileError
 from rnnpb.model import MirrorSystem, OnlineConfig
-from rnnpb.model.io import load_archive, save_archive
+from rnnpb.model.archive import load_archive, save_archive
 from rnnpb.model.meta import PB_DRIVEN, regime_of
 from rnnpb.model.reference import ReferenceMirrorSystem
 from rnnpb.safety import (

@@ -61,6 +61,7 @@ def test_a_tiny_search_writes_its_trials_and_a_fragment_to_paste(tool, tmp_path,
     source = fragment["sources"]["recognition-search-fast"]
     assert source["draws"] == [3]
     assert source["command"] == results["command"]
-    assert set(source) == {"command", "draws", "figure", "note"}
+    assert set(source) == {"kind", "command", "draws", "figure", "note"}
+    assert source["kind"] == "measured"
     # The best values are ones RecognitionConfig takes.
     RecognitionConfig.fast().with_tuning(**fragment["recognition"])

@@ -9,7 +9,7 @@ sees a person; a robot's body is mapped there by :mod:`rnnpb.interaction.dyad`).
   of each learned pattern's *references* (each stretch's mean removed): the pattern *as taught*
   (one cycle of the demonstrator's ideal movement at every phase, :func:`movement_templates`)
   and, for a robot, the pattern *as its network plays it* (its closed-loop generation from the
-  pattern's learned PB, :func:`rnnpb.interaction.dyad.pattern_references`). The class is the
+  pattern's learned PB, :func:`rnnpb.interaction.person_space.pattern_references`). The class is the
   pattern of the best-fitting stretch if its RMS misfit is below ``tolerance`` times that
   stretch's RMS and the agent moves (some coordinate's spread above ``MOVING_LEVEL``); else
   none (``""``: still, or no learned movement). It is judged from what the agent does, never
@@ -520,7 +520,7 @@ def measure_dyad(
     ``templates``: each pattern as taught (default: the demonstrator's,
     :func:`movement_templates`); ``references_a``/``references_b``: each agent's own playing
     of its learned patterns (name -> (T, 4), e.g. a robot's closed loop,
-    :func:`rnnpb.interaction.dyad.pattern_references`), compared as well."""
+    :func:`rnnpb.interaction.person_space.pattern_references`), compared as well."""
     templates = templates or movement_templates()
     ca = np.where(
         moving(view_a), classify_movement(view_a, templates, references=references_a).pattern, ""

@@ -101,6 +101,7 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from rnnpb.model import TrainedModel
+    from rnnpb.model.io import model_framing
 
     model = TrainedModel.load(args.model)
     net = model.network
@@ -138,6 +139,15 @@ def run(args: argparse.Namespace) -> int:
     print(
         f"step time: dt {model.dt:g} s, learned and played at"
         + ("" if recorded_dt else " (not recorded: the paper's, as every older model file)")
+    )
+    framing = model_framing(model.meta)
+    print(
+        f"framing: a person's body placed {framing:g} m from the robot's camera"
+        + (
+            ""
+            if "framing_m" in model.meta
+            else " (not recorded: the standard user's place, where the demonstrator stands)"
+        )
     )
     print(f"on-line regression: {suited_regression(model)}")
     if model.taught_sensory is None:

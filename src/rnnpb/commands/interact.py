@@ -24,6 +24,7 @@ Sources (--source):
   csv:FILE        a sensory stream (step,lhy,lhz,rhy,rhz; empty cell = hand not seen)
   video:FILE | images:DIR | webcam:INDEX | synthetic:P   (through the colour-ball tracker)
   zenoh:KEY[@ENDPOINT]     hands published on a Zenoh bus by a camera node (docs/bridge.md)
+  bvh:FILE[,FILE...]       motion capture, read as `rnnpb record` reads it (docs/motion-capture.md)
 
 Writes DIR/session.csv (one row per step), DIR/session.png (the paper's Figure 5 layout)
 and DIR/summary.json (timings per section, missed deadlines, config, versions, the
@@ -49,8 +50,8 @@ learning preset's [online], [recognition] or [recognition_untaught] values for r
 --learn its [teaching.cutter], [teaching] and [consolidation] values.
 
 With --learn the robot learns new movements on-line (docs/teaching.md): when the novelty
-detector has called a structured movement `novel` for a few cycles, three whole cycles of it
-(a performance of five or six cycles: all of it, when it ends) are kept in the model's
+detector has called a structured movement `novel` for a few cycles, two whole cycles of it
+(a performance of three or four cycles: all of it, when it ends) are kept in the model's
 short-term memory (MODEL.memory.sqlite) as pattern new-1, new-2, ....
 A later performance of the same shape is merged with it (never a second pattern); once a
 movement has been seen twice ("new-1 seen twice") it is consolidated, from both performances,
@@ -232,7 +233,8 @@ def run(args: argparse.Namespace) -> int:
         online_name, online = choice.name, choice.config
         why = f", chosen as {choice.reason}; --online overrides"
     else:
-        online_name, online = args.online, OnlineConfig.preset(args.online)
+        # the named preset's regression, its effort per second kept at the model's step
+        online_name, online = args.online, OnlineConfig.preset(args.online).at_step(model.dt)
         why = ""
     if overrides is not None:
         online = tables.online(online)

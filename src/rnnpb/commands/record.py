@@ -39,8 +39,8 @@ depth puts the hands on the plane x = --plane-x metres in front of the robot.
 
 Cutting (--cut): cycles (default) takes sequences of --cycles whole cycles (default: as many
 as make about 48 steps, at least 2); length takes consecutive --length steps; whole keeps
-each stretch seen whole (a routine, for `rnnpb train-routines`). A hand lost for more than a
-few steps splits the recording; no sequence spans the gap.
+each stretch seen whole (a routine, for `rnnpb train-routines`). A step on which a hand was not
+seen splits the recording; no sequence spans the gap.
 
 Every recording writes DIR/recording.json: the source, the step time, the framing and what
 each step changed; `rnnpb train` learns at that step time and framing.

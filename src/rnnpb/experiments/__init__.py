@@ -1,8 +1,9 @@
 """The paper's experiments (section 3) over the library, and the report that shows them.
 
 :mod:`~rnnpb.experiments.paper` holds the experiments and their result objects,
+:mod:`~rnnpb.experiments.jobs` what the demo runs and its jobs, one per learned model,
 :mod:`~rnnpb.experiments.summary` the measures over all jobs and the targets they meet,
-:mod:`~rnnpb.experiments.report` the demo and its report, and
+:mod:`~rnnpb.experiments.demo` the demo, :mod:`~rnnpb.experiments.report` its report, and
 :mod:`~rnnpb.experiments.reporting` what every report shares (tables, figures, versions,
 writing ``report.md`` and ``results.json``).
 
@@ -16,22 +17,25 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
+    from rnnpb.experiments.demo import run_demo
+    from rnnpb.experiments.jobs import (
+        ExperimentConfig,
+        LargerSetRun,
+        LearningSetResult,
+        larger_set_job,
+        learning_set_job,
+    )
     from rnnpb.experiments.paper import (
         Attractor,
         Draw,
-        ExperimentConfig,
         FollowsEveryPattern,
-        LargerSetRun,
-        LearningSetResult,
         NovelResponse,
         Run,
         Switching,
         SwitchingSequence,
         Synchronization,
         follows_every_pattern,
-        larger_set_job,
         learned_attractors,
-        learning_set_job,
         novel_response,
         run_scenario,
         switching,
@@ -42,7 +46,6 @@ if TYPE_CHECKING:
         describe_configuration,
         missing_cases_explanation,
         report_lines,
-        run_demo,
         write_report,
     )
     from rnnpb.experiments.summary import (
@@ -60,19 +63,19 @@ if TYPE_CHECKING:
 _EXPORTS: dict[str, str] = {
     "Attractor": "paper",
     "Draw": "paper",
-    "ExperimentConfig": "paper",
+    "ExperimentConfig": "jobs",
     "FollowsEveryPattern": "paper",
-    "LargerSetRun": "paper",
-    "LearningSetResult": "paper",
+    "LargerSetRun": "jobs",
+    "LearningSetResult": "jobs",
     "NovelResponse": "paper",
     "Run": "paper",
     "Switching": "paper",
     "SwitchingSequence": "paper",
     "Synchronization": "paper",
     "follows_every_pattern": "paper",
-    "larger_set_job": "paper",
+    "larger_set_job": "jobs",
     "learned_attractors": "paper",
-    "learning_set_job": "paper",
+    "learning_set_job": "jobs",
     "novel_response": "paper",
     "run_scenario": "paper",
     "switching": "paper",
@@ -81,7 +84,7 @@ _EXPORTS: dict[str, str] = {
     "describe_configuration": "report",
     "missing_cases_explanation": "report",
     "report_lines": "report",
-    "run_demo": "report",
+    "run_demo": "demo",
     "write_report": "report",
     "DemoResults": "summary",
     "DrawsSummary": "summary",

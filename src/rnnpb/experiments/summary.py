@@ -16,14 +16,8 @@ import numpy as np
 
 from rnnpb.analysis import metrics
 from rnnpb.analysis.statistics import Interval, bootstrap_interval, median_interval, share_within
-from rnnpb.experiments.paper import (
-    Draw,
-    ExperimentConfig,
-    FollowsEveryPattern,
-    LargerSetRun,
-    LearningSetResult,
-    NovelResponse,
-)
+from rnnpb.experiments.jobs import ExperimentConfig, LargerSetRun, LearningSetResult
+from rnnpb.experiments.paper import Draw, FollowsEveryPattern, NovelResponse
 from rnnpb.experiments.reporting import sci
 
 # Per learning set, per pattern: a synchronization measure.

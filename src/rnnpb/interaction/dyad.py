@@ -3,25 +3,13 @@ robot–subject, in one process, as fast as possible or paced.
 
 Each agent moves a body and sees its partner's. What an agent shows its partner is its hands
 *in the person's space*: where a person's hands would be, in the seeing robot's frame, for the
-robot's camera to see them as it saw its teachers (``lhy lhz rhy rhz``,
-:meth:`rnnpb.robot.camera.RobotCamera.sensory_from_hands`).
-
-The scale mapping between a robot's body and a person's. The robot imitates a person through
-the mirror mapping (:class:`rnnpb.demonstrator.MirrorMapping`): each person's hand, relative to
-the person's shoulder, reflected through the plane between them and scaled by
-``s = (L1 + L2) / arm_reach`` (robot arm reach over a person's, 0.21 m / 0.62 m = 0.34),
-placed at the robot's opposite-side shoulder. A robot facing a robot is seen through the
-inverse of that mapping: its hands by forward kinematics
-(:func:`rnnpb.robot.forward_kinematics`), relative to its shoulders, scaled by ``1 / s``,
-reflected back and placed at a person's shoulders (:class:`rnnpb.demonstrator.UserBody`) — the
-person the robot would be imitating (``view="mirrored"``, the default). So a robot moving a
-learned pattern is seen moving that pattern. Physically, a robot facing another sees it turned
-half a turn (``view="physical"``): left and right swap sides and the circles of patterns 3 and
-4 turn the other way, which the robots never learned; "mirrored" is that view flipped left to
-right, as in a mirror.
+robot's camera to see them as it saw its teachers (:mod:`rnnpb.interaction.person_space`: the
+scale mapping between a robot's body and a person's). The robot agent is here; the scripted
+subject, the person it may face, is :mod:`rnnpb.interaction.subject`.
 
 Timing: the agents see each other one step late (the other's body as it was after the last
-step), so both can act at once; a subject and a robot alike.
+step), so both can act at once; a subject and a robot alike. Paced, the dyad keeps the
+deadlines as the interaction loop does (:class:`rnnpb.interaction.pacing.Pacer`).
 
 What an agent may vary (:class:`AgentConfig`): its *adaptation* — how fast its PB follows what
 it sees (a scale on the regression's learning rates; 0: the PB never follows, the robot plays
@@ -41,77 +29,20 @@ from typing import Protocol
 
 import numpy as np
 
-from rnnpb.demonstrator import PATTERNS, PatternConfig, UserBody, pattern_offsets
+from rnnpb.demonstrator import UserBody
 from rnnpb.errors import ConfigError
+from rnnpb.interaction.pacing import Pacer
+from rnnpb.interaction.person_space import WARMUP, person_hands
 from rnnpb.model.generation import generate
 from rnnpb.model.io import TrainedModel
 from rnnpb.model.mirror import MirrorSystem, StepResult
 from rnnpb.model.online_config import OnlineConfig
-from rnnpb.robot import FOREARM_LENGTH, SHOULDERS, UPPER_ARM_LENGTH, forward_kinematics
 from rnnpb.robot.camera import RobotCamera
 
-VIEWS = ("mirrored", "physical")
-WARMUP = 48  # closed-loop steps generated before an initiative is played (4 cycles)
 LEAD_HORIZON = 600  # steps an initiative can last past lead_steps while the partner follows
-REFERENCE_STEPS = 240  # closed-loop steps (after the warm-up) a learned pattern is judged by
 LEADER_HORIZON = 4000  # steps a robot that never follows plans ahead (then plans again)
 UNMATCHED = ("novel", "unstructured", "still")  # what the detector calls no learned pattern
 RELEASE = 3  # unstable steps after which a leader whose partner no longer follows lets go
-_REFLECT_X = np.array([-1.0, 1.0, 1.0])
-_TURN = np.array([-1.0, -1.0, 1.0])  # half a turn about the vertical axis
-
-
-def robot_to_person_scale(body: UserBody | None = None) -> float:
-    """Metres of a person's hand movement per metre of the robot's: ``arm_reach / (L1 + L2)``."""
-    body = body or UserBody()
-    return body.arm_reach / (UPPER_ARM_LENGTH + FOREARM_LENGTH)
-
-
-def person_hands(
-    joints: np.ndarray, body: UserBody | None = None, view: str = "mirrored"
-) -> np.ndarray:
-    """A robot's joint angles (..., 8) → its hands in the person's space (..., 2, 3): where a
-    person's hands would be (robot frame of the robot that sees it), [left, right]."""
-    if view not in VIEWS:
-        raise ConfigError(f"view must be one of {', '.join(VIEWS)}, got {view!r}")
-    body = body or UserBody()
-    hands, _ = forward_kinematics(joints)
-    relative = (hands - SHOULDERS) * robot_to_person_scale(body)
-    if view == "mirrored":
-        # The inverse of MirrorMapping: the robot's right arm shows the person's left hand.
-        return body.shoulders + relative[..., ::-1, :] * _REFLECT_X
-    # Turned half a turn: the robot's left arm is on the seer's right, where a person's left
-    # hand is.
-    return body.shoulders + relative * _TURN
-
-
-def pattern_references(
-    model: TrainedModel,
-    view: str = "mirrored",
-    n_steps: int = REFERENCE_STEPS,
-    body: UserBody | None = None,
-    camera: RobotCamera | None = None,
-) -> dict[str, np.ndarray]:
-    """Each learned pattern as this robot's network plays it, seen as its partner sees it:
-    the closed-loop generation from the pattern's learned PB and initial context, after the
-    warm-up an initiative skips (:data:`WARMUP`), ``n_steps`` steps; name -> (n_steps, 4).
-
-    The measures judge a robot's movement against these (and the pattern as taught): a
-    paper-learned network's closed loop may play a learned pattern otherwise than the
-    demonstrator did, or not repeat at all (docs/dyad.md), and it is still that pattern."""
-    camera = camera or RobotCamera()
-    out = {}
-    for name in model.patterns:
-        generated = generate(
-            model,
-            np.clip(model.pattern_pb[name], 0.0, 1.0),
-            WARMUP + n_steps,
-            initial_context=model.pattern_initial_context(name),
-        )
-        out[name] = camera.sensory_from_hands(
-            person_hands(np.asarray(generated.motor[WARMUP:]), body, view)
-        )
-    return out
 
 
 @dataclass(frozen=True)
@@ -439,201 +370,6 @@ class RobotAgent:
 
 
 @dataclass(frozen=True)
-class SubjectConfig:
-    """The scripted subject of the paper's section 4.2.
-
-    It does not know the robot's repertoire. It plays a pattern of its own; when the robot's
-    movement comes close to one of its patterns it keeps following it (it takes that pattern,
-    at the robot's phase); when they cannot match for ``patience`` steps it initiates another
-    (one it has not found yet, if any); once matched for ``memorize_steps`` it counts the
-    pattern found and, after holding it that long again, moves on to explore another.
-
-    Attributes
-    ----------
-    repertoire : tuple of str
-        Its patterns (the demonstrator's movements).
-    patience : int
-        Steps without a match before it initiates another pattern.
-    memorize_steps : int
-        Steps of match after which a pattern counts as found (for the subject); it holds the
-        synchrony as long again before exploring.
-    follow_steps : int
-        Steps the robot must move one of its other patterns before it follows it.
-    commit_steps : int
-        Steps it keeps to a pattern it has just initiated before it would follow another of
-        the robot's movements: a person who starts a movement gives the partner time to take
-        it up (the robot's switching takes up to 15 steps), and does not drop it the moment
-        the partner is still doing the old one (0: it follows at once).
-    phase_coupling : float
-        Fraction of the phase difference to the robot it closes each step while matched.
-    period_steps : float
-        Its own cycle (the demonstrator's: 12 steps).
-    match_tolerance : float
-        The movement-class tolerance (relative RMS misfit) under which it deems a movement
-        one of its patterns.
-    """
-
-    repertoire: tuple[str, ...] = PATTERNS
-    patience: int = 30
-    memorize_steps: int = 24
-    follow_steps: int = 4
-    commit_steps: int = 20
-    phase_coupling: float = 0.3
-    period_steps: float = 12.0
-    match_tolerance: float = 0.5
-
-    def __post_init__(self) -> None:
-        if not self.repertoire or any(p not in PATTERNS for p in self.repertoire):
-            raise ConfigError(f"subject repertoire must be patterns of {', '.join(PATTERNS)}")
-        for name in ("patience", "memorize_steps", "follow_steps"):
-            if getattr(self, name) < 1:
-                raise ConfigError(f"subject {name} must be >= 1, got {getattr(self, name)}")
-        if self.commit_steps < 0:
-            raise ConfigError(f"subject commit_steps must be >= 0, got {self.commit_steps}")
-        if not 0.0 <= self.phase_coupling <= 1.0:
-            raise ConfigError("subject phase_coupling must be in [0, 1]")
-        if not 3.0 <= self.period_steps <= 200.0:
-            raise ConfigError("subject period_steps must be in [3, 200]")
-        if not self.match_tolerance > 0:
-            raise ConfigError("subject match_tolerance must be > 0")
-
-
-class ScriptedSubject:
-    """A person who explores the robot's repertoire (:class:`SubjectConfig`)."""
-
-    def __init__(
-        self,
-        config: SubjectConfig | None = None,
-        *,
-        seed: int = 0,
-        agent: AgentConfig | None = None,
-        name: str = "subject",
-        pattern_config: PatternConfig | None = None,
-        camera: RobotCamera | None = None,
-    ) -> None:
-        self.config = config or SubjectConfig()
-        self.agent = agent or AgentConfig()
-        self.name = name
-        self.rng = np.random.default_rng(seed)
-        self.pattern_config = pattern_config or PatternConfig()
-        self.camera = camera or RobotCamera()
-        period = int(round(self.config.period_steps))
-        theta = 2 * np.pi * np.arange(period) / period
-        self._templates = {}
-        for name in self.config.repertoire:
-            cycle = self.camera.sensory_from_hands(
-                self.pattern_config.body.hand_centres
-                + pattern_offsets(name, theta, self.pattern_config)
-            )
-            self._templates[name] = cycle - cycle.mean(axis=0)
-        self._period = period
-        self.pattern = str(self.rng.choice(self.config.repertoire))
-        self.theta = float(self.rng.uniform(0, 2 * np.pi))
-        self.believed_found: list[str] = []
-        self._views: list[np.ndarray] = []
-        self._matched = 0
-        self._unmatched = 0
-        self._dwell = 0
-        self._other = ("", 0)
-        self._committed = self.config.commit_steps  # its first movement is its own initiative
-        self._hands = self._pose()
-
-    @property
-    def hands(self) -> np.ndarray:
-        return self._hands
-
-    def _pose(self) -> np.ndarray:
-        return self.pattern_config.body.hand_centres + pattern_offsets(
-            self.pattern, np.array(self.theta), self.pattern_config
-        )
-
-    def _initiate(self) -> None:
-        unfound = [
-            p for p in self.config.repertoire if p not in self.believed_found and p != self.pattern
-        ]
-        choices = (
-            unfound
-            or [p for p in self.config.repertoire if p != self.pattern]
-            or list(self.config.repertoire)
-        )
-        self.pattern = str(self.rng.choice(choices))
-        self._matched = self._unmatched = self._dwell = 0
-        self._other = ("", 0)
-        self._committed = self.config.commit_steps
-
-    def _robot_movement(self) -> tuple[str, int]:
-        """What it takes the robot to be doing: the one of its own patterns (and its phase)
-        that the robot's last cycle looks like, as :func:`rnnpb.analysis.dyad.classify_movement`
-        judges it (it knows its own movements, not the robot's)."""
-        w = self._period
-        if len(self._views) < w:
-            return "", -1
-        segment = np.asarray(self._views[-w:])
-        if not np.isfinite(segment).all():
-            return "", -1
-        segment = segment - segment.mean(axis=0)
-        index = (np.arange(w)[:, None] + np.arange(-w + 1, 1)[None, :]) % w
-        best = (np.inf, "", -1)
-        for name, cycle in self._templates.items():
-            fits = np.sqrt(np.mean((cycle[index] - segment[None]) ** 2, axis=(1, 2))) / np.sqrt(
-                np.mean(cycle**2)
-            )
-            j = int(np.argmin(fits))
-            if fits[j] < best[0]:
-                best = (float(fits[j]), name, j)
-        return (best[1], best[2]) if best[0] < self.config.match_tolerance else ("", -1)
-
-    def act(self, view: np.ndarray) -> AgentStep:
-        seen = np.asarray(view, dtype=np.float64)
-        if self.agent.noise > 0:
-            seen = seen + self.agent.noise * self.rng.standard_normal(seen.shape)
-        self._views.append(seen)
-        del self._views[: -self._period]
-        robot, phase = self._robot_movement()
-        config = self.config
-        initiative = False
-        self._dwell += 1
-        self._committed -= 1
-        if robot and robot == self.pattern:
-            self._matched += 1  # over the time on this pattern: a flicker does not reset it
-            self._unmatched = 0
-            # Keep following passively: close part of the phase gap to the robot.
-            robot_theta = 2 * np.pi * phase / self._period
-            gap = (robot_theta - self.theta + np.pi) % (2 * np.pi) - np.pi
-            self.theta += config.phase_coupling * gap
-            if self._matched == config.memorize_steps and self.pattern not in self.believed_found:
-                self.believed_found.append(self.pattern)
-            if self._matched >= 2 * config.memorize_steps and len(self.believed_found) < len(
-                config.repertoire
-            ):
-                self._initiate()  # memorised: explore another
-                initiative = True
-        else:
-            self._unmatched += 1
-            if robot and robot != self.pattern and self._committed <= 0:
-                name, count = self._other
-                self._other = (robot, count + 1 if name == robot else 1)
-                if self._other[1] >= config.follow_steps:
-                    # The robot's movement is close to one of its own: follow it.
-                    self.pattern = robot
-                    self.theta = 2 * np.pi * phase / self._period
-                    self._matched = self._unmatched = self._dwell = 0
-                    self._other = ("", 0)
-            else:
-                self._other = ("", 0)
-            if (
-                self._unmatched >= config.patience
-                or self._dwell >= config.patience + 2 * config.memorize_steps
-            ):
-                # They cannot match (or not for long enough to remember it): try another.
-                self._initiate()
-                initiative = True
-        self.theta += 2 * np.pi / config.period_steps
-        self._hands = self._pose()
-        return AgentStep(hands=self._hands, view=seen, intent=self.pattern, initiative=initiative)
-
-
-@dataclass(frozen=True)
 class DyadStep:
     """One step of both agents: ``step`` index, each agent's :class:`AgentStep`, the seconds
     the step took, and each agent's hands as the other's camera sees them after the step
@@ -675,6 +411,12 @@ class Dyad:
         self.side_by_side = side_by_side
         self._thread: ThreadPoolExecutor | None = None
         self._shown: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self._pacer = Pacer()
+
+    @property
+    def missed_deadlines(self) -> int:
+        """Steps of :meth:`run` that took longer than its ``dt``."""
+        return self._pacer.missed_deadlines
 
     def view(self, of: Agent) -> np.ndarray:
         """What a robot's camera sees of an agent now, (4,)."""
@@ -722,28 +464,24 @@ class Dyad:
         between_steps: Callable[[float], None] | None = None,
         should_stop: Callable[[], bool] | None = None,
     ) -> DyadRun:
-        """``n_steps`` steps, as fast as possible or one every ``dt`` seconds (the pacing of
-        :class:`rnnpb.interaction.InteractionLoop`: a late step starts the next at once;
-        ``between_steps(wait_s)`` is called while waiting)."""
+        """``n_steps`` steps, as fast as possible or one every ``dt`` seconds, paced as
+        :class:`rnnpb.interaction.InteractionLoop` is (:class:`~rnnpb.interaction.pacing.Pacer`:
+        a late step counts a missed deadline and starts the next at once). Paced,
+        ``between_steps(wait_s)`` is called while waiting; ``should_stop()`` ends the run
+        before its next step."""
         records = []
-        deadline = time.perf_counter()
+        self._pacer.start()
         for _ in range(n_steps):
-            while paced:
-                wait_s = max(0.0, deadline - time.perf_counter())
-                if between_steps is not None:
-                    between_steps(wait_s)
-                elif wait_s > 0:
-                    time.sleep(wait_s)
-                if (should_stop is not None and should_stop()) or time.perf_counter() >= deadline:
-                    break
+            if paced:
+                self._pacer.wait(True, between_steps, should_stop)
             if should_stop is not None and should_stop():
                 break
             record = self.step()
+            self._pacer.took(record.seconds, dt)
             records.append(record)
             if on_step is not None:
                 on_step(record)
-            if paced:
-                deadline = max(deadline + dt, time.perf_counter())
+            self._pacer.stepped(dt)
         return DyadRun.from_steps(records)
 
 
@@ -837,26 +575,3 @@ def robot_pair(
         initial_joints=joints_b,
     )
     return Dyad(robot_a, robot_b)
-
-
-def robot_and_subject(
-    model: TrainedModel,
-    robot: AgentConfig | None = None,
-    subject: SubjectConfig | None = None,
-    *,
-    seed: int = 0,
-    online: OnlineConfig | None = None,
-) -> Dyad:
-    """A robot (agent A, from a random start) and a scripted subject (agent B)."""
-    rng = np.random.default_rng([int(seed), 42])
-    pb, joints = random_start(model, rng)
-    robot_agent = RobotAgent(
-        model,
-        robot,
-        online=online,
-        seed=int(rng.integers(2**31)),
-        name="robot",
-        initial_pb=pb,
-        initial_joints=joints,
-    )
-    return Dyad(robot_agent, ScriptedSubject(subject, seed=int(rng.integers(2**31))))

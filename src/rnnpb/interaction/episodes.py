@@ -30,12 +30,15 @@ movement once it has been ``novel`` long enough to be sure and to hold whole cyc
    kept, and the person told, as soon as it holds ``episode_cycles`` cycles.
 4. **A short performance is kept when it ends.** The detector says ``novel`` once the
    movement's last cycle repeats the one before it, so about two cycles go by before a run
-   starts, and a performance of five or six cycles ends before its run holds
+   starts, and a performance of three or four cycles ends before its run holds
    ``episode_cycles``. The steps that first call rests on (the step's ``repeating``) are the
    new movement already: when a run ends before it was kept, they are put in front of it
    (counted as called ``novel``) — as far back as the hands were seen without a break and no
-   step was called ``familiar`` or ``still`` (a learned pattern or a pause before the
-   movement is not part of it) — and every whole cycle up to its last ``novel`` step is the
+   step was called ``still`` (a pause before the movement is not part of it). Steps called
+   ``familiar`` are looked back through (recognition of the movement before holds a few
+   steps into a new one), but leading cycles that are a learned pattern's shape
+   (``EpisodeCutter.learned``, the running mirror system's judgement) are left out — and
+   every whole cycle up to its last ``novel`` step is the
    episode, when they are ``episode_cycles`` or more, at least ``confirm_cycles`` of them the
    detector's own calls reach into, and novel enough. A performance long
    enough to keep on its own is cut as above, from the detector's own calls alone.
@@ -47,7 +50,7 @@ and an autocorrelation of at most ``max_run_steps`` steps.
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import InitVar, dataclass, field
 from typing import Any
 
@@ -194,6 +197,9 @@ class EpisodeCutter:
         self.config = config or TeachingConfig()
         self.mapping = mapping or MirrorMapping()
         self.camera = camera or RobotCamera()
+        # What says a cycle is a learned pattern's shape (the running mirror system's
+        # MirrorSystem.learned_shape, set by the teacher), or None.
+        self.learned: Callable[[np.ndarray], str | None] | None = None
         self.reset()
 
     def reset(self) -> None:
@@ -379,6 +385,10 @@ class EpisodeCutter:
             self._novel.insert(0, 1.0)  # the call rested on them
         self._looked_back = []
         cycles = self._cycles_to_last_novel(0)
+        # A cycle of the look back that is a learned pattern's shape is the movement before
+        # this one (its recognition held a few steps into this one): left out.
+        while cycles and cycles[0][0] < ahead and self._learned(cycles[0]):
+            cycles.pop(0)
         # The cycles the detector's own calls reach into (not only those the look back holds).
         own = sum(stop > ahead for _, stop in cycles)
         if len(cycles) < config.episode_cycles or own < config.confirm_cycles:
@@ -386,6 +396,11 @@ class EpisodeCutter:
         if not self._novel_enough(cycles[0][0], cycles[-1][1]):
             return None
         return self._movement(cycles)
+
+    def _learned(self, cycle: tuple[int, int]) -> bool:
+        if self.learned is None:
+            return False
+        return self.learned(np.array(self._sensory[cycle[0] : cycle[1]])) is not None
 
     def _cycles_to_last_novel(self, first: int) -> list[tuple[int, int]]:
         """The run's whole cycles (counted from its start) up to its last step called

@@ -6,12 +6,12 @@ generation: one compiled call), ``act`` (send the command to the robot) and ``re
 the session row). A step whose sections together overran ``dt`` counts as a missed deadline;
 run as fast as possible the loop just measures.
 
-The loop owns its pacing: :meth:`InteractionLoop.run` paced (one step every ``dt`` seconds, as
-a robot would) starts each step at its deadline, and a step that overran makes the next one
-start at once (missed steps are not made up). A controller — the dashboard — passes
-``between_steps``: the loop calls it while it waits for the next step, and there the controller
-applies its commands (:meth:`~InteractionLoop.set_dt`, :meth:`~InteractionLoop.stop`, a new
-source); it never steps the loop itself.
+The loop owns its pacing (:class:`rnnpb.interaction.pacing.Pacer`): :meth:`InteractionLoop.run`
+paced (one step every ``dt`` seconds, as a robot would) starts each step at its deadline, and a
+step that overran makes the next one start at once (missed steps are not made up). A controller
+— the dashboard — passes ``between_steps``: the loop calls it while it waits for the next step,
+and there the controller applies its commands (:meth:`~InteractionLoop.set_dt`,
+:meth:`~InteractionLoop.stop`, a new source); it never steps the loop itself.
 
 A source that perceives in a worker thread (the pose tracker:
 :class:`rnnpb.perception.TrackedUserSource` with ``in_worker``) is given a deadline by a paced
@@ -40,6 +40,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rnnpb.errors import ConfigError
+from rnnpb.interaction.pacing import Pacer
 from rnnpb.interaction.recorder import SessionRecorder
 from rnnpb.sources import UserSource
 
@@ -204,7 +205,7 @@ class InteractionLoop:
         }
         self._predicted = np.full(mirror.model.network.sensory_size, math.nan)
         self.steps = 0
-        self.missed_deadlines = 0
+        self._pacer = Pacer()
         self.lost_steps = 0
         self.held_steps = 0
         self.reused_observations = 0
@@ -214,6 +215,11 @@ class InteractionLoop:
         self.unsafe_commands = 0
         self._start: float | None = None
         self._stop_requested = False
+
+    @property
+    def missed_deadlines(self) -> int:
+        """Steps whose sections together took longer than ``dt``."""
+        return self._pacer.missed_deadlines
 
     def subscribe(self, callback: Callable[[StepRecord], None]) -> Callable[[], None]:
         """Call ``callback(record)`` after every step; returns a function that unsubscribes."""
@@ -281,8 +287,7 @@ class InteractionLoop:
         self.lost_steps += int(not np.all(np.isfinite(observation.sensory)))
         self.held_steps += int(result.held)
         self.reused_observations += int(reused)
-        if t4 - t0 > self.config.dt:
-            self.missed_deadlines += 1
+        self._pacer.took(t4 - t0, self.config.dt)
         # Last, so that subscribers publish this step's complete timings and counts.
         for callback in list(self._subscribers):
             callback(record)
@@ -324,9 +329,9 @@ class InteractionLoop:
             replace :attr:`source`. Without it a paced run sleeps until each deadline.
         """
         self._stop_requested = False
-        deadline = time.perf_counter()
+        self._pacer.start()
         while self.config.max_steps is None or self.steps < self.config.max_steps:
-            self._wait_until(deadline, between_steps)
+            self._pacer.wait(self.config.paced, between_steps, lambda: self._stop_requested)
             if self._stop_requested:
                 break
             record = self.step()
@@ -334,22 +339,8 @@ class InteractionLoop:
                 break
             if on_step is not None:
                 on_step(record)
-            if self.config.paced:
-                # A step that overran starts the next at once: missed steps are not made up.
-                deadline = max(deadline + self.config.dt, time.perf_counter())
+            self._pacer.stepped(self.config.dt)
         return self.summary()
-
-    def _wait_until(self, deadline: float, between_steps: Callable[[float], None] | None) -> None:
-        if between_steps is None:
-            delay = deadline - time.perf_counter()
-            if self.config.paced and delay > 0:
-                time.sleep(delay)
-            return
-        while True:
-            wait_s = max(0.0, deadline - time.perf_counter()) if self.config.paced else 0.0
-            between_steps(wait_s)
-            if self._stop_requested or wait_s == 0.0 or time.perf_counter() >= deadline:
-                return
 
     def stop(self) -> None:
         """Make :meth:`run` return before its next step (from ``between_steps``, a subscriber

@@ -205,6 +205,7 @@ class Teacher:
         before = len(self.keeper.kept)
         self.keeper.model = self.model_path
         self.keeper.recognition = getattr(self.loop.mirror, "recognition", None)
+        self.keeper.cutter.learned = getattr(self.loop.mirror, "learned_shape", None)
         self.keeper.taught = self.taught_patterns()
         # A running consolidation learns its episodes as they were: they do not grow.
         self.keeper.learning = self._job_episodes if self.job is not None else frozenset()

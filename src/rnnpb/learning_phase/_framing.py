@@ -10,7 +10,7 @@ is low (0.52 m) and 60° high; further back the whole reach fits, smaller.
 
 The learning phase frames a person by their whole reach (``framing="reach"``, the default):
 the nearest distance at which every point an arm of the standard body can reach lies inside the
-view with a margin of :data:`MARGIN` (:func:`reach_distance`: 1.6 m for the robot's camera).
+view with a margin of :data:`MARGIN` (:func:`reach_distance`: 1.55 m for the robot's camera).
 Every person, whatever their size and whatever they recorded, is so framed alike, and a model
 learned from several recordings sees all of them the same way. ``framing="fit"`` takes instead
 the nearest distance at which this recording's hands lie inside the view (from the standard 1 m

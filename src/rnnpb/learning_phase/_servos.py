@@ -35,9 +35,10 @@ import numpy as np
 from rnnpb.demonstrator import MirrorMapping
 from rnnpb.robot import SHOULDERS, joint_step_limit, retarget
 
-SERVO_MARGIN = 0.95
-"""Share of the servo's step a learned step may use: the rest absorbs the rounding of written
-data and a network's small overshoot."""
+SERVO_MARGIN = 0.75
+"""Share of the servo's step a learned step may use: the rest is headroom for what the network
+makes of it — its own overshoot, and a follower a little faster than the person it learned
+from."""
 ROUNDS = 6
 """Rounds of shrinking at most: to 26 % of the swing."""
 SHRINK = 0.8

@@ -11,7 +11,9 @@ A movement faster than the step cannot be learned from its samples: with fewer t
 movement lies (mean removed; for a single gesture, its duration) — an estimate that errs on
 the safe, short side by at most one cycle per take length. The shortest period over the takes
 is checked, and a movement too fast is refused with the time scale and the ``dt`` that would
-work — never undersampled.
+work — never undersampled. (``rnnpb record`` does not refuse: its learning phase,
+:mod:`rnnpb.learning_phase`, plays such a movement slower by the least factor that gives it
+four steps a cycle, and says so.)
 """
 
 from __future__ import annotations

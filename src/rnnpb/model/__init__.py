@@ -1,8 +1,9 @@
 """The RNNPB: network, learning, generation and on-line PB regression.
 
 Pure functions and their configs, with no I/O or clocks, except where a module says why in its
-docstring: model files (``io.py``), the training driver's checkpoints and clock
-(``training.py``) and the clock of consolidation's history (``consolidation.py``).
+docstring: model files (``io.py``, as archives: ``archive.py``), the training driver's
+checkpoints and clock (``training.py``) and the clock of consolidation's history
+(``consolidation.py``).
 ``reference.py`` is the NumPy twin the compiled code is held to.
 """
 

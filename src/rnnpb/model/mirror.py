@@ -42,6 +42,7 @@ from rnnpb.model.recognition import (
     RecognitionState,
     initial_recognition_state,
     recognise,
+    taught_distances,
     taught_stretches,
 )
 
@@ -327,6 +328,24 @@ class MirrorSystem:
             else None
         )
         self.steps = 0
+
+    def learned_shape(self, values: np.ndarray) -> str | None:
+        """The learned pattern whose taught hands one cycle of a movement, ``values`` (T, S),
+        has the shape of — the cycle resampled to the detector's ``template_steps`` and matched
+        as the detector matches (:func:`rnnpb.model.recognition.taught_distances`), within
+        ``template_level`` — or None (also for a model without taught hands)."""
+        values = np.asarray(values, dtype=np.float64)
+        if self._taught is None or len(values) < 2 or not np.isfinite(values).all():
+            return None
+        points = self.recognition.template_steps
+        at = np.linspace(0, len(values) - 1, points)
+        window = np.stack(
+            [np.interp(at, np.arange(len(values)), values[:, j]) for j in range(values.shape[1])],
+            axis=1,
+        )
+        distances = taught_distances(window, self._taught)
+        best = int(np.argmin(distances))
+        return self.patterns[best] if distances[best] < self.recognition.template_level else None
 
     def reset(self, initial_pb: np.ndarray | None = None) -> None:
         """Forget the window: the next step starts a new interaction."""

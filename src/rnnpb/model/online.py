@@ -52,7 +52,7 @@ from rnnpb.model import window
 from rnnpb.model.io import TrainedModel
 from rnnpb.model.meta import MetaParams, barrier_energy, project_out
 from rnnpb.model.network import Params, closed_loop, logit, logit_numpy
-from rnnpb.model.online_config import OnlineConfig
+from rnnpb.model.online_config import TUNED_MOVEMENT, OnlineConfig
 from rnnpb.model.parametric_bias import pb_update
 
 
@@ -163,13 +163,23 @@ def _recent_error(
     )
 
 
+def level_scale(state: OnlineState, steps: int) -> jax.Array:
+    """How much further than the movement the levels were tuned on (``TUNED_MOVEMENT``) the
+    hands moved a step over the window's last ``steps`` observations, at least 1: the factor
+    on the surprise gate's and the phase restarts' levels."""
+    moved = jnp.sqrt(window.movement(state, since=state.n - 1 - steps))
+    return jnp.maximum(moved / TUNED_MOVEMENT, 1.0)
+
+
 def _surprise_gate(params: Params, state: OnlineState, config: OnlineConfig) -> jax.Array | None:
     """The factor on the PB's error gradient (see ``OnlineConfig.surprise_gate``); None when
-    the gate is off. Measured with the profile and onset the regression starts from."""
+    the gate is off. Measured with the profile and onset the regression starts from, against
+    the level grown with the movement (:func:`level_scale`)."""
     if config.surprise_gate <= 0:
         return None
     rms = jnp.sqrt(_recent_error(params, state, config, config.gate_steps))
-    return jnp.clip((rms / config.surprise_gate) ** config.gate_power, config.gate_floor, 1.0)
+    level = config.surprise_gate * level_scale(state, config.gate_steps)
+    return jnp.clip((rms / level) ** config.gate_power, config.gate_floor, 1.0)
 
 
 def _phase_restart(
@@ -212,7 +222,8 @@ def _phase_restart(
     # Where the window predicts the recent steps within the level (most steps of a movement
     # followed), no candidate can be taken: they are scored only where one could be (under
     # vmap both branches run, with the same outcome).
-    possible = (state.n >= span) & (current > config.phase_restart_level**2)
+    level = config.phase_restart_level * level_scale(state, recent)
+    possible = (state.n >= span) & (current > level**2)
     best_error, best = jax.lax.cond(
         possible,
         best_candidate,

@@ -39,6 +39,13 @@ def _preset_tuning(preset: Preset | str, section: str) -> Tuning:
     return Tuning(preset.name, {k: v for k, v in values.items() if k not in _USER})
 
 
+TUNED_MOVEMENT = 0.04
+"""The RMS change of a seen value from one step to the next (view units) on which the surprise
+gate's and the phase restarts' levels were tuned: the demonstrator's four patterns move 0.031 to
+0.040 a step (median over their cycles), its new shapes up to 0.053. A movement that moves
+further a step has its levels raised in proportion (:func:`rnnpb.model.online.level_scale`)."""
+
+
 @dataclass(frozen=True)
 class OnlineConfig:
     """How the PB is regressed on-line.
@@ -68,8 +75,12 @@ class OnlineConfig:
     started ``phase_restarts + 1`` steps back from states on the learned cycles; where one
     predicts the last ``phase_restarts`` observations better than the window by the factor
     ``phase_restart_ratio``, and the window is off by more than ``phase_restart_level``
-    there, the window starts over from that state. The guard: ``"barrier"`` adds
-    ``barrier_weight * softplus(risk logit - logit(risk_level))`` per step of the window's
+    there, the window starts over from that state. Both levels were tuned on the
+    demonstrator, whose hands move about :data:`TUNED_MOVEMENT` a step: where the hands move
+    further in the same steps (a person's own tempo, a large movement), each level grows in
+    proportion, so that an error is judged against the movement it is made on. The guard:
+    ``"barrier"`` adds ``barrier_weight * softplus(risk logit - logit(risk_level))`` per step
+    of the window's
     newest ``barrier_span`` steps (0: all) to the error of eq. 1; ``"projection"`` moves each
     regressed PB down the risk gradient (at most ``projection_steps`` steps of
     ``projection_rate`` in rho) until its risk is below ``risk_level``.
@@ -168,6 +179,22 @@ class OnlineConfig:
         ``OnlineConfig().with_tuning(surprise_gate=0.0, pb={"k_nb": 0.1})``."""
         return _with_tuning(self, changes)
 
+    def at_step(self, dt: float) -> OnlineConfig:
+        """This regression for a model that plays at ``dt`` seconds a step. The presets count
+        its effort, ``iterations``, per step of the paper's 0.4 s; at another step it is kept
+        per second (25 iterations a 0.1 s step, at least 1): the PB relaxes toward what the
+        window says at the same pace in seconds, not four times as fast — it would follow
+        each new step's evidence and jump — and a second of interaction costs what it costs
+        at 0.4 s. The window, the restarts and the gate count steps of a movement's cycle and
+        stay: a person at their own tempo at 0.1 s makes as many steps a cycle as the paper's
+        slow demonstrator at 0.4 s."""
+        if not dt > 0:
+            raise ConfigError(f"dt must be > 0, got {dt}")
+        iterations = max(1, round(self.iterations * dt / PRESET_DT))
+        if iterations == self.iterations:
+            return self
+        return replace(self, iterations=iterations, _tuning=tuning_of(self))
+
     @classmethod
     def from_preset(cls, preset: Preset | str, section: str = "online") -> OnlineConfig:
         """The regression a preset's ``section`` describes (``[online]``, or the paper
@@ -259,8 +286,9 @@ def suggested_online_config(model: Any) -> OnlineChoice:
     regression, ``OnlineConfig.ungated()``; one learned by the paper's algorithm, or one that
     records no learning, the paper preset's, ``OnlineConfig()`` (docs/model.md, "On-line
     interaction"). The recognition settings come from the same preset, those for models
-    without taught hands where the model kept none, with a person's durations kept in seconds
-    at the model's step (:meth:`RecognitionConfig.at_step`). The preset is the one the model records
+    without taught hands where the model kept none, with a person's durations and the
+    regression's effort kept in seconds at the model's step (:meth:`RecognitionConfig.at_step`,
+    :meth:`OnlineConfig.at_step`). The preset is the one the model records
     (:func:`rnnpb.model.io.learning_preset`; a file from before presets were recorded is
     read by its recorded optimizer).
 
@@ -285,5 +313,5 @@ def suggested_online_config(model: Any) -> OnlineChoice:
     else:
         reason = "the model was learned with momentum descent, the paper's algorithm"
     if name == "fast":
-        return OnlineChoice("ungated", OnlineConfig.ungated(), reason, recognition)
-    return OnlineChoice("default", OnlineConfig(), reason, recognition)
+        return OnlineChoice("ungated", OnlineConfig.ungated().at_step(dt), reason, recognition)
+    return OnlineChoice("default", OnlineConfig().at_step(dt), reason, recognition)

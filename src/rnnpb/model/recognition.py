@@ -198,8 +198,9 @@ class RecognitionConfig:
         factor = PRESET_DT / dt
         if abs(factor - 1.0) < 1e-9:
             return self
+        # at a longer step, no fewer than being still can be told by (2 steps)
         return self.with_tuning(
-            **{name: max(1, round(getattr(self, name) * factor)) for name in DURATIONS}
+            **{name: max(2, round(getattr(self, name) * factor)) for name in DURATIONS}
         )
 
     @classmethod

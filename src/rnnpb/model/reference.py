@@ -26,7 +26,7 @@ from rnnpb.model.mirror import (
 )
 from rnnpb.model.network import Params, logit_numpy
 from rnnpb.model.online import phase_candidates, restart_candidates
-from rnnpb.model.online_config import OnlineConfig, suggested_online_config
+from rnnpb.model.online_config import TUNED_MOVEMENT, OnlineConfig, suggested_online_config
 from rnnpb.model.parametric_bias import PBUpdateConfig
 from rnnpb.model.recognition import (
     RecognitionConfig,
@@ -411,6 +411,19 @@ class ReferenceMirrorSystem:
         ]
         return float(np.mean(squared)) if squared else 0.0
 
+    def _level_scale(self, first: int, last: int) -> float:
+        """As :func:`rnnpb.model.online.level_scale`: the RMS one-step change of the
+        observations ``first + 1`` … ``last`` seen at both ends, over ``TUNED_MOVEMENT``, at
+        least 1."""
+        squared = [
+            (self.sensory[t + 1, j] - self.sensory[t, j]) ** 2
+            for t in range(max(first, 0), last)
+            for j in range(self.sensory.shape[1])
+            if self.seen[t + 1, j] and self.seen[t, j]
+        ]
+        moved = float(np.sqrt(np.mean(squared))) if squared else 0.0
+        return max(moved / TUNED_MOVEMENT, 1.0)
+
     def _phase_restart(self, motor_inputs: np.ndarray | None) -> None:
         """Start the window over from the learned state that best predicts the last
         ``phase_restarts`` observations, where it does so much better than the window."""
@@ -442,9 +455,8 @@ class ReferenceMirrorSystem:
         assert best_error is not None and best is not None  # one candidate per learned pattern
         predictions = self._window(motor_inputs)[4]
         current = self._recent_mse(predictions, self.sensory, self.seen, start, self.n - 1)
-        if not (
-            best_error < cfg.phase_restart_ratio * current and current > cfg.phase_restart_level**2
-        ):
+        level = cfg.phase_restart_level * self._level_scale(start, self.n - 1)
+        if not (best_error < cfg.phase_restart_ratio * current and current > level**2):
             return
         for name in ("sensory", "seen", "motor_sent"):
             buffer = getattr(self, name)
@@ -561,7 +573,10 @@ class ReferenceMirrorSystem:
                     )
                 )
             )
-            gate = float(np.clip((rms / cfg.surprise_gate) ** cfg.gate_power, cfg.gate_floor, 1.0))
+            level = cfg.surprise_gate * self._level_scale(
+                max(self.n - 1 - cfg.gate_steps, 0), self.n - 1
+            )
+            gate = float(np.clip((rms / level) ** cfg.gate_power, cfg.gate_floor, 1.0))
         steers = self.meta_level is None or self.meta_level.steers()
         guard = cfg.safety_guard if self.meta is not None and steers else "off"
         barrier = guard == "barrier" and cfg.barrier_weight > 0

@@ -53,8 +53,9 @@ import numpy as np
 
 from rnnpb import __version__
 from rnnpb.errors import ConfigError, DataFileError, ModelFileError
+from rnnpb.model.archive import load_archive, save_archive
 from rnnpb.model.batched import BatchedMirror
-from rnnpb.model.io import TrainedModel, load_archive, save_archive
+from rnnpb.model.io import TrainedModel
 from rnnpb.model.learning import TrainConfig, TrainingData, chunk_runner, init_state
 from rnnpb.model.meta import MetaParams
 from rnnpb.model.mirror import MirrorSystem, StepResult

@@ -18,6 +18,7 @@ from collections.abc import Callable
 from collections.abc import Sequence as SequenceABC
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
+from typing import Any
 
 import jax
 import jax.numpy as jnp
@@ -25,7 +26,8 @@ import numpy as np
 
 from rnnpb import __version__
 from rnnpb.errors import ConfigError, ModelFileError
-from rnnpb.model.io import TrainedModel, check_numeric, load_archive, save_archive
+from rnnpb.model.archive import MAX_MEMBERS, check_numeric, load_archive, save_archive
+from rnnpb.model.io import TrainedModel
 from rnnpb.model.learning import (
     TrainConfig,
     TrainingData,
@@ -359,6 +361,21 @@ def save_checkpoint(
     save_archive(path, meta, arrays)
 
 
+def _checkpoint_members(path: Path, meta: dict[str, Any]) -> dict[str, tuple[int, ...] | None]:
+    """The arrays a checkpoint archive holds (:data:`rnnpb.model.archive.Members`): meta.json
+    and the leaves of the training state as state/0000 …; their shapes depend on the training
+    data, which the checkpoint does not record, so only names, count and the total size are
+    bounded here."""
+    n_leaves = meta.get("n_leaves")
+    if (
+        not isinstance(n_leaves, int)
+        or isinstance(n_leaves, bool)
+        or not (0 < n_leaves < MAX_MEMBERS)
+    ):
+        raise ModelFileError(f"{path}: checkpoint meta.json has no valid 'n_leaves' ({n_leaves!r})")
+    return {f"state/{i:04d}": None for i in range(n_leaves)}
+
+
 def load_checkpoint(
     path: str | os.PathLike[str],
     template: TrainState,
@@ -369,7 +386,9 @@ def load_checkpoint(
 ) -> TrainState:
     """Read a checkpoint into the structure of ``template``; it must match data, config and
     warm start."""
-    meta, arrays = load_archive(path, CHECKPOINT_FORMAT, CHECKPOINT_FORMAT_VERSION)
+    meta, arrays = load_archive(
+        path, CHECKPOINT_FORMAT, CHECKPOINT_FORMAT_VERSION, _checkpoint_members
+    )
     if meta.get("data_fingerprint") != data.fingerprint:
         raise ModelFileError(f"{path}: checkpoint was made with other training data")
     if meta.get("warm_start") != warm_start:

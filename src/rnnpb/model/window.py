@@ -182,6 +182,19 @@ def prediction_errors(
     return jnp.where(target, predictions[:-1, :n_s] - state.sensory[1:], 0.0), target
 
 
+def movement(state: WindowObservations, since: jax.Array | int | None = None) -> jax.Array:
+    """The mean squared change of the observations from one step to the next over the steps
+    :func:`prediction_errors` compares (from step ``since`` on, when given), where both were
+    seen (0 if none): how far the hands move a step."""
+    length, _ = state.sensory.shape
+    index = jnp.arange(length - 1)
+    steps = index < state.n - 1
+    if since is not None:
+        steps = steps & (index >= since)
+    both = steps[:, None] & state.seen[1:] & state.seen[:-1]
+    return mean_squared(jnp.where(both, state.sensory[1:] - state.sensory[:-1], 0.0), both)
+
+
 def mean_squared(error: jax.Array, target: jax.Array) -> jax.Array:
     """The mean of the squared ``error`` over the entries where ``target`` holds (0 if none)."""
     return jnp.sum(error**2) / jnp.maximum(jnp.sum(target), 1)

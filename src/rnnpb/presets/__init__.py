@@ -5,8 +5,30 @@ learned by the paper's algorithm, ``fast.toml`` for the fast preset (Adam). A fi
 values chosen for that preset's models, one table per job — ``[learning]``, ``[online]``,
 ``[recognition]``, ``[recognition_untaught]``, ``[consolidation]``, ``[teaching]``, ... — and,
 for every value, its evidence: ``[evidence.<section>]`` maps each key to the id of a
-``[sources.<id>]`` entry that says which command chose it (``""`` where the search script is
-not kept), on which draws, and which figure it met.
+``[sources.<id>]`` entry that says what kind of evidence it is, which command measures it, on
+which draws, and which figure it met.
+
+A source's ``kind`` (:data:`KINDS`) is one of:
+
+- ``paper``: the paper's value (Ito & Tani 2004); no command, draws or figure;
+- ``documented``: a value set for a reason the note states (an operational choice, the
+  package's reading of the paper, a value derived from another), not measured; no command,
+  draws or figure;
+- ``unmeasured``: a chosen value that no repeatable measure supports: measured by a search or
+  harness that was not kept (the figure and draws say what it measured then, the note why it
+  cannot be rerun), or set when a part was built and never searched. A command, if given,
+  repeats a measure *like* the one that chose it, whose figure may differ;
+- ``measured``: its ``command`` (``python benchmarks/NAME.py ...`` or ``python tools/NAME.py
+  ...``, run from a checkout) reproduces its ``figure`` on its ``draws`` (development draws).
+
+A measured source may also say how dear its harness is, ``cost = "cheap"`` (seconds on one
+core, from a checkout, with no input prepared beforehand) or ``"costly"`` (the default), and
+what it expects, ``expect = {figure = value, ..., tolerance = t}``: the harness writes its
+figures as JSON to the file its command names ``JSON``, each key of ``expect`` is a path into
+that JSON (``/`` between levels), a number held to within ``tolerance`` (absolute, default 0)
+and anything else exactly. In a command, ``DIR`` is a folder the harness writes in and
+``JSON`` that file; ``rnnpb presets evidence --check NAME`` runs the cheap harnesses with
+fresh ones and fails when a figure differs (:mod:`rnnpb.presets.evidence`).
 
 A nested table is a section of its own, named by its dotted path: ``[online.pb]`` is section
 ``"online.pb"``, its evidence ``[evidence.online.pb]``. Lists are read as tuples, so a
@@ -17,6 +39,8 @@ section's values are hashable, as the compiled code needs its static settings to
 0.035
 >>> preset.evidence("online", "surprise_gate").draws
 (100, 200, 300)
+>>> preset.evidence("online", "window").kind
+'paper'
 
 :func:`load_preset` reads a preset by name (cached); :func:`read_preset` any file in the same
 format; :meth:`Preset.overridden` applies a ``--config`` file's values over a preset. Every
@@ -48,8 +72,16 @@ PRESET_NAMES: tuple[str, ...] = ("paper", "fast")
 REGISTRY = "versions.toml"
 """The file of this package that records each preset version's fingerprint."""
 
+KINDS: tuple[str, ...] = ("paper", "documented", "unmeasured", "measured")
+"""The kinds of evidence a source is (see the module)."""
+COSTS: tuple[str, ...] = ("cheap", "costly")
+"""How dear a measured source's harness is to run again: ``cheap`` ones ``--check`` reruns."""
+HARNESS_FOLDERS: tuple[str, ...] = ("benchmarks", "tools")
+"""Where in a checkout the harnesses that measure a preset's values live."""
+
 _RESERVED = ("name", "version", "description", "evidence", "sources")
-_SOURCE_FIELDS = {"command": str, "draws": list, "figure": str, "note": str}
+_SOURCE_FIELDS = {"kind": str, "command": str, "draws": list, "figure": str, "note": str}
+_OPTIONAL_FIELDS = ("cost", "expect")
 
 
 @dataclass(frozen=True)
@@ -60,13 +92,25 @@ class Source:
     ----------
     id : str
     command : str
-        The command that measured the choice; ``""`` when the search that chose it is not
-        kept (``note`` then says where the choice was made).
+        ``measured``: the harness that reproduces the figure (``python benchmarks/NAME.py
+        ...`` or ``python tools/NAME.py ...``); ``unmeasured``: ``""``, or a harness that
+        repeats a measure like the one that chose the value (its figure may differ);
+        ``paper`` and ``documented``: ``""``.
     draws : tuple of int
-        The draws of the user (scenario seeds) or learning seeds it was chosen on.
+        The draws of the user (scenario seeds) or learning seeds the figure comes from.
     figure : str
-        What the choice met, in a line.
+        What the value met, in a line (``""`` for a value that claims no measure).
     note : str
+        The reason (``paper``, ``documented``), what was measured then and why it cannot be
+        rerun (``unmeasured``), or anything else a reader needs.
+    kind : str
+        One of :data:`KINDS`.
+    cost : str
+        One of :data:`COSTS` (a measured source's; ``costly`` unless the file says).
+    expect : mapping of str to value
+        The figures the harness's JSON must hold (paths with ``/`` between levels).
+    tolerance : float
+        How far a number of ``expect`` may lie from the figure the harness gives.
     """
 
     id: str
@@ -74,6 +118,21 @@ class Source:
     draws: tuple[int, ...]
     figure: str
     note: str
+    kind: str = "documented"
+    cost: str = "costly"
+    expect: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}))
+    tolerance: float = 0.0
+
+    @property
+    def claims_a_measure(self) -> bool:
+        """Whether the source gives a figure or draws: something was measured."""
+        return bool(self.figure or self.draws)
+
+    @property
+    def harness(self) -> str:
+        """The harness's path in a checkout (``benchmarks/NAME.py``), ``""`` without one."""
+        words = self.command.split()
+        return words[1] if len(words) > 1 and words[0] == "python" else ""
 
 
 @dataclass(frozen=True)
@@ -131,7 +190,7 @@ class Preset:
         """
         sections = {name: dict(values) for name, values in self._sections.items()}
         evidence = {name: dict(keys) for name, keys in self._evidence.items()}
-        source = Source(f"override:{origin}", "", (), "", f"set by {origin}")
+        source = Source(f"override:{origin}", "", (), "", f"set by {origin}", "documented")
         for path, key, value in _leaves(overrides, origin, ()):
             section = ".".join(path)
             if section not in sections or key not in sections[section]:
@@ -282,24 +341,88 @@ def _parse(text: str, origin: str) -> Preset:
 def _sources(table: Any, origin: str) -> dict[str, Source]:
     if not isinstance(table, dict):
         raise ConfigError(f"{origin}: [sources] must be a table")
-    sources = {}
-    for source_id, entry in table.items():
-        if not isinstance(entry, dict) or set(entry) != set(_SOURCE_FIELDS):
-            raise ConfigError(
-                f"{origin}: [sources.{source_id}] must hold exactly {', '.join(_SOURCE_FIELDS)}"
-            )
-        for key, kind in _SOURCE_FIELDS.items():
-            if not isinstance(entry[key], kind):
-                raise ConfigError(
-                    f"{origin}: [sources.{source_id}] {key} must be a {kind.__name__}"
-                )
-        draws = entry["draws"]
-        if not all(isinstance(d, int) and not isinstance(d, bool) for d in draws):
-            raise ConfigError(f"{origin}: [sources.{source_id}] draws must be whole numbers")
-        sources[source_id] = Source(
-            source_id, entry["command"], tuple(draws), entry["figure"], entry["note"]
+    return {
+        source_id: _source(source_id, entry, f"{origin}: [sources.{source_id}]")
+        for source_id, entry in table.items()
+    }
+
+
+def _source(source_id: str, entry: Any, where: str) -> Source:
+    """One ``[sources.<id>]`` entry, checked (see the module); every problem one line."""
+    required = set(_SOURCE_FIELDS)
+    if not isinstance(entry, dict) or not required <= set(entry) <= required | set(
+        _OPTIONAL_FIELDS
+    ):
+        raise ConfigError(
+            f"{where} must hold exactly {', '.join(_SOURCE_FIELDS)} (and may hold "
+            f"{' and '.join(_OPTIONAL_FIELDS)})"
         )
-    return sources
+    for key, kind in _SOURCE_FIELDS.items():
+        if not isinstance(entry[key], kind):
+            raise ConfigError(f"{where} {key} must be a {kind.__name__}")
+    draws = entry["draws"]
+    if not all(isinstance(d, int) and not isinstance(d, bool) for d in draws):
+        raise ConfigError(f"{where} draws must be whole numbers")
+    kind, command = entry["kind"], entry["command"]
+    if kind not in KINDS:
+        raise ConfigError(f"{where} kind must be one of {', '.join(KINDS)}, got {kind!r}")
+    if kind in ("paper", "documented"):
+        if command or draws or entry["figure"]:
+            raise ConfigError(
+                f"{where} is {kind}: it claims no measure, so its command, draws and figure "
+                "are empty (a measured value is 'measured', one measured once 'unmeasured')"
+            )
+    if kind != "measured" and not entry["note"]:
+        raise ConfigError(f"{where} is {kind}: its note must say why the value is what it is")
+    if kind == "measured" and not (command and entry["figure"]):
+        raise ConfigError(f"{where} is measured: it needs the command and the figure it gives")
+    if command and not _is_harness(command):
+        forms = " or ".join(f"'python {folder}/NAME.py ...'" for folder in HARNESS_FOLDERS)
+        raise ConfigError(
+            f"{where} command must run a harness of the checkout, {forms}; got {command!r:.60}"
+        )
+    cost, expect = entry.get("cost", "costly"), entry.get("expect", {})
+    if ("cost" in entry or "expect" in entry) and kind != "measured":
+        raise ConfigError(f"{where} is {kind}: only a measured source has a cost or expect")
+    if cost not in COSTS:
+        raise ConfigError(f"{where} cost must be one of {', '.join(COSTS)}, got {cost!r}")
+    if not isinstance(expect, dict):
+        raise ConfigError(f"{where} expect must be a table of figures")
+    if expect and "JSON" not in command.split():
+        raise ConfigError(
+            f"{where} expect needs the command to name JSON, the file its harness writes"
+        )
+    figures = dict(expect)
+    tolerance = figures.pop("tolerance", 0.0)
+    if isinstance(tolerance, bool) or not isinstance(tolerance, int | float) or tolerance < 0:
+        raise ConfigError(f"{where} expect.tolerance must be a number >= 0, got {tolerance!r}")
+    if expect and not figures:
+        raise ConfigError(f"{where} expect names no figure besides its tolerance")
+    for key, value in figures.items():
+        if not isinstance(value, bool | int | float | str):
+            raise ConfigError(
+                f"{where} expect.{key} must be a number, true or false, or text, got {value!r}"
+            )
+    return Source(
+        source_id,
+        command,
+        tuple(draws),
+        entry["figure"],
+        entry["note"],
+        kind,
+        cost,
+        MappingProxyType(figures),
+        float(tolerance),
+    )
+
+
+def _is_harness(command: str) -> bool:
+    """Whether ``command`` runs a script of the checkout's benchmarks/ or tools/."""
+    words = command.split()
+    if len(words) < 2 or words[0] != "python":
+        return False
+    folder, _, script = words[1].partition("/")
+    return folder in HARNESS_FOLDERS and script.endswith(".py") and "/" not in script
 
 
 def _leaves(table: Mapping[str, Any], origin: str, path: tuple[str, ...]):
@@ -340,6 +463,9 @@ def _freeze_sections(
 
 
 __all__ = [
+    "COSTS",
+    "HARNESS_FOLDERS",
+    "KINDS",
     "PRESET_NAMES",
     "REGISTRY",
     "Preset",

@@ -24,7 +24,7 @@ import numpy as np
 
 from rnnpb.errors import ModelFileError
 from rnnpb.model import TrainedModel
-from rnnpb.model.io import check_numeric, load_archive, save_archive
+from rnnpb.model.archive import check_numeric, load_archive, save_archive
 from rnnpb.model.meta import MetaParams
 from rnnpb.safety._meta import familiarity, risk
 

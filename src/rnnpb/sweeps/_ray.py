@@ -137,7 +137,7 @@ def run_tasks(
 def ray_runner(
     address: str | None = None, workers: int | None = None, retries: int = 2
 ) -> Callable[[Sequence[Job]], Iterator[tuple[Any, Any]]]:
-    """A job runner for :func:`rnnpb.experiments.report.run_demo`: the demo's jobs as Ray
+    """A job runner for :func:`rnnpb.experiments.demo.run_demo`: the demo's jobs as Ray
     tasks; a job that fails fails the demo."""
 
     def run(jobs: Sequence[Job]) -> Iterator[tuple[Any, Any]]:

@@ -23,15 +23,10 @@ from rnnpb.experiments.exams import Exam
 from rnnpb.experiments.scenarios import study_models as shared
 from rnnpb.experiments.studies import StudyOptions
 from rnnpb.experiments.studies._pool import study_pool
-from rnnpb.interaction.dyad import (
-    AgentConfig,
-    DyadRun,
-    SubjectConfig,
-    pattern_references,
-    robot_and_subject,
-    robot_pair,
-)
+from rnnpb.interaction.dyad import AgentConfig, DyadRun, robot_pair
+from rnnpb.interaction.person_space import pattern_references
 from rnnpb.interaction.recorder import DyadRecorder
+from rnnpb.interaction.subject import SubjectConfig, robot_and_subject
 from rnnpb.model.io import TrainedModel
 from rnnpb.model.online_config import OnlineConfig
 

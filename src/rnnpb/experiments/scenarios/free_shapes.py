@@ -6,11 +6,11 @@ shape* is drawn from a wider family: each hand traces a Lissajous figure in the 
 frequency ratios 1:1 (an ellipse or a tilted line), 1:2 and 2:1 (two-loop figures: an eight,
 a lying eight) or 2:3 — of its own size (0.5 to 1.5 times the demonstrator's swing) about a
 centre moved by up to 5 cm; the hands move mirrored, in step, in opposite phase, one still and
-the other moving, or each its own figure; the period is the same in steps at every step time: 10 to 30 steps for
-a 1:1 figure (slow circles included), and for the others long enough that their faster part
-turns in no fewer than 8 steps, as a person's arm does at a natural speed (16 to 30 steps for
-1:2 and 2:1, 24 to 39 for 2:3). A person's imperfection rides on it: each cycle a
-little larger or smaller (±8 %) and longer or shorter (±5 %), and the camera's noise.
+the other moving, or each its own figure; the period is the same in steps at every step time:
+10 to 30 steps for a 1:1 figure (slow circles included), and for the others long enough that
+their faster part turns in no fewer than 8 steps, as a person's arm does at a natural speed
+(16 to 30 steps for 1:2 and 2:1, 24 to 39 for 2:3). A person's imperfection rides on it: each
+cycle a little larger or smaller (±8 %) and longer or shorter (±5 %), and the camera's noise.
 """
 
 from __future__ import annotations

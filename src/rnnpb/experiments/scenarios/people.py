@@ -331,40 +331,28 @@ def paced_run(model, path: Path, steps: int, dt: float) -> dict[str, Any]:
     deadlines and the step's sections."""
     from rnnpb.interaction import InteractionLoop, LoopConfig, open_source
     from rnnpb.model import MirrorSystem, OnlineConfig
-    from rnnpb.sources import UserSource
+    from rnnpb.perception import VideoFileSource
 
-    class Looped(UserSource):
-        def __init__(self) -> None:
-            self.inner = None
-
-        def _open(self):
-            self.inner = open_source(
-                f"video:{path}", dt=dt, perception="pose", framing=model.framing
-            )
-            self.inner.connect()
-
-        def connect(self) -> None:
-            self._open()
+    class Looped(VideoFileSource):
+        """The video's frames over and over, its file opened again at its end: one pose
+        tracker for the whole run, as a camera's."""
 
         def read(self):
-            assert self.inner is not None
-            observation = self.inner.read()
-            if observation is None:
-                self.inner.close()
-                self._open()
-                observation = self.inner.read()
-            return observation
+            frame = super().read()
+            if frame is None:
+                self.close()
+                self.connect()
+                frame = super().read()
+            return frame
 
-        def close(self) -> None:
-            if self.inner is not None:
-                self.inner.close()
-
+    source = open_source(f"video:{path}", dt=dt, perception="pose", framing=model.framing)
+    source.frames = Looped(source.frames.path)
     choice = OnlineConfig.for_model(model)
     mirror = MirrorSystem(model, choice.config, recognition=choice.recognition)
     # Compiled before the run, as `rnnpb interact` does before its first paced step.
     mirror.step(np.full(4, 0.5))
     mirror.reset()
-    with Looped() as source:
+    with source:
         loop = InteractionLoop(
             mirror, source, config=LoopConfig(dt=dt, paced=True, max_steps=steps)
         )

@@ -21,8 +21,8 @@ from rnnpb.model import TrainConfig
 
 def paper_training(learning_set: str, seed: int = 0) -> TrainConfig:
     """How ``rnnpb demo`` learns ``learning_set``'s model with the paper's algorithm: its
-    :class:`~rnnpb.experiments.paper.ExperimentConfig`'s learning (the larger set's own)."""
-    from rnnpb.experiments.paper import ExperimentConfig
+    :class:`~rnnpb.experiments.jobs.ExperimentConfig`'s learning (the larger set's own)."""
+    from rnnpb.experiments.jobs import ExperimentConfig
 
     demo = ExperimentConfig()
     return replace(demo.larger_train if learning_set == "full" else demo.train, seed=seed)

@@ -4,7 +4,8 @@ robot's learning phase and then followed in other people, at the paper's step an
 For each step time and kind of source — motion capture (``dataset-2_*.bvh`` takes) and video
 through the pose model (when ``rnnpb[hands]`` is installed) — each movement of the learning
 performer goes through the learning phase as ``rnnpb record`` runs it with its defaults, one
-network learns them all (the fast preset), and the other performers' movements, one after
+network learns them all (the paper's algorithm, as `rnnpb train` learns by default), and
+the other performers' movements, one after
 another, are followed with the command filter in the loop. Measured: sources recorded or
 learned with a refusal, learned steps the independent judges (MuJoCo's contacts, the servo's
 step) refuse, the recognised share, the share of segments followed in step and the share of
@@ -25,6 +26,7 @@ import os
 import platform
 import re
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -124,10 +126,9 @@ def _kind(
     result: dict[str, Any] = {"sources": sources, "runs": {}}
     if not sequences or len(framings) != 1:
         return result
-    model = train(sequences, JOINT_LIMITS, config=TrainConfig.fast(seed=seed))
+    # As `rnnpb train` learns with its defaults: the paper's algorithm.
+    model = train(sequences, JOINT_LIMITS, config=replace(TrainConfig.paper(), seed=seed))
     framing = framings.pop()
-    from dataclasses import replace
-
     model = replace(model, meta={**model.meta, "dt": dt, "framing_m": framing})
     model.save(out / f"{kind}-dt{dt:g}.npz")
     result["model"] = str(out / f"{kind}-dt{dt:g}.npz")

@@ -116,7 +116,8 @@ def run_study(out: Path, config: TeachConfig, log=print, exam: Exam | None = Non
         return StudyOutcome(runtime, targets)
 
     for j, dt in enumerate(config.step_times):
-        at = replace(config, dt=dt)
+        # the regression's effort per second kept at each step, as `rnnpb interact` keeps it
+        at = replace(config, dt=dt, online=config.online.at_step(dt))
         folder = out / f"dt{dt:g}"
         (folder / "runs").mkdir(parents=True, exist_ok=True)
         given = at.shipped or at.models is not None
