@@ -101,6 +101,7 @@ ALLOWED: dict[str, set[str]] = {
         "robot",
         "sources",
         "sequences",
+        "structure",
         "analysis",
     },
     "sweeps": {

@@ -40,6 +40,7 @@ def server(model_dir, tmp_path_factory):
         port=0,
         dt=TEST_DT,
         workdir=tmp_path_factory.mktemp("sessions"),
+        games_dir=tmp_path_factory.mktemp("games"),
     )
     dashboard.start()
     try:

@@ -123,6 +123,8 @@ def test_mouse_tracing_a_learned_pattern_is_recognised(page, server, model):
     sensory = held_scenario(pattern, n_steps=TRACE_SAMPLES, seed=3).sensory
     page.click(".tab[data-mode=pointer]")
     page.wait_for_function("rnnpbDashboard.state.mode === 'pointer'")
+    # Both markers are traced, one drag each: the other hand does not follow the dragged one.
+    page.select_option("#other-hand", "still")
     _set(page, f'{{type: "dt", dt: {TRACE_DT}}}', f"rnnpbDashboard.state.dt === {TRACE_DT}")
     page.click("#reset")
     page.click("#start")
@@ -236,6 +238,27 @@ def _rewrite_names(route) -> None:
 def _until(page, condition: str, timeout: float = 10000):
     """wait_for_function under the page's CSP: a function predicate, not an eval'd string."""
     return page.wait_for_function(f"() => ({condition})", timeout=timeout)
+
+
+def _mouse_click(page, selector: str) -> None:
+    """Click ``selector`` as a person does: the mouse moved to its middle, pressed and let go."""
+    box = page.locator(selector).bounding_box()
+    assert box is not None, f"{selector} is not shown"
+    page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2, steps=4)
+    page.mouse.click(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+
+
+def _swing(page, start, path, seconds: float, period_s: float) -> None:
+    """Press the mouse at ``start`` (page pixels) and move it along ``path(phase)`` (page
+    pixels, phase in [0, 1) of a cycle) for ``seconds``, a cycle every ``period_s``, as a
+    hand does: as often as the browser takes the moves (tens a second), then let go."""
+    page.mouse.move(*start)
+    page.mouse.down()
+    began = time.monotonic()
+    while (elapsed := time.monotonic() - began) < seconds:
+        page.mouse.move(*path((elapsed / period_s) % 1.0))
+        page.wait_for_timeout(15)
+    page.mouse.up()
 
 
 @contextlib.contextmanager
@@ -484,7 +507,7 @@ def test_user_named_patterns_offer_only_what_the_demonstrator_performs(browser, 
         assert "not learned" in buttons[0] and "not learned" not in buttons[1]
         assert not any("wave" in b or "clap" in b for b in buttons)
         note = page.text_content("#patterns-note")
-        assert "wave" in note and "clap" in note and "mouse" in note
+        assert "wave" in note and "clap" in note and "pointer" in note
 
 
 def test_a_reload_keeps_the_plots_and_reset_and_stop_say_what_the_values_are(page, browser, server):

@@ -34,7 +34,11 @@ def test_two_robots_play_and_the_page_shows_the_measures(browser, server, tmp_pa
         assert 0.0 <= meter <= 1.0
         assert "of" in page.text_content("#found")
         page.screenshot(path=str(tmp_path / "game.png"))
-        # The person's hands: the page sends them and the robot sees them.
+        # The person's hands: the page sends them and the robot sees them. One game at a
+        # time: Start is off while the robots play.
+        assert page.is_disabled("#start")
+        page.click("#stop")
+        _until(page, "!document.querySelector('#start').disabled", 20000)
         page.select_option("#mode", "person")
         page.click("#start")
         _until(page, "/step [1-9][0-9]/.test(document.querySelector('#time').textContent)", 90000)
@@ -273,3 +277,36 @@ def test_the_player_frame_shows_a_small_movement_off_centre_at_the_taught_size_a
     for _ in range(24):
         still.push(here + 0.002 * rng.standard_normal(4))
     assert still.gain * 0.002 < 0.01
+
+
+def test_a_figure_eight_s_cycle_is_its_own_however_often_it_crosses_its_middle():
+    from rnnpb.web._game import _period
+
+    angle = 2 * np.pi * np.arange(48) / 12
+
+    def eight(height: float) -> np.ndarray:
+        """Up and down twice in each 12-step cycle, the hands mirrored."""
+        across, up = 0.08 * np.sin(angle), height * np.sin(2 * angle)
+        return np.stack([0.6 + across, 0.5 + up, 0.4 - across, 0.5 + up], axis=1)
+
+    tall, wide = eight(0.16), eight(0.02)
+    assert _period(tall) == 12
+    assert _period(wide) == 12
+    still = np.full((48, 4), 0.5)
+    assert np.isnan(_period(still))
+
+
+def test_no_hint_leads_back_to_a_movement_found_already():
+    from rnnpb.web._game import PlayerFrame, hint, taught_frame
+
+    templates = measures.movement_templates()
+    centre = np.array([0.62, 0.55, 0.38, 0.55])
+    robot = centre + np.tile(templates["1"], (4, 1))  # the horizontal swing, mirrored
+    parallel = templates["1"] * np.array([1, 1, -1, 1])  # the same swing, hands parallel
+    person = centre + np.tile(parallel, (4, 1))
+    frame = PlayerFrame(*taught_frame())
+    for view in person[-24:]:
+        frame.push(view)
+    assert hint(person, person, robot, frame, 0.2) == "the other hand mirror"
+    told = hint(person, person, robot, frame, 0.2, found_already="1")
+    assert "mirror" not in told and "movement 1" in told and "found" in told

@@ -37,6 +37,7 @@ from rnnpb.demonstrator import PatternConfig
 from rnnpb.interaction.dyad import AgentConfig, AgentStep, Dyad, RobotAgent, robot_pair
 from rnnpb.model.io import TrainedModel
 from rnnpb.robot.camera import RobotCamera
+from rnnpb.structure import repeating_stretches
 
 log = logging.getLogger("rnnpb.web")
 
@@ -52,6 +53,8 @@ TEMPOS = (8, 10, 12, 14, 17)  # cycle lengths (steps) a movement is recognised a
 SMALL = 0.35  # below this share of the taught size the game says "bigger"
 TEMPO_SLACK = 1.3  # a cycle this much shorter (longer) than the robot's: "slower" ("faster")
 IN_STEP = 0.6  # meter from which the two move in step: no hint, only time is needed
+PERIOD_LAGS = (5, 24)  # shortest and longest cycle (steps) the tempo hints look for
+PERIOD_STEPS = 48  # steps a cycle is looked for in: two cycles of the longest tempo and more
 
 
 def taught_frame(
@@ -422,17 +425,17 @@ class Found:
 
 
 def _period(views: np.ndarray) -> float:
-    """A movement's cycle in steps: twice the mean spacing of its main direction's crossings
-    of its mean; NaN with fewer than two crossings. (n, 4)"""
-    if len(views) < 4 or not np.isfinite(views).all():
+    """A movement's cycle in steps, found as recognition and the learning phase find one
+    (:func:`rnnpb.structure.repeating_stretches`: each cycle compared with the one before at
+    every lag): the period of the repeating stretch that reaches the last step; NaN where the
+    movement does not repeat there. (n, 4)"""
+    views = np.asarray(views, dtype=np.float64)
+    if not np.isfinite(views).all():
         return math.nan
-    centred = views - views.mean(axis=0)
-    _, _, axes = np.linalg.svd(centred, full_matrices=False)
-    main = centred @ axes[0]
-    crossings = np.flatnonzero(np.diff(np.sign(main)) != 0)
-    if len(crossings) < 2:
+    stretches = repeating_stretches(views, *PERIOD_LAGS)
+    if not stretches or stretches[-1].stop != len(views):
         return math.nan
-    return float(2 * np.mean(np.diff(crossings)))
+    return float(stretches[-1].period)
 
 
 def _coupling(views: np.ndarray) -> tuple[int, int]:
@@ -465,12 +468,19 @@ def coupling_name(signs: tuple[int, int]) -> str:
 
 
 def hint(
-    raw: np.ndarray, person: np.ndarray, robot: np.ndarray, frame: PlayerFrame, meter: float
+    raw: np.ndarray,
+    person: np.ndarray,
+    robot: np.ndarray,
+    frame: PlayerFrame,
+    meter: float,
+    found_already: str = "",
 ) -> str:
     """What the person might try, from their last ``FRAME_STEPS`` steps as the page has them
     (``raw``), as the robot sees them (``person``) and the robot's (``robot``), (n, 4) each,
     and the meter now; ``""`` when there is nothing to say (in step with the robot: the
-    recognition needs a cycle or two)."""
+    recognition needs a cycle or two). While the robot moves a movement found already
+    (``found_already`` names it), nothing leads the person to it: they are sent on to
+    another."""
     if len(raw) == 0 or not np.isfinite(raw[-1]).all():
         return "press on a blue hand and move it"
     recent = raw[-FRAME_STEPS:]
@@ -486,6 +496,11 @@ def hint(
     hands = np.array([np.hypot(spread[0], spread[1]), np.hypot(spread[2], spread[3])])
     if hands.min() < 0.25 * hands.max():
         return "the other hand too (choose how it follows: Other hand)"
+    if found_already:
+        return (
+            f"another movement: movement {found_already}, which the robot moves now, is found"
+            " — lead it somewhere new"
+        )
     theirs = _coupling(robot[-AGREEMENT_WINDOW:])
     yours = _coupling(person[-AGREEMENT_WINDOW:])
     if (
@@ -494,7 +509,7 @@ def hint(
         and coupling_name(theirs) != coupling_name(yours)
     ):
         return f"the other hand {COUPLING_NAMES[coupling_name(theirs)]}"
-    yours_period, theirs_period = _period(person[-FRAME_STEPS:]), _period(robot[-FRAME_STEPS:])
+    yours_period, theirs_period = _period(person[-PERIOD_STEPS:]), _period(robot[-PERIOD_STEPS:])
     if math.isfinite(yours_period) and math.isfinite(theirs_period):
         if yours_period * TEMPO_SLACK < theirs_period:
             return "slower"
@@ -525,7 +540,6 @@ class _Measured:
     class_b: np.ndarray
     coherent: np.ndarray
     episodes: list[measures.Episode]
-    shifts: list[measures.Shift]
 
 
 def _measure(
@@ -535,12 +549,12 @@ def _measure(
     templates: dict[int, dict[str, np.ndarray]],
 ) -> _Measured:
     """The joint measures of :func:`rnnpb.analysis.dyad.measure_dyad` (classes, lock,
-    coherence, episodes, shifts) with the classes judged at every tempo (:func:`classify`)."""
+    coherence, episodes) with the classes judged at every tempo (:func:`classify`)."""
     ca, cb = classify(a, templates), classify(b, templates)
     lock = measures.phase_lock(a, b)
     coherent = measures.coherence(ca, cb, lock.locked, learned)
     found = measures.episodes(coherent, ca)
-    return _Measured(ca, cb, coherent, found, measures.pattern_shifts(found, ca, cb))
+    return _Measured(ca, cb, coherent, found)
 
 
 class _Tracker:
@@ -573,34 +587,37 @@ class _Tracker:
         known = {f.pattern for f in self.found}
         previous_end = 0
         for episode in measured.episodes:
+            # Who moved the joint movement first: the leader of the switch into it (into the
+            # first one, from no joint movement at all).
+            leader, _ = measures.shift_leader(
+                measured.class_a, measured.class_b, episode.start, episode.pattern, previous_end
+            )
+            named = {"a": self.names[0], "b": self.names[1]}.get(leader, "")
             if episode.pattern not in known and episode.pattern in self.learned:
-                leader, _ = measures.shift_leader(
-                    measured.class_a,
-                    measured.class_b,
-                    episode.start,
-                    episode.pattern,
-                    previous_end,
-                )
                 self.found.append(
                     Found(
                         episode.pattern,
                         int(record.step),
                         round(elapsed, 1),
                         offset + episode.start,
-                        {"a": self.names[0], "b": self.names[1]}.get(leader, ""),
+                        named,
                     )
                 )
                 known.add(episode.pattern)
+            self.last_leader = named
             previous_end = episode.end - 1
-        if measured.shifts:
-            leader = measured.shifts[-1].leader
-            self.last_leader = {"a": self.names[0], "b": self.names[1]}.get(leader, "")
         meter = velocity_agreement(a, b)
         coherent = bool(measured.coherent[-1])
         advice = ""
         shown_b = record.shown_b
         if self.mode == "person" and self.frame is not None and raw is not None:
-            advice = "" if coherent else hint(np.asarray(self.raw), b, a, self.frame, meter)
+            robot_now = str(measured.class_a[-1])
+            found_already = robot_now if robot_now in known else ""
+            advice = (
+                ""
+                if coherent
+                else hint(np.asarray(self.raw), b, a, self.frame, meter, found_already)
+            )
         return {
             "type": "game_step",
             "step": int(record.step),

@@ -101,8 +101,10 @@ def parse_client_message(text: str | bytes | None) -> dict[str, Any]:
     ``{"type": "model", "name": NAME}``            one of the models the server offers
     ``{"type": "ping"}``                           answered with ``pong``
     ``{"type": "teach_mode", "mode": M}``          ``off``, ``confirm`` or ``auto``
-    ``{"type": "teach", "action": A}``             ``confirm`` (consolidate the kept
-                                                   episodes) or ``undo`` (previous version)
+    ``{"type": "teach", "action": A}``             ``confirm`` (consolidate a kept
+                                                   movement: ``"pattern": P`` names it, else
+                                                   the one the panel asks about) or ``undo``
+                                                   (the previous version)
     ``{"type": "rename", "pattern": P,``           call a pattern learned (or kept) by
     ``"name": N}``                                 teaching ``N``
     ``{"type": "game", "action": A, "mode": M,``   the mirror game (``/game``): ``start`` or
@@ -219,13 +221,25 @@ def parse_client_message(text: str | bytes | None) -> dict[str, Any]:
             )
         return {"type": "teach_mode", "mode": message["mode"]}
     if kind == "teach":
-        _keys(message, ("action",))
+        # ``pattern`` (optional, confirm only): the kept movement the person confirms.
+        named = "pattern" in message
+        _keys(message, ("action", "pattern") if named else ("action",))
         if not isinstance(message["action"], str) or message["action"] not in TEACH_ACTIONS:
             raise ProtocolError(
                 f"teach action must be one of {', '.join(TEACH_ACTIONS)}, got "
                 f"{_shown(message['action'])}"
             )
-        return {"type": "teach", "action": message["action"]}
+        if not named:
+            return {"type": "teach", "action": message["action"]}
+        pattern = message["pattern"]
+        if message["action"] != "confirm":
+            raise ProtocolError("teach pattern goes with the confirm action only")
+        if not isinstance(pattern, str) or not 0 < len(pattern) <= MAX_RENAME_LENGTH:
+            raise ProtocolError(
+                f"teach pattern must be a string of 1 to {MAX_RENAME_LENGTH} characters, "
+                f"got {_shown(pattern)}"
+            )
+        return {"type": "teach", "action": "confirm", "pattern": pattern}
     if kind == "rename":
         _keys(message, ("pattern", "name"))
         for key in ("pattern", "name"):

@@ -31,7 +31,8 @@ from starlette.websockets import WebSocket, WebSocketDisconnect
 from rnnpb.web._access import ANY_ADDRESS, AccessPolicy, SecurityHeadersMiddleware, normalize_host
 from rnnpb.web._game import GameSession
 from rnnpb.web._protocol import ProtocolError, parse_client_message
-from rnnpb.web._session import RecordingLimits, Session
+from rnnpb.web._recording import RecordingLimits
+from rnnpb.web._session import Session
 from rnnpb.web._teaching import TeachingSettings
 
 log = logging.getLogger("rnnpb.web")
@@ -85,11 +86,15 @@ class _TokenBucket:
 
 
 def create_app(
-    session: Session, access: AccessPolicy | None = None, limits: CommandLimits | None = None
+    session: Session,
+    access: AccessPolicy | None = None,
+    limits: CommandLimits | None = None,
+    games_dir: str | Path | None = None,
 ) -> Starlette:
     """The ASGI app serving ``session`` (already started) to the hosts and origins
     ``access`` allows (default: this computer's loopback names only), each connection within
-    ``limits`` (default :class:`CommandLimits`)."""
+    ``limits`` (default :class:`CommandLimits`); the game's logs go to ``games_dir`` (default:
+    ``games`` in the session's folder)."""
     access = access or AccessPolicy()
     limits = limits or CommandLimits()
 
@@ -212,7 +217,8 @@ def create_app(
                 await sending
             log.info("%s disconnected", client)
 
-    game = GameSession(session.models, dt=session.dt, log_dir=session.workdir / "games")
+    games = Path(games_dir) if games_dir is not None else session.workdir / "games"
+    game = GameSession(session.models, dt=session.dt, log_dir=games)
 
     async def game_page(request: Request) -> Response:
         return FileResponse(STATIC_DIR / "game.html", media_type="text/html")
@@ -334,6 +340,7 @@ class DashboardServer:
         limits: CommandLimits | None = None,
         recording_limits: RecordingLimits | None = None,
         teaching: TeachingSettings | None = None,
+        games_dir: str | Path | None = None,
     ) -> None:
         import uvicorn
 
@@ -346,7 +353,10 @@ class DashboardServer:
             teaching=teaching,
         )
         self._first_model = model
-        self.app = create_app(self.session, self.access, limits)
+        # The game's logs are the person's: kept in ``games/`` of the folder the server was
+        # started in, never in the session's temporary folder (deleted when it stops).
+        self.games_dir = Path(games_dir) if games_dir is not None else Path.cwd() / "games"
+        self.app = create_app(self.session, self.access, limits, self.games_dir)
         config = uvicorn.Config(
             self.app,
             host=host,

@@ -19,12 +19,13 @@ import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
 from rnnpb.errors import ConfigError, RnnpbError
 from rnnpb.interaction.teaching import TeachingConfig, merged_with, shown_as
+from rnnpb.web._models import ModelShelf, ReadyModel, make_ready
 from rnnpb.web._protocol import TEACH_MODES
 
 log = logging.getLogger("rnnpb.web")
@@ -68,6 +69,48 @@ class TeachingSettings:
             raise ConfigError(f"consolidation iterations must be >= 1, got {self.iterations}")
 
 
+class TeachingHost(Protocol):
+    """What teaching needs of the session it teaches in."""
+
+    @property
+    def loop(self) -> Any:
+        """The run's :class:`~rnnpb.interaction.InteractionLoop` (a Reset makes a new one), or
+        None before the first run."""
+        ...
+
+    @property
+    def mode(self) -> str:
+        """Who drives: ``demonstrator``, ``pointer`` or ``webcam``."""
+        ...
+
+    @property
+    def shelf(self) -> ModelShelf:
+        """The models offered and the one running."""
+        ...
+
+    @property
+    def workdir(self) -> Path: ...
+
+    @property
+    def temporary_workdir(self) -> bool:
+        """Whether ``workdir`` is deleted when the server stops."""
+        ...
+
+    def hands_3d(self) -> np.ndarray | None:
+        """The webcam's last hands in 3-D (None unless the webcam drives)."""
+        ...
+
+    def swap(self, ready: ReadyModel) -> None:
+        """Run ``ready`` from the next step on, the loop going on with it."""
+        ...
+
+    def report(self, text: str) -> None:
+        """Say ``text`` on every page as an error (and in the log)."""
+        ...
+
+    def publish_state(self) -> None: ...
+
+
 class _LoopView:
     """The loop as the Teacher sees it: the session's current loop (a Reset makes a new one,
     the Teacher and its versions stay), its step subscription held by the session (so that
@@ -81,12 +124,12 @@ class _LoopView:
     def config(self):
         from rnnpb.interaction import LoopConfig
 
-        loop = self._teaching.session.loop
+        loop = self._teaching.host.loop
         return loop.config if loop is not None else LoopConfig(paced=True)
 
     @property
     def steps(self) -> int:
-        loop = self._teaching.session.loop
+        loop = self._teaching.host.loop
         return loop.steps if loop is not None else 0
 
     def subscribe(self, callback):
@@ -95,7 +138,8 @@ class _LoopView:
 
     @property
     def mirror(self):
-        return self._teaching.session.mirror
+        running = self._teaching.host.shelf.running
+        return running.mirror if running is not None else None
 
     @mirror.setter
     def mirror(self, mirror) -> None:
@@ -103,37 +147,20 @@ class _LoopView:
 
 
 class _Prepared:
-    """A model version made ready off the session thread: loaded, its safety, its mirror
-    system compiled (``error`` says why not)."""
+    """A model version made ready off the session thread (:func:`make_ready`: loaded, its
+    safety, its mirror system compiled); ``error`` says why not."""
 
-    def __init__(self, teaching: SessionTeaching, path: str) -> None:
+    def __init__(self, shelf: ModelShelf, path: str) -> None:
         self.path = path
-        self.result: tuple | None = None
+        self.result: ReadyModel | None = None
         self.error: str | None = None
-        self._session = teaching.session
+        self._tables, self._safety = shelf.tables, shelf.safety_enabled
         self.thread = threading.Thread(target=self._run, name="rnnpb-prepare", daemon=True)
         self.thread.start()
 
     def _run(self) -> None:
         try:
-            from rnnpb.model import MirrorSystem, TrainedModel
-            from rnnpb.robot import JOINT_LIMITS
-
-            model = TrainedModel.load(self.path, joint_limits=JOINT_LIMITS)
-            choice = self._session.config_tables.choice_for(model)
-            safety, risk = self._session._load_safety(Path(self.path), model, choice.config)
-            mirror = MirrorSystem(
-                model, safety.config, recognition=choice.recognition, **safety.mirror_options
-            )
-            started = time.perf_counter()
-            mirror.step(np.full(model.network.sensory_size, 0.5))  # compiles the step
-            mirror.reset()
-            log.info(
-                "teaching: %s ready (step compiled in %.1f s)",
-                Path(self.path).name,
-                time.perf_counter() - started,
-            )
-            self.result = (model, mirror, safety, risk)
+            self.result = make_ready(self.path, self._tables, self._safety)
         except Exception as error:  # noqa: BLE001 - reported, the swap builds it instead
             self.error = f"{type(error).__name__}: {error}"
 
@@ -147,12 +174,13 @@ class SessionTeaching:
 
     Parameters
     ----------
-    session : rnnpb.web.Session
+    host : TeachingHost
+        The session.
     settings : TeachingSettings
     """
 
-    def __init__(self, session, settings: TeachingSettings) -> None:
-        self.session = session
+    def __init__(self, host: TeachingHost, settings: TeachingSettings) -> None:
+        self.host = host
         self.settings = settings
         self.mode = settings.mode
         self.teacher = None
@@ -165,20 +193,25 @@ class SessionTeaching:
         self._view = _LoopView(self)
         self._said = 0
         self._first_name = ""  # the name the first version was chosen under
-        self._mirrors: dict[str, tuple] = {}  # model fingerprint -> (model, mirror, safety, risk)
+        self._mirrors: dict[str, ReadyModel] = {}  # model fingerprint -> the version ready
         self._prepared: _Prepared | None = None
         self._version_patterns: dict[str, list[str]] = {}
         self._lists: dict[str, Any] = {"episodes": [], "pending": 0}
         self._shapes: dict[str, str] = {}  # demonstrator shape -> the pattern it was learned as
         self._started_at = 0.0
-        self._pending_use: tuple | None = None
+        self._pending_use: ReadyModel | None = None
+        self._kept: dict[str, list[int]] = {}  # kept movement -> its episodes, oldest first
+        self._learning: set[str] = set()  # the movements a consolidation is learning
+        # Every version this teaching has run (undone ones too: the model list offers them),
+        # in the order learned, and the name the model list gives each.
+        self._versions: list[str] = []
+        self._names: dict[str, str] = {}
 
     # --- life cycle -----------------------------------------------------------------------
-    def open(self, model_path: Path, model, mirror, safety, risk, name: str = "") -> None:
-        """Start teaching ``model`` (just loaded from ``model_path``, offered as ``name``):
-        learn from a copy when the file is the package's own, open its short-term memory. A
-        memory that cannot be opened turns teaching off for this model with the reason; the
-        robot runs on."""
+    def open(self, ready: ReadyModel, name: str = "") -> None:
+        """Start teaching the model ``ready`` runs (offered as ``name``): learn from a copy
+        when the file is the package's own, open its short-term memory. A memory that cannot
+        be opened turns teaching off for this model with the reason; the robot runs on."""
         from rnnpb.interaction.teaching import Teacher
         from rnnpb.memory import MemoryStore, memory_path_for
 
@@ -188,27 +221,30 @@ class SessionTeaching:
         self.result = ""
         self.events = []
         self._said = 0
-        self._mirrors = {model.fingerprint: (model, mirror, safety, risk)}
+        self._mirrors = {ready.model.fingerprint: ready}
         try:
-            path = self._learning_path(Path(model_path))
+            path = self._learning_path(Path(ready.path))
             self.memory = MemoryStore(memory_path_for(path)).open()
         except (RnnpbError, OSError) as error:
             self.unavailable = f"teaching is off for this model: {error}"
             log.warning("%s", self.unavailable)
             return
+        self._versions = [str(path)]
+        self._names = {str(path): name or Path(ready.path).name}
+        self._learning = set()
         self.teacher = Teacher(
             self._view,
             path,
             self.memory,
             make_mirror=self._mirror_for,
-            source=self.session.mode,
+            source=self.host.mode,
             config=self.settings.config,
             auto=self.mode == "auto",
             wait=False,
             hands_of=self._hands_of,
             iterations=self.settings.iterations,
             prepare=False,  # made ready here (`_Prepared`), with the session's safety map
-            tables=self.session.config_tables,
+            tables=self.host.shelf.tables,
         )
         self._refresh()
         log.info("teaching: short-term memory %s (%s)", self.memory.path, self.mode)
@@ -232,12 +268,12 @@ class SessionTeaching:
         if path.resolve().parent != shipped:
             self.folder_note = f"new versions are written beside {path.name}"
             return path
-        folder = Path(self.settings.folder or self.session.workdir / "taught")
+        folder = Path(self.settings.folder or self.host.workdir / "taught")
         folder.mkdir(parents=True, exist_ok=True)
         copy = folder / path.name
         if not copy.exists():
             shutil.copyfile(path, copy)
-        temporary = self.settings.folder is None and self.session._own_workdir
+        temporary = self.settings.folder is None and self.host.temporary_workdir
         self.folder_note = f"learning from a copy of the shipped model in {folder}" + (
             " (a temporary folder, deleted when the server stops; rnnpb serve --teach-dir keeps it)"
             if temporary
@@ -258,38 +294,34 @@ class SessionTeaching:
 
         known = self._mirrors.get(model.fingerprint)
         if known is not None:
-            known[1].reset()
+            known.mirror.reset()
             self._pending_use = known
-            return known[1]
-        online = self.session.safety.config if self.session.safety is not None else None
-        options = self.session.safety.mirror_options if self.session.safety is not None else {}
-        recognition = self.session.config_tables.recognition_for(model)
+            return known.mirror
+        running = self.host.shelf.running
+        safety = running.safety if running is not None else None
+        online = safety.config if safety is not None else None
+        options = safety.mirror_options if safety is not None else {}
+        recognition = self.host.shelf.tables.recognition_for(model)
         mirror = MirrorSystem(model, online, recognition=recognition, **options)
-        self._mirrors[model.fingerprint] = (model, mirror, self.session.safety, None)
-        self._pending_use = self._mirrors[model.fingerprint]
+        path = Path(self.teacher.model_path) if self.teacher is not None else Path()
+        ready = ReadyModel(path, model, mirror, safety, running.risk if running else {})
+        self._mirrors[model.fingerprint] = self._pending_use = ready
         return mirror
 
     def use(self, mirror) -> None:
         """Swap ``mirror`` in (between two steps): the session's model, mirror and safety
         map follow, the loop runs on with it."""
-        model, _, safety, risk = self._pending_use
-        session = self.session
-        session.model, session.mirror = model, mirror
-        if safety is not None:
-            session.safety = safety
-            if risk is not None:
-                session._risk_views = risk
-        if session.loop is not None:
-            session.loop.mirror = mirror
+        ready = self._pending_use
+        if ready is None or ready.mirror is not mirror:
+            raise RuntimeError("teaching swapped in a mirror it did not make")
+        self.host.swap(ready)
 
     def _hands_of(self, record):
         """3-D hands for the episode: the webcam's depth from the balls' size; the mouse and
         the demonstrator give none (their hands lie on the fixed plane)."""
-        webcam = self.session._webcam
-        if self.session.mode != "webcam" or webcam is None:
+        if self.host.mode != "webcam":
             return None
-        result = getattr(webcam, "last_result", None)
-        return None if result is None else result.hands_3d
+        return self.host.hands_3d()
 
     # --- each step, between steps ---------------------------------------------------------
     def on_step(self, record) -> None:
@@ -299,7 +331,7 @@ class SessionTeaching:
         if self.mode == "off" or self._holding():
             teacher.keeper.cutter.reset()
         else:
-            teacher.keeper.source = self.session.mode
+            teacher.keeper.source = self.host.mode
             self._view.on_step(record)
         self._take_events()
 
@@ -308,19 +340,16 @@ class SessionTeaching:
         first version by the name it was chosen under, a learned one by its file's name
         (``set1.v2.npz``, as the model list names files), offered in the model list from
         then on (its file stays on disk)."""
-        teacher, session = self.teacher, self.session
+        teacher, shelf = self.teacher, self.host.shelf
         if teacher is None:
             return
         if len(teacher.versions) == 1:
-            session.model_name = self._first_name or session.model_name
+            shelf.name = self._first_name or shelf.name
             return
-        path = Path(teacher.model_path)
-        name = path.name
-        known = session.models.get(name)
-        if known is not None and Path(known).resolve() != path.resolve():
-            name = f"{name} ({path.parent.name})"  # another folder's file of the same name
-        session.models[name] = path
-        session.model_name = name
+        path = teacher.model_path
+        shelf.name = self._names[path] = shelf.offer(path)
+        if path not in self._versions:
+            self._versions.append(path)
 
     def _holding(self) -> bool:
         """Nothing more is kept while a movement seen often enough waits for Confirm or is
@@ -335,7 +364,16 @@ class SessionTeaching:
 
     def between_steps(self) -> None:
         """Follow the consolidation without waiting: when it is done, make the new version
-        ready in a thread, then let the Teacher swap it in."""
+        ready in a thread, then let the Teacher swap it in. A failure here is reported and
+        never stops the robot."""
+        try:
+            self._follow()
+        except Exception as error:  # noqa: BLE001 - the robot runs on
+            log.exception("session: teaching failed")
+            self.failure = f"teaching failed: {type(error).__name__}: {error}"
+            self.host.report(f"{self.failure}; the running model stays")
+
+    def _follow(self) -> None:
         teacher = self.teacher
         if teacher is None:
             return
@@ -347,12 +385,12 @@ class SessionTeaching:
             if state.state == "done":
                 prepared = self._prepared
                 if prepared is None or prepared.path != state.model_path:
-                    self._prepared = _Prepared(self, state.model_path)
+                    self._prepared = _Prepared(self.host.shelf, state.model_path)
                     return
                 if not prepared.done:
                     return
                 if prepared.result is not None:
-                    self._mirrors[prepared.result[0].fingerprint] = prepared.result
+                    self._mirrors[prepared.result.model.fingerprint] = prepared.result
                 else:
                     log.warning("teaching: %s made ready: %s", state.model_path, prepared.error)
                 self._prepared = None
@@ -378,9 +416,11 @@ class SessionTeaching:
             if event.kind in ("failed", "refused"):
                 self.failure = event.text
                 log.warning("teaching: step %d: %s", event.step, event.text)
-                self.session._error(f"teaching: {event.text}; the running model stays")
+                self.host.report(f"teaching: {event.text}; the running model stays")
             else:
                 log.info("teaching: step %d: %s", event.step, event.text)
+            if event.kind in ("learned", "failed", "refused"):
+                self._learning = set()
             if event.kind in ("learned", "undone"):
                 self.failure = None
             if event.kind in ("learned", "undone", "renamed"):
@@ -397,8 +437,9 @@ class SessionTeaching:
                 )
             if event.kind == "consolidating":
                 self._started_at = time.monotonic()
+                self._learning = {p for p in (event.pattern or "").split(", ") if p}
         self._refresh()
-        self.session._publish_state()
+        self.host.publish_state()
 
     # --- commands -------------------------------------------------------------------------
     def _need(self):
@@ -411,21 +452,44 @@ class SessionTeaching:
         if self.teacher is not None:
             self.teacher.auto = mode == "auto"
             if mode == "auto" and self.teacher.job is None:
-                self.confirm(quiet=True)
+                self.confirm(quiet=True)  # what waits for a Confirm is learned now
 
-    def confirm(self, quiet: bool = False) -> None:
-        """Consolidate the memory's kept episodes (those not learned yet)."""
+    def asks(self) -> str:
+        """The movement Confirm learns now (the panel asks about it and its button names it):
+        of the kept movements not being learned, the newest seen often enough to learn, else
+        the newest kept; ``""`` when nothing is kept."""
+        teacher = self.teacher
+        if teacher is None or teacher.job is not None:
+            return ""
+        waiting = {p: ids for p, ids in self._kept.items() if p not in self._learning}
+        newest = sorted(waiting, key=lambda p: max(waiting[p]), reverse=True)
+        seen = self._lists.get("seen", {})
+        ready = [p for p in newest if seen.get(p, 0) >= teacher.performances]
+        return (ready or newest or [""])[0]
+
+    def confirm(self, pattern: str | None = None, quiet: bool = False) -> None:
+        """Consolidate one kept movement: ``pattern``, or the one the panel asks about
+        (:meth:`asks`). Only its episodes are learned — a movement kept by accident before
+        stays kept — also those a failed consolidation or an earlier session left; a
+        movement seen fewer times than the Teacher waits for is learned from what was seen."""
         teacher = self._need()
         if teacher.job is not None:
             raise ConfigError("a consolidation is running already")
-        if not teacher.pending:
-            # Also what a failed consolidation left, and what an earlier session kept.
-            teacher.pending = [e.id for e in reversed(self.memory.episodes("kept"))]
-        if not teacher.pending:
+        self._refresh()
+        chosen = pattern or self.asks()
+        if not chosen:
             if quiet:
                 return
             raise ConfigError("no kept movement to learn: perform a new movement first")
+        ids = self._kept.get(chosen)
+        if not ids:
+            kept = ", ".join(self._kept) or "none"
+            raise ConfigError(f"no kept movement {chosen!r} to learn (kept: {kept})")
+        others = [i for i in teacher.pending if i not in ids]
+        teacher.pending = list(ids)
         teacher.confirm()
+        teacher.pending = [*others, *teacher.pending]
+        self._learning = {chosen}
         self._take_events()
 
     def undo(self) -> None:
@@ -449,6 +513,7 @@ class SessionTeaching:
         if self.memory is None:
             self._lists = {"episodes": [], "pending": 0}
             self._shapes = {}
+            self._kept = {}
             return
         try:
             episodes = self.memory.episodes()
@@ -476,6 +541,10 @@ class SessionTeaching:
             if e.status in ("kept", "learned"):
                 seen[e.pattern] = seen.get(e.pattern, 0) + 1
         waiting = {e.pattern: seen[e.pattern] for e in episodes if e.status == "kept"}
+        self._kept = {}
+        for e in episodes:
+            if e.status == "kept":
+                self._kept.setdefault(e.pattern, []).append(e.id)
         self._lists = {
             "episodes": shown,
             "pending": pending,
@@ -546,22 +615,30 @@ class SessionTeaching:
                 "folder": "",
             }
         first = set(self._patterns_of(teacher.versions[0]))
-        running = list(self.session.model.patterns) if self.session.model is not None else []
+        shelf = self.host.shelf
+        running = list(shelf.running.model.patterns) if shelf.running is not None else []
+        learning = self._learning if teacher.job is not None else set()
         out.update(
-            memory=str(self.memory.path),
+            memory=str(self.memory.path) if self.memory is not None else "",
             folder=self.folder_note,
+            # The model list offers every version learned (an undone one too): so does this.
             versions=[
                 {
-                    "name": Path(v).name,
+                    "name": self._names.get(v, Path(v).name),
                     "patterns": self._patterns_of(v),
-                    "running": i == len(teacher.versions) - 1,
+                    "running": v == teacher.model_path,
+                    "undone": v not in teacher.versions,
                 }
-                for i, v in enumerate(teacher.versions)
+                for v in self._versions
             ],
             taught=[p for p in running if p not in first],
             taught_shapes={k: v for k, v in self._shapes.items() if v in running},
             can_undo=len(teacher.versions) > 1 and teacher.job is None,
             consolidating=teacher.job is not None,
+            # What is being learned is not asked about again (nor counted as waiting).
+            learning=sorted(learning),
+            seen={p: n for p, n in self._lists.get("seen", {}).items() if p not in learning},
+            asks=self.asks(),
             waiting=self.mode == "confirm" and teacher.waiting_for_confirm(),
         )
         return out

@@ -1,4 +1,6 @@
 // The mirror game (docs/dashboard.md). DOM text only through textContent; no inline code.
+import { follow } from "./hands.js";
+
 const $ = (id) => document.getElementById(id);
 const canvas = $("view");
 const ctx = canvas.getContext("2d");
@@ -25,6 +27,10 @@ function send(message) {
 function receive(message) {
   if (message.type === "game_state") {
     $("status").textContent = message.status + (message.model ? ` — ${message.model}` : "");
+    // One game at a time: Start while none runs, Stop while one does.
+    const playing = message.status === "running" || message.status === "starting";
+    $("start").disabled = playing;
+    $("stop").disabled = !playing;
     const select = $("model");
     if (select.options.length === 0) {
       for (const name of message.models) {
@@ -129,20 +135,9 @@ function nearest(px, py) {
   return best;
 }
 
-// How the other hand follows the dragged one, per axis of the camera's view (Y across, Z up):
-// mirror reflects left-right, parallel copies, opposite phase is half a turn about the centre.
-const COUPLINGS = { mirror: [-1, 1], parallel: [1, 1], opposite: [-1, -1] };
-
+// One pointer: the other hand as "Other hand" says; two fingers each drag their own.
 function moveHand(index, y, z) {
-  hands[2 * index] = y;
-  hands[2 * index + 1] = z;
-  const sign = COUPLINGS[$("coupling").value];
-  if (pointers.size !== 1 || !sign || !anchors) return; // two fingers: each its own hand
-  const other = 1 - index;
-  // From where both hands were when the drag began: the other hand does not drift.
-  hands[2 * other] = Math.min(1, Math.max(0, anchors[2 * other] + sign[0] * (y - anchors[2 * index])));
-  hands[2 * other + 1] = Math.min(1, Math.max(0,
-    anchors[2 * other + 1] + sign[1] * (z - anchors[2 * index + 1])));
+  hands = follow(hands, anchors, index, y, z, pointers.size === 1 ? $("coupling").value : "still");
 }
 
 function position(event) {
