@@ -434,6 +434,14 @@ class Session:
         # Teaching first: whoever sees the new mirror sees its teaching too.
         self.teaching.open(ready, name=name)
         self.shelf.run(ready, name)
+        # a person's bare hands framed as the model learned people
+        try:
+            opened = self.webcam.frame_for(ready.model.framing)
+        except RnnpbError as error:
+            self.report(f"the camera could not be opened again for the model's framing: {error}")
+        else:
+            if self.mode == "webcam" and opened is not None:
+                self._source.inner = opened
         self.routines.follower(ready.model, name)  # the model's routine level, if any
         self._new_run()
         self.running = was_running

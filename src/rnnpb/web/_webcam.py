@@ -17,11 +17,15 @@ FRAME_WIDTH = 320
 
 class Webcam:
     """The camera ``index`` (for the next :meth:`open`) seen through ``perception``
-    (``balls`` or ``pose``); ``source`` is the open camera source, None while closed."""
+    (``balls`` or ``pose``); ``source`` is the open camera source, None while closed.
+    ``framing``: metres from the camera at which bare hands' body is placed — the running
+    model's framing (:func:`rnnpb.learning_phase.placed_body`), so that a person is seen as
+    the model learned people; None: the standard user's place."""
 
     def __init__(self) -> None:
         self.index = 0
         self.perception = "balls"
+        self.framing: float | None = None
         self.source: UserSource | None = None
 
     @property
@@ -31,9 +35,16 @@ class Webcam:
     def open(self) -> UserSource:
         """Open camera ``index`` with the tracker ``perception`` names (a camera open before
         is closed once the new one works); a missing camera raises its reason."""
-        from rnnpb.perception import open_camera_source
+        from rnnpb.perception import PoseConfig, open_camera_source
 
-        webcam = open_camera_source("webcam", self.index, perception=self.perception)
+        pose_config = None
+        if self.perception == "pose" and self.framing is not None:
+            from rnnpb.learning_phase import placed_body
+
+            pose_config = PoseConfig(body=placed_body(self.framing))
+        webcam = open_camera_source(
+            "webcam", self.index, perception=self.perception, pose_config=pose_config
+        )
         try:
             webcam.connect()
         except RnnpbError as error:
@@ -42,6 +53,21 @@ class Webcam:
         self.close()
         self.source = webcam
         return webcam
+
+    def frame_for(self, framing: float) -> UserSource | None:
+        """Bare hands framed at ``framing`` metres from now on (a model with another framing
+        runs): an open pose camera is opened again with it (and kept as it was when that
+        fails). Returns the camera source now open, if any."""
+        if framing == self.framing:
+            return self.source
+        previous, self.framing = self.framing, framing
+        if self.source is None or self.perception != "pose":
+            return self.source
+        try:
+            return self.open()
+        except RnnpbError:
+            self.framing = previous
+            raise
 
     def close(self) -> None:
         if self.source is not None:
