@@ -1,23 +1,23 @@
-"""The on-line regression's loop as native code: a drop-in twin of the loop in
-:func:`rnnpb.model.online.online_step` (``rnnpb bench`` and ``benchmarks/native_loop.py`` time
+"""The on-line regression's loop as native code: the fast twin of the loop of
+:func:`rnnpb.model.online.step_sessions` (``rnnpb bench`` and ``benchmarks/native_loop.py`` time
 the two side by side).
 
-The loop — ``iterations`` times the window's forward and backward pass (:mod:`rnnpb.model.window`),
-the PB update of eqs. 1–2 (:func:`rnnpb.model.parametric_bias.pb_update`) and the onset's step —
-is written here in LLVM's intermediate language with explicit 8-wide vectors and compiled at run
-time for the machine's processor by llvmlite (a wheel with LLVM inside: no C compiler). The sums
-of each layer's products stay in vector registers through the products' loops, which XLA's code
-for the same loop does not manage; the sigmoid is a rational function (the form Eigen gives
-``tanh``), within 2e-7 of the exact one.
+The loop — ``iterations`` times the window's forward and backward pass, the PB update of eqs.
+1–2 and the onset's step (:mod:`rnnpb.model.equations`) — is written here in LLVM's
+intermediate language with explicit 8-wide vectors and compiled at run time for the machine's
+processor by llvmlite. The sums of each layer's products stay in vector registers through the
+products' loops, which the compiled Python of :mod:`rnnpb.model.equations` does not manage
+(it keeps them in memory between inputs: docs/model.md, "Speed"); the sigmoid is the same
+rational function as :func:`rnnpb.model.equations.unit`.
 
-Everything before and after the loop — the new observation, the restarts, the surprise gate, the
-outputs, recognition's evidence — stays the compiled JAX code of :mod:`rnnpb.model.online`
-(:func:`rnnpb.model.online.prepare` and :func:`rnnpb.model.online.conclude`): one step is a
-compiled call, the kernel, and a compiled call. The safety barrier's gradient (the risk network of
+Everything before and after the loop — the new observation, the restarts, the surprise gate,
+the outputs, recognition's evidence — is the compiled step of :mod:`rnnpb.model.online`, which
+also fills each session's block for this kernel (:func:`rnnpb.model.online.fill_blocks`) and
+takes its results back. The safety barrier's gradient (the risk network of
 :mod:`rnnpb.model.meta` on the window's newest steps) is in the kernel too, for the risk
-network it was built with. The pure-JAX step is the reference and the fallback: it runs where
-llvmlite is missing or ``RNNPB_NATIVE=0`` asks for it. ``tests/model/test_native.py`` holds the
-two together.
+network it was built with. The step's own loop is the reference and the fallback: it runs
+where llvmlite is missing or ``RNNPB_NATIVE=0`` asks for it. ``tests/model/test_native.py``
+holds the two together.
 
 Layouts (all float32): every row is padded to a whole number of 8-wide vectors — ``HP`` for the
 hidden layer (H), ``IP`` for the inputs and outputs with the context (``I + C``), ``PP`` for the
@@ -38,13 +38,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 
 from rnnpb.model.meta import MetaParams
 from rnnpb.model.network import NetworkConfig, Params
-from rnnpb.model.online import OnlineState, Regressed, prepare
 from rnnpb.model.online_config import OnlineConfig
 
 V = "<8 x float>"
@@ -847,79 +844,6 @@ def _pad(values: np.ndarray, rows: int, width: int) -> np.ndarray:
     return padded
 
 
-def _pad_jax(values: jax.Array, width: int) -> jax.Array:
-    return jnp.pad(values, [(0, 0)] * (values.ndim - 1) + [(0, width - values.shape[-1])])
-
-
-def step_block(
-    params: Params, state: OnlineState, gate: jax.Array | None, config: OnlineConfig
-) -> jax.Array:
-    """A step's block for the kernel (:meth:`Shapes.block_layout`), from the state the
-    regression starts from (the terms of :func:`rnnpb.model.window.gradients` that do not
-    change in the loop)."""
-    length, n_s = state.sensory.shape
-    n_m = state.onset_motor.shape[0]
-    n_c = state.onset_context.shape[0]
-    hp, ip, pp = _padded(params.b_h.shape[0]), _padded(n_s + n_m + n_c), _padded(state.rho.shape[1])
-    valid = jnp.arange(length) < state.n
-    seen = state.seen & valid[:, None]
-    w_u, w_m = params.w_in[:n_s], params.w_in[n_s : n_s + n_m]
-    fixed = jnp.where(seen, state.sensory, 0.0) @ w_u + params.b_h
-    recorded = config.motor_input == "recorded"
-    if recorded:
-        fixed = fixed + state.motor_sent @ w_m
-    mask = jnp.concatenate(
-        [
-            (~seen).astype(jnp.float32),
-            jnp.full((length, n_m), 0.0 if recorded else 1.0, jnp.float32),
-            jnp.ones((length, n_c), jnp.float32),
-        ],
-        axis=1,
-    )
-    steps = jnp.arange(length - 1) < state.n - 1
-    target_mask = (steps[:, None] & state.seen[1:]).astype(jnp.float32)
-    zeros_row = jnp.zeros((1, n_s), jnp.float32)
-    target = jnp.concatenate([state.sensory[1:], zeros_row])
-    target_mask = jnp.concatenate([target_mask, zeros_row])
-    next_mask = jnp.concatenate([mask[1:], jnp.zeros_like(mask[:1])])
-    learn = jnp.concatenate([jnp.zeros(n_s), jnp.ones(n_m + n_c)]).astype(jnp.float32)
-    onset = jnp.concatenate([jnp.zeros(n_s, jnp.float32), state.onset_motor, state.onset_context])
-    head = jnp.zeros(8, jnp.float32)
-    head = head.at[0].set(1.0 if gate is None else gate).at[1].set(state.n.astype(jnp.float32))
-    parts = [
-        head,
-        _pad_jax(fixed, hp),
-        _pad_jax(mask, ip),
-        _pad_jax(target, ip),
-        _pad_jax(target_mask, ip),
-        _pad_jax(next_mask, ip),
-        _pad_jax(learn, ip),
-        _pad_jax(onset, ip),
-        _pad_jax(state.rho, pp),
-        _pad_jax(state.rho_velocity, pp),
-    ]
-    return jnp.concatenate([jnp.ravel(part).astype(jnp.float32) for part in parts])
-
-
-def step_start(
-    params: Params,
-    state: OnlineState,
-    u: jax.Array,
-    seen: jax.Array,
-    config: OnlineConfig,
-    candidates: jax.Array | None = None,
-    phase_candidates: jax.Array | None = None,
-) -> tuple[OnlineState, jax.Array]:
-    """Everything of :func:`rnnpb.model.online.online_step` before its loop: the state the
-    regression starts from and its block for the kernel (:func:`prepare_block` compiles it as
-    one call)."""
-    state, gate = prepare(params, state, u, seen, config, candidates, phase_candidates)
-    return state, step_block(params, state, gate, config)
-
-
-prepare_block = jax.jit(step_start, static_argnames=("config",))
-
-
 def native_regression(
     params: Params,
     network: NetworkConfig,
@@ -975,44 +899,31 @@ class NativeRegression:
         built with."""
         return not self._barrier(meta) or meta is self.meta
 
-    def __call__(
-        self, block: jax.Array | np.ndarray, meta: MetaParams | None = None
-    ) -> Regressed[np.ndarray]:
-        """The regression over a step's block; ``meta`` as the JAX step takes it (the
-        barrier acts when given, with the guard "barrier"; see :meth:`applies`)."""
-        return Regressed(*(part[0] for part in self.many(np.asarray(block)[None], meta)))
+    def block_layout(self) -> tuple[int, ...]:
+        """Where a block's parts start, and the padded widths, as
+        :func:`rnnpb.model.online.fill_blocks` takes them."""
+        layout, shapes = self._layout, self.shapes
+        names = ("fixed", "mask", "target", "target_mask", "next_mask", "learn", "onset", "rho")
+        starts = tuple(layout[name][0] for name in (*names, "velocity"))
+        return (*starts, shapes.hp, shapes.ip, shapes.pp)
 
-    def many(
-        self, blocks: jax.Array | np.ndarray, meta: MetaParams | None = None
-    ) -> Regressed[np.ndarray]:
-        """The regressions over many sessions' blocks, shape (B, block), ``GROUP`` sessions
-        to a kernel call; the results with a leading session axis."""
-        if not self.applies(meta):
-            raise ValueError("this kernel was built without that risk network")
-        values = np.array(blocks, dtype=np.float32, copy=True)
-        values[:, 2] = 1.0 if self._barrier(meta) else 0.0
-        shapes, layout = self.shapes, self._layout
-        length, pp, sessions = shapes.window, shapes.pp, values.shape[0]
-        n = values[:, 1].astype(np.int64)
-        rho_at, velocity_at = layout["rho"][0], layout["velocity"][0]
-        velocity = values[:, velocity_at : velocity_at + length * pp].reshape(-1, length, pp)
-        if self.config.iterations > 0:
-            # the update leaves steps outside the window without momentum
-            velocity[np.arange(length)[None, :] >= n[:, None]] = 0.0
-            with self._lock:  # one scratch per kernel
-                for first in range(0, sessions, GROUP):
-                    group = min(GROUP, sessions - first)
-                    compiled(shapes, group)(
-                        self.config.iterations,
-                        self.config.pb.integration_length // 2,
-                        self._weights.ctypes.data,
-                        values[first].ctypes.data,
-                        self._scratch.ctypes.data,
-                    )
-        rho = values[:, rho_at : rho_at + length * pp].reshape(-1, length, pp)[..., : shapes.pb]
-        onset_at = layout["onset"][0] + shapes.sensory
-        motor = values[:, onset_at : onset_at + shapes.motor]
-        context = values[:, onset_at + shapes.motor : onset_at - shapes.sensory + shapes.io]
-        return Regressed(
-            rho.copy(), velocity[..., : shapes.pb].copy(), context.copy(), motor.copy()
-        )
+    def blocks(self, sessions: int) -> np.ndarray:
+        """Room for ``sessions`` blocks, (B, block)."""
+        return np.zeros((sessions, self._layout["total"][0]), np.float32)
+
+    def run(self, blocks: np.ndarray) -> None:
+        """The regressions over many sessions' blocks (B, block), in place, ``GROUP``
+        sessions to a kernel call. A block asks for the barrier with head[2] = 1; only a
+        kernel built with a risk network (``meta``) has one."""
+        if np.any(blocks[:, 2]) and self.meta is None:
+            raise ValueError("this kernel was built without a risk network")
+        with self._lock:  # one scratch per kernel
+            for first in range(0, blocks.shape[0], GROUP):
+                group = min(GROUP, blocks.shape[0] - first)
+                compiled(self.shapes, group)(
+                    self.config.iterations,
+                    self.config.pb.integration_length // 2,
+                    self._weights.ctypes.data,
+                    blocks[first].ctypes.data,
+                    self._scratch.ctypes.data,
+                )
