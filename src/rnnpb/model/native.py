@@ -27,45 +27,32 @@ PB (P); the padding's weights are 0, so it changes nothing.
 from __future__ import annotations
 
 import ctypes
-import hashlib
-import importlib
-import os
-import struct
 import threading
 import warnings
-from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from rnnpb.model._ir import (
+    V,
+    _Emitter,
+    _offsets,
+    _padded,
+    _pb_update,
+    _vector_constant,
+    build,
+    enabled,
+    module,
+)
 from rnnpb.model.meta import MetaParams
 from rnnpb.model.network import NetworkConfig, Params
 from rnnpb.model.online_config import OnlineConfig
 
-V = "<8 x float>"
-# tanh(t) ~ t * P(t^2) / Q(t^2) on [-7.9, 7.9] (Eigen's float tanh); sigmoid(x) = 0.5 +
-# 0.5 * tanh(x / 2).
-_TANH_P = (
-    -2.76076847742355e-16,
-    2.00018790482477e-13,
-    -8.60467152213735e-11,
-    5.12229709037114e-08,
-    1.48572235717979e-05,
-    6.37261928875436e-04,
-    4.89352455891786e-03,
-)
-_TANH_Q = (1.19825839466702e-06, 1.18534705686654e-04, 2.26843463243900e-03, 4.89352518554385e-03)
-_TANH_CLAMP = 7.90531110763549805
 # Sessions regressed together by one kernel call (NativeRegression.many): each weight vector
 # loaded serves all of them.
 GROUP = 4
 _SCALARS = 8  # the weights block opens with the PB update's coefficients (see _weights_block)
-
-
-def _padded(n: int) -> int:
-    return 8 * -(-n // 8)
 
 
 @dataclass(frozen=True)
@@ -170,168 +157,7 @@ class Shapes:
         }
 
 
-def _offsets(parts: dict[str, int]) -> dict[str, tuple[int, int]]:
-    layout, offset = {}, 0
-    for name, size in parts.items():
-        layout[name] = (offset, size)
-        offset += size
-    layout["total"] = (offset, 0)
-    return layout
-
-
 # --- the intermediate language ------------------------------------------------------------
-
-
-def _vector_constant(value: float) -> str:
-    """An <8 x float> constant (LLVM writes floats as the hex of their double)."""
-    return "<" + ", ".join([f"float {_float(value)}"] * 8) + ">"
-
-
-def _float(value: float) -> str:
-    bits = struct.unpack(">Q", struct.pack(">d", float(np.float32(value))))[0]
-    return f"0x{bits:016X}"
-
-
-class _Emitter:
-    """Builds one function's body: unique names, blocks, counted loops with carried values."""
-
-    def __init__(self) -> None:
-        self.lines: list[str] = []
-        self.count = 0
-        self.current = "entry"
-
-    def name(self, stem: str) -> str:
-        self.count += 1
-        return f"%{stem}.{self.count}"
-
-    def label(self, stem: str) -> str:
-        self.count += 1
-        return f"{stem}.{self.count}"
-
-    def emit(self, line: str) -> None:
-        self.lines.append("  " + line)
-
-    def block(self, label: str) -> None:
-        self.lines.append(f"{label}:")
-        self.current = label
-
-    def op(self, stem: str, expression: str) -> str:
-        result = self.name(stem)
-        self.emit(f"{result} = {expression}")
-        return result
-
-    # vectors
-    def fmul(self, a: str, b: str) -> str:
-        return self.op("m", f"fmul fast {V} {a}, {b}")
-
-    def fadd(self, a: str, b: str) -> str:
-        return self.op("a", f"fadd fast {V} {a}, {b}")
-
-    def fsub(self, a: str, b: str) -> str:
-        return self.op("s", f"fsub fast {V} {a}, {b}")
-
-    def fma(self, a: str, b: str, c: str) -> str:
-        return self.op("f", f"call fast {V} @llvm.fma.v8f32({V} {a}, {V} {b}, {V} {c})")
-
-    def address(self, base: str, index: str | int) -> str:
-        return self.op("p", f"getelementptr inbounds float, ptr {base}, i64 {index}")
-
-    def load(self, base: str, index: str | int) -> str:
-        return self.op("v", f"load {V}, ptr {self.address(base, index)}, align 4")
-
-    def load_scalar(self, base: str, index: str | int) -> str:
-        return self.op("x", f"load float, ptr {self.address(base, index)}, align 4")
-
-    def store(self, value: str, base: str, index: str | int) -> None:
-        self.emit(f"store {V} {value}, ptr {self.address(base, index)}, align 4")
-
-    def broadcast(self, scalar: str) -> str:
-        first = self.op("b", f"insertelement {V} undef, float {scalar}, i32 0")
-        return self.op("b", f"shufflevector {V} {first}, {V} undef, <8 x i32> zeroinitializer")
-
-    def int_op(self, stem: str, operation: str, a: str | int, b: str | int) -> str:
-        return self.op(stem, f"{operation} i64 {a}, {b}")
-
-    def one_minus(self, x: str) -> str:
-        return self.fsub(_vector_constant(1.0), x)
-
-    def sigmoid(self, x: str) -> str:
-        half = _vector_constant(0.5)
-        t = self.fmul(x, half)
-        t = self.op(
-            "c", f"call fast {V} @llvm.minnum.v8f32({V} {t}, {V} {_vector_constant(_TANH_CLAMP)})"
-        )
-        t = self.op(
-            "c", f"call fast {V} @llvm.maxnum.v8f32({V} {t}, {V} {_vector_constant(-_TANH_CLAMP)})"
-        )
-        t2 = self.fmul(t, t)
-        polynomials = []
-        for coefficients in (_TANH_P, _TANH_Q):
-            value = _vector_constant(coefficients[0])
-            for c in coefficients[1:]:
-                value = self.fma(t2, value, _vector_constant(c))
-            polynomials.append(value)
-        ratio = self.op("d", f"fdiv fast {V} {self.fmul(t, polynomials[0])}, {polynomials[1]}")
-        return self.fma(ratio, half, half)
-
-    def tanh(self, x: str) -> str:
-        """tanh(x) = 2 sigmoid(2x) - 1."""
-        value = self.sigmoid(self.fmul(x, _vector_constant(2.0)))
-        return self.fma(value, _vector_constant(2.0), _vector_constant(-1.0))
-
-    def loop(self, count: str | int, carried: list[str], body: Any) -> list[str]:
-        """A counted loop ``for i in range(count)`` (``count`` ≥ 1) whose ``body(i, values)``
-        emits its code and returns the carried vectors' next values; returns their last."""
-        before = self.current
-        head, end = self.label("loop"), self.label("done")
-        i, following = self.name("i"), self.name("i")
-        self.emit(f"br label %{head}")
-        self.block(head)
-        phi_at = len(self.lines)
-        values = [self.name("phi") for _ in carried]
-        updated = body(i, values)
-        latch = self.current
-        phis = [f"  {i} = phi i64 [0, %{before}], [{following}, %{latch}]"]
-        phis += [
-            f"  {v} = phi {V} [{start}, %{before}], [{new}, %{latch}]"
-            for v, start, new in zip(values, carried, updated, strict=True)
-        ]
-        self.lines[phi_at:phi_at] = phis
-        self.emit(f"{following} = add i64 {i}, 1")
-        finished = self.op("e", f"icmp eq i64 {following}, {count}")
-        self.emit(f"br i1 {finished}, label %{end}, label %{head}")
-        self.block(end)
-        return updated
-
-    def products(
-        self,
-        sums: list[list[str]],
-        count: int,
-        scalars: Sequence[tuple[str, str | int]],
-        weights: str,
-        width: int,
-    ) -> list[list[str]]:
-        """For each session ``g``: ``sums[g][v] + Σ_k x_g[start_g + k] · weights[k, 8v : 8v
-        + 8]`` for ``k < count``, where ``scalars[g]`` is ``(x_g, start_g)``; the sums held in
-        registers through the loop, each weight vector loaded once for every session."""
-        group, vectors = len(sums), len(sums[0])
-
-        def body(k: str, flat: list[str]) -> list[str]:
-            current = [flat[g * vectors : (g + 1) * vectors] for g in range(group)]
-            factors = [
-                self.broadcast(self.load_scalar(base, self.int_op("k", "add", start, k)))
-                for base, start in scalars
-            ]
-            row = self.int_op("r", "mul", k, width)
-            updated = [list(values) for values in current]
-            for v in range(vectors):
-                weight = self.load(weights, self.int_op("w", "add", row, 8 * v))
-                for g in range(group):
-                    updated[g][v] = self.fma(factors[g], weight, current[g][v])
-            return [value for values in updated for value in values]
-
-        flat = self.loop(count, [value for values in sums for value in values], body)
-        return [flat[g * vectors : (g + 1) * vectors] for g in range(group)]
 
 
 def regression_ir(shapes: Shapes, group: int = 1) -> str:
@@ -488,26 +314,6 @@ def regression_ir(shapes: Shapes, group: int = 1) -> str:
     )
 
 
-def module(signature: str, e: _Emitter) -> str:
-    """A module of one function, ``void @signature``, whose body ``e`` holds (its return
-    added), with the intrinsics the emitter's code calls declared."""
-    e.emit("ret void")
-    return "\n".join(
-        [
-            f"declare {V} @llvm.minnum.v8f32({V}, {V})",
-            f"declare {V} @llvm.maxnum.v8f32({V}, {V})",
-            f"declare {V} @llvm.fma.v8f32({V}, {V}, {V})",
-            f"declare {V} @llvm.sqrt.v8f32({V})",
-            f"declare float @llvm.vector.reduce.fadd.v8f32(float, {V})",
-            "declare <8 x i32> @llvm.fshl.v8i32(<8 x i32>, <8 x i32>, <8 x i32>)",
-            f"define void @{signature} {{",
-            "entry:",
-            *e.lines,
-            "}",
-        ]
-    )
-
-
 def _barrier(
     e: _Emitter,
     shapes: Shapes,
@@ -576,83 +382,6 @@ def _barrier(
     e.block(after)
 
 
-def _pb_update(
-    e: _Emitter,
-    s: dict[str, str],
-    b: dict[str, str],
-    coefficient: dict[str, str],
-    n: str,
-    pv: int,
-    pp: int,
-) -> None:
-    """Eqs. 1–2 over the window's ``n`` valid steps (:func:`rnnpb.model.parametric_bias.
-    pb_update`): the error term summed over the integration length by a cumulative sum, the
-    second difference held flat at the ends, momentum."""
-    zero = "zeroinitializer"
-    for v in range(pv):
-        e.store(zero, s["cum"], 8 * v)
-
-    def cumulate(t: str, running: list[str]) -> list[str]:
-        row = e.int_op("q", "mul", t, pp)
-        following = e.int_op("q", "add", row, pp)
-        updated = []
-        for v in range(pv):
-            total = e.fadd(running[v], e.load(s["grad"], e.int_op("q", "add", row, 8 * v)))
-            e.store(total, s["cum"], e.int_op("q", "add", following, 8 * v))
-            updated.append(total)
-        return updated
-
-    e.loop(n, [zero] * pv, cumulate)
-
-    def update(t: str, _: list[str]) -> list[str]:
-        upper = e.int_op("u", "add", t, "%half")
-        upper = e.int_op("u", "add", upper, 1)
-        upper = e.op(
-            "u", f"select i1 {e.op('u', f'icmp slt i64 {upper}, {n}')}, i64 {upper}, i64 {n}"
-        )
-        lower = e.int_op("u", "sub", t, "%half")
-        lower = e.op("u", f"select i1 {e.op('u', f'icmp sgt i64 {lower}, 0')}, i64 {lower}, i64 0")
-        before = e.int_op("u", "sub", t, 1)
-        before = e.op("u", f"select i1 {e.op('u', f'icmp eq i64 {t}, 0')}, i64 0, i64 {before}")
-        after = e.int_op("u", "add", t, 1)
-        after = e.op(
-            "u", f"select i1 {e.op('u', f'icmp slt i64 {after}, {n}')}, i64 {after}, i64 {t}"
-        )
-        rows = {
-            name: e.int_op("u", "mul", index, pp)
-            for name, index in (
-                ("t", t),
-                ("upper", upper),
-                ("lower", lower),
-                ("before", before),
-                ("after", after),
-            )
-        }
-        for v in range(pv):
-            at = {name: e.int_op("u", "add", row, 8 * v) for name, row in rows.items()}
-            integral = e.fsub(e.load(s["cum"], at["upper"]), e.load(s["cum"], at["lower"]))
-            rho = e.load(b["rho"], at["t"])
-            smooth = e.fadd(e.load(b["rho"], at["after"]), e.load(b["rho"], at["before"]))
-            smooth = e.fsub(smooth, e.fadd(rho, rho))
-            delta = e.fma(coefficient["k_nb"], smooth, e.fmul(coefficient["k_bp"], integral))
-            velocity = e.fmul(coefficient["momentum"], e.load(b["velocity"], at["t"]))
-            velocity = e.fma(coefficient["rate"], delta, velocity)
-            e.store(velocity, b["velocity"], at["t"])
-            e.store(e.fadd(rho, velocity), s["rnew"], at["t"])
-        return []
-
-    e.loop(n, [], update)
-
-    def copy(t: str, _: list[str]) -> list[str]:
-        row = e.int_op("q", "mul", t, pp)
-        for v in range(pv):
-            index = e.int_op("q", "add", row, 8 * v)
-            e.store(e.load(s["rnew"], index), b["rho"], index)
-        return []
-
-    e.loop(n, [], copy)
-
-
 # --- compiling and calling ---------------------------------------------------------------
 
 _compiled: dict[tuple[Shapes, int], tuple[Any, Any]] = {}
@@ -660,17 +389,6 @@ _compile_lock = threading.Lock()
 _SIGNATURE = ctypes.CFUNCTYPE(
     None, ctypes.c_int64, ctypes.c_int64, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p
 )
-
-
-def enabled() -> bool:
-    """Whether the native loop runs: llvmlite importable and ``RNNPB_NATIVE`` not ``0``."""
-    if os.environ.get("RNNPB_NATIVE", "1") == "0":
-        return False
-    try:
-        importlib.import_module("llvmlite.binding")
-    except ImportError:
-        return False
-    return True
 
 
 def compiled(shapes: Shapes, group: int = 1) -> Any:
@@ -682,95 +400,6 @@ def compiled(shapes: Shapes, group: int = 1) -> Any:
         if key not in _compiled:
             _compiled[key] = build(regression_ir(shapes, group), "regress", _SIGNATURE)
         return _compiled[key][0]
-
-
-def build(ir: str, name: str, signature: Any) -> tuple[Any, Any]:
-    """The function ``name`` of the module ``ir``, compiled for this machine's processor
-    (LLVM's -O3 pipeline), as a ctypes function of ``signature``; and the engine that owns
-    its code (keep it as long as the function).
-
-    The machine code is kept on disk beside the compiled JAX programs (:func:`object_folder`),
-    named by a digest of the module, the processor, its features and LLVM's version, so that
-    a later process loads it instead of compiling it again; a file that does not match its
-    own digest is compiled again and replaced."""
-    llvm = importlib.import_module("llvmlite.binding")
-    llvm.initialize_native_target()
-    llvm.initialize_native_asmprinter()
-    cpu, features = llvm.get_host_cpu_name(), llvm.get_host_cpu_features().flatten()
-    target = llvm.Target.from_default_triple()
-    machine = target.create_target_machine(cpu=cpu, features=features, opt=3)
-    version = importlib.import_module("llvmlite").__version__
-    digest = hashlib.sha256(
-        "\n".join([version, str(llvm.get_default_triple()), cpu, features, ir]).encode()
-    ).hexdigest()
-    folder = object_folder()
-    path = None if folder is None else folder / f"{name}-{digest[:32]}.o"
-    code = _read_object(path)
-    if code is None:
-        module = llvm.parse_assembly(ir)
-        module.verify()
-        options = llvm.create_pipeline_tuning_options(speed_level=3)
-        builder = llvm.create_pass_builder(machine, options)
-        builder.getModulePassManager().run(module, builder)
-        code = machine.emit_object(module)
-        _write_object(path, code)
-    engine = llvm.create_mcjit_compiler(llvm.parse_assembly(""), machine)
-    engine.add_object_file(llvm.ObjectFileRef.from_data(code))
-    engine.finalize_object()
-    address = engine.get_function_address(name)
-    if not address:
-        raise RuntimeError(f"the compiled code has no function {name!r}")
-    return signature(address), engine
-
-
-_OBJECT_MAGIC = b"rnnpb native object 1\n"
-
-
-def object_folder() -> Path | None:
-    """Where compiled native code is kept: ``native`` in the folder of the compiled JAX
-    programs (``rnnpb._xla.cache_folder``: ``RNNPB_XLA_CACHE`` moves it, ``0`` turns both
-    off); None when off or when the folder cannot be made (a read-only home: compiled in
-    every process, silently)."""
-    from rnnpb import _xla
-
-    base = _xla.cache_folder()
-    if base is None:
-        return None
-    folder = base / "native"
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError:
-        return None
-    return folder
-
-
-def _read_object(path: Path | None) -> bytes | None:
-    """The machine code kept at ``path``, or None: no file, unreadable, or not matching its
-    digest (a file cut short or damaged)."""
-    if path is None:
-        return None
-    try:
-        data = path.read_bytes()
-    except OSError:
-        return None
-    head = len(_OBJECT_MAGIC)
-    digest, code = data[head : head + 32], data[head + 32 :]
-    if data[:head] != _OBJECT_MAGIC or hashlib.sha256(code).digest() != digest or not code:
-        return None
-    return code
-
-
-def _write_object(path: Path | None, code: bytes) -> None:
-    """Keep ``code`` at ``path`` whole or not at all (a temporary file renamed over it); a
-    folder that cannot be written to is left alone."""
-    if path is None:
-        return
-    temporary = path.with_name(f".{path.name}.{os.getpid()}.{threading.get_ident()}")
-    try:
-        temporary.write_bytes(_OBJECT_MAGIC + hashlib.sha256(code).digest() + code)
-        os.replace(temporary, path)
-    except OSError:
-        temporary.unlink(missing_ok=True)
 
 
 def shapes_of(
