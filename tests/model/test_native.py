@@ -30,9 +30,7 @@ def _start(mirror: MirrorSystem, hands: np.ndarray) -> tuple[OnlineState, np.nda
     step's gate."""
     u, seen = normalized_hands(hands, mirror.model.network.sensory_size)
     state, gates = _copy(mirror._state), np.empty(1, np.float32)
-    saved = (state.onset_motor, state.predicted_sensory, state.next_onset_context, state.rho)
-    start = tuple(np.empty_like(part) for part in saved)
-    start += (np.empty_like(state.onset_context), np.empty_like(state.onset_motor))
+    start = online.start_arrays(state)
     online.prepare_sessions(
         mirror._net,
         state,

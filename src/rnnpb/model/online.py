@@ -734,6 +734,12 @@ def take_blocks(st, layout, blocks):
         ]
 
 
+def start_arrays(st: OnlineState) -> tuple[np.ndarray, ...]:
+    """Room for what :func:`prepare_sessions` keeps for :func:`conclude_sessions`."""
+    parts = (st.onset_motor, st.predicted_sensory, st.next_onset_context, st.rho)
+    return tuple(np.empty_like(part) for part in (*parts, st.onset_context, st.onset_motor))
+
+
 def step_sessions(
     net: tuple,
     meta: tuple,
@@ -759,11 +765,7 @@ def step_sessions(
     The regression's loop runs in ``native`` (:mod:`rnnpb.model.native`) when given, else
     in :func:`regress_sessions`."""
     sessions, dtype = st.n.shape[0], st.rho.dtype
-    gates = np.empty(sessions, dtype)
-    start = tuple(
-        np.empty_like(part)
-        for part in (st.onset_motor, st.predicted_sensory, st.next_onset_context, st.rho)
-    ) + (np.empty_like(st.onset_context), np.empty_like(st.onset_motor))
+    gates, start = np.empty(sessions, dtype), start_arrays(st)
     prepare_sessions(net, st, u, seen, candidates, phase, s, gates, start)
     if s.iterations > 0 and native is not None:
         layout = native.block_layout()
