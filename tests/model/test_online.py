@@ -111,7 +111,7 @@ def test_numerical_failure_holds_the_last_good_state_in_both_twins(trained):
         ("recorded", True, 0, 0.0, 2),
     ],
 )
-def test_compiled_step_matches_numpy_reference(
+def test_float32_step_matches_float64_reference(
     trained, motor_input, optimize_onset, restart_span, surprise_gate, phase
 ):
     config = OnlineConfig(window=8, iterations=5).with_tuning(
@@ -239,7 +239,7 @@ def _risk_network(pb_size, seed=0):
 
 
 @pytest.mark.parametrize("guard, span", [("barrier", 3), ("barrier", 0), ("projection", 3)])
-def test_the_safety_guard_matches_the_numpy_reference(trained, guard, span):
+def test_the_safety_guard_matches_the_reference(trained, guard, span):
     meta = _risk_network(trained.network.pb_size)
     config = OnlineConfig(window=8, iterations=5, safety_guard=guard).with_tuning(
         barrier_span=span,
