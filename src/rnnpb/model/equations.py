@@ -80,8 +80,16 @@ def tanh(x):
 
 @kernel
 def accumulate(total, x, w):
-    """``total (G, N) += x (G, K) @ w (K, N)``, one input at a time."""
-    for k in range(w.shape[0]):
+    """``total (G, N) += x (G, K) @ w (K, N)``, four inputs at a time: a sum goes to memory
+    and back once for four products (the compiler keeps it in memory between inputs)."""
+    k_size = w.shape[0]
+    whole = k_size - k_size % 4
+    for k in range(0, whole, 4):
+        for g in range(x.shape[0]):
+            a, b, c, d = x[g, k], x[g, k + 1], x[g, k + 2], x[g, k + 3]
+            for j in range(w.shape[1]):
+                total[g, j] += (a * w[k, j] + b * w[k + 1, j]) + (c * w[k + 2, j] + d * w[k + 3, j])
+    for k in range(whole, k_size):
         for g in range(x.shape[0]):
             a = x[g, k]
             for j in range(w.shape[1]):

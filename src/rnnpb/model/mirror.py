@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike
 from rnnpb.errors import ConfigError
 from rnnpb.model.io import TrainedModel
 from rnnpb.model.meta import MetaLevel, MetaParams, regime_of
-from rnnpb.model.native import native_regression
+from rnnpb.model.native import NativeRegression, native_regression
 from rnnpb.model.network import logit_numpy
 from rnnpb.model.online import (
     OnlineState,
@@ -232,7 +232,7 @@ class MirrorSystem:
         self._pattern_rho = restart_candidates(model).astype(dtype)
         self._meta = meta_arrays(meta, net.pb_size, dtype)
         self._guarded = meta is not None
-        self._native = None
+        self._native: NativeRegression | None = None
         if native and dtype == np.float32:
             self._native = native_regression(model.params, net, self.config, meta)
         self.meta_level = (

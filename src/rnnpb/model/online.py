@@ -66,6 +66,7 @@ from rnnpb.model.equations import (
     window_inputs,
 )
 from rnnpb.model.io import TrainedModel
+from rnnpb.model.meta import MetaParams
 from rnnpb.model.native import NativeRegression
 from rnnpb.model.network import LOGIT_CLIP, Params, closed_loop, logit_numpy
 from rnnpb.model.online_config import TUNED_MOVEMENT, OnlineConfig
@@ -205,14 +206,14 @@ def network_arrays(params: Params, sensory: int, motor: int, dtype: type) -> tup
     return tuple(np.ascontiguousarray(a) for a in parts)
 
 
-def meta_arrays(meta: object | None, pb_size: int, dtype: type) -> tuple:
+def meta_arrays(meta: MetaParams | None, pb_size: int, dtype: type) -> tuple:
     """The risk network (:class:`rnnpb.model.meta.MetaParams`) as the kernel takes it; empty
     arrays without one."""
     if meta is None:
         parts = [np.zeros((pb_size, 0)), np.zeros(0), np.zeros((0, 0)), np.zeros(0), np.zeros(0)]
         parts.append(np.zeros(1))
     else:
-        parts = [np.asarray(a) for a in meta]  # pyright: ignore[reportGeneralTypeIssues]
+        parts = [np.asarray(a) for a in meta]
     parts[5] = np.reshape(parts[5], 1)
     return tuple(np.ascontiguousarray(a, dtype) for a in parts)
 
