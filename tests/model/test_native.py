@@ -172,13 +172,13 @@ def test_sessions_regressed_together_are_each_regressed_alone(trained):
     for b, (state, gate) in enumerate(starts):
         _, alone = _both(mirror, kernel, state, gate)
         for name in _PARTS:
-            # The same arithmetic to the last bit or two: the kernels of four sessions and of
-            # one may contract a product and a sum into one fused operation differently.
+            # The same arithmetic in another order: a session alone sums each product in two
+            # chains (even and odd inputs), four sessions together in one.
             np.testing.assert_allclose(
                 getattr(grouped, name)[b],
                 getattr(alone, name)[0],
-                rtol=1e-6,
-                atol=1e-9,
+                rtol=1e-5,
+                atol=1e-5,
                 err_msg=f"{name}, session {b}",
             )
 

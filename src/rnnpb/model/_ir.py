@@ -182,10 +182,13 @@ class _Emitter:
     ) -> list[list[str]]:
         """For each session ``g``: ``sums[g][v] + Σ_k x_g[start_g + k] · weights[k, 8v : 8v
         + 8]`` for ``k < count``, where ``scalars[g]`` is ``(x_g, start_g)``; the sums held in
-        registers through the loop, each weight vector loaded once for every session."""
+        registers through the loop, each weight vector loaded once for every session. Where
+        the registers allow (one or two sessions), the even and the odd inputs go to two sets
+        of sums added at the end, so that a sum waits for one multiply-add in two."""
         group, vectors = len(sums), len(sums[0])
+        size = group * vectors
 
-        def body(k: str, flat: list[str]) -> list[str]:
+        def accumulate(k: str | int, flat: list[str]) -> list[str]:
             current = [flat[g * vectors : (g + 1) * vectors] for g in range(group)]
             factors = [
                 self.broadcast(self.load_scalar(base, self.int_op("k", "add", start, k)))
@@ -199,7 +202,21 @@ class _Emitter:
                     updated[g][v] = self.fma(factors[g], weight, current[g][v])
             return [value for values in updated for value in values]
 
-        flat = self.loop(count, [value for values in sums for value in values], body)
+        start = [value for values in sums for value in values]
+        if count < 2 or 2 * size > 12:
+            flat = self.loop(count, start, accumulate)
+        else:
+
+            def pair(i: str, flat: list[str]) -> list[str]:
+                even = self.int_op("k", "mul", i, 2)
+                odd = self.int_op("k", "add", even, 1)
+                return accumulate(even, flat[:size]) + accumulate(odd, flat[size:])
+
+            both = self.loop(count // 2, start + ["zeroinitializer"] * size, pair)
+            flat = both[:size]
+            if count % 2:
+                flat = accumulate(count - 1, flat)
+            flat = [self.fadd(a, b) for a, b in zip(flat, both[size:], strict=True)]
         return [flat[g * vectors : (g + 1) * vectors] for g in range(group)]
 
 
