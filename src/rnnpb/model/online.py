@@ -327,7 +327,9 @@ def _windows(net, sensory, seen, motor_sent, n, recorded, copies):
 @kernel
 def _run(net, fixed, mask, rho, onset_context, onset_motor, rows):
     """The forward pass of G windows with profiles ``rho`` (G, L, P) and onsets (G, C),
-    (G, M): hidden (L, G, H) and outputs (L, G, IO)."""
+    (G, M) over their first ``rows`` steps: hidden (L, G, H) and outputs (L, G, IO), later
+    steps left unset. A pass for the prediction errors alone stops a step before the
+    window's last: that step's prediction has no observation to meet yet."""
     length, copies, h = fixed.shape
     io = mask.shape[2]
     dtype = fixed.dtype
@@ -372,7 +374,7 @@ def _recent_error(net, st, b, recorded, steps):
         net, st.sensory[b], st.seen[b], st.motor_sent[b], n, recorded, 1
     )
     b1 = slice(b, b + 1)
-    _, outputs = _run(net, fixed, mask, st.rho[b1], st.onset_context[b1], st.onset_motor[b1], n)
+    _, outputs = _run(net, fixed, mask, st.rho[b1], st.onset_context[b1], st.onset_motor[b1], n - 1)
     return _mean_error(outputs, target, target_mask, 0, n - 1 - steps)
 
 
@@ -424,7 +426,9 @@ def _phase_restart(net, st, b, candidates, s):
     rho = np.empty((q, span, p), st.rho.dtype)
     for g in range(q):
         rho[g] = candidates[g, :p]
-    _, outputs = _run(net, fixed, mask, rho, candidates[:, p + m :], candidates[:, p : p + m], span)
+    _, outputs = _run(
+        net, fixed, mask, rho, candidates[:, p + m :], candidates[:, p : p + m], span - 1
+    )
     best, best_error = 0, np.inf
     for g in range(q):
         error = _mean_error(outputs, target, target_mask, g, 0)
@@ -462,7 +466,7 @@ def _restart(net, st, b, candidates, s):
                 rho[g, t] = candidates[g - 1]
         onset_context[g] = st.onset_context[b]
         onset_motor[g] = st.onset_motor[b]
-    _, outputs = _run(net, fixed, mask, rho, onset_context, onset_motor, n)
+    _, outputs = _run(net, fixed, mask, rho, onset_context, onset_motor, n - 1)
     best, best_error = 0, np.inf
     for g in range(copies):
         error, _ = prediction_error(outputs, target, target_mask, g, 0)
@@ -576,7 +580,7 @@ def pattern_errors(net, st, b, pattern_rho, steps, recorded):
         rho[g] = pattern_rho[g]
         onset_context[g] = st.onset_context[b]
         onset_motor[g] = st.onset_motor[b]
-    _, outputs = _run(net, fixed, mask, rho, onset_context, onset_motor, n)
+    _, outputs = _run(net, fixed, mask, rho, onset_context, onset_motor, n - 1)
     errors = np.empty(copies)
     for g in range(copies):
         errors[g] = _mean_error(outputs, target, target_mask, g, n - 1 - steps)
