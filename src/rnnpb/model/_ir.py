@@ -179,12 +179,14 @@ class _Emitter:
         scalars: Sequence[tuple[str, str | int]],
         weights: str,
         width: int,
+        chains: int = 1,
     ) -> list[list[str]]:
         """For each session ``g``: ``sums[g][v] + Σ_k x_g[start_g + k] · weights[k, 8v : 8v
         + 8]`` for ``k < count``, where ``scalars[g]`` is ``(x_g, start_g)``; the sums held in
-        registers through the loop, each weight vector loaded once for every session. Where
-        the registers allow (one or two sessions), the even and the odd inputs go to two sets
-        of sums added at the end, so that a sum waits for one multiply-add in two."""
+        registers through the loop, each weight vector loaded once for every session. With
+        ``chains`` 2, where the registers allow (the sums of one session, or of two of one
+        vector), the even and the odd inputs go to two sets of sums added at the end, so that a
+        sum waits for one multiply-add in two."""
         group, vectors = len(sums), len(sums[0])
         size = group * vectors
 
@@ -203,7 +205,7 @@ class _Emitter:
             return [value for values in updated for value in values]
 
         start = [value for values in sums for value in values]
-        if count < 2 or 2 * size > 12:
+        if chains < 2 or count < 2 or 2 * size > 12:
             flat = self.loop(count, start, accumulate)
         else:
 

@@ -219,7 +219,9 @@ def regression_ir(shapes: Shapes, group: int = 1) -> str:
             sums = [
                 [e.load(b[g]["fixed"], row_index(t, hp, v)) for v in range(hv)] for g in sessions
             ]
-            sums = e.products(sums, p, [(s[g]["pb"], pb_row) for g in sessions], w["w_p"], hp)
+            sums = e.products(
+                sums, p, [(s[g]["pb"], pb_row) for g in sessions], w["w_p"], hp, chains=2
+            )
             # the recurrent input: the first input at t = 0, else the last output; masked
             first_step = e.op("z", f"icmp eq i64 {t}, 0")
             previous = e.int_op("y", "mul", e.int_op("y", "sub", t, 1), ip)
@@ -232,7 +234,9 @@ def regression_ir(shapes: Shapes, group: int = 1) -> str:
                     value = e.load(source, e.int_op("y", "add", previous, 8 * v))
                     mask = e.load(b[g]["mask"], row_index(t, ip, v))
                     e.store(e.fmul(value, mask), s[g]["x"], 8 * v)
-            sums = e.products(sums, io, [(s[g]["x"], 0) for g in sessions], w["w_loop"], hp)
+            sums = e.products(
+                sums, io, [(s[g]["x"], 0) for g in sessions], w["w_loop"], hp, chains=2
+            )
             hidden_row = e.int_op("h", "mul", t, hp)
             for g in sessions:
                 for v, total in enumerate(sums[g]):
@@ -245,6 +249,7 @@ def regression_ir(shapes: Shapes, group: int = 1) -> str:
                 [(s[g]["hid"], hidden_row) for g in sessions],
                 w["w_out"],
                 ip,
+                chains=2,
             )
             for g in sessions:
                 for v, total in enumerate(outputs[g]):
@@ -272,6 +277,7 @@ def regression_ir(shapes: Shapes, group: int = 1) -> str:
                 [(s[g]["g"], 0) for g in sessions],
                 w["w_out_t"],
                 hp,
+                chains=2,
             )
             hidden_row = e.int_op("h", "mul", t, hp)
             for g in sessions:
@@ -279,7 +285,7 @@ def regression_ir(shapes: Shapes, group: int = 1) -> str:
                     hid = e.load(s[g]["hid"], e.int_op("h", "add", hidden_row, 8 * v))
                     e.store(e.fmul(total, e.fmul(hid, e.one_minus(hid))), s[g]["dh"], 8 * v)
             errors = [(s[g]["dh"], 0) for g in sessions]
-            d_pb = e.products([[zero] * pv for _ in sessions], h, errors, w["w_p_t"], pp)
+            d_pb = e.products([[zero] * pv for _ in sessions], h, errors, w["w_p_t"], pp, chains=2)
             pb_row = e.int_op("q", "mul", t, pp)
             for g in sessions:
                 for v, total in enumerate(d_pb[g]):
@@ -287,7 +293,9 @@ def regression_ir(shapes: Shapes, group: int = 1) -> str:
                     pb = e.load(s[g]["pb"], index)
                     gradient = e.fmul(total, e.fmul(pb, e.one_minus(pb)))
                     e.store(e.fmul(gradient, minus_gate[g]), s[g]["grad"], index)
-            d_input = e.products([[zero] * iv for _ in sessions], h, errors, w["w_loop_t"], ip)
+            d_input = e.products(
+                [[zero] * iv for _ in sessions], h, errors, w["w_loop_t"], ip, chains=2
+            )
             return [value for values in d_input for value in values]
 
         d_first = grouped(e.loop(length, [zero] * (iv * group), backward), iv)
