@@ -19,9 +19,10 @@ from __future__ import annotations
 import hashlib
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any, TypeVar, cast
 
 import numba
+from numba.core import config as numba_config
 
 from rnnpb import _xla
 
@@ -52,11 +53,12 @@ def _cache_folder() -> Path | None:
 
 _FOLDER = _cache_folder()
 if _FOLDER is not None:
-    numba.config.CACHE_DIR = str(_FOLDER)
+    setattr(numba_config, "CACHE_DIR", str(_FOLDER))  # read when a kernel is made
 
 
 def kernel(function: _Function) -> _Function:
     """``function`` compiled by numba on its first call (see the module's docstring)."""
-    return numba.njit(
+    compiled = numba.njit(
         cache=_FOLDER is not None, fastmath=set(FASTMATH), error_model="numpy", nogil=True
     )(function)
+    return cast("_Function", compiled)

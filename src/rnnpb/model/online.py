@@ -104,8 +104,8 @@ class OnlineState(NamedTuple):
             part[b] = value[0]
 
 
-# The arrays of StepOutputs.
-_Values = TypeVar("_Values", np.ndarray, float)
+# The arrays of StepOutputs, or where each lies in a session's row of outputs.
+_Values = TypeVar("_Values", np.ndarray, slice)
 
 
 class StepOutputs(NamedTuple, Generic[_Values]):
@@ -125,7 +125,9 @@ class StepOutputs(NamedTuple, Generic[_Values]):
     pattern_errors: _Values
 
 
-def output_layout(sensory: int, motor: int, pb: int, context: int, patterns: int) -> StepOutputs:
+def output_layout(
+    sensory: int, motor: int, pb: int, context: int, patterns: int
+) -> StepOutputs[slice]:
     """Where each output lies in a session's row: a slice per field."""
     sizes = (motor, sensory, pb, 1, 1, context, patterns)
     ends = np.cumsum(sizes)
