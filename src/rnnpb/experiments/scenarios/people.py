@@ -325,18 +325,14 @@ def measure(runs: list[dict[str, Any]], config: PeopleConfig) -> dict[str, Any]:
     }
 
 
-def paced_run(model, path: Path, steps: int, dt: float) -> dict[str, Any]:
-    """A video (looped) through the pose model and ``model`` in real time at ``dt``, as
-    ``rnnpb interact --source video:PATH --perception pose --paced`` runs it: missed
-    deadlines and the step's sections."""
-    from rnnpb.interaction import InteractionLoop, LoopConfig, open_source
-    from rnnpb.model import MirrorSystem, OnlineConfig
+def looped_video(path: Path, dt: float, framing: float):
+    """The video at ``path`` through the pose model at ``dt``, framed at ``framing``, played
+    over and over: at its end the file is opened again, the pose tracker kept (one tracker for
+    the whole run, as a camera's)."""
+    from rnnpb.interaction import open_source
     from rnnpb.perception import VideoFileSource
 
     class Looped(VideoFileSource):
-        """The video's frames over and over, its file opened again at its end: one pose
-        tracker for the whole run, as a camera's."""
-
         def read(self):
             frame = super().read()
             if frame is None:
@@ -345,8 +341,20 @@ def paced_run(model, path: Path, steps: int, dt: float) -> dict[str, Any]:
                 frame = super().read()
             return frame
 
-    source = open_source(f"video:{path}", dt=dt, perception="pose", framing=model.framing)
-    source.frames = Looped(source.frames.path)
+    source = open_source(f"video:{path}", dt=dt, perception="pose", framing=framing)
+    tracked = getattr(source, "inner", source)  # a video sampled every N-th frame: inside
+    tracked.frames = Looped(tracked.frames.path)
+    return source
+
+
+def paced_run(model, path: Path, steps: int, dt: float) -> dict[str, Any]:
+    """A video (looped) through the pose model and ``model`` in real time at ``dt``, as
+    ``rnnpb interact --source video:PATH --perception pose --paced`` runs it: missed
+    deadlines and the step's sections."""
+    from rnnpb.interaction import InteractionLoop, LoopConfig
+    from rnnpb.model import MirrorSystem, OnlineConfig
+
+    source = looped_video(path, dt, model.framing)
     choice = OnlineConfig.for_model(model)
     mirror = MirrorSystem(model, choice.config, recognition=choice.recognition)
     # Compiled before the run, as `rnnpb interact` does before its first paced step.
