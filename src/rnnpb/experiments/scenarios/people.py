@@ -115,15 +115,11 @@ class VideoPerformance:
 def video_performance(path: Path) -> VideoPerformance:
     """A video through the pose model at its own frame rate (as ``rnnpb record video:PATH
     --perception pose`` reads it at the 0.1 s step, every frame)."""
-    import cv2
-
     from rnnpb.learning_phase import from_source
-    from rnnpb.perception import open_camera_source
+    from rnnpb.perception import open_camera_source, video_fps
 
-    capture = cv2.VideoCapture(str(path))
-    fps = capture.get(cv2.CAP_PROP_FPS) if capture.isOpened() else 0.0
-    capture.release()
-    if not fps or not math.isfinite(fps) or fps <= 0:
+    fps = video_fps(path)
+    if not fps:
         raise RnnpbError(f"{path}: no frame rate")
     source = open_camera_source("video", str(path), perception="pose")
     frame_ms: list[float] = []
