@@ -42,10 +42,10 @@ def run_variant(variant: str, starts: dict[str, str], args, out: Path) -> dict:
     from rnnpb.experiments.scenarios.teaching_scenario import TeachConfig
     from rnnpb.experiments.scenarios.teaching_targets import learned_in_time, third_showing_share
     from rnnpb.interaction.teaching import TeachingConfig
-    from rnnpb.model._tuned import apply_table
+    from rnnpb.presets import Overrides
 
-    cutter = apply_table(
-        TeachingConfig(), variant_tables(variant, "teaching.cutter"), "teaching.cutter"
+    cutter = TeachingConfig().overridden(
+        Overrides(variant_tables(variant, "teaching.cutter"), variant)
     )
     config = TeachConfig(
         learning_sets=tuple(args.sets),
