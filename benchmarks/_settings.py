@@ -14,7 +14,7 @@ from typing import Any
 
 def variant_tables(text: str, section: str) -> dict[str, dict[str, Any]]:
     """A variant as a ``--config`` file's tables of ``section`` (``{section: ...,
-    section.pb: ...}``; none for ``default``), for :func:`rnnpb.model._tuned.apply_table`."""
+    section.pb: ...}``; none for ``default``), as :class:`rnnpb.presets.Overrides` holds them."""
     if text.strip() == "default":
         return {}
     changes: dict[str, dict[str, Any]] = {}
@@ -37,9 +37,10 @@ def variant_tables(text: str, section: str) -> dict[str, dict[str, Any]]:
 def apply_variant(config: Any, text: str, section: str) -> Any:
     """``config`` (a ``TrainConfig``, ``OnlineConfig`` ...) with variant ``text``: its settings
     replaced, its tuned values by ``with_tuning``, as a ``--config`` file's table would."""
-    from rnnpb.model._tuned import apply_table
+    from rnnpb.model._tuned import with_values
+    from rnnpb.presets import Overrides
 
-    return apply_table(config, variant_tables(text, section), section)
+    return with_values(config, Overrides(variant_tables(text, section), text).values(section))
 
 
 def processor() -> str:

@@ -48,6 +48,7 @@ def one_case(path: str, set_name: str, draw: int, variant: str) -> dict:
     from rnnpb.experiments.scenarios.incremental_measures import measure
     from rnnpb.experiments.scenarios.incremental_scenario import IncrementalConfig, demonstrations
     from rnnpb.model import TrainedModel, consolidate, consolidation_config
+    from rnnpb.presets import Overrides
 
     start = TrainedModel.load(path)
     tables = variant_tables(variant, "consolidation")
@@ -57,8 +58,7 @@ def one_case(path: str, set_name: str, draw: int, variant: str) -> dict:
         start,
         "add",
         iterations=iterations,
-        overrides={"consolidation": table} if table else None,
-        origin=f"variant {variant}",
+        overrides=Overrides({"consolidation": table}, f"variant {variant}") if table else None,
     )
     config = IncrementalConfig(new_data_seed=draw, scenario_seed=100 + draw, workers=1)
     added = novel_pattern(set_name)

@@ -53,6 +53,7 @@ def model_path(models: Path, set_name: str) -> Path:
 def consolidation(model, variant: str):
     """Teaching's consolidation of ``model``, or the variant named."""
     from rnnpb.interaction.background import teaching_consolidation
+    from rnnpb.presets import Overrides
 
     config = teaching_consolidation(model)
     assert config.train is not None
@@ -74,7 +75,7 @@ def consolidation(model, variant: str):
                 table[key] = tomllib.loads(f"v = {text}")["v"]
             except tomllib.TOMLDecodeError:
                 table[key] = text
-        return teaching_consolidation(model, overrides={"teaching": table}, origin=variant)
+        return teaching_consolidation(model, overrides=Overrides({"teaching": table}, variant))
     raise SystemExit(
         f"unknown variant {variant!r}: policy, iterations:N, adam:RATExN or "
         "teaching:KEY=VALUE[+KEY=VALUE]"

@@ -40,12 +40,12 @@ def run_variant(variant: str, starts: dict[str, str], args, out: Path) -> dict:
     )
     from rnnpb.experiments.scenarios.teaching_runs import teach_job
     from rnnpb.experiments.scenarios.teaching_scenario import TeachConfig
-    from rnnpb.experiments.studies.teach import _learned_in_time, third_showing_share
+    from rnnpb.experiments.scenarios.teaching_targets import learned_in_time, third_showing_share
     from rnnpb.interaction.teaching import TeachingConfig
-    from rnnpb.model._tuned import apply_table
+    from rnnpb.presets import Overrides
 
-    cutter = apply_table(
-        TeachingConfig(), variant_tables(variant, "teaching.cutter"), "teaching.cutter"
+    cutter = TeachingConfig().overridden(
+        Overrides(variant_tables(variant, "teaching.cutter"), variant)
     )
     config = TeachConfig(
         learning_sets=tuple(args.sets),
@@ -69,7 +69,7 @@ def run_variant(variant: str, starts: dict[str, str], args, out: Path) -> dict:
                     "draw": draw,
                     "kept_of_shape": sum(most_performed(e) == shape for e in run.episodes),
                     "learned": bool(run.new_pattern),
-                    "learned_before_third": _learned_in_time(run),
+                    "learned_before_third": learned_in_time(run),
                     "third_recognised": third_showing_share(run, SETTLE_STEPS),
                     "from_random": sum(
                         m in UNSTRUCTURED_MOVEMENTS for m in run.timeline["taught"].values()

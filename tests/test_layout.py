@@ -195,3 +195,35 @@ def test_imports_point_down():
 def test_the_model_imports_nothing_of_the_world():
     edges = {target for target, _ in _imports()["model"]}
     assert not edges & {"robot", "perception", "web", "memory", "interaction", "demonstrator"}
+
+
+STUDY_LINES = 400
+"""The most lines a study's module may have: it is a runner, a judge and a report over its
+scenarios (experiments/scenarios/), which hold the rest."""
+FILE_LINES = 800
+"""The most lines any module may have, but the native code's two (compiled kernels in one
+file each)."""
+LONGER_FILES = {"model/native.py", "model/native_learning.py"}
+
+
+def _lines(path: Path) -> int:
+    return len(path.read_text(encoding="utf-8").splitlines())
+
+
+def test_each_study_is_a_short_script():
+    long = {
+        str(path.relative_to(ROOT)): _lines(path)
+        for path in sorted((ROOT / "experiments" / "studies").glob("*.py"))
+        if _lines(path) > STUDY_LINES
+    }
+    assert not long, f"studies over {STUDY_LINES} lines (move a part into scenarios/): {long}"
+
+
+def test_no_module_is_longer_than_it_can_be_read():
+    long = {
+        relative: _lines(path)
+        for path in sorted(ROOT.rglob("*.py"))
+        if (relative := path.relative_to(ROOT).as_posix()) not in LONGER_FILES
+        and _lines(path) > FILE_LINES
+    }
+    assert not long, f"modules over {FILE_LINES} lines: {long}"

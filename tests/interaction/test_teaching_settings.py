@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import pickle
 
 import pytest
 
@@ -76,7 +77,10 @@ def test_interact_learn_gives_teaching_the_config_file_s_tables(research, tmp_pa
     teacher.confirm()
     (job,) = jobs
     assert teaching_consolidation(model, *job[4:]) == config
-    assert job[5] == {"teaching": {"hold_old_pb": "all"}, "consolidation": {"rehearsal_steps": 40}}
+    overrides = job[5]  # the file as it was read, pickled for the process as it is
+    assert overrides.origin == str(research) and pickle.loads(pickle.dumps(overrides)) == overrides
+    assert overrides.tables["teaching"] == {"hold_old_pb": "all"}
+    assert overrides.tables["consolidation"] == {"rehearsal_steps": 40}
 
 
 def test_teaching_tables_need_learn(research, tmp_path, capsys):

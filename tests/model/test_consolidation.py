@@ -320,19 +320,20 @@ def test_a_config_file_overrides_the_policy(two_patterns):
     """Research changes any of the policy's values (a --config file's tables); an unknown
     key is refused with the file's name."""
     from rnnpb.model.consolidation import consolidation_config
+    from rnnpb.presets import Overrides
 
     model, _ = two_patterns
     tables = {"consolidation": {"hold_old_pb": "off", "iterations": 7, "rehearsal_steps": 20}}
-    added = consolidation_config(model, "add", overrides=tables, origin="ablation.toml")
+    added = consolidation_config(model, "add", overrides=Overrides(tables, "ablation.toml"))
     assert added.train is not None and added.train.iterations == 7
     assert (added.hold_old_pb, added.rehearsal_steps, added.new_pb_start) == ("off", 20, "farthest")
     taught = consolidation_config(
-        model, "teach", overrides={"teaching": {"input_noise": 0.05}}, origin="ablation.toml"
+        model, "teach", overrides=Overrides({"teaching": {"input_noise": 0.05}}, "ablation.toml")
     )
     assert taught.train is not None and taught.train.input_noise == 0.05
     with pytest.raises(ConfigError, match="ablation.toml: unknown setting 'hold' in"):
         consolidation_config(
-            model, overrides={"consolidation": {"hold": "off"}}, origin="ablation.toml"
+            model, overrides=Overrides({"consolidation": {"hold": "off"}}, "ablation.toml")
         )
 
 

@@ -131,3 +131,24 @@ def test_the_dashboard_switches_to_bare_hands(tmp_path):
         assert session.perception == "pose"  # the webcam opens with the pose tracker
     finally:
         session.close()
+
+
+def test_a_looped_video_plays_on_past_its_end_with_one_tracker(filmed_person):
+    """The people study's paced video: sampled every other frame at 0.2 s (the 10 frames/s
+    clip holds 63 such steps), read on past its end, the file opened again and the pose
+    tracker the same, its hands found on the looped frames too."""
+    from rnnpb.experiments.scenarios.people import looped_video
+    from rnnpb.sources import FrameStepSource
+
+    source = looped_video(filmed_person, 0.2, 1.55)
+    assert isinstance(source, FrameStepSource)
+    tracker = source.inner.tracker
+    with source:
+        observations = [source.read() for _ in range(70)]
+    assert all(o is not None for o in observations)
+    assert source.inner.tracker is tracker
+    # the raised right hand is found on the second pass as on the first
+    second = np.array([o.sensory[2:] for o in observations[63:]])
+    assert np.isfinite(second).all()
+    first = np.array([o.sensory[2:] for o in observations[:7]])
+    assert np.abs(second.mean(axis=0) - first.mean(axis=0)).max() < 0.1

@@ -31,13 +31,13 @@ def research(tmp_path):
 def test_a_config_file_s_values_reach_the_session_s_mirror_and_teaching(
     model_dir, model, research, tmp_path
 ):
-    from rnnpb.interaction.settings import ConfigTables
+    from rnnpb.presets import Overrides
     from rnnpb.web import Session
 
     folder = tmp_path / "models"
     folder.mkdir()
     shutil.copy(model_dir / "set1.npz", folder / "set1.npz")  # its memory is made beside it
-    tables = ConfigTables(
+    overrides = Overrides(
         {
             "online": {"surprise_gate": 0.02},
             "recognition": {"switch_steps": 3},
@@ -49,7 +49,7 @@ def test_a_config_file_s_values_reach_the_session_s_mirror_and_teaching(
         {"set1.npz": folder / "set1.npz"},
         dt=TEST_DT,
         workdir=tmp_path / "sessions",
-        config_tables=tables,
+        overrides=overrides,
     )
     try:
         session.start()
@@ -93,8 +93,8 @@ def test_serve_reads_the_config_file_before_it_serves(model_dir, research, monke
     args = ["serve", "--model", str(model_dir), "--port", "0", "--config", str(research)]
     assert main(args) == 0
     (session,) = started
-    assert session.config_tables.origin == str(research)
-    assert session.config_tables.tables["online"] == {"surprise_gate": 0.02}
+    assert session.overrides.origin == str(research)
+    assert session.overrides.tables["online"] == {"surprise_gate": 0.02}
     assert f"values from {research}" in capsys.readouterr().out
     # A table the dashboard does not read is one line, before anything is served.
     research.write_text("[learning]\nlearning_rate = 0.02\n")

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -100,27 +101,45 @@ def check_folder_dt(folder: Path, dt: float, data: dict[str, Any] | None = None)
         )
 
 
-def data_dt(paths: list[str]) -> tuple[float, list[Path]] | None:
-    """The step time the data folders' recording.json files agree on, and those files; None
-    when none has one. A data file's folder is its parent. Disagreeing files raise
-    :class:`ConfigError` naming two of them."""
+def _agreed(
+    paths: list[str], value_of: Callable[[Path], float | None], disagree: Callable[..., str]
+) -> tuple[float, list[Path]] | None:
+    """The value the data folders' recording.json files agree on (``value_of(folder)``, None
+    where a folder gives none), and those files; None when none gives one. A data file's
+    folder is its parent. Disagreeing files raise :class:`ConfigError` with
+    ``disagree(first, value, other, other_value)``."""
     folders = dict.fromkeys(Path(p) if Path(p).is_dir() else Path(p).parent for p in paths)
-    found: list[tuple[float, Path]] = []
-    for folder in folders:
-        data = read_recording(folder)
-        if data is not None:
-            found.append((float(data["dt"]), folder / RECORDING_FILE))
+    found = [
+        (float(value), folder / RECORDING_FILE)
+        for folder in folders
+        if (value := value_of(folder)) is not None
+    ]
     if not found:
         return None
-    dt, first = found[0]
-    for other_dt, other in found[1:]:
-        if not math.isclose(other_dt, dt, rel_tol=1e-9):
-            raise ConfigError(
-                f"the data were recorded at different step times ({first}: dt {dt:g} s, "
-                f"{other}: dt {other_dt:g} s); a model learns at one dt: record them again "
-                "at one --dt"
-            )
-    return dt, [path for _, path in found]
+    value, first = found[0]
+    for other_value, other in found[1:]:
+        if not math.isclose(other_value, value, rel_tol=1e-9):
+            raise ConfigError(disagree(first, value, other, other_value))
+    return value, [path for _, path in found]
+
+
+def data_dt(paths: list[str]) -> tuple[float, list[Path]] | None:
+    """The step time the data folders' recording.json files agree on, and those files; None
+    when none has one. Disagreeing files raise :class:`ConfigError` naming two of them."""
+
+    def dt_of(folder: Path) -> float | None:
+        data = read_recording(folder)
+        return None if data is None else data["dt"]
+
+    return _agreed(
+        paths,
+        dt_of,
+        lambda first, dt, other, other_dt: (
+            f"the data were recorded at different step times ({first}: dt {dt:g} s, "
+            f"{other}: dt {other_dt:g} s); a model learns at one dt: record them again "
+            "at one --dt"
+        ),
+    )
 
 
 def folder_framing(folder: Path) -> float | None:
@@ -133,20 +152,12 @@ def folder_framing(folder: Path) -> float | None:
 def data_framing(paths: list[str]) -> tuple[float, list[Path]] | None:
     """The framing the data folders agree on, and the recording files that give it; None when
     none gives one. Folders framed differently raise :class:`ConfigError` naming two."""
-    folders = dict.fromkeys(Path(p) if Path(p).is_dir() else Path(p).parent for p in paths)
-    found: list[tuple[float, Path]] = []
-    for folder in folders:
-        framing = folder_framing(folder)
-        if framing is not None:
-            found.append((float(framing), folder / RECORDING_FILE))
-    if not found:
-        return None
-    framing, first = found[0]
-    for other_framing, other in found[1:]:
-        if not math.isclose(other_framing, framing, rel_tol=1e-9):
-            raise ConfigError(
-                f"the data frame the person differently ({first}: {framing:g} m, {other}: "
-                f"{other_framing:g} m); a model learns one framing: record them into one folder, "
-                f"or again with --framing {max(framing, other_framing):g}"
-            )
-    return framing, [path for _, path in found]
+    return _agreed(
+        paths,
+        folder_framing,
+        lambda first, framing, other, other_framing: (
+            f"the data frame the person differently ({first}: {framing:g} m, {other}: "
+            f"{other_framing:g} m); a model learns one framing: record them into one folder, "
+            f"or again with --framing {max(framing, other_framing):g}"
+        ),
+    )

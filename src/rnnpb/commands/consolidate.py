@@ -150,8 +150,7 @@ def run(args: argparse.Namespace) -> int:
         method=args.method,
         iterations=args.iterations,
         seed=args.seed,
-        overrides=None if overrides is None else dict(overrides.tables),
-        origin=args.config or "",
+        overrides=overrides,
     )
     assert config.train is not None
     learning = replace(config.train, checkpoint_every=args.checkpoint_every)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 
-from rnnpb.commands._config import RUN_SECTIONS, add_config_argument
+from rnnpb.commands._config import RUN_SECTIONS, TEACHING_SECTIONS, add_config_argument
 from rnnpb.commands._perception import add_perception_argument
 from rnnpb.commands._signals import terminate_as_interrupt
 
@@ -198,7 +198,6 @@ def run(args: argparse.Namespace) -> int:
         open_source,
         read_session,
     )
-    from rnnpb.interaction.settings import ConfigTables
     from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel
     from rnnpb.model.recognition import describe_answer, recognition_timeline
     from rnnpb.models import default_model, first_model_file
@@ -218,27 +217,29 @@ def run(args: argparse.Namespace) -> int:
 
         raise ConfigError("--learn-from-one needs --learn")
     overrides = read_config(args.config, CONFIG_SECTIONS, NAME)
-    tables = ConfigTables() if overrides is None else ConfigTables(overrides.tables, overrides.path)
-    if tables.teaches and not args.learn:
+    if overrides is not None and set(overrides.names) & set(TEACHING_SECTIONS) and not args.learn:
         from rnnpb.errors import ConfigError
 
         raise ConfigError(
-            f"{tables.origin}: [teaching], [teaching.cutter] and [consolidation] apply with --learn"
+            f"{overrides.origin}: [teaching], [teaching.cutter] and [consolidation] apply with "
+            "--learn"
         )
     model_path = first_model_file(Path(args.model) if args.model else default_model())
     model = TrainedModel.load(model_path, joint_limits=JOINT_LIMITS)
     args.dt = played_dt(model_path, model.dt, args.dt)
+    # The regression and the recognition that suit the model, the --config file's values over
+    # both (read where the preset's are).
+    choice = OnlineConfig.for_model(model, overrides)
     if args.online == "auto":
-        choice = OnlineConfig.for_model(model)
         online_name, online = choice.name, choice.config
         why = f", chosen as {choice.reason}; --online overrides"
     else:
         # the named preset's regression, its effort per second kept at the model's step
-        online_name, online = args.online, OnlineConfig.preset(args.online).at_step(model.dt)
+        online_name = args.online
+        online = OnlineConfig.preset(args.online).at_step(model.dt).overridden(overrides)
         why = ""
     if overrides is not None:
-        online = tables.online(online)
-        why += f"; values from {overrides.path}"
+        why += f"; values from {overrides.origin}"
 
     loop_config = LoopConfig(dt=args.dt, paced=args.paced, max_steps=args.steps)
     out = Path(args.out)
@@ -275,13 +276,13 @@ def run(args: argparse.Namespace) -> int:
             model,
             routines,
             online,
-            recognition=tables.recognition_for(model),
+            recognition=choice.recognition,
             **safety.mirror_options,
         )
         extra_columns = ROUTINE_COLUMNS
     else:
         mirror = MirrorSystem(
-            model, online, recognition=tables.recognition_for(model), **safety.mirror_options
+            model, online, recognition=choice.recognition, **safety.mirror_options
         )
     with contextlib.ExitStack() as stack:
         # SIGTERM (`kill`, a service manager) ends the run as Ctrl-C does: at the next step,
@@ -316,7 +317,7 @@ def run(args: argparse.Namespace) -> int:
         teacher = None
         if args.learn:
             teacher = _start_teaching(
-                stack, loop, model_path, source, args, online, tables, model.framing
+                stack, loop, model_path, source, args, online, overrides, model.framing
             )
         # One line, printed just before the first compilation starts.
         print(
@@ -460,15 +461,15 @@ def run(args: argparse.Namespace) -> int:
 _TEACHING_LINES = ("kept", "extended", "waiting", "refused", "consolidating", "learned", "failed")
 
 
-def _start_teaching(stack, loop, model_path, source, args, online, tables, framing):
+def _start_teaching(stack, loop, model_path, source, args, online, overrides, framing):
     """Open the model's short-term memory and subscribe a Teacher to the loop (with the
-    --config file's ``tables``); a person's 3-D hands stand at ``framing`` metres."""
+    --config file, ``overrides``); a person's 3-D hands stand at ``framing`` metres."""
     from pathlib import Path
 
     import rnnpb.models
     from rnnpb.interaction.teaching import PERFORMANCES, Teacher, tracked_hands
     from rnnpb.memory import MemoryStore, memory_path_for
-    from rnnpb.model import MirrorSystem
+    from rnnpb.model import MirrorSystem, OnlineConfig
 
     model_path = Path(model_path)
     shipped = Path(rnnpb.models.__file__).resolve().parent
@@ -489,13 +490,13 @@ def _start_teaching(stack, loop, model_path, source, args, online, tables, frami
         model_path,
         memory,
         make_mirror=lambda model: MirrorSystem(
-            model, online, recognition=tables.recognition_for(model)
+            model, online, recognition=OnlineConfig.for_model(model, overrides).recognition
         ),
         source=args.source,
         hands_of=tracked_hands(source),
         framing=framing,
         iterations=args.consolidation_iterations,
-        tables=tables,
+        overrides=overrides,
         performances=1 if args.learn_from_one else PERFORMANCES,
     )
     stack.callback(lambda: teacher.job.cancel() if teacher.job is not None else None)

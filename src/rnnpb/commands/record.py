@@ -310,18 +310,11 @@ def _performance(args: argparse.Namespace):
 
 def _frame_time(args: argparse.Namespace) -> float | None:
     """Seconds between a video's frames (read from the file), None for other sources."""
-    import math
 
     kind, _, argument = str(args.source).partition(":")
     if kind.strip().lower() != "video":
         return None
-    import cv2
+    from rnnpb.perception import video_fps
 
-    capture = cv2.VideoCapture(argument)
-    try:
-        fps = capture.get(cv2.CAP_PROP_FPS) if capture.isOpened() else 0.0
-    finally:
-        capture.release()
-    if not fps or not math.isfinite(fps) or fps <= 0:
-        return None
-    return 1.0 / fps
+    fps = video_fps(argument)
+    return 1.0 / fps if fps else None

@@ -210,7 +210,6 @@ def _serve(args: argparse.Namespace, models: dict, access, teaching, overrides) 
     """Connect the robot, start the dashboard and wait; let both go however it ends."""
     from pathlib import Path
 
-    from rnnpb.interaction.settings import ConfigTables
     from rnnpb.web import DashboardServer
 
     robot = _connect_robot(args)
@@ -229,7 +228,7 @@ def _serve(args: argparse.Namespace, models: dict, access, teaching, overrides) 
         server.session.safety_enabled = not args.no_safety  # read when a model loads
         server.session.perception = args.perception  # read when the webcam tab opens
         if overrides is not None:  # read when a model loads, and by teaching
-            server.session.config_tables = ConfigTables(overrides.tables, overrides.path)
+            server.session.overrides = overrides
         server.session.robot = robot  # read when a run starts
         # Read when a step is published (the routine level of the running model version).
         server.session.routine_files = [Path(p) for p in args.routines]
@@ -245,7 +244,7 @@ def _serve(args: argparse.Namespace, models: dict, access, teaching, overrides) 
         )
         _print_safety(models, args.no_safety)
         if overrides is not None:
-            print(f"values from {overrides.path} over the learning preset's", flush=True)
+            print(f"values from {overrides.origin} over the learning preset's", flush=True)
         server.wait()
     finally:
         if robot is not None:

@@ -148,9 +148,10 @@ def run(args: argparse.Namespace) -> int:
             f"{safety.first} ({safety.unsafe} unsafe steps; record with `rnnpb record`, "
             "which retargets safely, or pass --allow-unsafe)"
         )
-    config = TrainConfig.from_preset(args.preset)
-    if overrides is not None:
-        config = overrides.apply(config, "learning")
+    # The preset, with the --config file's values over it: read the same way.
+    config = TrainConfig.from_preset(
+        args.preset if overrides is None else overrides.preset(args.preset)
+    )
     changes = {
         k: v
         for k, v in {

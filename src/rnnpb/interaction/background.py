@@ -16,13 +16,14 @@ import os
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 if TYPE_CHECKING:
     from rnnpb.model import TrainedModel
     from rnnpb.model.consolidation import ConsolidationConfig
+    from rnnpb.presets import Overrides
 
 
 # What the server imports before it forks a consolidation: JAX and what the worker imports.
@@ -61,20 +62,15 @@ def start_process_server() -> None:
 
 
 def teaching_consolidation(
-    model: TrainedModel,
-    iterations: int | None = None,
-    overrides: Mapping[str, Mapping[str, Any]] | None = None,
-    origin: str = "--config",
+    model: TrainedModel, iterations: int | None = None, overrides: Overrides | None = None
 ) -> ConsolidationConfig:
     """The consolidation teaching runs on ``model``: the policy for ``"teach"``
     (:func:`rnnpb.model.consolidation.consolidation_config`), with ``iterations`` when given
-    and a ``--config`` file's ``[teaching]`` and ``[consolidation]`` tables (``overrides``,
-    from ``origin``) over the preset's."""
+    and a ``--config`` file's ``[teaching]`` and ``[consolidation]`` tables (``overrides``)
+    over the preset's."""
     from rnnpb.model import consolidation_config
 
-    return consolidation_config(
-        model, "teach", iterations=iterations, overrides=overrides, origin=origin
-    )
+    return consolidation_config(model, "teach", iterations=iterations, overrides=overrides)
 
 
 # The environment variables a consolidation reads: XLA's, JAX's and rnnpb's own.
@@ -123,8 +119,7 @@ def _consolidation_worker(
     out_path: str,
     queue,
     iterations: int | None = None,
-    overrides: Mapping[str, Mapping[str, Any]] | None = None,
-    origin: str = "--config",
+    overrides: Overrides | None = None,
     environment: Mapping[str, str] | None = None,
 ) -> None:
     """In a process of its own: consolidate the episodes into the model, write the new version,
@@ -156,7 +151,7 @@ def _consolidation_worker(
         def progress(p) -> None:
             queue.put(("progress", int(p.iteration), int(p.total), float(p.mse)))
 
-        config = teaching_consolidation(model, iterations, overrides, origin)
+        config = teaching_consolidation(model, iterations, overrides)
         learned = consolidate(
             model, sequences, config, parent=model_path, progress=progress, grow=True
         )
@@ -241,8 +236,8 @@ class BackgroundConsolidation:
     The process loads the model, reads the episodes from the memory, runs
     :func:`rnnpb.model.consolidate` (rehearsal), writes the new version beside the model and
     records the consolidation in the memory; :meth:`poll` never blocks, :meth:`wait` does.
-    The consolidation is :func:`teaching_consolidation`'s (``iterations``, ``overrides`` and
-    ``origin`` are its).
+    The consolidation is :func:`teaching_consolidation`'s (``iterations`` and ``overrides``
+    are its; the process gets ``overrides`` as they are).
     """
 
     def __init__(
@@ -252,8 +247,7 @@ class BackgroundConsolidation:
         episode_ids: list[int],
         out_path: str | os.PathLike[str],
         iterations: int | None = None,
-        overrides: Mapping[str, Mapping[str, Any]] | None = None,
-        origin: str = "--config",
+        overrides: Overrides | None = None,
     ) -> None:
         context = process_context()
         self._queue = context.Queue()
@@ -268,8 +262,7 @@ class BackgroundConsolidation:
                 self.out_path,
                 self._queue,
                 iterations,
-                None if overrides is None else {k: dict(v) for k, v in overrides.items()},
-                origin,
+                overrides,
                 _settings(),
             ),
         )

@@ -59,9 +59,10 @@ import numpy as np
 from rnnpb.demonstrator import MirrorMapping
 from rnnpb.errors import ConfigError
 from rnnpb.learning_phase import cycle_bounds, whole_cycles
-from rnnpb.model._tuned import Tuning, section_values, settle
+from rnnpb.model._tuned import Tuning, section_values, settle, with_values
 from rnnpb.model._tuned import with_tuning as _with_tuning
 from rnnpb.perception import MOUSE_PLANE_X, hands_on_plane
+from rnnpb.presets import Overrides
 from rnnpb.robot.camera import RobotCamera
 
 WATCHING, RECORDING, KEPT = "watching", "recording", "kept"
@@ -129,6 +130,10 @@ class TeachingConfig:
         """These settings with some tuned values changed, for research: e.g.
         ``TeachingConfig().with_tuning(episode_cycles=4)``."""
         return _with_tuning(self, changes)
+
+    def overridden(self, overrides: Overrides | None) -> TeachingConfig:
+        """These settings with a ``--config`` file's ``[teaching.cutter]`` values over them."""
+        return self if overrides is None else with_values(self, overrides.values("teaching.cutter"))
 
 
 @dataclass(frozen=True)

@@ -32,7 +32,6 @@ frame nearest to each ``dt``).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 from rnnpb.errors import ConfigError, RnnpbError
@@ -251,13 +250,7 @@ def open_source(
 
 
 def _video_frame_step(path: str, dt: float) -> int:
-    import cv2
+    from rnnpb.perception import video_fps
 
-    capture = cv2.VideoCapture(path)
-    try:
-        fps = capture.get(cv2.CAP_PROP_FPS) if capture.isOpened() else 0.0
-    finally:
-        capture.release()
-    if not fps or not math.isfinite(fps) or fps <= 0:
-        return 1
-    return max(1, round(fps * dt))
+    fps = video_fps(path)
+    return max(1, round(fps * dt)) if fps else 1

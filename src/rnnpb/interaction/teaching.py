@@ -15,8 +15,8 @@ It composes parts of one job each:
   :func:`rnnpb.model.consolidation_config` for ``"teach"``) and the new version's mirror
   system compiled in a thread (:class:`PreparedMirror`);
 - the model file's renaming: :meth:`rnnpb.model.TrainedModel.renamed`;
-- :mod:`rnnpb.interaction.settings`: a ``--config`` file's tables over the cutter's and the
-  consolidation policy's values (:class:`ConfigTables`).
+- a ``--config`` file (:class:`rnnpb.presets.Overrides`), handed as it is to the cutter's
+  config (:meth:`TeachingConfig.overridden`) and to each consolidation's policy.
 """
 
 from __future__ import annotations
@@ -58,11 +58,11 @@ from rnnpb.interaction.keeper import (
     tracked_hands,
 )
 from rnnpb.interaction.repeats import Repeat, find_repeat, shape_distance
-from rnnpb.interaction.settings import ConfigTables
 from rnnpb.learning_phase import placed_body
 
 if TYPE_CHECKING:
     from rnnpb.model.consolidation import ConsolidationConfig
+    from rnnpb.presets import Overrides
 
 __all__ = [
     "CUTTER_STATES",
@@ -127,8 +127,8 @@ class Teacher:
     so the swap itself costs no deadline.
 
     ``config`` (default ``TeachingConfig()``) says when a movement is kept; ``iterations``
-    (default: the policy's) how long each consolidation learns; ``tables``, a ``--config``
-    file's, changes both: ``[teaching.cutter]`` the config's tuned values, ``[teaching]`` and
+    (default: the policy's) how long each consolidation learns; ``overrides``, a ``--config``
+    file, changes both: ``[teaching.cutter]`` the config's tuned values, ``[teaching]`` and
     ``[consolidation]`` the policy each consolidation takes (:meth:`consolidation`).
     ``framing`` (metres; None: the standard user's place) is where the 3-D hands a source gives
     of a person's body stand: the model's framing (:mod:`rnnpb.learning_phase`).
@@ -148,7 +148,7 @@ class Teacher:
         hands_of=None,
         iterations: int | None = None,
         prepare: bool | None = None,
-        tables: ConfigTables | None = None,
+        overrides: Overrides | None = None,
         performances: int = PERFORMANCES,
         framing: float | None = None,
     ) -> None:
@@ -156,8 +156,8 @@ class Teacher:
             raise ConfigError(f"performances must be >= 1, got {performances}")
         self.performances = performances
         self.iterations = iterations
-        self.tables = tables or ConfigTables()
-        config = self.tables.teaching(config or TeachingConfig())
+        self.overrides = overrides
+        config = (config or TeachingConfig()).overridden(overrides)
         self.loop = loop
         self.memory = memory
         self.make_mirror = make_mirror
@@ -284,9 +284,7 @@ class Teacher:
 
     def consolidation(self, model) -> ConsolidationConfig:
         """The consolidation a confirmed episode of ``model`` runs (in its own process)."""
-        return teaching_consolidation(
-            model, self.iterations, self.tables.consolidation, self.tables.origin
-        )
+        return teaching_consolidation(model, self.iterations, self.overrides)
 
     def confirm(self) -> None:
         """Start consolidating every pending episode (the person said yes): a movement seen
@@ -314,8 +312,7 @@ class Teacher:
             ids,
             out,
             self.iterations,
-            self.tables.consolidation,
-            self.tables.origin,
+            self.overrides,
         )
         self.events.append(
             TeachingEvent(

@@ -214,29 +214,23 @@ def capture_stream(
     up_axis: str | None = None,
     body: UserBody | None = None,
 ) -> CaptureStream:
-    """Read the BVH files, put their hands on the standard body, join and resample them."""
+    """Read the BVH files, put their hands on the standard body, join
+    (:func:`capture_takes`) and resample them."""
     if not paths:
         raise ConfigError("no BVH file given")
     if not (math.isfinite(dt) and dt > 0):
         raise ConfigError(f"dt must be a positive number of seconds, got {dt}")
     if not (math.isfinite(time_scale) and 0.01 <= time_scale <= 100):
         raise ConfigError(f"--time-scale must be from 0.01 to 100, got {time_scale}")
-    if not (math.isfinite(crossfade) and crossfade >= 0):
-        raise ConfigError(f"the cross-fade must be >= 0 s, got {crossfade}")
-    takes: list[Take] = []
-    motions: list[np.ndarray] = []
-    for path in paths:
-        bvh = read_bvh(path)
-        if bvh.n_frames < 2:
-            raise ConfigError(f"{path}: one frame is no movement")
-        take_hands, scale = body_hands(bvh, hands=hands, units=units, up_axis=up_axis, body=body)
-        period = movement_period(take_hands, bvh.frame_time)
-        takes.append(Take(str(path), bvh.n_frames, bvh.frame_time, bvh.duration, period, scale))
-        motions.append(take_hands)
+    capture = capture_takes(
+        paths, crossfade=crossfade, hands=hands, units=units, up_axis=up_axis, body=body
+    )
+    takes = capture.takes
     shortest = min(takes, key=lambda t: t.period)
     what = Path(shortest.path).name if len(takes) > 1 else shortest.path
     check_sampling(shortest.period, dt, time_scale, what)
-    joined, fine, crossfade = _joined(motions, takes, crossfade)
+    joined, crossfade = capture.hands, capture.crossfade
+    fine = min(t.frame_time for t in takes)
     recorded_step = dt / time_scale
     # An odd width keeps the average centred on its step.
     half = max(0, round((recorded_step / fine - 1) / 2))
@@ -254,13 +248,7 @@ def capture_stream(
     steps = np.stack(
         [np.interp(times, fine_times, smoothed[:, k]) for k in range(flat.shape[1])], axis=1
     )
-    return CaptureStream(
-        steps.reshape(len(times), 2, 3),
-        dt,
-        time_scale,
-        tuple(takes),
-        crossfade,
-    )
+    return CaptureStream(steps.reshape(len(times), 2, 3), dt, time_scale, takes, crossfade)
 
 
 def _joined(

@@ -81,11 +81,7 @@ def user_names(cls: type) -> tuple[str, ...]:
 
 def section_values(preset: Preset | str, section: str) -> dict[str, Any]:
     """A preset section's values, with its ``pb`` subsection (if any) as a dict under "pb"."""
-    preset = load_preset(preset) if isinstance(preset, str) else preset
-    values = dict(preset.section(section))
-    if f"{section}.pb" in preset.sections:
-        values["pb"] = dict(preset.section(f"{section}.pb"))
-    return values
+    return (load_preset(preset) if isinstance(preset, str) else preset).values(section)
 
 
 def settle(config: Any, tuning: Mapping[str, Any] | None, default: Tuning, pb_type: Any) -> None:
@@ -142,19 +138,10 @@ def with_tuning(config: Config, changes: Mapping[str, Any]) -> Config:
     return type(config)(**user, _tuning=Tuning(current.preset, values))  # type: ignore[call-arg]
 
 
-def table_values(tables: Mapping[str, Mapping[str, Any]], section: str) -> dict[str, Any]:
-    """Table ``section`` of a ``--config`` file's ``tables`` (dotted names), its ``pb`` table
-    (``section.pb``) as a dict under ``"pb"``; empty when the file does not name it."""
-    values = dict(tables.get(section, {}))
-    if f"{section}.pb" in tables:
-        values["pb"] = dict(tables[f"{section}.pb"])
-    return values
-
-
-def apply_table(config: Config, tables: Mapping[str, Mapping[str, Any]], section: str) -> Config:
-    """``config`` with table ``section`` of ``tables``: its settings by
-    :func:`dataclasses.replace`, its tuned values by ``with_tuning``."""
-    values = table_values(tables, section)
+def with_values(config: Config, values: Mapping[str, Any]) -> Config:
+    """``config`` with ``values`` (a section's, as :meth:`rnnpb.presets.Overrides.values`
+    gives a ``--config`` file's): its settings by :func:`dataclasses.replace`, its tuned
+    values by ``with_tuning``."""
     if not values:
         return config
     settings = set(user_names(type(config)))

@@ -65,7 +65,7 @@ from rnnpb.model.generation import generate
 from rnnpb.model.io import HistoryEntry, TrainedModel
 from rnnpb.model.learning import TrainConfig, WarmStart, prepare_data
 from rnnpb.model.training import TrainingProgress, train
-from rnnpb.presets import Preset, load_preset
+from rnnpb.presets import Overrides, Preset, load_preset
 from rnnpb.sequences import Sequence
 
 Method = Literal["rehearsal", "finetune", "replay", "scratch"]
@@ -148,11 +148,12 @@ def recorded_learning(model: TrainedModel) -> TrainConfig:
         ) from None
 
 
-def _learning_preset(model: TrainedModel) -> Preset:
+def _learning_preset(model: TrainedModel, overrides: Overrides | None = None) -> Preset:
     """The learning preset the model was learned with (:attr:`TrainedModel.learning_preset`;
-    the paper's for a model that recorded no learning)."""
+    the paper's for a model that recorded no learning), with ``overrides`` over it."""
     recorded = model.learning_preset
-    return load_preset(recorded[0] if recorded is not None else "paper")
+    name = recorded[0] if recorded is not None else "paper"
+    return load_preset(name) if overrides is None else overrides.preset(name)
 
 
 def consolidation_policy(
@@ -315,19 +316,16 @@ def consolidation_config(
     method: Method = "rehearsal",
     iterations: int | None = None,
     seed: int | None = None,
-    overrides: Mapping[str, Mapping[str, Any]] | None = None,
-    origin: str = "--config",
+    overrides: Overrides | None = None,
 ) -> ConsolidationConfig:
     """The consolidation of ``model`` for ``purpose``, every choice made: the one policy
     ``rnnpb consolidate``, on-line teaching and the studies consolidate by.
 
     ``iterations`` and ``seed``, given, replace the policy's and the model's. ``overrides``
-    (``{"consolidation": {...}, "teaching": {...}}``, a ``--config`` file's tables, named by
-    ``origin``) replace the preset's values; an unknown key is a :class:`ConfigError`.
+    (a ``--config`` file: its ``[consolidation]`` and ``[teaching]`` tables) go over the
+    preset the policy reads; an unknown key is a :class:`ConfigError`.
     """
-    preset = _learning_preset(model)
-    if overrides:
-        preset = preset.overridden(overrides, origin)
+    preset = _learning_preset(model, overrides)
     config = ConsolidationConfig(method=method, purpose=purpose).resolved(model, preset)
     assert config.train is not None
     changes = {"iterations": iterations, "seed": seed}

@@ -17,12 +17,19 @@ from functools import cache
 from typing import Any, Literal
 
 from rnnpb.errors import ConfigError
-from rnnpb.model._tuned import Tuning, section_values, settle, tuning_of, user_names
+from rnnpb.model._tuned import (
+    Tuning,
+    section_values,
+    settle,
+    tuning_of,
+    user_names,
+    with_values,
+)
 from rnnpb.model._tuned import with_tuning as _with_tuning
 from rnnpb.model.io import learning_preset
 from rnnpb.model.parametric_bias import PBUpdateConfig
 from rnnpb.model.recognition import PRESET_DT, RecognitionConfig
-from rnnpb.presets import Preset, load_preset
+from rnnpb.presets import Overrides, Preset, load_preset
 
 _DEFAULT = section_values("paper", "online")
 _USER = ("window", "iterations", "safety_guard")
@@ -195,6 +202,11 @@ class OnlineConfig:
             return self
         return replace(self, iterations=iterations, _tuning=tuning_of(self))
 
+    def overridden(self, overrides: Overrides | None) -> OnlineConfig:
+        """This regression with a ``--config`` file's ``[online]`` values over it, taken as
+        given (after :meth:`at_step`: at the model's step), whichever preset it came from."""
+        return self if overrides is None else with_values(self, overrides.values("online"))
+
     @classmethod
     def from_preset(cls, preset: Preset | str, section: str = "online") -> OnlineConfig:
         """The regression a preset's ``section`` describes (``[online]``, or the paper
@@ -226,9 +238,9 @@ class OnlineConfig:
         return {"default": cls, "paper": cls.paper, "ungated": cls.ungated}[name]()
 
     @classmethod
-    def for_model(cls, model: Any) -> OnlineChoice:
+    def for_model(cls, model: Any, overrides: Overrides | None = None) -> OnlineChoice:
         """The regression that suits ``model``: see :func:`suggested_online_config`."""
-        return suggested_online_config(model)
+        return suggested_online_config(model, overrides)
 
     def to_dict(self) -> dict[str, Any]:
         """Every value, settings and tuned, as one flat record (``pb`` a dict)."""
@@ -279,7 +291,7 @@ class OnlineChoice:
     recognition: RecognitionConfig = field(default_factory=RecognitionConfig)
 
 
-def suggested_online_config(model: Any) -> OnlineChoice:
+def suggested_online_config(model: Any, overrides: Overrides | None = None) -> OnlineChoice:
     """The on-line regression that suits a model's learning preset.
 
     A model learned with the fast preset (Adam, noise on the inputs) takes the fast preset's
@@ -290,12 +302,15 @@ def suggested_online_config(model: Any) -> OnlineChoice:
     regression's effort kept in seconds at the model's step (:meth:`RecognitionConfig.at_step`,
     :meth:`OnlineConfig.at_step`). The preset is the one the model records
     (:func:`rnnpb.model.io.learning_preset`; a file from before presets were recorded is
-    read by its recorded optimizer).
+    read by its recorded optimizer). A ``--config`` file's tables (``overrides``) go over
+    both as given, in the model's steps: ``[online]``, and ``[recognition]`` or
+    ``[recognition_untaught]`` as the model kept its taught hands or not.
 
     Parameters
     ----------
     model : TrainedModel
         Anything with a ``meta`` dict (and ``taught_sensory``).
+    overrides : Overrides, optional
     """
     meta = getattr(model, "meta", None)
     learned = learning_preset(meta if isinstance(meta, dict) else {})
@@ -306,6 +321,9 @@ def suggested_online_config(model: Any) -> OnlineChoice:
     # The durations a preset counts in the paper's steps are kept in seconds at the model's.
     dt = getattr(model, "dt", PRESET_DT)
     recognition = RecognitionConfig.for_preset(name, taught=taught).at_step(dt)
+    if overrides is not None:
+        section = "recognition" if taught else "recognition_untaught"
+        recognition = with_values(recognition, overrides.values(section))
     if learned is None:
         reason = "the model does not record how it was learned"
     elif name == "fast":
@@ -313,5 +331,8 @@ def suggested_online_config(model: Any) -> OnlineChoice:
     else:
         reason = "the model was learned with momentum descent, the paper's algorithm"
     if name == "fast":
-        return OnlineChoice("ungated", OnlineConfig.ungated().at_step(dt), reason, recognition)
-    return OnlineChoice("default", OnlineConfig().at_step(dt), reason, recognition)
+        ungated = OnlineConfig.ungated().at_step(dt).overridden(overrides)
+        return OnlineChoice("ungated", ungated, reason, recognition)
+    return OnlineChoice(
+        "default", OnlineConfig().at_step(dt).overridden(overrides), reason, recognition
+    )

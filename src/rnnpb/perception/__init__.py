@@ -70,6 +70,7 @@ from rnnpb.perception._sources import (
     VideoWriter,
     WebcamSource,
     call_with_timeout,
+    video_fps,
 )
 from rnnpb.perception._synthetic import SceneConfig, SyntheticCamera, oscillating_hands
 from rnnpb.perception._tracker import (
@@ -131,6 +132,7 @@ __all__ = [
     "TrackerConfig",
     "TrackingResult",
     "VideoFileSource",
+    "video_fps",
     "VideoWriter",
     "WebcamSource",
     "ball_colors_from_json",

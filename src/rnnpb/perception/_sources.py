@@ -9,6 +9,7 @@ reads run under a timeout, so an unplugged or stuck camera cannot hang the robot
 
 from __future__ import annotations
 
+import math
 import os
 import queue
 import re
@@ -181,6 +182,17 @@ class WebcamSource(FrameSource):
         if self._capture is not None:
             self._capture.release()
             self._capture = None
+
+
+def video_fps(path: str | os.PathLike[str]) -> float:
+    """A video file's frame rate as recorded, 0 when it is unknown (or the file unreadable)."""
+    _quiet_opencv()
+    capture = cv2.VideoCapture(str(path))
+    try:
+        fps = float(capture.get(cv2.CAP_PROP_FPS)) if capture.isOpened() else 0.0
+    finally:
+        capture.release()
+    return fps if math.isfinite(fps) and fps > 0 else 0.0
 
 
 class VideoFileSource(FrameSource):

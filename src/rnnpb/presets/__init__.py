@@ -43,8 +43,11 @@ section's values are hashable, as the compiled code needs its static settings to
 'paper'
 
 :func:`load_preset` reads a preset by name (cached); :func:`read_preset` any file in the same
-format; :meth:`Preset.overridden` applies a ``--config`` file's values over a preset. Every
-malformed file, unknown name or unknown setting is a one-line :class:`ConfigError`.
+format. A ``--config`` file is :class:`Overrides` (:meth:`Overrides.read`): its tables, checked
+against the preset files, are read where the preset's are — over any preset
+(:meth:`Overrides.preset`, a :meth:`Preset.overridden`) or as one section's values
+(:meth:`Overrides.values`). Every malformed file, unknown name or unknown setting is a one-line
+:class:`ConfigError`.
 
 A preset's ``version`` rises whenever a value changes, and ``versions.toml`` beside the presets
 records each version's fingerprint (:attr:`Preset.fingerprint`, a hash of the values, not of
@@ -175,6 +178,12 @@ class Preset:
                 f"preset {self.name!r} has no section [{name}]; it has {', '.join(self._sections)}"
             ) from None
 
+    def values(self, section: str) -> dict[str, Any]:
+        """Section ``section``'s values with its ``pb`` section (``[section.pb]``), if any, as
+        a dict under ``"pb"``: what a config of the section takes."""
+        values = dict(self.section(section))
+        return _with_pb(values, self._sections, section)
+
     def evidence(self, section: str, key: str) -> Source:
         """The source of section ``section``'s value ``key``."""
         if key not in self.section(section):
@@ -206,6 +215,61 @@ class Preset:
             _freeze_sections(sections),
             MappingProxyType({k: MappingProxyType(v) for k, v in evidence.items()}),
         )
+
+
+@dataclass(frozen=True)
+class Overrides:
+    """Values put over a preset's for one run: a ``--config`` file (research; docs/model.md,
+    "Settings"), handed unchanged to the code that makes each config.
+
+    Attributes
+    ----------
+    tables : mapping of str to dict
+        Each section the file names, dotted (``"online"``, ``"online.pb"``), to its values,
+        each of the kind the preset's value has (plain dicts: a worker process gets them
+        pickled).
+    origin : str
+        Where they come from (the file's path): the evidence of each value they change.
+    """
+
+    tables: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    origin: str = "--config"
+
+    @classmethod
+    def read(cls, path: str | Path, reads: tuple[str, ...] = (), reader: str = "") -> Overrides:
+        """The ``--config`` file at ``path``, checked: each key must be one of the preset
+        files', its value of that key's kind, and its section (with its ``.pb`` section) one of
+        ``reads`` (empty: any), which ``reader`` (``"rnnpb train"``) reads. Every problem is
+        one :class:`ConfigError` line naming the file and the key."""
+        data = read_overrides(path)
+        # The paper preset has every section; its values give each key's kind.
+        checked = load_preset("paper").overridden(data, str(path))
+        tables: dict[str, dict[str, Any]] = {}
+        for keys, key, _ in _leaves(data, str(path), ()):
+            section = ".".join(keys)
+            if reads and section.removesuffix(".pb") not in reads:
+                raise ConfigError(
+                    f"{path}: [{section}] does not apply to {reader} "
+                    f"(it reads {', '.join(f'[{name}]' for name in reads)})"
+                )
+            tables.setdefault(section, {})[key] = checked.section(section)[key]
+        return cls(tables, str(path))
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The sections the file names."""
+        return tuple(self.tables)
+
+    def values(self, section: str) -> dict[str, Any]:
+        """Section ``section``'s values as :meth:`Preset.values` gives a preset's (``pb``
+        nested); empty when the file does not name it."""
+        return _with_pb(dict(self.tables.get(section, {})), self.tables, section)
+
+    def preset(self, name: str) -> Preset:
+        """Learning preset ``name`` with these values over its own (each changed value's
+        evidence: :attr:`origin`)."""
+        preset = load_preset(name)
+        return preset.overridden(self.tables, self.origin) if self.tables else preset
 
 
 @functools.cache
@@ -436,6 +500,15 @@ def _leaves(table: Mapping[str, Any], origin: str, path: tuple[str, ...]):
             yield path, key, value
 
 
+def _with_pb(
+    values: dict[str, Any], sections: Mapping[str, Mapping[str, Any]], section: str
+) -> dict[str, Any]:
+    """``values`` of ``section`` with its ``pb`` section of ``sections`` as a dict under "pb"."""
+    if f"{section}.pb" in sections:
+        values["pb"] = dict(sections[f"{section}.pb"])
+    return values
+
+
 def _frozen(value: Any) -> Any:
     if isinstance(value, list):
         return tuple(_frozen(item) for item in value)
@@ -468,6 +541,7 @@ __all__ = [
     "KINDS",
     "PRESET_NAMES",
     "REGISTRY",
+    "Overrides",
     "Preset",
     "RecordedVersion",
     "Source",

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from rnnpb.errors import ConfigError, RnnpbError
-from rnnpb.interaction.settings import ConfigTables
+from rnnpb.presets import Overrides
 
 log = logging.getLogger("rnnpb.web")
 
@@ -104,18 +104,18 @@ class ReadyModel:
         return {"map": False, "guard": "off", "filter": False, "note": "", "risk": {}}
 
 
-def make_ready(path: str | Path, tables: ConfigTables, safety_enabled: bool) -> ReadyModel:
+def make_ready(path: str | Path, overrides: Overrides | None, safety_enabled: bool) -> ReadyModel:
     """Load the model at ``path`` with the on-line regression that suits it (as ``rnnpb
-    interact`` picks it, with a ``--config`` file's values: ``tables``), its safety (the
+    interact`` picks it, with a ``--config`` file's values: ``overrides``), its safety (the
     command filter, and the map beside it; neither without ``safety_enabled``) and its
     mirror system, and compile the mirror's step (seconds; never between two steps)."""
-    from rnnpb.model import MirrorSystem, TrainedModel
+    from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel
     from rnnpb.robot import JOINT_LIMITS
     from rnnpb.safety import online_safety, risk_views
 
     path = Path(path)
     model = TrainedModel.load(path, joint_limits=JOINT_LIMITS)
-    choice = tables.choice_for(model)
+    choice = OnlineConfig.for_model(model, overrides)
     safety = online_safety(path, model, choice.config, enabled=safety_enabled)
     log.info("%s", safety.note)
     risk = {} if safety.safety_map is None else risk_views(safety.safety_map, model.pattern_pb)
@@ -154,7 +154,7 @@ class ModelShelf:
         self.error: str | None = None  # why the last model chosen cannot be used
         # ``rnnpb serve --no-safety`` and ``--config`` set these before the first model loads.
         self.safety_enabled = True
-        self.tables = ConfigTables()
+        self.overrides: Overrides | None = None
 
     @property
     def first(self) -> str:
@@ -169,7 +169,7 @@ class ModelShelf:
         self.loading = name
         try:
             announce()
-            return make_ready(self.offered[name], self.tables, self.safety_enabled)
+            return make_ready(self.offered[name], self.overrides, self.safety_enabled)
         except Exception as error:
             kept = f"; still using {self.name}" if self.name else ""
             self.error = f"model {name} cannot be used: {error}{kept}"

@@ -38,7 +38,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rnnpb.errors import ConfigError, RnnpbError
-from rnnpb.interaction.settings import ConfigTables
+from rnnpb.presets import Overrides
 from rnnpb.web._broadcast import RECENT_STEPS, Broadcast
 from rnnpb.web._handover import Handover
 from rnnpb.web._models import ModelShelf, ReadyModel, find_models, offered_models
@@ -83,10 +83,10 @@ class Session:
     teaching : TeachingSettings, optional
         Teaching by showing (docs/dashboard.md, "Teaching"); by default new movements are
         kept and consolidated when the person confirms.
-    config_tables : ConfigTables, optional
-        A ``--config`` file's tables (``rnnpb serve --config``), put over the on-line
-        regression and recognition chosen for each model and over teaching's settings
-        (:mod:`rnnpb.interaction.settings`); read when a model loads.
+    overrides : Overrides, optional
+        A ``--config`` file (``rnnpb serve --config``), put over the on-line regression and
+        recognition chosen for each model and over teaching's settings; read when a model
+        loads.
     routines : paths, optional
         Routine files (``rnnpb train-routines``, docs/routines.md): the one learned over the
         running model version, if any, follows the interaction and the step message says the
@@ -101,14 +101,13 @@ class Session:
         recording_limits: RecordingLimits | None = None,
         max_queued_commands: int = MAX_QUEUED_COMMANDS,
         teaching: TeachingSettings | None = None,
-        config_tables: ConfigTables | None = None,
+        overrides: Overrides | None = None,
         routines: Sequence[str | Path] = (),
     ) -> None:
         import tempfile
 
         self.shelf = ModelShelf(models)
-        if config_tables is not None:
-            self.shelf.tables = config_tables
+        self.shelf.overrides = overrides
         self.dt = float(dt)
         self.temporary_workdir = workdir is None
         self.workdir = Path(workdir or tempfile.mkdtemp(prefix="rnnpb-serve-"))
@@ -183,12 +182,12 @@ class Session:
         self.shelf.safety_enabled = enabled
 
     @property
-    def config_tables(self) -> ConfigTables:
-        return self.shelf.tables
+    def overrides(self) -> Overrides | None:
+        return self.shelf.overrides
 
-    @config_tables.setter
-    def config_tables(self, tables: ConfigTables) -> None:
-        self.shelf.tables = tables
+    @overrides.setter
+    def overrides(self, overrides: Overrides | None) -> None:
+        self.shelf.overrides = overrides
 
     @property
     def routine_files(self) -> list[Path]:

@@ -154,13 +154,13 @@ class _Prepared:
         self.path = path
         self.result: ReadyModel | None = None
         self.error: str | None = None
-        self._tables, self._safety = shelf.tables, shelf.safety_enabled
+        self._overrides, self._safety = shelf.overrides, shelf.safety_enabled
         self.thread = threading.Thread(target=self._run, name="rnnpb-prepare", daemon=True)
         self.thread.start()
 
     def _run(self) -> None:
         try:
-            self.result = make_ready(self.path, self._tables, self._safety)
+            self.result = make_ready(self.path, self._overrides, self._safety)
         except Exception as error:  # noqa: BLE001 - reported, the swap builds it instead
             self.error = f"{type(error).__name__}: {error}"
 
@@ -244,7 +244,7 @@ class SessionTeaching:
             hands_of=self._hands_of,
             iterations=self.settings.iterations,
             prepare=False,  # made ready here (`_Prepared`), with the session's safety map
-            tables=self.host.shelf.tables,
+            overrides=self.host.shelf.overrides,
         )
         self._refresh()
         log.info("teaching: short-term memory %s (%s)", self.memory.path, self.mode)
@@ -290,7 +290,7 @@ class SessionTeaching:
     def _mirror_for(self, model):
         """The Teacher's ``make_mirror``: a version made ready beforehand, a version seen
         before (undo), else one built now (a rename: the same shapes, compiled already)."""
-        from rnnpb.model import MirrorSystem
+        from rnnpb.model import MirrorSystem, OnlineConfig
 
         known = self._mirrors.get(model.fingerprint)
         if known is not None:
@@ -301,7 +301,7 @@ class SessionTeaching:
         safety = running.safety if running is not None else None
         online = safety.config if safety is not None else None
         options = safety.mirror_options if safety is not None else {}
-        recognition = self.host.shelf.tables.recognition_for(model)
+        recognition = OnlineConfig.for_model(model, self.host.shelf.overrides).recognition
         mirror = MirrorSystem(model, online, recognition=recognition, **options)
         path = Path(self.teacher.model_path) if self.teacher is not None else Path()
         ready = ReadyModel(path, model, mirror, safety, running.risk if running else {})

@@ -22,7 +22,7 @@ def plot_following(
     recognised (dots) over the steps (``dt`` seconds each), the unjudged first
     ``settle_steps`` of each movement shaded, and the steps whose command the safety filter
     changed marked in red."""
-    fig = Figure(figsize=(9.0, 1.1 + 1.0 * max(len(runs), 1)))
+    fig = Figure(figsize=(9.0, 1.1 + 1.2 * max(len(runs), 1)), layout="constrained")
     axes = fig.subplots(max(len(runs), 1), 1, squeeze=False, sharex=True)[:, 0]
     rows = {name: k for k, name in enumerate(movements)}
     for ax, (performer, run) in zip(axes, runs.items(), strict=False):
@@ -41,9 +41,10 @@ def plot_following(
             ax.scatter(filtered, [-0.6] * len(filtered), s=8, color="tab:red", marker="|")
         ax.set_yticks(range(len(movements)), list(movements), fontsize=7)
         ax.set_ylim(-0.9, len(movements) - 0.4)
-        ax.set_ylabel(performer, fontsize=8)
+        # the performer above its panel: a label beside it would run into its neighbours'
+        ax.set_title(performer, fontsize=8, loc="left", pad=2)
     axes[-1].set_xlabel(
         f"step, {dt:g} s each (grey: performed; blue: recognised; red: command filtered)"
     )
-    fig.suptitle("Another performer's movements, followed", y=1.0)
+    fig.suptitle("Another performer's movements, followed")
     save(fig, path)

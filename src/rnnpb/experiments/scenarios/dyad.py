@@ -1,6 +1,7 @@
 """The dyad study's scenarios and measures (``rnnpb study dyad``, docs/dyad.md): two robots
 imitating each other from random starts, over a grid of adaptation rates, and a robot with a
-scripted subject; each run a job for a worker process, and the cells of the phase diagram.
+scripted subject; each run a job for a worker process, the cells of the phase diagram, and the
+study's targets measured from its results (:func:`measured`).
 
 Coherence is judged from the agents' movements (:mod:`rnnpb.analysis.dyad`): both on the same
 learned pattern — as taught, or as the robot's own network plays it in closed loop — and
@@ -395,4 +396,46 @@ def phase_cell(
         "leader_index": (led_a - led_b) / (led_a + led_b) if led_a + led_b else float("nan"),
         "holds": share >= hold_share,
         "shifts": shift >= shift_rate and led_a > 0 and led_b > 0,
+    }
+
+
+def measured(results: dict[str, Any], exam: Exam) -> dict[str, dict[str, Any]]:
+    """Each target's measured value (``value``) and the counts its detail gives, from the
+    study's results, by the exam's definitions."""
+    lock = exam.target("robots_lock_from_random_starts").parameter("steps")
+    same = [s for s in results["random_starts"] if s["kind"] == "same"]
+    regimes = exam.target("phase_diagram_both_regimes")
+    hold, shift = regimes.parameter("hold_share"), regimes.parameter("shift_rate")
+    settings = list(
+        {
+            (c["persistence"], c["adaptation_a"], c["adaptation_b"]): c
+            for c in results["phase_cells"] + results["persistence_line"]
+        }.values()
+    )
+    holding = [c for c in settings if c["coherent_share"] >= hold]
+    shifting = [
+        c
+        for c in settings
+        if c["shifts_per_200"] >= shift and c["led_by_a"] > 0 and c["led_by_b"] > 0
+    ]
+    minutes = exam.target("subject_finds_all").parameter("minutes")
+    sessions = results["subject"]
+    in_time = within(sessions, minutes, "minutes_to_all")
+    return {
+        "robots_lock_from_random_starts": {
+            "value": within(same, lock) / len(same),
+            "locked": within(same, lock),
+            "by_templates": within(same, lock, "first_coherent_by_templates"),
+            "runs": len(same),
+        },
+        "phase_diagram_both_regimes": {
+            "value": min(len(holding), len(shifting)),
+            "holding": len(holding),
+            "shifting": len(shifting),
+        },
+        "subject_finds_all": {
+            "value": in_time / len(sessions),
+            "in_time": in_time,
+            "sessions": len(sessions),
+        },
     }

@@ -115,15 +115,11 @@ class VideoPerformance:
 def video_performance(path: Path) -> VideoPerformance:
     """A video through the pose model at its own frame rate (as ``rnnpb record video:PATH
     --perception pose`` reads it at the 0.1 s step, every frame)."""
-    import cv2
-
     from rnnpb.learning_phase import from_source
-    from rnnpb.perception import open_camera_source
+    from rnnpb.perception import open_camera_source, video_fps
 
-    capture = cv2.VideoCapture(str(path))
-    fps = capture.get(cv2.CAP_PROP_FPS) if capture.isOpened() else 0.0
-    capture.release()
-    if not fps or not math.isfinite(fps) or fps <= 0:
+    fps = video_fps(path)
+    if not fps:
         raise RnnpbError(f"{path}: no frame rate")
     source = open_camera_source("video", str(path), perception="pose")
     frame_ms: list[float] = []
@@ -325,18 +321,14 @@ def measure(runs: list[dict[str, Any]], config: PeopleConfig) -> dict[str, Any]:
     }
 
 
-def paced_run(model, path: Path, steps: int, dt: float) -> dict[str, Any]:
-    """A video (looped) through the pose model and ``model`` in real time at ``dt``, as
-    ``rnnpb interact --source video:PATH --perception pose --paced`` runs it: missed
-    deadlines and the step's sections."""
-    from rnnpb.interaction import InteractionLoop, LoopConfig, open_source
-    from rnnpb.model import MirrorSystem, OnlineConfig
+def looped_video(path: Path, dt: float, framing: float):
+    """The video at ``path`` through the pose model at ``dt``, framed at ``framing``, played
+    over and over: at its end the file is opened again, the pose tracker kept (one tracker for
+    the whole run, as a camera's)."""
+    from rnnpb.interaction import open_source
     from rnnpb.perception import VideoFileSource
 
     class Looped(VideoFileSource):
-        """The video's frames over and over, its file opened again at its end: one pose
-        tracker for the whole run, as a camera's."""
-
         def read(self):
             frame = super().read()
             if frame is None:
@@ -345,8 +337,20 @@ def paced_run(model, path: Path, steps: int, dt: float) -> dict[str, Any]:
                 frame = super().read()
             return frame
 
-    source = open_source(f"video:{path}", dt=dt, perception="pose", framing=model.framing)
-    source.frames = Looped(source.frames.path)
+    source = open_source(f"video:{path}", dt=dt, perception="pose", framing=framing)
+    tracked = getattr(source, "inner", source)  # a video sampled every N-th frame: inside
+    tracked.frames = Looped(tracked.frames.path)
+    return source
+
+
+def paced_run(model, path: Path, steps: int, dt: float) -> dict[str, Any]:
+    """A video (looped) through the pose model and ``model`` in real time at ``dt``, as
+    ``rnnpb interact --source video:PATH --perception pose --paced`` runs it: missed
+    deadlines and the step's sections."""
+    from rnnpb.interaction import InteractionLoop, LoopConfig
+    from rnnpb.model import MirrorSystem, OnlineConfig
+
+    source = looped_video(path, dt, model.framing)
     choice = OnlineConfig.for_model(model)
     mirror = MirrorSystem(model, choice.config, recognition=choice.recognition)
     # Compiled before the run, as `rnnpb interact` does before its first paced step.

@@ -104,51 +104,10 @@ def run(out: Path, options: StudyOptions) -> StudyOutcome:
 # --- the judge ---------------------------------------------------------------------------------
 
 
-def measured(results: dict[str, Any], exam: Exam) -> dict[str, dict[str, Any]]:
-    """Each target's measured value (``value``) and the counts its detail gives, from the
-    study's results, by the exam's definitions."""
-    lock = exam.target("robots_lock_from_random_starts").parameter("steps")
-    same = [s for s in results["random_starts"] if s["kind"] == "same"]
-    regimes = exam.target("phase_diagram_both_regimes")
-    hold, shift = regimes.parameter("hold_share"), regimes.parameter("shift_rate")
-    settings = list(
-        {
-            (c["persistence"], c["adaptation_a"], c["adaptation_b"]): c
-            for c in results["phase_cells"] + results["persistence_line"]
-        }.values()
-    )
-    holding = [c for c in settings if c["coherent_share"] >= hold]
-    shifting = [
-        c
-        for c in settings
-        if c["shifts_per_200"] >= shift and c["led_by_a"] > 0 and c["led_by_b"] > 0
-    ]
-    minutes = exam.target("subject_finds_all").parameter("minutes")
-    sessions = results["subject"]
-    in_time = scenario.within(sessions, minutes, "minutes_to_all")
-    return {
-        "robots_lock_from_random_starts": {
-            "value": scenario.within(same, lock) / len(same),
-            "locked": scenario.within(same, lock),
-            "by_templates": scenario.within(same, lock, "first_coherent_by_templates"),
-            "runs": len(same),
-        },
-        "phase_diagram_both_regimes": {
-            "value": min(len(holding), len(shifting)),
-            "holding": len(holding),
-            "shifting": len(shifting),
-        },
-        "subject_finds_all": {
-            "value": in_time / len(sessions),
-            "in_time": in_time,
-            "sessions": len(sessions),
-        },
-    }
-
-
 def judge_results(results: dict[str, Any], exam: Exam) -> dict[str, Target]:
-    """The study's targets judged by ``exam``'s definitions from its results."""
-    values = measured(results, exam)
+    """The study's targets judged by ``exam``'s definitions from its results (measured by
+    :func:`rnnpb.experiments.scenarios.dyad.measured`)."""
+    values = scenario.measured(results, exam)
     met = exam.judge({name: m["value"] for name, m in values.items()})
     starts, regimes = values["robots_lock_from_random_starts"], values["phase_diagram_both_regimes"]
     subject = values["subject_finds_all"]

@@ -313,12 +313,21 @@ def _report(
                     "yes" if s["time"]["retimed"] else "no",
                     f"{s['servos']['reduced_steps']} "
                     f"({s['servos']['median_reduced_amplitude']:.0%})",
-                    f"{s['cycles']['count']} of {s['cycles']['median_steps']}",
+                    f"{s['cycles']['count']} × {fmt(s['cycles']['median_steps'])} steps",
                     s["refused"] or "learned",
                 )
             )
     lines += table(
-        ["source", "movement", "framing", "retimed", "steps made smaller", "cycles", "train"], rows
+        [
+            "source",
+            "movement",
+            "framing",
+            "retimed",
+            "steps made smaller (median amplitude)",
+            "whole cycles",
+            "train",
+        ],
+        rows,
     )
     lines += ["", "## Following another performer", ""]
     for key, m in results["following"].items():

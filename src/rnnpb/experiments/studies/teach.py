@@ -5,7 +5,8 @@ and new movement (the demonstrator's new shapes and free shapes it does not make
 user shows the robot the movement as a person shows something — three cycles, other movements,
 three cycles again — and then a third time
 (:mod:`rnnpb.experiments.scenarios.teaching_scenario`); measured
-(:mod:`~rnnpb.experiments.scenarios.teaching_measures`): whether the movement was learned from
+(:mod:`~rnnpb.experiments.scenarios.teaching_measures`, the targets by
+:mod:`~rnnpb.experiments.scenarios.teaching_targets`): whether the movement was learned from
 the two showings before the third and its third showing recognised, patterns learned from
 random movement and twice, the old patterns' lock-on after the swap, the consolidation's CPU
 time, and the deadlines of a paced run at each step time.
@@ -18,26 +19,20 @@ shipped fast-preset model of learning set 1 one shape.
 
 from __future__ import annotations
 
-import math
-import statistics
 import time
 from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
 
-from rnnpb.experiments.exams import Exam, ExamTarget, load_exam
+from rnnpb.experiments.exams import Exam, load_exam
 from rnnpb.experiments.reporting import embed, fmt, table, versions, write_outputs
-from rnnpb.experiments.scenarios.teaching_measures import (
-    LATE_S,
-    PacedRun,
-    TeachRun,
-)
+from rnnpb.experiments.scenarios.teaching_measures import LATE_S, PacedRun, TeachRun
 from rnnpb.experiments.scenarios.teaching_runs import job_count, paced_job, study_jobs
-from rnnpb.experiments.scenarios.teaching_scenario import (
-    UNSTRUCTURED_MOVEMENTS,
-    TeachConfig,
-    period_of,
-    starting_models,
+from rnnpb.experiments.scenarios.teaching_scenario import TeachConfig, starting_models
+from rnnpb.experiments.scenarios.teaching_targets import (
+    target_measures,
+    third_showing_share,
+    where,
 )
 from rnnpb.experiments.studies import StudyOptions, StudyOutcome
 from rnnpb.experiments.studies._pool import study_pool
@@ -159,17 +154,10 @@ def run_study(out: Path, config: TeachConfig, log=print, exam: Exam | None = Non
 def judge(
     runs: list[TeachRun], paced: list[PacedRun], exam: Exam | None = None
 ) -> dict[str, Target]:
-    """Every target measured, by ``exam``'s definitions (default: the study's exam file)."""
+    """Every target measured (:mod:`~rnnpb.experiments.scenarios.teaching_targets`), by
+    ``exam``'s definitions (default: the study's exam file)."""
     exam = exam or load_exam(NAME)
-    measures = {
-        "taught_after_two_showings": lambda t: _taught(runs, t),
-        "third_showing_recognised": lambda t: _recognised(runs, t),
-        "patterns_from_random_movement": lambda t: _from_random(runs),
-        "duplicate_patterns": lambda t: _duplicates(runs),
-        "old_patterns_lock_on": lambda t: _old_locks(runs, t),
-        "no_missed_deadline": lambda t: _deadlines(paced) if paced else None,
-        "consolidation_cpu": lambda t: _consolidation_cpu(runs, paced),
-    }
+    measures = target_measures(runs, paced)
     measured = {name: measures[name](exam.target(name)) for name in exam.targets}
     return {
         name: Target(exam.target(name).met(value), detail, value)
@@ -182,149 +170,6 @@ def judge_results(results: dict[str, Any], exam: Exam) -> dict[str, Target]:
     runs = [TeachRun.from_json(r) for r in results["runs"]]
     paced = [PacedRun.from_json(p) for p in results["paced"]]
     return judge(runs, paced, exam)
-
-
-def third_showing_share(run: TeachRun, settle: float) -> float:
-    """The share of the third showing's steps, from one cycle of the movement (at least
-    ``settle`` steps) after it begins, recognised as the pattern learned from the showings
-    (0 when nothing was learned)."""
-    if not run.new_pattern:
-        return 0.0
-    start = run.timeline["third_showing"] + max(int(settle), period_of(run.shape))
-    recognised = run.timeline["recognised"][start:]
-    return sum(r == run.new_pattern for r in recognised) / len(recognised) if recognised else 0.0
-
-
-def _learned_in_time(run: TeachRun) -> bool:
-    """Learned from the first two showings: a pattern of the movement swapped in before the
-    third showing began."""
-    return (
-        bool(run.new_pattern) and bool(run.swaps) and run.swaps[0] <= run.timeline["third_showing"]
-    )
-
-
-def _where(run: TeachRun) -> str:
-    return f"dt {run.dt:g} set {run.learning_set} {run.shape}"
-
-
-def _taught(runs: list[TeachRun], target: ExamTarget) -> tuple[float, str]:
-    settle, share = target.parameter("settle_steps"), target.parameter("recognised_share")
-    good = [r for r in runs if _learned_in_time(r) and third_showing_share(r, settle) >= share]
-    late = [_where(r) for r in runs if r.new_pattern and not _learned_in_time(r)]
-    none = [_where(r) for r in runs if not r.new_pattern]
-    low = [
-        f"{_where(r)} {100 * third_showing_share(r, settle):.0f} %"
-        for r in runs
-        if _learned_in_time(r) and third_showing_share(r, settle) < share
-    ]
-    words = [f"{len(good)}/{len(runs)} runs"]
-    for label, items in (
-        ("learned after the third began", late),
-        ("nothing learned", none),
-        ("third showing recognised less", low),
-    ):
-        if items:
-            words.append(f"{label}: {', '.join(items[:8])}" + (" …" if len(items) > 8 else ""))
-    return len(good) / len(runs) if runs else math.nan, "; ".join(words)
-
-
-def _recognised(runs: list[TeachRun], target: ExamTarget) -> tuple[float, str]:
-    settle = target.parameter("settle_steps")
-    shares = [third_showing_share(r, settle) for r in runs]
-    mean = sum(shares) / len(shares) if shares else math.nan
-    low = sorted((s, _where(r)) for s, r in zip(shares, runs, strict=True))
-    return mean, (
-        f"mean {100 * mean:.1f} % over {len(runs)} runs; lowest: "
-        + ", ".join(f"{where} {100 * s:.0f} %" for s, where in low[:4])
-    )
-
-
-def _from_random(runs: list[TeachRun]) -> tuple[float, str]:
-    """Patterns learned whose data hold more unstructured movement than anything else."""
-    found = [
-        f"{_where(r)}: {p}"
-        for r in runs
-        for p, movement in r.timeline.get("taught", {}).items()
-        if movement in UNSTRUCTURED_MOVEMENTS
-    ]
-    kept = sum(r.episodes_unstructured for r in runs)
-    return len(found), (
-        f"{len(found)} pattern(s) learned from random movement"
-        + (f" ({'; '.join(found)})" if found else "")
-        + f"; {kept} episode(s) kept holding some random movement, over {len(runs)} runs"
-    )
-
-
-def _duplicates(runs: list[TeachRun]) -> tuple[float, str]:
-    """Patterns learned beyond one from the shown movement, over every run."""
-    extra = {
-        _where(r): sorted(p for p, m in r.timeline.get("taught", {}).items() if m == r.shape)
-        for r in runs
-    }
-    extra = {k: v for k, v in extra.items() if len(v) > 1}
-    count = sum(len(v) - 1 for v in extra.values())
-    return count, (
-        f"{count} pattern(s) beyond one per run over {len(runs)} runs"
-        + ("; " + "; ".join(f"{k}: {', '.join(v)}" for k, v in extra.items()) if extra else "")
-    )
-
-
-def _old_locks(runs: list[TeachRun], target: ExamTarget) -> tuple[float, str]:
-    """Learned patterns performed after the swap, locked onto within the target's steps."""
-    lock = target.parameter("lock_steps")
-    locks, misses = 0, []
-    total = 0
-    for r in runs:
-        if not r.swaps:
-            old = [m for m, _ in r.segments if m != r.shape and m not in UNSTRUCTURED_MOVEMENTS]
-            total += len(old[-2:])
-            misses += [f"{_where(r)}: nothing learned"] * len(old[-2:])
-            continue
-        for segment, steps in r.lock_in_timeline.items():
-            movement = segment.split(":", 1)[1]
-            if movement == r.shape:
-                continue
-            total += 1
-            if steps is not None and steps <= lock:
-                locks += 1
-            else:
-                misses.append(f"{_where(r)}: {segment} {fmt(steps)}")
-    return locks / total if total else math.nan, (
-        f"{locks}/{total} within {lock:g} steps"
-        + (
-            f"; missed: {'; '.join(misses[:10])}" + (" …" if len(misses) > 10 else "")
-            if misses
-            else ""
-        )
-    )
-
-
-def _deadlines(paced: list[PacedRun]) -> tuple[float, str]:
-    """The paced steps that missed their deadline or whose late start plus work ran past the
-    slot, over the paced runs."""
-    count = sum(p.missed_deadlines + p.overrun_steps for p in paced)
-    return count, "; ".join(
-        f"dt {p.dt:g}: {p.missed_deadlines} missed, {p.overrun_steps} past their slot, "
-        f"{p.late_steps} started > {LATE_S * 1e3:.0f} ms late over {p.steps} steps"
-        + ("" if p.swap_step is not None else " (consolidation cut short)")
-        for p in paced
-    )
-
-
-def _consolidation_cpu(runs: list[TeachRun], paced: list[PacedRun]) -> tuple[float, str]:
-    """The CPU seconds of the longest teaching consolidation (its process), over every run."""
-    times = [c.cpu_s for r in runs for c in r.consolidations]
-    times += [p.consolidation.cpu_s for p in paced if p.consolidation is not None]
-    if not times:
-        return math.nan, "no consolidation ran"
-    unknown = sum(1 for t in times if not math.isfinite(t))
-    if unknown:
-        return math.nan, f"{unknown} of {len(times)} consolidations ended without their CPU time"
-    ordered = sorted(times)
-    return ordered[-1], (
-        f"longest {ordered[-1]:.1f} s CPU, median {statistics.median(ordered):.1f} s, over "
-        f"{len(times)} consolidations"
-    )
 
 
 # --- the report ------------------------------------------------------------------------------
@@ -404,9 +249,7 @@ def report(config, runs, paced, targets, runtime, progress, on_exam: Exam | None
     from rnnpb.analysis.figures.teach import timeline_file
 
     lines += ["", "## Timelines", ""]
-    lines += [
-        embed(_where(r), timeline_file(r.learning_set, f"{r.shape}_dt{r.dt:g}")) for r in runs
-    ]
+    lines += [embed(where(r), timeline_file(r.learning_set, f"{r.shape}_dt{r.dt:g}")) for r in runs]
     return lines
 
 
