@@ -53,7 +53,7 @@ def _cache_folder() -> Path | None:
 
 _FOLDER = _cache_folder()
 if _FOLDER is not None:
-    setattr(numba_config, "CACHE_DIR", str(_FOLDER))  # read when a kernel is made
+    numba_config.CACHE_DIR = str(_FOLDER)  # pyright: ignore[reportAttributeAccessIssue]  # set at run time
 
 
 def kernel(function: _Function) -> _Function:
