@@ -27,14 +27,13 @@ def main() -> None:
 
     _xla.configure()
     import jax
-    import jax.numpy as jnp
     import numpy as np
 
     from rnnpb.demonstrator import learning_set
     from rnnpb.model import MirrorSystem, NetworkConfig, TrainedModel
-    from rnnpb.model.mirror import _online_step_packed, normalized_hands
+    from rnnpb.model.mirror import normalized_hands
     from rnnpb.model.network import init_params
-    from rnnpb.model.online import initial_state, phase_candidates, restart_candidates
+    from rnnpb.model.online import initial_state, step_sessions
     from rnnpb.robot import JOINT_LIMITS
 
     network = NetworkConfig()
@@ -54,18 +53,26 @@ def main() -> None:
     )
     mirror = MirrorSystem(model)
     untaught = MirrorSystem(replace(model, taught_sensory=None))
-    params = jax.tree_util.tree_map(lambda a: jnp.asarray(a, jnp.float32), model.params)
     state = initial_state(model, mirror.config)
-    candidates = jnp.asarray(restart_candidates(model), jnp.float32)
-    phases = jnp.asarray(phase_candidates(model), jnp.float32)
+    out = np.empty((1, mirror._layout.pattern_errors.stop), np.float32)
 
     def bare(u: np.ndarray) -> None:
-        nonlocal state
+        """The compiled step alone: no evidence asked for, no recognition on the host."""
         hands, seen = normalized_hands(u, network.sensory_size)
-        state, packed = _online_step_packed(
-            params, state, hands.astype(np.float32), seen, mirror.config, candidates, phases
+        step_sessions(
+            mirror._net,
+            mirror._meta,
+            state,
+            hands[None].astype(np.float32),
+            seen[None],
+            np.zeros(1, bool),
+            mirror._candidates,
+            mirror._phase_candidates,
+            mirror._pattern_rho[:0],
+            mirror._settings,
+            out[:, : mirror._layout.context.stop],
+            mirror._native,
         )
-        np.asarray(packed)
 
     stream = np.concatenate([s.sensory for s in sequences])
     for t in range(40):

@@ -1,4 +1,5 @@
-"""The on-line regression's loop alone, native (rnnpb.model.native) beside JAX, on one core.
+"""The on-line regression's loop alone, native (rnnpb.model.native) beside the same loop
+compiled from the model's equations by numba (rnnpb.model.online), on one core.
 
 A real window: the model's mirror system after 40 steps of the demonstrator's first pattern,
 then the next observation; the default regression (100 iterations of the window's forward and
@@ -6,6 +7,9 @@ backward pass, the PB update and the onset's step) from the state the step's res
 Prints the two loops' medians, timed alternately, their ratio, and their largest difference::
 
     PYTHONPATH=src .venv/bin/python benchmarks/native_loop.py [--model MODEL] [--repeats 50]
+
+``RNNPB_NATIVE_CPU=haswell`` and ``NUMBA_CPU_NAME=haswell NUMBA_CPU_FEATURES=`` time the code
+built for an AVX2 processor.
 """
 
 from __future__ import annotations
@@ -21,16 +25,11 @@ def main() -> None:
     parser.add_argument("--model", help="a learned model (default: the shipped one)")
     parser.add_argument("--repeats", type=int, default=50, help="timed regressions of each")
     args = parser.parse_args()
-    from rnnpb import _xla
-
-    _xla.single_threaded()
-    _xla.configure()
-    import jax
-
     from rnnpb.demonstrator import held_scenario
-    from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel
-    from rnnpb.model.native import NativeRegression, enabled, prepare_block
-    from rnnpb.model.online import regression
+    from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel, online
+    from rnnpb.model.mirror import normalized_hands
+    from rnnpb.model.native import NativeRegression, enabled
+    from rnnpb.model.online import OnlineState
     from rnnpb.models import SHIPPED_MODEL
 
     if not enabled():
@@ -41,39 +40,58 @@ def main() -> None:
     hands = held_scenario(model.patterns[0], n_steps=41, seed=3).sensory
     for u in hands[:-1]:
         mirror.step(u)
-    u = hands[-1].astype(np.float32)
-    start, block = prepare_block(
-        mirror._params,
-        mirror._state,
-        u,
-        np.isfinite(u),
-        config,
+    u, seen = normalized_hands(hands[-1], model.network.sensory_size)
+    start = OnlineState(*(np.array(part) for part in mirror._state))
+    gates = np.empty(1, np.float32)
+    saved = online.start_arrays(start)
+    online.prepare_sessions(
+        mirror._net,
+        start,
+        u[None].astype(np.float32),
+        seen[None],
         mirror._candidates,
         mirror._phase_candidates,
+        mirror._settings,
+        gates,
+        saved,
     )
-    kernel = NativeRegression(mirror._params, model.network, config)
-    jax_loop = jax.jit(regression, static_argnames=("config",))
-    gate = None  # the default regression is not gated
+    kernel = NativeRegression(model.params, model.network, config)
+    layout, guarded = kernel.block_layout(), np.zeros(1, bool)
 
-    def in_jax():
-        return jax.block_until_ready(jax_loop(mirror._params, start, gate, config))
+    def copy() -> OnlineState:
+        return OnlineState(*(np.array(part) for part in start))
 
-    expected, got = in_jax(), kernel(block)
-    times: dict[str, list[float]] = {"native": [], "jax": []}
+    def native() -> OnlineState:
+        state, blocks = copy(), kernel.blocks(1)
+        online.fill_blocks(mirror._net, state, gates, guarded, mirror._settings, layout, blocks)
+        kernel.run(blocks)
+        online.take_blocks(state, layout, blocks)
+        return state
+
+    def compiled() -> OnlineState:
+        state = copy()
+        online.regress_sessions(mirror._net, mirror._meta, state, gates, guarded, mirror._settings)
+        return state
+
+    expected, got = compiled(), native()
+    times: dict[str, list[float]] = {"native": [], "numba": []}
     for _ in range(args.repeats):  # alternately, so that both see the same machine
-        for name, call in (("native", lambda: kernel(block)), ("jax", in_jax)):
+        for name, call in (("native", native), ("numba", compiled)):
             t0 = time.perf_counter()
             call()
             times[name].append(time.perf_counter() - t0)
     ms = {name: float(np.median(values)) * 1e3 for name, values in times.items()}
     difference = max(
-        float(np.max(np.abs(np.asarray(a) - b))) for a, b in zip(expected, got, strict=True)
+        float(np.max(np.abs(getattr(expected, name) - getattr(got, name))))
+        for name in ("rho", "rho_velocity", "onset_context", "onset_motor")
     )
     print(
         f"the default regression ({config.iterations} iterations, L = {config.window}), one core:"
     )
     print(f"  native loop: {ms['native']:.3f} ms median")
-    print(f"  JAX loop:    {ms['jax']:.3f} ms median ({ms['jax'] / ms['native']:.2f}x the native)")
+    print(
+        f"  numba loop:  {ms['numba']:.3f} ms median ({ms['numba'] / ms['native']:.2f}x the native)"
+    )
     print(f"  largest difference (rho, momentum, onset): {difference:.1e}")
 
 

@@ -7,10 +7,11 @@ shipped model (learning set 1, the fast preset):
   default without phase restarts, without restarts, with half and with no iterations (what is
   left with none is everything but the regression loop);
 * the default step by section, as ``MirrorSystem.step`` runs it: the hands checked, the
-  compiled call before the regression's loop (``native.prepare_block``, its block brought to
-  the host), the native loop, the compiled call after it (``_conclude_packed``, its outputs
-  brought back), the outputs unpacked, recognition on the host, the motor command (with
-  ``RNNPB_NATIVE=0``, or without llvmlite, the whole compiled step in place of the three);
+  compiled call before the regression's loop (``online.prepare_sessions``), the native loop
+  with its blocks filled and taken back (``online.fill_blocks``, ``native.run``,
+  ``online.take_blocks``; with ``RNNPB_NATIVE=0``, or without llvmlite, the compiled loop
+  ``online.regress_sessions``), the compiled call after it (``online.conclude_sessions``), the
+  outputs unpacked, recognition on the host, the motor command;
 * ``BatchedMirror``: B sessions in one call against one session's step;
 * then the default step of one mirror system stepped alone, with nothing between its steps
   (in the alternating runs above, every step follows other systems' steps, which push its
@@ -44,14 +45,9 @@ def main() -> None:
     import numpy as np
 
     from rnnpb.demonstrator import learning_set
-    from rnnpb.model import BatchedMirror, MirrorSystem, OnlineConfig, TrainedModel
-    from rnnpb.model.mirror import (
-        _conclude_packed,
-        _online_step_packed,
-        motor_command,
-        normalized_hands,
-    )
-    from rnnpb.model.native import prepare_block
+    from rnnpb.model import BatchedMirror, MirrorSystem, OnlineConfig, TrainedModel, online
+    from rnnpb.model.mirror import motor_command, normalized_hands
+    from rnnpb.model.online import OnlineState, StepOutputs
     from rnnpb.model.recognition import recognise
     from rnnpb.models import SHIPPED_MODEL
 
@@ -81,9 +77,7 @@ def main() -> None:
     whole: dict[str, list[float]] = {name: [] for name in systems}
     whole[f"{args.sessions} sessions in one call"] = []
     native = systems["default"]._native
-    calls = (
-        ("call before the loop", "native loop", "call after it") if native else ("compiled step",)
-    )
+    calls = ("call before the loop", "native loop" if native else "compiled loop", "call after it")
     sections: dict[str, list[float]] = {
         name: [] for name in ("hands checked", *calls, "unpacked", "recognition", "motor command")
     }
@@ -102,35 +96,37 @@ def main() -> None:
         marks = [time.perf_counter()]
         u, seen = normalized_hands(u_raw, model.network.sensory_size)
         marks.append(time.perf_counter())
-        arguments = (mirror._params, mirror._state, u.astype(np.float32), seen, mirror.config)
-        if native is not None:
-            start, block = prepare_block(*arguments, mirror._candidates, mirror._phase_candidates)
-            block = np.asarray(block)
-            marks.append(time.perf_counter())
-            regressed = native(block, mirror._meta)
-            marks.append(time.perf_counter())
-            _, packed = _conclude_packed(
-                mirror._params,
-                mirror._state,
-                start,
-                regressed,
-                mirror.config,
-                mirror._meta,
-                mirror._pattern_rho,
-                mirror.recognition.recognition_steps,
-            )
-        else:
-            _, packed = _online_step_packed(
-                *arguments,
-                mirror._candidates,
-                mirror._phase_candidates,
-                mirror._meta,
-                mirror._pattern_rho,
-                mirror.recognition.recognition_steps,
-            )
-        packed = np.asarray(packed, dtype=np.float64)
+        state = OnlineState(*(np.array(part) for part in mirror._state))
+        gates, kept = np.empty(1, np.float32), online.start_arrays(state)
+        guarded = np.zeros(1, bool)
+        settings = mirror._settings
+        online.prepare_sessions(
+            mirror._net,
+            state,
+            u[None].astype(np.float32),
+            seen[None],
+            mirror._candidates,
+            mirror._phase_candidates,
+            settings,
+            gates,
+            kept,
+        )
         marks.append(time.perf_counter())
-        outputs = mirror._layout.unpack(packed)
+        if native is not None:
+            layout, blocks = native.block_layout(), native.blocks(1)
+            online.fill_blocks(mirror._net, state, gates, guarded, settings, layout, blocks)
+            native.run(blocks)
+            online.take_blocks(state, layout, blocks)
+        else:
+            online.regress_sessions(mirror._net, mirror._meta, state, gates, guarded, settings)
+        marks.append(time.perf_counter())
+        out = np.empty((1, mirror._layout.pattern_errors.stop), np.float32)
+        online.conclude_sessions(
+            mirror._net, mirror._meta, state, kept, guarded, mirror._pattern_rho, settings, out
+        )
+        packed = out[0].astype(np.float64)
+        marks.append(time.perf_counter())
+        outputs = StepOutputs(*(packed[part] for part in mirror._layout))
         marks.append(time.perf_counter())
         recognise(
             mirror._recognition,

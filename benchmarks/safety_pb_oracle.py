@@ -34,14 +34,12 @@ def main() -> None:
     from rnnpb import _xla
 
     _xla.configure()
-    import jax
-    import jax.numpy as jnp
     import numpy as np
 
     from rnnpb.experiments.scenarios.safety import USERS, adversarial_stream
-    from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel, window
+    from rnnpb.model import MirrorSystem, OnlineConfig, TrainedModel, online
     from rnnpb.model.mirror import motor_command
-    from rnnpb.model.network import logit
+    from rnnpb.model.network import logit_numpy
     from rnnpb.safety import SafetyChecker
 
     model = TrainedModel.load(args.model)
@@ -56,16 +54,33 @@ def main() -> None:
     )
     s = model.network.sensory_size
 
-    @jax.jit
-    def commands_with(state, onset_context, onset_motor):
-        def one(pb):
-            rho = jnp.broadcast_to(logit(pb), state.rho.shape)
-            predictions, _ = window.run(
-                mirror._params, state, rho, onset_context, onset_motor, mirror.config
-            )
-            return predictions[jnp.maximum(state.n - 2, 0), s:]
+    rho_of = logit_numpy(pbs).astype(np.float32)
 
-        return jax.vmap(one)(jnp.asarray(pbs, jnp.float32))
+    def commands_with() -> np.ndarray:
+        """The command the window gives this step with each PB of ``pbs`` in place of the
+        regressed profile, from the regressed onset (normalized)."""
+        state, count = mirror._state, len(pbs)
+        n = int(state.n[0])
+        fixed, mask, _, _ = online._windows(
+            mirror._net,
+            state.sensory[0],
+            state.seen[0],
+            state.motor_sent[0],
+            n,
+            mirror._settings.recorded,
+            count,
+        )
+        rho = np.ascontiguousarray(np.broadcast_to(rho_of[:, None], (count, *state.rho.shape[1:])))
+        _, outputs = online._run(
+            mirror._net,
+            fixed,
+            mask,
+            rho,
+            np.repeat(state.onset_context, count, axis=0),
+            np.repeat(state.onset_motor, count, axis=0),
+            n,
+        )
+        return outputs[max(n - 2, 0), :, s : s + model.network.motor_size]
 
     def collides(previous, command) -> bool:
         return any(r.startswith("collision") for r in checker.command_reasons(previous, command))
@@ -80,10 +95,7 @@ def main() -> None:
             # After the window has filled (the first steps have no regression to speak of).
             if t >= mirror.config.window and collides(previous, result.motor):
                 colliding += 1
-                state = mirror._state
-                others = np.asarray(
-                    commands_with(state, state.onset_context, state.onset_motor), np.float64
-                )
+                others = np.asarray(commands_with(), np.float64)
                 safe = np.array([not collides(previous, motor_command(model, o)) for o in others])
                 distance = np.linalg.norm(pbs - result.pb, axis=1)
                 some += bool(safe.any())

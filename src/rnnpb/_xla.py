@@ -1,25 +1,20 @@
 """The one XLA setting rnnpb recommends, and who applies it.
 
-The on-line step (:func:`rnnpb.model.online.online_step`) runs 100 iterations of a forward and a
-backward pass through a 30-step window every step: some 12,000 tiny matrix-vector products in
-sequence. XLA's CPU runtime launches every operation of a loop body as a separate task, and at
-these sizes the launches cost more than the arithmetic. XLA compiles a *small* while loop into
-one function instead when the loop touches fewer bytes than a threshold (1 KiB by default) and
-holds nothing it must hand to a library (a matrix library call, a custom call). The window's
-loops are written to hold no such operation, and :data:`FLAG` raises the threshold to 1 MiB, so
-the whole regression compiles into one function: this halves the on-line step's time
-(``rnnpb bench``, docs/model.md). Loops that move more data — learning, with six sequences at
-once — keep their library calls and are not affected.
+XLA's CPU runtime launches every operation of a loop body as a separate task, unless the loop is
+*small*: it touches fewer bytes than a threshold (1 KiB by default) and holds nothing XLA hands
+to a library; then XLA compiles the whole loop into one function. :data:`FLAG` raises the
+threshold to 1 MiB for rnnpb's JAX loops that are small: generation's closed loop (the phase
+restarts' candidates), the routine level's regression and the input noise's generator of the
+JAX learning chunk. The on-line step itself is compiled by numba (:mod:`rnnpb.model.online`)
+and does not depend on it; loops that move more data — learning — keep their library calls.
 
 Importing rnnpb changes nothing: the setting is a process-wide environment variable, so the
 program decides. The ``rnnpb`` command, the demo's worker processes and the test suite call
-:func:`configure` before their first JAX computation. A library user calls
-``rnnpb.configure_xla()`` the same way, or sets ``XLA_FLAGS`` themselves; one who did neither
-is told once, when they build a :class:`~rnnpb.model.MirrorSystem`
-(:func:`warn_if_not_configured`). XLA reads its flags once, when JAX starts its CPU backend, so
-the setting takes effect only before the first JAX computation of the process.
-``RNNPB_XLA_DEFAULTS=0`` (or an ``--xla_backend_extra_options`` of one's own in ``XLA_FLAGS``)
-keeps XLA's defaults and silences the notice.
+:func:`configure` before their first JAX computation; a library user calls
+``rnnpb.configure_xla()`` the same way, or sets ``XLA_FLAGS`` themselves. XLA reads its flags
+once, when JAX starts its CPU backend, so the setting takes effect only before the first JAX
+computation of the process. ``RNNPB_XLA_DEFAULTS=0`` (or an ``--xla_backend_extra_options`` of
+one's own in ``XLA_FLAGS``) keeps XLA's defaults.
 
 The compiled programs are kept on disk (:func:`compilation_cache`): XLA compiles the learning
 iteration and each on-line configuration's step in a few seconds each, in every new process. The
@@ -42,8 +37,6 @@ SMALL_LOOP_OPTION = "xla_cpu_small_while_loop_byte_threshold"
 SMALL_LOOP_BYTES = 1 << 20
 FLAG = f"--xla_backend_extra_options={SMALL_LOOP_OPTION}={SMALL_LOOP_BYTES}"
 
-_told = False
-
 
 def user_decided(environ: Mapping[str, str] | None = None) -> bool:
     """Whether the environment already says what XLA should do with small loops: rnnpb's
@@ -56,7 +49,7 @@ def user_decided(environ: Mapping[str, str] | None = None) -> bool:
 
 
 def configure(environ: MutableMapping[str, str] | None = None) -> bool:
-    """Compile the on-line regression into one function: add :data:`FLAG` to ``XLA_FLAGS``.
+    """Compile rnnpb's small JAX loops whole: add :data:`FLAG` to ``XLA_FLAGS``.
 
     Call it before the first JAX computation of the process (XLA reads its flags once). It
     leaves the environment alone when the user decided otherwise (:func:`user_decided`) or the
@@ -82,31 +75,12 @@ def configure(environ: MutableMapping[str, str] | None = None) -> bool:
     if environ is os.environ and backend_started():
         warnings.warn(
             "JAX started before rnnpb.configure_xla() was called, so the setting does not "
-            "apply in this process and the on-line step runs about twice as slow; call it "
-            f"before the first JAX computation, or set XLA_FLAGS={FLAG}",
+            "apply in this process; call it before the first JAX computation, or set "
+            f"XLA_FLAGS={FLAG}",
             RuntimeWarning,
             stacklevel=2,
         )
     return True
-
-
-def warn_if_not_configured() -> None:
-    """Tell a library user once per process that the on-line step runs at XLA's default speed.
-
-    Silent when the flag is active or the user decided otherwise (:func:`user_decided`).
-    """
-    global _told
-    if _told or active() or user_decided():
-        return
-    _told = True
-    warnings.warn(
-        "the on-line step runs about twice as slow as it can: XLA compiles its regression "
-        "loop as separate tasks. Call rnnpb.configure_xla() before the first JAX computation "
-        f"(or set XLA_FLAGS={FLAG}); RNNPB_XLA_DEFAULTS=0 keeps XLA's defaults and silences "
-        "this",
-        RuntimeWarning,
-        stacklevel=3,
-    )
 
 
 def single_threaded(environ: MutableMapping[str, str] | None = None) -> None:

@@ -176,7 +176,7 @@ entry:
 def _fill_once() -> float:
     import ctypes
 
-    from rnnpb.model.native import build
+    from rnnpb.model._ir import build
 
     function, engine = build(_TINY, "fill", ctypes.CFUNCTYPE(None, ctypes.c_void_p))
     value = np.zeros(1, np.float32)

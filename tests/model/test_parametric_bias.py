@@ -1,4 +1,4 @@
-"""Eqs. 1-2 as vectorised in JAX equal the step-by-step NumPy version."""
+"""Eqs. 1-2 as vectorised in JAX equal the kernels' step-by-step version."""
 
 from typing import Any
 
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from rnnpb.errors import ConfigError
-from rnnpb.model import pb_update, reference
+from rnnpb.model import equations, pb_update
 from rnnpb.model.parametric_bias import PBUpdateConfig, integrate
 
 
@@ -32,7 +32,21 @@ def test_update_matches_reference(n_valid):
     new_rho, new_velocity = pb_update(
         jnp.asarray(rho), jnp.asarray(velocity), jnp.asarray(grad), config, jnp.asarray(valid)
     )
-    ref_rho, ref_velocity = reference.pb_update(rho, velocity, grad, config, n_valid)
+    # The kernels' eqs. 1-2 (rnnpb.model.equations), in place, on a float64 copy.
+    ref_rho, ref_velocity = rho.copy(), velocity.copy()
+    equations.pb_update(
+        ref_rho,
+        ref_velocity,
+        grad,
+        n_valid,
+        config.integration_length // 2,
+        config.k_bp,
+        config.k_nb,
+        config.learning_rate,
+        config.momentum,
+        np.empty((13, 3)),
+        np.empty((12, 3)),
+    )
     np.testing.assert_allclose(np.asarray(new_rho), ref_rho, rtol=1e-5, atol=1e-6)
     np.testing.assert_allclose(np.asarray(new_velocity), ref_velocity, rtol=1e-5, atol=1e-6)
     # Steps that do not exist yet are left as they were.

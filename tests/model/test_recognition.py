@@ -7,6 +7,7 @@ import pytest
 
 from rnnpb.errors import ConfigError
 from rnnpb.model import MirrorSystem, OnlineConfig
+from rnnpb.model.mirror import ReferenceMirrorSystem
 from rnnpb.model.recognition import (
     NOVELTY_STATES,
     RecognitionConfig,
@@ -16,7 +17,6 @@ from rnnpb.model.recognition import (
     taught_distances,
     taught_stretches,
 )
-from rnnpb.model.reference import ReferenceMirrorSystem
 
 from .synthetic import PERIOD, pattern_values
 

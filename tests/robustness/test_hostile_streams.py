@@ -9,6 +9,8 @@ import pytest
 from rnnpb.errors import ConfigError, DataFileError
 from rnnpb.interaction import InteractionLoop, LoopConfig, SessionRecorder, read_session
 from rnnpb.model import MirrorSystem
+from rnnpb.model.native import native_regression
+from rnnpb.model.online import OnlineState, network_arrays
 from rnnpb.robot import JOINT_LIMITS, KinematicRobot
 from rnnpb.sources import ArraySensorySource, CsvSensorySource
 
@@ -68,11 +70,17 @@ def test_long_run_of_nan_then_recovery(mirror):
     assert np.isfinite(errors[1:]).all()
 
 
+def _saved(mirror: MirrorSystem) -> OnlineState:
+    """A copy of the mirror system's state (the step changes it in place), to step from
+    again."""
+    return OnlineState(*(np.array(part) for part in mirror._state))
+
+
 def test_infinity_is_treated_like_nan(mirror):
     mirror.reset()
     for t in range(10):
         mirror.step(_swing(t))
-    state = mirror._state
+    state = _saved(mirror)
     with_nan = mirror.step([np.nan, 0.4, np.nan, 0.6])
     mirror._state = state
     mirror.steps -= 1
@@ -85,7 +93,7 @@ def test_infinity_is_treated_like_nan(mirror):
 
 def test_far_outside_values_are_clipped_to_the_view_plane(mirror):
     mirror.reset()
-    state = mirror._state
+    state = _saved(mirror)
     far = mirror.step([1e30, -1e30, 7.0, -3.0])
     mirror._state = state
     edge = mirror.step([1.0, 0.0, 1.0, 0.0])
@@ -107,12 +115,17 @@ def _poisoned_steps(mirror, n_good, n_poisoned):
     mirror.reset()
     for t in range(n_good):
         good = mirror.step(_swing(t))
-    healthy = mirror._params
-    mirror._params = healthy._replace(w_out=healthy.w_out * np.nan)
+    # The weights poisoned where the step reads them: the compiled step's and the native loop's.
+    healthy = mirror._net, mirror._native
+    params = mirror.model.params
+    poisoned = params._replace(w_out=np.asarray(params.w_out) * np.nan)
+    net = mirror.model.network
+    mirror._net = network_arrays(poisoned, net.sensory_size, net.motor_size, np.float32)
+    mirror._native = native_regression(poisoned, net, mirror.config)
     try:
         results = [mirror.step(_swing(n_good + t)) for t in range(n_poisoned)]
     finally:
-        mirror._params = healthy
+        mirror._net, mirror._native = healthy
     return good, results
 
 

@@ -12,7 +12,7 @@ from rnnpb.errors import ModelFileError
 from rnnpb.model import MirrorSystem, OnlineConfig
 from rnnpb.model.archive import load_archive, save_archive
 from rnnpb.model.meta import PB_DRIVEN, regime_of
-from rnnpb.model.reference import ReferenceMirrorSystem
+from rnnpb.model.mirror import ReferenceMirrorSystem
 from rnnpb.safety import (
     GENERATION,
     SEEN,

@@ -31,7 +31,8 @@ single-threaded, after warm-up:
     where the PB drives the motion, the regime and the inhibition check every step);
   - side by side in the same run, each as median, 99th percentile and ratio to the first:
     the step with the paper's regression, with the default one, the default one with its
-    regression loop in JAX rather than native code (rnnpb.model.native), with the default one
+    regression loop compiled from the model's equations by numba (rnnpb.model.online) rather
+    than in native code (rnnpb.model.native), with the default one
     and its detectors and the safety guard (barrier and command filter), the step per session
     of 16 sessions stepped in one call (rnnpb.model.BatchedMirror), with the ratio of the
     16 sessions' call to one default step, and the two-level step (docs/routines.md: the
@@ -39,8 +40,8 @@ single-threaded, after warm-up:
     routine level's observe, on a routine performed by the synthetic user), with
     the routine level's part of it, the share of steps the prior went down on, and the
     budget it must stay within, the step period dt;
-  - the same on-line step in a straightforward NumPy implementation (the reference the
-    tests hold the compiled one to), and the ratio;
+  - the same on-line step in float64 (the reference the tests hold the float32 one to),
+    and the ratio;
   - colour-ball tracking of 640x480 frames;
   - bare-hand pose tracking of 640x480 frames of a photographed person, following the body
     and finding it afresh, median and 95th percentile (with the `rnnpb[hands]` extra; without
@@ -66,7 +67,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", metavar="FILE", help="also write the figures as JSON")
     parser.add_argument("--steps", type=int, default=300, help="timed on-line steps (default 300)")
     parser.add_argument(
-        "--reference-steps", type=int, default=5, help="timed NumPy reference steps (default 5)"
+        "--reference-steps", type=int, default=5, help="timed float64 reference steps (default 5)"
     )
     parser.add_argument("--no-tracking", action="store_true", help="skip the tracking bench")
     parser.add_argument(
@@ -130,7 +131,7 @@ def run(args: argparse.Namespace) -> int:
     from rnnpb.model.network import init_params
     from rnnpb.robot import JOINT_LIMITS
 
-    parts = ["learning", "routine level", "on-line step", "NumPy reference"] + (
+    parts = ["learning", "routine level", "on-line step", "float64 reference"] + (
         [] if args.no_tracking else ["tracking"]
     )
     bar = progress_bar(
@@ -202,9 +203,9 @@ def run(args: argparse.Namespace) -> int:
     compiled = MIRROR_SYSTEMS["compiled"]
     mirror = compiled(model, online)
     plain = compiled(model, online.with_tuning(phase_restarts=0))
-    # The default step with its regression loop in JAX as well (rnnpb.model.native's
-    # reference), side by side with the native loop.
-    whole_jax = MirrorSystem(model, online, native=False)
+    # The default step with its regression loop compiled from the equations by numba (what
+    # rnnpb.model.native's loop is held to), side by side with the native loop.
+    numba_loop = MirrorSystem(model, online, native=False)
     # The safety-on steps: a risk network of the stored size (its weights do not change the
     # cost) guarding the regression — the barrier on the newest steps (the default span), the
     # barrier on the whole window, the projection — and the command filter before sending.
@@ -240,13 +241,13 @@ def run(args: argparse.Namespace) -> int:
         due = two_level.step(routine_stream[t % len(routine_stream)]).higher.switch_due
         mirror.step(stream[t])
         plain.step(stream[t])
-        whole_jax.step(stream[t])
+        numba_loop.step(stream[t])
         paper.step(stream[t])
         batched.step(session_hands(t))
         for system in guarded.values():
             command_filter(system.step(stream[t]).motor)
     step_times, plain_times, paper_times, batched_times = [], [], [], []
-    jax_times: list[float] = []
+    numba_times: list[float] = []
     two_level_times: list[float] = []
     follower_times.clear()
     prior_steps = 0
@@ -260,7 +261,7 @@ def run(args: argparse.Namespace) -> int:
         for system, times in (
             (mirror, step_times),
             (plain, plain_times),
-            (whole_jax, jax_times),
+            (numba_loop, numba_times),
             (paper, paper_times),
         ):
             t0, c0 = time.perf_counter(), time.process_time()
@@ -289,14 +290,10 @@ def run(args: argparse.Namespace) -> int:
     step_times = np.asarray(step_times)
     next_part()
 
-    # The same step, same model and config, in the NumPy twin.
+    # The same step, same model and config, in float64: the reference.
     reference = MIRROR_SYSTEMS["reference"](model, online)
-    # Fill its window without regressing it (a full window is the steady-state cost; 29
-    # regressions would take seconds): the reference keeps its state in plain attributes.
     for t in range(online.window - 1):
-        reference.n = t + 1
-        reference.sensory[t] = stream[t]
-        reference.seen[t] = True
+        reference.step(stream[t])
     reference_times = []
     for t in range(args.reference_steps):
         t0 = time.perf_counter()
@@ -316,7 +313,7 @@ def run(args: argparse.Namespace) -> int:
     side_by_side = {
         "paper": np.asarray(paper_times),
         "default": step_times,
-        "default_jax": np.asarray(jax_times),
+        "default_numba": np.asarray(numba_times),
         "default_guarded": guarded_with_filter,
         "batched_per_session": np.asarray(batched_times) / BATCHED_SESSIONS,
         "two_level": np.asarray(two_level_times),
@@ -363,8 +360,8 @@ def run(args: argparse.Namespace) -> int:
             f"online_step_{name}_cpu_ms_median": float(np.median(times))
             for name, times in cpu_times.items()
         },
-        "online_step_reference_numpy_ms_median": reference_ms,
-        "online_speedup_vs_numpy": reference_ms / float(np.median(step_times)),
+        "online_step_reference_ms_median": reference_ms,
+        "online_speedup_vs_reference": reference_ms / float(np.median(step_times)),
         **{f"online_{key}": value for key, value in compared.items()},
         **dyad_figures,
     }
@@ -394,6 +391,7 @@ def run(args: argparse.Namespace) -> int:
         f"rnnpb {__version__} bench — {note}, jax {jax.__version__}, "
         f"{platform.processor() or platform.machine()}"
     )
+    print(f"  {processor_note()}")
     print(
         f"  learning iteration (6 seq x 50 steps):   {train_ms:8.3f} ms median "
         f"(50,000 iterations ~ {train_ms * 50:.0f} s)"
@@ -441,7 +439,7 @@ def run(args: argparse.Namespace) -> int:
     labels = {
         "paper": "the paper's regression",
         "default": "the default",
-        "default_jax": "the default, its loop in JAX",
+        "default_numba": "the default, its loop by numba",
         "default_guarded": "default, detectors, guard and filter",
         "batched_per_session": f"per session of {BATCHED_SESSIONS} in one call",
         "two_level": "two levels (routines, with the prior)",
@@ -478,9 +476,9 @@ def run(args: argparse.Namespace) -> int:
         "of it)"
     )
     print(
-        f"  on-line step, NumPy reference:           {reference_ms:8.1f} ms median "
-        f"(over {args.reference_steps} steps) — compiled is "
-        f"{figures['online_speedup_vs_numpy']:.0f}x faster"
+        f"  on-line step, the float64 reference:    {reference_ms:8.3f} ms median "
+        f"(over {args.reference_steps} steps; the float32 step "
+        f"{figures['online_speedup_vs_reference']:.1f}x faster)"
     )
     cores = int(figures["dyad_cores"])
     print(
@@ -527,12 +525,39 @@ def run(args: argparse.Namespace) -> int:
             "machine": platform.machine(),
             "python": platform.python_version(),
             "note": note,
+            "processor": processor_note(),
             "online_config": online.to_dict(),
         }
         with atomic_write(args.json, "w", encoding="utf-8") as handle:
             json.dump(document, handle, indent=2)
         print(f"wrote {args.json}")
     return 0
+
+
+def processor_note() -> str:
+    """The processor and the instruction sets the compiled code was built for: the native
+    loops' (``RNNPB_NATIVE_CPU``, else this processor's) and numba's (``NUMBA_CPU_NAME``,
+    else this processor's)."""
+    import importlib
+
+    name = ""
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as info:
+            name = next(
+                (line.split(":", 1)[1].strip() for line in info if "model name" in line), ""
+            )
+    except OSError:
+        pass
+    llvm = importlib.import_module("llvmlite.binding")
+    host = llvm.get_host_cpu_name()
+    features = llvm.get_host_cpu_features().flatten()
+    isa = "AVX-512" if "+avx512f" in features else "AVX2" if "+avx2" in features else "SSE"
+    native = os.environ.get("RNNPB_NATIVE_CPU") or host
+    numba = os.environ.get("NUMBA_CPU_NAME") or host
+    return (
+        f"processor {name or 'unknown'} ({host}, {isa}); native loops built for {native}, "
+        f"numba's code for {numba}"
+    )
 
 
 ROUTINE_LEARNED_DRAW = 201

@@ -379,7 +379,7 @@ class Teacher:
         """Swap ``mirror`` in between two steps, continuing the running interaction (its
         window, PB and what it has seen): the robot's command goes on smoothly."""
         running = self.loop.mirror
-        carry_on = getattr(mirror, "continue_from", None)  # the NumPy twin starts afresh
+        carry_on = getattr(mirror, "continue_from", None)  # a mirror without it starts afresh
         if running is not None and running is not mirror and carry_on is not None:
             carry_on(running)
         self.loop.mirror = mirror

@@ -4,7 +4,7 @@ Pure functions and their configs, with no I/O or clocks, except where a module s
 docstring: model files (``io.py``, as archives: ``archive.py``), the training driver's
 checkpoints and clock (``training.py``) and the clock of consolidation's history
 (``consolidation.py``).
-``reference.py`` is the NumPy twin the compiled code is held to.
+The float64 ``ReferenceMirrorSystem`` (``mirror.py``) is the twin the float32 step is held to.
 """
 
 from rnnpb.model.batched import BatchedMirror, run_streams
@@ -20,7 +20,7 @@ from rnnpb.model.consolidation import (
 from rnnpb.model.generation import Generated, generate
 from rnnpb.model.io import HistoryEntry, TrainedModel
 from rnnpb.model.learning import TrainConfig
-from rnnpb.model.mirror import MirrorSystem, StepResult
+from rnnpb.model.mirror import MIRROR_SYSTEMS, MirrorSystem, ReferenceMirrorSystem, StepResult
 from rnnpb.model.network import (
     NetworkConfig,
     Params,
@@ -32,7 +32,6 @@ from rnnpb.model.network import (
 )
 from rnnpb.model.online_config import OnlineConfig
 from rnnpb.model.parametric_bias import pb_update
-from rnnpb.model.reference import MIRROR_SYSTEMS, ReferenceMirrorSystem
 from rnnpb.model.routines import RoutineFollower, RoutineModel, TwoLevelMirror, learn_routines
 from rnnpb.model.training import TrainingProgress, train, train_seeds
 

@@ -2,14 +2,13 @@
 the same trained model (users, draws, seeds) in one step.
 
 Each session is what a :class:`rnnpb.model.MirrorSystem` of the same model and settings would
-be: its own window, PB, onset and recognition, started from its own initial PB. The compiled
-step is :func:`rnnpb.model.online.online_step` mapped over the sessions (``jax.vmap`` over the
-state and the observations; the weights, restarts and settings are shared) — with the native
-loop (:mod:`rnnpb.model.native`), its parts before and after the loop are, and the sessions'
-loops run between the two calls, a few to a kernel call — and its outputs come back to the
-host in one transfer, as a (B, packed) array; recognition then runs on the host for each
-session, as in ``MirrorSystem``. ``tests/model/test_batched.py`` holds it to
-``B`` separate mirror systems step by step.
+be: its own window, PB, onset and recognition, started from its own initial PB. The step is one
+call of :func:`rnnpb.model.online.step_sessions` for all sessions (the weights, restarts and
+settings shared), whose regression runs the sessions' windows a few at a time
+(:data:`rnnpb.model.online.GROUP`), each loaded weight serving all of them; the outputs come
+back as a (B, outputs) array, and recognition then runs on the host for each session, as in
+``MirrorSystem``. ``tests/model/test_batched.py`` holds it to ``B`` separate mirror systems
+step by step.
 
 :func:`run_streams` runs many recorded streams (the runs of an experiment) through a pool of
 batched sessions: a session that finishes its stream starts the next one afresh.
@@ -19,106 +18,20 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from functools import partial
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 
 from rnnpb.errors import ConfigError
 from rnnpb.model.io import TrainedModel
 from rnnpb.model.meta import MetaParams
-from rnnpb.model.mirror import (
-    MirrorSystem,
-    StepResult,
-    _conclude_packed,
-    _online_step_packed,
-    normalized_hands,
-)
-from rnnpb.model.native import step_start
-from rnnpb.model.network import Params
-from rnnpb.model.online import OnlineState, Regressed, initial_state
+from rnnpb.model.mirror import MirrorSystem, StepResult, normalized_hands
+from rnnpb.model.online import OnlineState, initial_state, step_sessions
 from rnnpb.model.online_config import OnlineConfig
 from rnnpb.model.recognition import (
     RecognitionConfig,
     RecognitionState,
     initial_recognition_state,
 )
-
-
-@partial(jax.jit, static_argnames=("config", "recognition_steps"))
-def _batched_step_packed(
-    params: Params,
-    states: OnlineState,
-    u: jax.Array,
-    seen: jax.Array,
-    config: OnlineConfig,
-    candidates: jax.Array | None,
-    phase_candidates: jax.Array | None,
-    meta: MetaParams | None,
-    pattern_rho: jax.Array | None,
-    recognition_steps: int,
-) -> tuple[OnlineState, jax.Array]:
-    """One step of every session: ``states`` with a leading session axis (B, ...), ``u`` and
-    ``seen`` (B, S); returns the states and the packed outputs (B, packed)."""
-
-    def one(state: OnlineState, u_b: jax.Array, seen_b: jax.Array) -> tuple[OnlineState, jax.Array]:
-        return _online_step_packed(
-            params,
-            state,
-            u_b,
-            seen_b,
-            config,
-            candidates,
-            phase_candidates,
-            meta,
-            pattern_rho,
-            recognition_steps,
-        )
-
-    return jax.vmap(one)(states, u, seen)
-
-
-@partial(jax.jit, static_argnames=("config",))
-def _batched_prepare(
-    params: Params,
-    states: OnlineState,
-    u: jax.Array,
-    seen: jax.Array,
-    config: OnlineConfig,
-    candidates: jax.Array | None,
-    phase_candidates: jax.Array | None,
-) -> tuple[OnlineState, jax.Array]:
-    """Every session's step before its regression, and its block for the native kernel
-    (:func:`rnnpb.model.native.prepare_block` mapped over the sessions)."""
-
-    def one(state: OnlineState, u_b: jax.Array, seen_b: jax.Array) -> tuple[OnlineState, jax.Array]:
-        return step_start(params, state, u_b, seen_b, config, candidates, phase_candidates)
-
-    return jax.vmap(one)(states, u, seen)
-
-
-@partial(jax.jit, static_argnames=("config", "recognition_steps"))
-def _batched_conclude(
-    params: Params,
-    previous: OnlineState,
-    states: OnlineState,
-    regressed: Regressed[np.ndarray],
-    config: OnlineConfig,
-    meta: MetaParams | None,
-    pattern_rho: jax.Array | None,
-    recognition_steps: int,
-) -> tuple[OnlineState, jax.Array]:
-    """Every session's step after its native regression; the packed outputs (B, packed)."""
-
-    def one(
-        before: OnlineState, state: OnlineState, result: Regressed[np.ndarray]
-    ) -> tuple[OnlineState, jax.Array]:
-        return _conclude_packed(
-            params, before, state, result, config, meta, pattern_rho, recognition_steps
-        )
-
-    return jax.vmap(one)(previous, states, regressed)
 
 
 class BatchedMirror:
@@ -138,8 +51,7 @@ class BatchedMirror:
         ``MirrorSystem``).
     native : bool
         As for ``MirrorSystem``: the sessions' regression loops in native code, a few
-        sessions to a kernel call, between two compiled calls for all sessions; False: the
-        whole step of every session in one compiled JAX call.
+        sessions to a kernel call (:data:`rnnpb.model.native.GROUP`).
     """
 
     def __init__(
@@ -185,7 +97,7 @@ class BatchedMirror:
                 )
             starts = list(pbs)
         states = [initial_state(self.model, self.config, pb) for pb in starts]
-        return jax.tree_util.tree_map(lambda *a: jnp.stack(a), *states)
+        return OnlineState(*(np.concatenate(parts) for parts in zip(*states, strict=True)))
 
     def reset(self, initial_pb: np.ndarray | None = None) -> None:
         """Forget every session's window: the next step starts new interactions
@@ -199,10 +111,7 @@ class BatchedMirror:
         """Start session ``index`` afresh (a new user); the others go on."""
         if not 0 <= index < self.sessions:
             raise ConfigError(f"session {index} does not exist: there are {self.sessions}")
-        fresh = initial_state(self.model, self.config, initial_pb)
-        self._states = jax.tree_util.tree_map(
-            lambda batch, one: batch.at[index].set(one), self._states, fresh
-        )
+        self._states.put(index, initial_state(self.model, self.config, initial_pb))
         self._recognition[index] = self._fresh_recognition()
         self._predicted[index] = None
 
@@ -234,34 +143,22 @@ class BatchedMirror:
         u = np.stack([h[0] for h in hands])
         seen = np.stack([h[1] for h in hands])
         shared = self._shared
-        arguments = (shared._params, self._states, u.astype(np.float32), seen, self.config)
-        native = shared._native
-        if native is not None and native.applies(shared._meta):
-            starts, blocks = _batched_prepare(
-                *arguments, shared._candidates, shared._phase_candidates
-            )
-            # The kernel runs the sessions' loops a few at a time (rnnpb.model.native.GROUP).
-            regressed = native.many(blocks, shared._meta)
-            self._states, packed = _batched_conclude(
-                shared._params,
-                self._states,
-                starts,
-                regressed,
-                self.config,
-                shared._meta,
-                shared._pattern_rho,
-                self.recognition.recognition_steps,
-            )
-        else:
-            self._states, packed = _batched_step_packed(
-                *arguments,
-                shared._candidates,
-                shared._phase_candidates,
-                shared._meta,
-                shared._pattern_rho,
-                self.recognition.recognition_steps,
-            )
-        packed = np.asarray(packed, dtype=np.float64)
+        out = np.empty((self.sessions, shared._layout.pattern_errors.stop), shared.dtype)
+        step_sessions(
+            shared._net,
+            shared._meta,
+            self._states,
+            u.astype(shared.dtype),
+            seen,
+            np.full(self.sessions, shared._guarded),
+            shared._candidates,
+            shared._phase_candidates,
+            shared._pattern_rho,
+            shared._settings,
+            out,
+            shared._native,
+        )
+        packed = out.astype(np.float64)
         results = []
         for b in range(self.sessions):
             result, self._recognition[b], self._predicted[b] = shared._finish(

@@ -388,9 +388,9 @@ def _runner(config: TrainConfig) -> ChunkRunner:
     """The native chunk (:mod:`rnnpb.model.native_learning`) where it runs, else the compiled
     JAX chunk: the reference, and what the native one falls back to."""
     compiled = _compiled_chunk(config)
-    from rnnpb.model import native, native_learning
+    from rnnpb.model import _ir, native_learning
 
-    if not native.enabled():
+    if not _ir.enabled():
         return compiled
     return native_learning.NativeChunk(config, compiled)
 

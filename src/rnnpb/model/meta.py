@@ -3,10 +3,10 @@ PB vector to the risk that the behaviour it generates is unsafe.
 
 "Another network is prepared which learns safe or unsafe regions in the PB space from
 experience. The network can be used to prevent the PB values from coming too close to the
-learned undesired regions." This module holds only the pure function of that network and the
-barrier it puts into eq. 1, so that the on-line step (:mod:`rnnpb.model.online`) can use it
-without knowing where its weights came from; :mod:`rnnpb.safety` learns the weights from the
-robot's experience and stores them.
+learned undesired regions." This module holds the pure function of that network (the barrier it
+puts into eq. 1 and the projection are the compiled step's: :mod:`rnnpb.model.equations`), so
+that the on-line step (:mod:`rnnpb.model.online`) can use it without knowing where its weights
+came from; :mod:`rnnpb.safety` learns the weights from the robot's experience and stores them.
 
 The network: ``risk_logit(p) = w3 · tanh(W2 tanh(W1 p + b1) + b2) + b3``; ``risk = σ(risk_logit)``.
 
@@ -27,8 +27,8 @@ from rnnpb.errors import ConfigError
 
 
 class MetaParams(NamedTuple):
-    """Weights of the risk network. Shapes: P PB, H hidden. JAX arrays for the compiled
-    step, NumPy arrays for the NumPy twin."""
+    """Weights of the risk network. Shapes: P PB, H hidden. JAX arrays for the JAX functions
+    below, NumPy arrays for the compiled step (:func:`rnnpb.model.online.meta_arrays`)."""
 
     w1: jax.Array | np.ndarray  # (P, H)
     b1: jax.Array | np.ndarray  # (H,)
@@ -53,32 +53,6 @@ def risk_logit(params: MetaParams, pb: jax.Array) -> jax.Array:
     hidden = jnp.tanh(pb @ params.w1 + params.b1)
     hidden = jnp.tanh(hidden @ params.w2 + params.b2)
     return hidden @ params.w3 + params.b3
-
-
-def barrier_energy(params: MetaParams, rho: jax.Array, level: float) -> jax.Array:
-    """The barrier term per step, summed over ``rho`` (L, P) (the PB's internal values)."""
-    excess = risk_logit(params, jax.nn.sigmoid(rho)) - jnp.log(level / (1.0 - level))
-    return jnp.sum(jax.nn.softplus(excess))
-
-
-def project_out(
-    params: MetaParams, rho: jax.Array, level: float, steps: int, rate: float
-) -> jax.Array:
-    """Move each PB of ``rho`` (..., P) down the risk gradient until its risk is below
-    ``level`` (at most ``steps`` gradient steps of size ``rate`` in ρ), the projection
-    alternative to the barrier."""
-    threshold = jnp.log(level / (1.0 - level))
-
-    def one(r: jax.Array) -> jax.Array:
-        def body(_, r):
-            value, grad = jax.value_and_grad(lambda x: risk_logit(params, jax.nn.sigmoid(x)))(r)
-            norm = jnp.sqrt(jnp.sum(grad**2)) + 1e-6
-            return jnp.where(value > threshold, r - rate * grad / norm, r)
-
-        return jax.lax.fori_loop(0, steps, body, r)
-
-    flat = rho.reshape(-1, rho.shape[-1])
-    return jax.vmap(one)(flat).reshape(rho.shape)
 
 
 # --- the meta-level on the host: regimes, steering and inhibition ------------------------------
@@ -113,7 +87,7 @@ def risk_numpy(params: MetaParams, pb: np.ndarray) -> float:
 
 class MetaLevel:
     """The meta-level's part of each on-line step (host side, for
-    :class:`rnnpb.model.MirrorSystem` and its NumPy twin).
+    :class:`rnnpb.model.MirrorSystem` and its float64 twin).
 
     ``steering``: ``"pb_driven"`` — the guard in the regression (``OnlineConfig.
     safety_guard``) acts only where the previous step was PB-driven (:data:`PB_DRIVEN`) and

@@ -1,40 +1,37 @@
 """The mirror system on the host: :class:`MirrorSystem` keeps the on-line state between steps
 and speaks raw units (hands in [0, 1], NaN where not seen; joint angles in radians).
 
-Each :meth:`MirrorSystem.step` is one call of the compiled :func:`rnnpb.model.online.online_step`
-and one transfer back from the device: the step's outputs come back packed into one vector,
-whose layout (:class:`PackedLayout`) is computed once from the network's sizes. The NumPy
-reference :class:`rnnpb.model.reference.ReferenceMirrorSystem` is its drop-in twin: same
-constructor, same :class:`StepResult`.
+Each :meth:`MirrorSystem.step` is one call of the compiled step,
+:func:`rnnpb.model.online.step_sessions`, in float32; its outputs come back as one row. The
+reference :class:`ReferenceMirrorSystem` is the same step in float64, its drop-in twin: same
+constructor, same :class:`StepResult`; :data:`MIRROR_SYSTEMS` names both.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from functools import partial
-from typing import NamedTuple, cast
+from typing import cast
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 from numpy.typing import ArrayLike
 
-from rnnpb import _xla
 from rnnpb.errors import ConfigError
 from rnnpb.model.io import TrainedModel
 from rnnpb.model.meta import MetaLevel, MetaParams, regime_of
-from rnnpb.model.native import NativeRegression, native_regression, prepare_block
-from rnnpb.model.network import NetworkConfig, Params, logit_numpy
+from rnnpb.model.native import NativeRegression, native_regression
+from rnnpb.model.network import logit_numpy
 from rnnpb.model.online import (
     OnlineState,
-    Regressed,
     StepOutputs,
-    conclude,
     initial_state,
-    online_step,
+    meta_arrays,
+    network_arrays,
+    output_layout,
     phase_candidates,
     restart_candidates,
+    settings_for,
+    step_sessions,
 )
 from rnnpb.model.online_config import OnlineConfig, suggested_online_config
 from rnnpb.model.recognition import (
@@ -114,95 +111,6 @@ class StepResult:
     generated: np.ndarray | None = None
 
 
-class PackedLayout(NamedTuple):
-    """Where each of :class:`rnnpb.model.online.StepOutputs` sits in the one vector the
-    compiled step hands back: the fields in the same order, each a slice of the vector."""
-
-    motor: slice  # (M,)
-    predicted_sensory: slice  # (S,)
-    pb: slice  # (P,)
-    window_error: slice  # (1,)
-    held: slice  # (1,) 1.0 when held
-    context: slice  # (C,)
-    pattern_errors: slice  # (K,)
-
-    @classmethod
-    def for_network(cls, network: NetworkConfig, patterns: int = 0) -> PackedLayout:
-        """The layout for a network's sizes and ``patterns`` learned patterns (K)."""
-        sizes = {
-            "motor": network.motor_size,
-            "predicted_sensory": network.sensory_size,
-            "pb": network.pb_size,
-            "window_error": 1,
-            "held": 1,
-            "context": network.context_size,
-            "pattern_errors": patterns,
-        }
-        parts, start = {}, 0
-        for name in cls._fields:
-            parts[name] = slice(start, start + sizes[name])
-            start += sizes[name]
-        return cls(**parts)
-
-    def unpack(self, packed: np.ndarray) -> StepOutputs[np.ndarray]:
-        """The packed vector (host side) back into named outputs."""
-        return StepOutputs(*(packed[part] for part in self))
-
-
-def pack(outputs: StepOutputs[jax.Array]) -> jax.Array:
-    """The outputs of a step as one float32 vector, in :class:`PackedLayout`'s order."""
-    return jnp.concatenate([jnp.reshape(value, (-1,)).astype(jnp.float32) for value in outputs])
-
-
-@partial(jax.jit, static_argnames=("config", "recognition_steps"))
-def _online_step_packed(
-    params: Params,
-    state: OnlineState,
-    u: jax.Array,
-    seen: jax.Array,
-    config: OnlineConfig,
-    candidates: jax.Array | None = None,
-    phase_candidates: jax.Array | None = None,
-    meta: MetaParams | None = None,
-    pattern_rho: jax.Array | None = None,
-    recognition_steps: int = 12,
-) -> tuple[OnlineState, jax.Array]:
-    """:func:`online_step` with its outputs packed into one vector, so that they come back in
-    one transfer."""
-    state, outputs = online_step(
-        params,
-        state,
-        u,
-        seen,
-        config,
-        candidates,
-        phase_candidates,
-        meta,
-        pattern_rho,
-        recognition_steps,
-    )
-    return state, pack(outputs)
-
-
-@partial(jax.jit, static_argnames=("config", "recognition_steps"))
-def _conclude_packed(
-    params: Params,
-    previous: OnlineState,
-    state: OnlineState,
-    regressed: Regressed[jax.Array] | Regressed[np.ndarray],
-    config: OnlineConfig,
-    meta: MetaParams | None = None,
-    pattern_rho: jax.Array | None = None,
-    recognition_steps: int = 12,
-) -> tuple[OnlineState, jax.Array]:
-    """:func:`rnnpb.model.online.conclude` with its outputs packed into one vector: the step
-    after a native regression (:mod:`rnnpb.model.native`)."""
-    state, outputs = conclude(
-        params, previous, state, regressed, config, meta, pattern_rho, recognition_steps
-    )
-    return state, pack(outputs)
-
-
 def normalized_hands(values: object, sensory_size: int) -> tuple[np.ndarray, np.ndarray]:
     """Check a step's observed hands; return them normalized (clipped to [0, 1], 0 where not
     seen), shape (S,), and which were seen (finite), shape (S,)."""
@@ -270,6 +178,9 @@ class MirrorSystem:
     >>> result.motor, result.pb, result.predicted_hands    # doctest: +SKIP
     """
 
+    dtype: type = np.float32
+    """The precision the step computes in: float32; float64 for :class:`ReferenceMirrorSystem`."""
+
     def __init__(
         self,
         model: TrainedModel,
@@ -289,43 +200,43 @@ class MirrorSystem:
         only with ``meta``). The defaults keep the guard at every step and never inhibit;
         ``rnnpb.safety.online_safety`` gives the meta-level's (``"pb_driven"``, True).
         ``native``: the regression's loop in native code where it can run
-        (:mod:`rnnpb.model.native`); False keeps the whole step in compiled JAX, the reference
-        the native loop is held to."""
-        _xla.warn_if_not_configured()  # once per process, if nobody chose XLA's loop setting
+        (:mod:`rnnpb.model.native`, float32 only); False keeps it in the compiled step, the
+        loop the native one is held to."""
         self.model = model
         self.config = config or OnlineConfig()
         self.recognition = recognition or suggested_online_config(model).recognition
         self.patterns = tuple(model.pattern_pb)
         self._learned_pb = np.array([model.pattern_pb[name] for name in self.patterns])
         self._taught = taught_stretches(model.taught_hands or {}, self.patterns, self.recognition)
-        self._layout = PackedLayout.for_network(model.network, len(self.patterns))
-        self._pattern_rho = jnp.asarray(restart_candidates(model), jnp.float32)
+        net, dtype = model.network, self.dtype
+        self._layout = output_layout(
+            net.sensory_size, net.motor_size, net.pb_size, net.context_size, len(self.patterns)
+        )
         self._recognition = initial_recognition_state(
-            model.network.sensory_size, model.network.pb_size, self.recognition
+            net.sensory_size, net.pb_size, self.recognition
         )
-        self._params = jax.tree_util.tree_map(lambda a: jnp.asarray(a, jnp.float32), model.params)
-        self._state = initial_state(model, self.config)
-        # The last prediction of the hands, kept on the host: the next step's prediction error
-        # is measured against it without a transfer from the device.
+        self._net = network_arrays(model.params, net.sensory_size, net.motor_size, dtype)
+        self._settings = settings_for(self.config, dtype, self.recognition.recognition_steps)
+        self._state = initial_state(model, self.config, dtype=dtype)
+        # The last prediction of the hands: the next step's prediction error is measured
+        # against it.
         self._predicted: np.ndarray | None = None
-        self._candidates = None
+        none = np.zeros((0, net.pb_size), dtype)
+        self._candidates = none
         if self.config.restart_span > 0:
-            self._candidates = jnp.asarray(restart_candidates(model), jnp.float32)
-        self._phase_candidates = None
+            self._candidates = restart_candidates(model).astype(dtype)
+        self._phase_candidates = np.zeros((0, net.pb_size + net.motor_size + net.context_size))
         if self.config.phase_restarts > 0:
-            self._phase_candidates = jnp.asarray(phase_candidates(model), jnp.float32)
-        self._meta = (
-            None if meta is None else MetaParams(*(jnp.asarray(a, jnp.float32) for a in meta))
-        )
+            self._phase_candidates = phase_candidates(model)
+        self._phase_candidates = self._phase_candidates.astype(dtype)
+        self._pattern_rho = restart_candidates(model).astype(dtype)
+        self._meta = meta_arrays(meta, net.pb_size, dtype)
+        self._guarded = meta is not None
+        self._native: NativeRegression | None = None
+        if native and dtype == np.float32:
+            self._native = native_regression(model.params, net, self.config, meta)
         self.meta_level = (
             None if meta is None else MetaLevel(meta, self.config.risk_level, steering, inhibition)
-        )
-        # The regression's loop in native code where it can run (rnnpb.model.native); None:
-        # the whole step is the compiled JAX one.
-        self._native: NativeRegression | None = (
-            native_regression(self._params, model.network, self.config, self._meta)
-            if native
-            else None
         )
         self.steps = 0
 
@@ -349,7 +260,7 @@ class MirrorSystem:
 
     def reset(self, initial_pb: np.ndarray | None = None) -> None:
         """Forget the window: the next step starts a new interaction."""
-        self._state = initial_state(self.model, self.config, initial_pb)
+        self._state = initial_state(self.model, self.config, initial_pb, self.dtype)
         self._predicted = None
         self._recognition = initial_recognition_state(
             self.model.network.sensory_size, self.model.network.pb_size, self.recognition
@@ -373,7 +284,10 @@ class MirrorSystem:
         if not same_shape:
             self.reset()
             return False
-        self._state = theirs  # immutable device arrays: both may step on from here
+        # A copy: each steps on from here with its own state.
+        self._state = OnlineState(
+            *(np.array(part, dtype=a.dtype) for part, a in zip(theirs, mine, strict=True))
+        )
         self._predicted = None if other._predicted is None else other._predicted.copy()
         fresh = initial_recognition_state(
             self.model.network.sensory_size, self.model.network.pb_size, self.recognition
@@ -397,14 +311,27 @@ class MirrorSystem:
     @property
     def pb(self) -> np.ndarray:
         """The current PB, shape (P,)."""
-        n = int(self._state.n)
-        return np.asarray(jax.nn.sigmoid(self._state.rho[max(n - 1, 0)]), dtype=np.float64)
+        n = int(self._state.n[0])
+        return 1.0 / (1.0 + np.exp(-self._state.rho[0, max(n - 1, 0)].astype(np.float64)))
 
     @property
     def pb_profile(self) -> np.ndarray:
         """The PB over the filled part of the window, shape (n, P)."""
-        n = int(self._state.n)
-        return np.asarray(jax.nn.sigmoid(self._state.rho[:n]), dtype=np.float64)
+        n = int(self._state.n[0])
+        return 1.0 / (1.0 + np.exp(-self._state.rho[0, :n].astype(np.float64)))
+
+    def _candidates_with(self, prior_pb: np.ndarray | None) -> np.ndarray:
+        """The restarts' PBs, with ``prior_pb`` (checked) as one more."""
+        candidates = self._candidates
+        if prior_pb is not None and len(candidates):
+            prior = np.clip(np.asarray(prior_pb, dtype=np.float64).reshape(-1), 0.0, 1.0)
+            if prior.shape != (self.model.network.pb_size,) or not np.isfinite(prior).all():
+                raise ConfigError(
+                    f"prior PB must be {self.model.network.pb_size} finite values, got "
+                    f"{np.shape(prior_pb)}"
+                )
+            candidates = np.concatenate([candidates, logit_numpy(prior)[None].astype(self.dtype)])
+        return candidates
 
     def step(self, observed_hands: np.ndarray, prior_pb: np.ndarray | None = None) -> StepResult:
         """Observe the user's hands for this step; regress the PB; return the motor command.
@@ -421,45 +348,26 @@ class MirrorSystem:
             patterns' PBs; the window's evidence decides whether it is taken. Without it (or
             with ``restart_span`` 0) the step is exactly the plain one.
         """
-        candidates = self._candidates
-        if prior_pb is not None and candidates is not None:
-            prior = np.clip(np.asarray(prior_pb, dtype=np.float64).reshape(-1), 0.0, 1.0)
-            if prior.shape != (self.model.network.pb_size,) or not np.isfinite(prior).all():
-                raise ConfigError(
-                    f"prior PB must be {self.model.network.pb_size} finite values, got "
-                    f"{np.shape(prior_pb)}"
-                )
-            candidates = jnp.concatenate(
-                [candidates, jnp.asarray(logit_numpy(prior)[None], jnp.float32)]
-            )
+        candidates = self._candidates_with(prior_pb)
         u, seen = normalized_hands(observed_hands, self.model.network.sensory_size)
-        # NumPy inputs go to the compiled step as they are and all outputs come back in one
-        # transfer: at a few milliseconds a step, per-array round trips are worth avoiding.
-        meta = self._meta if self.meta_level is None or self.meta_level.steers() else None
-        arguments = (self._params, self._state, u.astype(np.float32), seen, self.config)
-        if self._native is not None and self._native.applies(meta):
-            start, block = prepare_block(*arguments, candidates, self._phase_candidates)
-            self._state, packed = _conclude_packed(
-                self._params,
-                self._state,
-                start,
-                self._native(block, meta),
-                self.config,
-                meta,
-                self._pattern_rho,
-                self.recognition.recognition_steps,
-            )
-        else:
-            self._state, packed = _online_step_packed(
-                *arguments,
-                candidates,
-                self._phase_candidates,
-                meta,
-                self._pattern_rho,
-                self.recognition.recognition_steps,
-            )
+        steers = self.meta_level is None or self.meta_level.steers()
+        out = np.empty((1, self._layout.pattern_errors.stop), self.dtype)
+        step_sessions(
+            self._net,
+            self._meta,
+            self._state,
+            u[None].astype(self.dtype),
+            seen[None],
+            np.array([self._guarded and steers]),
+            candidates,
+            self._phase_candidates,
+            self._pattern_rho,
+            self._settings,
+            out,
+            self._native,
+        )
         result, self._recognition, self._predicted = self._finish(
-            np.asarray(packed, dtype=np.float64), u, seen, self._recognition, self._predicted
+            out[0].astype(np.float64), u, seen, self._recognition, self._predicted
         )
         if self.meta_level is not None:
             motor, why = self.meta_level.inhibit(result.regime, result.pb, result.motor)
@@ -479,7 +387,7 @@ class MirrorSystem:
         """The host side of a step, from its packed outputs (one session's row): the
         prediction error, recognition and the result in raw units; returns the result, the
         recognition state and the prediction to measure the next step against."""
-        outputs = self._layout.unpack(packed)
+        outputs = StepOutputs(*(packed[part] for part in self._layout))
         prediction_error = one_step_prediction_error(predicted, u, seen)
         recognition, seen_now = recognise(
             recognition,
@@ -510,3 +418,18 @@ class MirrorSystem:
             repeating=seen_now.repeating,
         )
         return result, recognition, outputs.predicted_sensory
+
+
+class ReferenceMirrorSystem(MirrorSystem):
+    """:class:`MirrorSystem` in float64: the same step, the reference the float32 one is held
+    to (its drop-in twin: same constructor, same :meth:`step`, :meth:`reset`, :attr:`pb`,
+    :attr:`pb_profile` and :attr:`steps`)."""
+
+    dtype = np.float64
+
+
+#: The mirror system's twins by name, so that a test or the bench swaps one for the other.
+MIRROR_SYSTEMS: dict[str, type[MirrorSystem]] = {
+    "compiled": MirrorSystem,
+    "reference": ReferenceMirrorSystem,
+}

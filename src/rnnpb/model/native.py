@@ -1,23 +1,23 @@
-"""The on-line regression's loop as native code: a drop-in twin of the loop in
-:func:`rnnpb.model.online.online_step` (``rnnpb bench`` and ``benchmarks/native_loop.py`` time
+"""The on-line regression's loop as native code: the fast twin of the loop of
+:func:`rnnpb.model.online.step_sessions` (``rnnpb bench`` and ``benchmarks/native_loop.py`` time
 the two side by side).
 
-The loop — ``iterations`` times the window's forward and backward pass (:mod:`rnnpb.model.window`),
-the PB update of eqs. 1–2 (:func:`rnnpb.model.parametric_bias.pb_update`) and the onset's step —
-is written here in LLVM's intermediate language with explicit 8-wide vectors and compiled at run
-time for the machine's processor by llvmlite (a wheel with LLVM inside: no C compiler). The sums
-of each layer's products stay in vector registers through the products' loops, which XLA's code
-for the same loop does not manage; the sigmoid is a rational function (the form Eigen gives
-``tanh``), within 2e-7 of the exact one.
+The loop — ``iterations`` times the window's forward and backward pass, the PB update of eqs.
+1–2 and the onset's step (:mod:`rnnpb.model.equations`) — is written here in LLVM's
+intermediate language with explicit 8-wide vectors and compiled at run time for the machine's
+processor by llvmlite. The sums of each layer's products stay in vector registers through the
+products' loops, which the compiled Python of :mod:`rnnpb.model.equations` does not manage
+(it keeps them in memory between inputs: docs/model.md, "Speed"); the sigmoid is the same
+rational function as :func:`rnnpb.model.equations.unit`.
 
-Everything before and after the loop — the new observation, the restarts, the surprise gate, the
-outputs, recognition's evidence — stays the compiled JAX code of :mod:`rnnpb.model.online`
-(:func:`rnnpb.model.online.prepare` and :func:`rnnpb.model.online.conclude`): one step is a
-compiled call, the kernel, and a compiled call. The safety barrier's gradient (the risk network of
+Everything before and after the loop — the new observation, the restarts, the surprise gate,
+the outputs, recognition's evidence — is the compiled step of :mod:`rnnpb.model.online`, which
+also fills each session's block for this kernel (:func:`rnnpb.model.online.fill_blocks`) and
+takes its results back. The safety barrier's gradient (the risk network of
 :mod:`rnnpb.model.meta` on the window's newest steps) is in the kernel too, for the risk
-network it was built with. The pure-JAX step is the reference and the fallback: it runs where
-llvmlite is missing or ``RNNPB_NATIVE=0`` asks for it. ``tests/model/test_native.py`` holds the
-two together.
+network it was built with. The step's own loop is the reference and the fallback: it runs
+where llvmlite is missing or ``RNNPB_NATIVE=0`` asks for it. ``tests/model/test_native.py``
+holds the two together.
 
 Layouts (all float32): every row is padded to a whole number of 8-wide vectors — ``HP`` for the
 hidden layer (H), ``IP`` for the inputs and outputs with the context (``I + C``), ``PP`` for the
@@ -27,48 +27,32 @@ PB (P); the padding's weights are 0, so it changes nothing.
 from __future__ import annotations
 
 import ctypes
-import hashlib
-import importlib
-import os
-import struct
 import threading
 import warnings
-from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 
+from rnnpb.model._ir import (
+    V,
+    _Emitter,
+    _offsets,
+    _padded,
+    _pb_update,
+    _vector_constant,
+    build,
+    enabled,
+    module,
+)
 from rnnpb.model.meta import MetaParams
 from rnnpb.model.network import NetworkConfig, Params
-from rnnpb.model.online import OnlineState, Regressed, prepare
 from rnnpb.model.online_config import OnlineConfig
 
-V = "<8 x float>"
-# tanh(t) ~ t * P(t^2) / Q(t^2) on [-7.9, 7.9] (Eigen's float tanh); sigmoid(x) = 0.5 +
-# 0.5 * tanh(x / 2).
-_TANH_P = (
-    -2.76076847742355e-16,
-    2.00018790482477e-13,
-    -8.60467152213735e-11,
-    5.12229709037114e-08,
-    1.48572235717979e-05,
-    6.37261928875436e-04,
-    4.89352455891786e-03,
-)
-_TANH_Q = (1.19825839466702e-06, 1.18534705686654e-04, 2.26843463243900e-03, 4.89352518554385e-03)
-_TANH_CLAMP = 7.90531110763549805
 # Sessions regressed together by one kernel call (NativeRegression.many): each weight vector
 # loaded serves all of them.
 GROUP = 4
 _SCALARS = 8  # the weights block opens with the PB update's coefficients (see _weights_block)
-
-
-def _padded(n: int) -> int:
-    return 8 * -(-n // 8)
 
 
 @dataclass(frozen=True)
@@ -173,168 +157,7 @@ class Shapes:
         }
 
 
-def _offsets(parts: dict[str, int]) -> dict[str, tuple[int, int]]:
-    layout, offset = {}, 0
-    for name, size in parts.items():
-        layout[name] = (offset, size)
-        offset += size
-    layout["total"] = (offset, 0)
-    return layout
-
-
 # --- the intermediate language ------------------------------------------------------------
-
-
-def _vector_constant(value: float) -> str:
-    """An <8 x float> constant (LLVM writes floats as the hex of their double)."""
-    return "<" + ", ".join([f"float {_float(value)}"] * 8) + ">"
-
-
-def _float(value: float) -> str:
-    bits = struct.unpack(">Q", struct.pack(">d", float(np.float32(value))))[0]
-    return f"0x{bits:016X}"
-
-
-class _Emitter:
-    """Builds one function's body: unique names, blocks, counted loops with carried values."""
-
-    def __init__(self) -> None:
-        self.lines: list[str] = []
-        self.count = 0
-        self.current = "entry"
-
-    def name(self, stem: str) -> str:
-        self.count += 1
-        return f"%{stem}.{self.count}"
-
-    def label(self, stem: str) -> str:
-        self.count += 1
-        return f"{stem}.{self.count}"
-
-    def emit(self, line: str) -> None:
-        self.lines.append("  " + line)
-
-    def block(self, label: str) -> None:
-        self.lines.append(f"{label}:")
-        self.current = label
-
-    def op(self, stem: str, expression: str) -> str:
-        result = self.name(stem)
-        self.emit(f"{result} = {expression}")
-        return result
-
-    # vectors
-    def fmul(self, a: str, b: str) -> str:
-        return self.op("m", f"fmul fast {V} {a}, {b}")
-
-    def fadd(self, a: str, b: str) -> str:
-        return self.op("a", f"fadd fast {V} {a}, {b}")
-
-    def fsub(self, a: str, b: str) -> str:
-        return self.op("s", f"fsub fast {V} {a}, {b}")
-
-    def fma(self, a: str, b: str, c: str) -> str:
-        return self.op("f", f"call fast {V} @llvm.fma.v8f32({V} {a}, {V} {b}, {V} {c})")
-
-    def address(self, base: str, index: str | int) -> str:
-        return self.op("p", f"getelementptr inbounds float, ptr {base}, i64 {index}")
-
-    def load(self, base: str, index: str | int) -> str:
-        return self.op("v", f"load {V}, ptr {self.address(base, index)}, align 4")
-
-    def load_scalar(self, base: str, index: str | int) -> str:
-        return self.op("x", f"load float, ptr {self.address(base, index)}, align 4")
-
-    def store(self, value: str, base: str, index: str | int) -> None:
-        self.emit(f"store {V} {value}, ptr {self.address(base, index)}, align 4")
-
-    def broadcast(self, scalar: str) -> str:
-        first = self.op("b", f"insertelement {V} undef, float {scalar}, i32 0")
-        return self.op("b", f"shufflevector {V} {first}, {V} undef, <8 x i32> zeroinitializer")
-
-    def int_op(self, stem: str, operation: str, a: str | int, b: str | int) -> str:
-        return self.op(stem, f"{operation} i64 {a}, {b}")
-
-    def one_minus(self, x: str) -> str:
-        return self.fsub(_vector_constant(1.0), x)
-
-    def sigmoid(self, x: str) -> str:
-        half = _vector_constant(0.5)
-        t = self.fmul(x, half)
-        t = self.op(
-            "c", f"call fast {V} @llvm.minnum.v8f32({V} {t}, {V} {_vector_constant(_TANH_CLAMP)})"
-        )
-        t = self.op(
-            "c", f"call fast {V} @llvm.maxnum.v8f32({V} {t}, {V} {_vector_constant(-_TANH_CLAMP)})"
-        )
-        t2 = self.fmul(t, t)
-        polynomials = []
-        for coefficients in (_TANH_P, _TANH_Q):
-            value = _vector_constant(coefficients[0])
-            for c in coefficients[1:]:
-                value = self.fma(t2, value, _vector_constant(c))
-            polynomials.append(value)
-        ratio = self.op("d", f"fdiv fast {V} {self.fmul(t, polynomials[0])}, {polynomials[1]}")
-        return self.fma(ratio, half, half)
-
-    def tanh(self, x: str) -> str:
-        """tanh(x) = 2 sigmoid(2x) - 1."""
-        value = self.sigmoid(self.fmul(x, _vector_constant(2.0)))
-        return self.fma(value, _vector_constant(2.0), _vector_constant(-1.0))
-
-    def loop(self, count: str | int, carried: list[str], body: Any) -> list[str]:
-        """A counted loop ``for i in range(count)`` (``count`` ≥ 1) whose ``body(i, values)``
-        emits its code and returns the carried vectors' next values; returns their last."""
-        before = self.current
-        head, end = self.label("loop"), self.label("done")
-        i, following = self.name("i"), self.name("i")
-        self.emit(f"br label %{head}")
-        self.block(head)
-        phi_at = len(self.lines)
-        values = [self.name("phi") for _ in carried]
-        updated = body(i, values)
-        latch = self.current
-        phis = [f"  {i} = phi i64 [0, %{before}], [{following}, %{latch}]"]
-        phis += [
-            f"  {v} = phi {V} [{start}, %{before}], [{new}, %{latch}]"
-            for v, start, new in zip(values, carried, updated, strict=True)
-        ]
-        self.lines[phi_at:phi_at] = phis
-        self.emit(f"{following} = add i64 {i}, 1")
-        finished = self.op("e", f"icmp eq i64 {following}, {count}")
-        self.emit(f"br i1 {finished}, label %{end}, label %{head}")
-        self.block(end)
-        return updated
-
-    def products(
-        self,
-        sums: list[list[str]],
-        count: int,
-        scalars: Sequence[tuple[str, str | int]],
-        weights: str,
-        width: int,
-    ) -> list[list[str]]:
-        """For each session ``g``: ``sums[g][v] + Σ_k x_g[start_g + k] · weights[k, 8v : 8v
-        + 8]`` for ``k < count``, where ``scalars[g]`` is ``(x_g, start_g)``; the sums held in
-        registers through the loop, each weight vector loaded once for every session."""
-        group, vectors = len(sums), len(sums[0])
-
-        def body(k: str, flat: list[str]) -> list[str]:
-            current = [flat[g * vectors : (g + 1) * vectors] for g in range(group)]
-            factors = [
-                self.broadcast(self.load_scalar(base, self.int_op("k", "add", start, k)))
-                for base, start in scalars
-            ]
-            row = self.int_op("r", "mul", k, width)
-            updated = [list(values) for values in current]
-            for v in range(vectors):
-                weight = self.load(weights, self.int_op("w", "add", row, 8 * v))
-                for g in range(group):
-                    updated[g][v] = self.fma(factors[g], weight, current[g][v])
-            return [value for values in updated for value in values]
-
-        flat = self.loop(count, [value for values in sums for value in values], body)
-        return [flat[g * vectors : (g + 1) * vectors] for g in range(group)]
 
 
 def regression_ir(shapes: Shapes, group: int = 1) -> str:
@@ -396,7 +219,9 @@ def regression_ir(shapes: Shapes, group: int = 1) -> str:
             sums = [
                 [e.load(b[g]["fixed"], row_index(t, hp, v)) for v in range(hv)] for g in sessions
             ]
-            sums = e.products(sums, p, [(s[g]["pb"], pb_row) for g in sessions], w["w_p"], hp)
+            sums = e.products(
+                sums, p, [(s[g]["pb"], pb_row) for g in sessions], w["w_p"], hp, chains=2
+            )
             # the recurrent input: the first input at t = 0, else the last output; masked
             first_step = e.op("z", f"icmp eq i64 {t}, 0")
             previous = e.int_op("y", "mul", e.int_op("y", "sub", t, 1), ip)
@@ -409,7 +234,9 @@ def regression_ir(shapes: Shapes, group: int = 1) -> str:
                     value = e.load(source, e.int_op("y", "add", previous, 8 * v))
                     mask = e.load(b[g]["mask"], row_index(t, ip, v))
                     e.store(e.fmul(value, mask), s[g]["x"], 8 * v)
-            sums = e.products(sums, io, [(s[g]["x"], 0) for g in sessions], w["w_loop"], hp)
+            sums = e.products(
+                sums, io, [(s[g]["x"], 0) for g in sessions], w["w_loop"], hp, chains=2
+            )
             hidden_row = e.int_op("h", "mul", t, hp)
             for g in sessions:
                 for v, total in enumerate(sums[g]):
@@ -422,6 +249,7 @@ def regression_ir(shapes: Shapes, group: int = 1) -> str:
                 [(s[g]["hid"], hidden_row) for g in sessions],
                 w["w_out"],
                 ip,
+                chains=2,
             )
             for g in sessions:
                 for v, total in enumerate(outputs[g]):
@@ -449,6 +277,7 @@ def regression_ir(shapes: Shapes, group: int = 1) -> str:
                 [(s[g]["g"], 0) for g in sessions],
                 w["w_out_t"],
                 hp,
+                chains=2,
             )
             hidden_row = e.int_op("h", "mul", t, hp)
             for g in sessions:
@@ -456,7 +285,7 @@ def regression_ir(shapes: Shapes, group: int = 1) -> str:
                     hid = e.load(s[g]["hid"], e.int_op("h", "add", hidden_row, 8 * v))
                     e.store(e.fmul(total, e.fmul(hid, e.one_minus(hid))), s[g]["dh"], 8 * v)
             errors = [(s[g]["dh"], 0) for g in sessions]
-            d_pb = e.products([[zero] * pv for _ in sessions], h, errors, w["w_p_t"], pp)
+            d_pb = e.products([[zero] * pv for _ in sessions], h, errors, w["w_p_t"], pp, chains=2)
             pb_row = e.int_op("q", "mul", t, pp)
             for g in sessions:
                 for v, total in enumerate(d_pb[g]):
@@ -464,7 +293,9 @@ def regression_ir(shapes: Shapes, group: int = 1) -> str:
                     pb = e.load(s[g]["pb"], index)
                     gradient = e.fmul(total, e.fmul(pb, e.one_minus(pb)))
                     e.store(e.fmul(gradient, minus_gate[g]), s[g]["grad"], index)
-            d_input = e.products([[zero] * iv for _ in sessions], h, errors, w["w_loop_t"], ip)
+            d_input = e.products(
+                [[zero] * iv for _ in sessions], h, errors, w["w_loop_t"], ip, chains=2
+            )
             return [value for values in d_input for value in values]
 
         d_first = grouped(e.loop(length, [zero] * (iv * group), backward), iv)
@@ -488,26 +319,6 @@ def regression_ir(shapes: Shapes, group: int = 1) -> str:
         "regress(i64 %iterations, i64 %half, ptr noalias %weights, ptr noalias %blocks, "
         "ptr noalias %scratch)",
         e,
-    )
-
-
-def module(signature: str, e: _Emitter) -> str:
-    """A module of one function, ``void @signature``, whose body ``e`` holds (its return
-    added), with the intrinsics the emitter's code calls declared."""
-    e.emit("ret void")
-    return "\n".join(
-        [
-            f"declare {V} @llvm.minnum.v8f32({V}, {V})",
-            f"declare {V} @llvm.maxnum.v8f32({V}, {V})",
-            f"declare {V} @llvm.fma.v8f32({V}, {V}, {V})",
-            f"declare {V} @llvm.sqrt.v8f32({V})",
-            f"declare float @llvm.vector.reduce.fadd.v8f32(float, {V})",
-            "declare <8 x i32> @llvm.fshl.v8i32(<8 x i32>, <8 x i32>, <8 x i32>)",
-            f"define void @{signature} {{",
-            "entry:",
-            *e.lines,
-            "}",
-        ]
     )
 
 
@@ -579,83 +390,6 @@ def _barrier(
     e.block(after)
 
 
-def _pb_update(
-    e: _Emitter,
-    s: dict[str, str],
-    b: dict[str, str],
-    coefficient: dict[str, str],
-    n: str,
-    pv: int,
-    pp: int,
-) -> None:
-    """Eqs. 1–2 over the window's ``n`` valid steps (:func:`rnnpb.model.parametric_bias.
-    pb_update`): the error term summed over the integration length by a cumulative sum, the
-    second difference held flat at the ends, momentum."""
-    zero = "zeroinitializer"
-    for v in range(pv):
-        e.store(zero, s["cum"], 8 * v)
-
-    def cumulate(t: str, running: list[str]) -> list[str]:
-        row = e.int_op("q", "mul", t, pp)
-        following = e.int_op("q", "add", row, pp)
-        updated = []
-        for v in range(pv):
-            total = e.fadd(running[v], e.load(s["grad"], e.int_op("q", "add", row, 8 * v)))
-            e.store(total, s["cum"], e.int_op("q", "add", following, 8 * v))
-            updated.append(total)
-        return updated
-
-    e.loop(n, [zero] * pv, cumulate)
-
-    def update(t: str, _: list[str]) -> list[str]:
-        upper = e.int_op("u", "add", t, "%half")
-        upper = e.int_op("u", "add", upper, 1)
-        upper = e.op(
-            "u", f"select i1 {e.op('u', f'icmp slt i64 {upper}, {n}')}, i64 {upper}, i64 {n}"
-        )
-        lower = e.int_op("u", "sub", t, "%half")
-        lower = e.op("u", f"select i1 {e.op('u', f'icmp sgt i64 {lower}, 0')}, i64 {lower}, i64 0")
-        before = e.int_op("u", "sub", t, 1)
-        before = e.op("u", f"select i1 {e.op('u', f'icmp eq i64 {t}, 0')}, i64 0, i64 {before}")
-        after = e.int_op("u", "add", t, 1)
-        after = e.op(
-            "u", f"select i1 {e.op('u', f'icmp slt i64 {after}, {n}')}, i64 {after}, i64 {t}"
-        )
-        rows = {
-            name: e.int_op("u", "mul", index, pp)
-            for name, index in (
-                ("t", t),
-                ("upper", upper),
-                ("lower", lower),
-                ("before", before),
-                ("after", after),
-            )
-        }
-        for v in range(pv):
-            at = {name: e.int_op("u", "add", row, 8 * v) for name, row in rows.items()}
-            integral = e.fsub(e.load(s["cum"], at["upper"]), e.load(s["cum"], at["lower"]))
-            rho = e.load(b["rho"], at["t"])
-            smooth = e.fadd(e.load(b["rho"], at["after"]), e.load(b["rho"], at["before"]))
-            smooth = e.fsub(smooth, e.fadd(rho, rho))
-            delta = e.fma(coefficient["k_nb"], smooth, e.fmul(coefficient["k_bp"], integral))
-            velocity = e.fmul(coefficient["momentum"], e.load(b["velocity"], at["t"]))
-            velocity = e.fma(coefficient["rate"], delta, velocity)
-            e.store(velocity, b["velocity"], at["t"])
-            e.store(e.fadd(rho, velocity), s["rnew"], at["t"])
-        return []
-
-    e.loop(n, [], update)
-
-    def copy(t: str, _: list[str]) -> list[str]:
-        row = e.int_op("q", "mul", t, pp)
-        for v in range(pv):
-            index = e.int_op("q", "add", row, 8 * v)
-            e.store(e.load(s["rnew"], index), b["rho"], index)
-        return []
-
-    e.loop(n, [], copy)
-
-
 # --- compiling and calling ---------------------------------------------------------------
 
 _compiled: dict[tuple[Shapes, int], tuple[Any, Any]] = {}
@@ -663,17 +397,6 @@ _compile_lock = threading.Lock()
 _SIGNATURE = ctypes.CFUNCTYPE(
     None, ctypes.c_int64, ctypes.c_int64, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p
 )
-
-
-def enabled() -> bool:
-    """Whether the native loop runs: llvmlite importable and ``RNNPB_NATIVE`` not ``0``."""
-    if os.environ.get("RNNPB_NATIVE", "1") == "0":
-        return False
-    try:
-        importlib.import_module("llvmlite.binding")
-    except ImportError:
-        return False
-    return True
 
 
 def compiled(shapes: Shapes, group: int = 1) -> Any:
@@ -685,95 +408,6 @@ def compiled(shapes: Shapes, group: int = 1) -> Any:
         if key not in _compiled:
             _compiled[key] = build(regression_ir(shapes, group), "regress", _SIGNATURE)
         return _compiled[key][0]
-
-
-def build(ir: str, name: str, signature: Any) -> tuple[Any, Any]:
-    """The function ``name`` of the module ``ir``, compiled for this machine's processor
-    (LLVM's -O3 pipeline), as a ctypes function of ``signature``; and the engine that owns
-    its code (keep it as long as the function).
-
-    The machine code is kept on disk beside the compiled JAX programs (:func:`object_folder`),
-    named by a digest of the module, the processor, its features and LLVM's version, so that
-    a later process loads it instead of compiling it again; a file that does not match its
-    own digest is compiled again and replaced."""
-    llvm = importlib.import_module("llvmlite.binding")
-    llvm.initialize_native_target()
-    llvm.initialize_native_asmprinter()
-    cpu, features = llvm.get_host_cpu_name(), llvm.get_host_cpu_features().flatten()
-    target = llvm.Target.from_default_triple()
-    machine = target.create_target_machine(cpu=cpu, features=features, opt=3)
-    version = importlib.import_module("llvmlite").__version__
-    digest = hashlib.sha256(
-        "\n".join([version, str(llvm.get_default_triple()), cpu, features, ir]).encode()
-    ).hexdigest()
-    folder = object_folder()
-    path = None if folder is None else folder / f"{name}-{digest[:32]}.o"
-    code = _read_object(path)
-    if code is None:
-        module = llvm.parse_assembly(ir)
-        module.verify()
-        options = llvm.create_pipeline_tuning_options(speed_level=3)
-        builder = llvm.create_pass_builder(machine, options)
-        builder.getModulePassManager().run(module, builder)
-        code = machine.emit_object(module)
-        _write_object(path, code)
-    engine = llvm.create_mcjit_compiler(llvm.parse_assembly(""), machine)
-    engine.add_object_file(llvm.ObjectFileRef.from_data(code))
-    engine.finalize_object()
-    address = engine.get_function_address(name)
-    if not address:
-        raise RuntimeError(f"the compiled code has no function {name!r}")
-    return signature(address), engine
-
-
-_OBJECT_MAGIC = b"rnnpb native object 1\n"
-
-
-def object_folder() -> Path | None:
-    """Where compiled native code is kept: ``native`` in the folder of the compiled JAX
-    programs (``rnnpb._xla.cache_folder``: ``RNNPB_XLA_CACHE`` moves it, ``0`` turns both
-    off); None when off or when the folder cannot be made (a read-only home: compiled in
-    every process, silently)."""
-    from rnnpb import _xla
-
-    base = _xla.cache_folder()
-    if base is None:
-        return None
-    folder = base / "native"
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError:
-        return None
-    return folder
-
-
-def _read_object(path: Path | None) -> bytes | None:
-    """The machine code kept at ``path``, or None: no file, unreadable, or not matching its
-    digest (a file cut short or damaged)."""
-    if path is None:
-        return None
-    try:
-        data = path.read_bytes()
-    except OSError:
-        return None
-    head = len(_OBJECT_MAGIC)
-    digest, code = data[head : head + 32], data[head + 32 :]
-    if data[:head] != _OBJECT_MAGIC or hashlib.sha256(code).digest() != digest or not code:
-        return None
-    return code
-
-
-def _write_object(path: Path | None, code: bytes) -> None:
-    """Keep ``code`` at ``path`` whole or not at all (a temporary file renamed over it); a
-    folder that cannot be written to is left alone."""
-    if path is None:
-        return
-    temporary = path.with_name(f".{path.name}.{os.getpid()}.{threading.get_ident()}")
-    try:
-        temporary.write_bytes(_OBJECT_MAGIC + hashlib.sha256(code).digest() + code)
-        os.replace(temporary, path)
-    except OSError:
-        temporary.unlink(missing_ok=True)
 
 
 def shapes_of(
@@ -847,79 +481,6 @@ def _pad(values: np.ndarray, rows: int, width: int) -> np.ndarray:
     return padded
 
 
-def _pad_jax(values: jax.Array, width: int) -> jax.Array:
-    return jnp.pad(values, [(0, 0)] * (values.ndim - 1) + [(0, width - values.shape[-1])])
-
-
-def step_block(
-    params: Params, state: OnlineState, gate: jax.Array | None, config: OnlineConfig
-) -> jax.Array:
-    """A step's block for the kernel (:meth:`Shapes.block_layout`), from the state the
-    regression starts from (the terms of :func:`rnnpb.model.window.gradients` that do not
-    change in the loop)."""
-    length, n_s = state.sensory.shape
-    n_m = state.onset_motor.shape[0]
-    n_c = state.onset_context.shape[0]
-    hp, ip, pp = _padded(params.b_h.shape[0]), _padded(n_s + n_m + n_c), _padded(state.rho.shape[1])
-    valid = jnp.arange(length) < state.n
-    seen = state.seen & valid[:, None]
-    w_u, w_m = params.w_in[:n_s], params.w_in[n_s : n_s + n_m]
-    fixed = jnp.where(seen, state.sensory, 0.0) @ w_u + params.b_h
-    recorded = config.motor_input == "recorded"
-    if recorded:
-        fixed = fixed + state.motor_sent @ w_m
-    mask = jnp.concatenate(
-        [
-            (~seen).astype(jnp.float32),
-            jnp.full((length, n_m), 0.0 if recorded else 1.0, jnp.float32),
-            jnp.ones((length, n_c), jnp.float32),
-        ],
-        axis=1,
-    )
-    steps = jnp.arange(length - 1) < state.n - 1
-    target_mask = (steps[:, None] & state.seen[1:]).astype(jnp.float32)
-    zeros_row = jnp.zeros((1, n_s), jnp.float32)
-    target = jnp.concatenate([state.sensory[1:], zeros_row])
-    target_mask = jnp.concatenate([target_mask, zeros_row])
-    next_mask = jnp.concatenate([mask[1:], jnp.zeros_like(mask[:1])])
-    learn = jnp.concatenate([jnp.zeros(n_s), jnp.ones(n_m + n_c)]).astype(jnp.float32)
-    onset = jnp.concatenate([jnp.zeros(n_s, jnp.float32), state.onset_motor, state.onset_context])
-    head = jnp.zeros(8, jnp.float32)
-    head = head.at[0].set(1.0 if gate is None else gate).at[1].set(state.n.astype(jnp.float32))
-    parts = [
-        head,
-        _pad_jax(fixed, hp),
-        _pad_jax(mask, ip),
-        _pad_jax(target, ip),
-        _pad_jax(target_mask, ip),
-        _pad_jax(next_mask, ip),
-        _pad_jax(learn, ip),
-        _pad_jax(onset, ip),
-        _pad_jax(state.rho, pp),
-        _pad_jax(state.rho_velocity, pp),
-    ]
-    return jnp.concatenate([jnp.ravel(part).astype(jnp.float32) for part in parts])
-
-
-def step_start(
-    params: Params,
-    state: OnlineState,
-    u: jax.Array,
-    seen: jax.Array,
-    config: OnlineConfig,
-    candidates: jax.Array | None = None,
-    phase_candidates: jax.Array | None = None,
-) -> tuple[OnlineState, jax.Array]:
-    """Everything of :func:`rnnpb.model.online.online_step` before its loop: the state the
-    regression starts from and its block for the kernel (:func:`prepare_block` compiles it as
-    one call)."""
-    state, gate = prepare(params, state, u, seen, config, candidates, phase_candidates)
-    return state, step_block(params, state, gate, config)
-
-
-prepare_block = jax.jit(step_start, static_argnames=("config",))
-
-
 def native_regression(
     params: Params,
     network: NetworkConfig,
@@ -975,44 +536,31 @@ class NativeRegression:
         built with."""
         return not self._barrier(meta) or meta is self.meta
 
-    def __call__(
-        self, block: jax.Array | np.ndarray, meta: MetaParams | None = None
-    ) -> Regressed[np.ndarray]:
-        """The regression over a step's block; ``meta`` as the JAX step takes it (the
-        barrier acts when given, with the guard "barrier"; see :meth:`applies`)."""
-        return Regressed(*(part[0] for part in self.many(np.asarray(block)[None], meta)))
+    def block_layout(self) -> tuple[int, ...]:
+        """Where a block's parts start, and the padded widths, as
+        :func:`rnnpb.model.online.fill_blocks` takes them."""
+        layout, shapes = self._layout, self.shapes
+        names = ("fixed", "mask", "target", "target_mask", "next_mask", "learn", "onset", "rho")
+        starts = tuple(layout[name][0] for name in (*names, "velocity"))
+        return (*starts, shapes.hp, shapes.ip, shapes.pp)
 
-    def many(
-        self, blocks: jax.Array | np.ndarray, meta: MetaParams | None = None
-    ) -> Regressed[np.ndarray]:
-        """The regressions over many sessions' blocks, shape (B, block), ``GROUP`` sessions
-        to a kernel call; the results with a leading session axis."""
-        if not self.applies(meta):
-            raise ValueError("this kernel was built without that risk network")
-        values = np.array(blocks, dtype=np.float32, copy=True)
-        values[:, 2] = 1.0 if self._barrier(meta) else 0.0
-        shapes, layout = self.shapes, self._layout
-        length, pp, sessions = shapes.window, shapes.pp, values.shape[0]
-        n = values[:, 1].astype(np.int64)
-        rho_at, velocity_at = layout["rho"][0], layout["velocity"][0]
-        velocity = values[:, velocity_at : velocity_at + length * pp].reshape(-1, length, pp)
-        if self.config.iterations > 0:
-            # the update leaves steps outside the window without momentum
-            velocity[np.arange(length)[None, :] >= n[:, None]] = 0.0
-            with self._lock:  # one scratch per kernel
-                for first in range(0, sessions, GROUP):
-                    group = min(GROUP, sessions - first)
-                    compiled(shapes, group)(
-                        self.config.iterations,
-                        self.config.pb.integration_length // 2,
-                        self._weights.ctypes.data,
-                        values[first].ctypes.data,
-                        self._scratch.ctypes.data,
-                    )
-        rho = values[:, rho_at : rho_at + length * pp].reshape(-1, length, pp)[..., : shapes.pb]
-        onset_at = layout["onset"][0] + shapes.sensory
-        motor = values[:, onset_at : onset_at + shapes.motor]
-        context = values[:, onset_at + shapes.motor : onset_at - shapes.sensory + shapes.io]
-        return Regressed(
-            rho.copy(), velocity[..., : shapes.pb].copy(), context.copy(), motor.copy()
-        )
+    def blocks(self, sessions: int) -> np.ndarray:
+        """Room for ``sessions`` blocks, (B, block)."""
+        return np.zeros((sessions, self._layout["total"][0]), np.float32)
+
+    def run(self, blocks: np.ndarray) -> None:
+        """The regressions over many sessions' blocks (B, block), in place, ``GROUP``
+        sessions to a kernel call. A block asks for the barrier with head[2] = 1; only a
+        kernel built with a risk network (``meta``) has one."""
+        if np.any(blocks[:, 2]) and self.meta is None:
+            raise ValueError("this kernel was built without a risk network")
+        with self._lock:  # one scratch per kernel
+            for first in range(0, blocks.shape[0], GROUP):
+                group = min(GROUP, blocks.shape[0] - first)
+                compiled(self.shapes, group)(
+                    self.config.iterations,
+                    self.config.pb.integration_length // 2,
+                    self._weights.ctypes.data,
+                    blocks[first].ctypes.data,
+                    self._scratch.ctypes.data,
+                )

@@ -256,7 +256,7 @@ def logit(p: jax.Array) -> jax.Array:
 
 def logit_numpy(p: np.ndarray) -> np.ndarray:
     """:func:`logit` in NumPy, in the precision of ``p`` (float64 for host-side values: learned
-    PBs, phase candidates, the NumPy reference)."""
+    PBs, phase candidates, the compiled step's state)."""
     p = np.clip(p, LOGIT_CLIP, 1 - LOGIT_CLIP)
     return np.log(p) - np.log1p(-p)
 

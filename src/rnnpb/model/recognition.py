@@ -71,8 +71,8 @@ evidence lies at other levels), and :meth:`RecognitionConfig.untaught` for model
 kind that kept no taught hands; ``OnlineConfig.for_model`` picks the one that suits a model,
 and :class:`rnnpb.model.MirrorSystem` uses it unless told otherwise.
 
-:func:`recognise` is pure (state in, state and answer out) and NumPy only. The compiled step
-and its NumPy twin compute the same evidence and call the same function, so both give the
+:func:`recognise` is pure (state in, state and answer out) and NumPy only. The float32 step
+and its float64 twin compute the same evidence and call the same function, so both give the
 same answer for the same observations.
 """
 
