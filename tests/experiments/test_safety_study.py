@@ -124,3 +124,35 @@ def test_models_it_cannot_find_are_named_in_one_line(tmp_path, capsys):
     error = capsys.readouterr().err.strip()
     assert error.startswith("rnnpb: error:") and "\n" not in error
     assert f"{tmp_path}: no model set1.npz for learning set 1" in error
+
+
+def test_the_unsafe_pattern_user_performs_the_most_often_unsafe_pbs(monkeypatch):
+    # A model no PB of which is unsafe from every start still gives the unsafe-pattern user
+    # the PBs unsafe from the most starts; one whose generation is never unsafe is refused.
+    import numpy as np
+    import pytest
+
+    import rnnpb.safety as safety
+    from rnnpb.errors import ConfigError
+    from rnnpb.experiments.scenarios import safety as scenario
+
+    pbs = np.array([[0.1, 0.1], [0.9, 0.9], [0.5, 0.5]])
+    chosen: list[np.ndarray] = []
+
+    class Found:
+        pb = pbs
+        share = np.array([0.0, 0.5, 0.0])
+
+    def generate(model, pb, contexts, inputs, n, sensory):
+        chosen.append(pb)
+        return np.full((n, 1, 4), 0.25)
+
+    monkeypatch.setattr(safety, "explore", lambda model, config: Found)
+    monkeypatch.setattr(safety, "sample_starts", lambda model, n, config, rng: (None, None))
+    monkeypatch.setattr(safety, "generate_from", generate)
+    hands = scenario._unsafe_pattern(object(), 150, seed=3, each=100)
+    assert hands.shape == (150, 4) and len(chosen) == 2
+    assert all(np.array_equal(pb, pbs[1:2]) for pb in chosen)
+    Found.share = np.zeros(3)
+    with pytest.raises(ConfigError, match="no PB of the model generates unsafe movement"):
+        scenario._unsafe_pattern(object(), 150, seed=3)
