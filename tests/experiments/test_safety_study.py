@@ -156,3 +156,27 @@ def test_the_unsafe_pattern_user_performs_the_most_often_unsafe_pbs(monkeypatch)
     Found.share = np.zeros(3)
     with pytest.raises(ConfigError, match="no PB of the model generates unsafe movement"):
         scenario._unsafe_pattern(object(), 150, seed=3)
+
+
+def test_a_model_that_generates_nothing_unsafe_has_no_unsafe_pattern_user(monkeypatch, capsys):
+    import numpy as np
+
+    from rnnpb.experiments.scenarios import safety as scenario
+
+    def stream(kind, n_steps, seed, learning_set, patterns=(), model=None):
+        if kind == "unsafe_pattern":
+            raise scenario.NoUnsafeMovement("no PB of the model generates unsafe movement")
+        return np.full((n_steps, 4), 0.5)
+
+    class Model:
+        patterns = ("1",)
+
+    class Config:
+        steps = 5
+
+    monkeypatch.setattr(scenario, "user_stream", stream)
+    monkeypatch.setattr(scenario, "_pattern_stream", lambda p, n, s: np.full((n, 4), 0.5))
+    monkeypatch.setattr(Config, "learned_steps", 5, raising=False)
+    streams = scenario._streams(Model(), Config(), range(len(USERS)), 7, "1")
+    assert "unsafe_pattern" not in streams and set(USERS) - {"unsafe_pattern"} <= set(streams)
+    assert "no unsafe_pattern user" in capsys.readouterr().err

@@ -136,15 +136,15 @@ def _unsafe_pattern(model, n_steps: int, seed: int, each: int = 100) -> np.ndarr
     """The hands the network predicts generating from the PBs whose own generation is most
     often unsafe (found by an exploration of the user's seed: unsafe from every start where
     any PB is; a model with none such still has PBs unsafe from some starts), each for
-    ``each`` steps after the transient. Refused only when no explored PB's generation is ever
-    unsafe: then there is no such movement to perform."""
+    ``each`` steps after the transient. :class:`NoUnsafeMovement` when no explored PB's
+    generation is ever unsafe: then there is no such movement to perform."""
     from rnnpb.safety import ExplorationConfig, explore, generate_from, sample_starts
 
     config = ExplorationConfig(samples=200, starts=2, seed=seed)
     found = explore(model, config)
     worst = float(found.share.max(initial=0.0))
     if worst <= 0.0:
-        raise ConfigError(f"no PB of the model generates unsafe movement (exploration {seed})")
+        raise NoUnsafeMovement(f"no PB of the model generates unsafe movement (exploration {seed})")
     unsafe = found.pb[found.share >= worst - 1e-9]
     rng = np.random.default_rng([seed, 2])
     parts = []
@@ -304,11 +304,20 @@ def learn_map(pool, model, model_path: Path, config, online, seeds: SafetySeeds,
     return maps
 
 
+class NoUnsafeMovement(ConfigError):
+    """The model's generation is never unsafe where the unsafe-pattern user looked."""
+
+
 def _streams(model, config, user_seeds, learned_seed: int, set_name: str) -> dict[str, Any]:
-    streams = {
-        user: user_stream(user, config.steps, seed, set_name, model.patterns, model)
-        for user, seed in zip(USERS, user_seeds, strict=True)
-    }
+    """Every user's stream and the learned patterns'. A model that generates no unsafe
+    movement has no unsafe-pattern user: that kind is left out, said on stderr, and the
+    report names it (``absent_users``)."""
+    streams = {}
+    for user, seed in zip(USERS, user_seeds, strict=True):
+        try:
+            streams[user] = user_stream(user, config.steps, seed, set_name, model.patterns, model)
+        except NoUnsafeMovement as error:
+            print(f"  set {set_name}: no {user} user: {error}", file=sys.stderr, flush=True)
     for pattern in model.patterns:
         streams[f"learned_{pattern}"] = _pattern_stream(pattern, config.learned_steps, learned_seed)
     return streams

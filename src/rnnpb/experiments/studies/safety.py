@@ -196,6 +196,7 @@ def _targets_section(targets, seeds: SafetySeeds, config, online) -> list[str]:
 
 def _set_section(set_name, source, maps, measured) -> list[str]:
     pred, fam, totals = measured["prediction"], measured["familiarity"], measured["totals"]
+    absent = [user for user in scenario.USERS if user not in measured["per_user"]]
     rows = []
     for label, arms in measured["per_user"].items():
         for arm, row in arms.items():
@@ -244,6 +245,15 @@ def _set_section(set_name, source, maps, measured) -> list[str]:
         "",
         f"Totals: {totals}.",
         "",
+        *(
+            [
+                f"No {', '.join(absent)} user: the model generated no unsafe movement where "
+                "the user's exploration looked, so there was none to perform.",
+                "",
+            ]
+            if absent
+            else []
+        ),
         "### Learned patterns",
         "",
         *table(
