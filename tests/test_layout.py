@@ -201,9 +201,7 @@ STUDY_LINES = 400
 """The most lines a study's module may have: it is a runner, a judge and a report over its
 scenarios (experiments/scenarios/), which hold the rest."""
 FILE_LINES = 800
-"""The most lines any module may have, but the native code's two (compiled kernels in one
-file each)."""
-LONGER_FILES = {"model/native.py", "model/native_learning.py"}
+"""The most lines any module or page script may have."""
 
 
 def _lines(path: Path) -> int:
@@ -221,9 +219,9 @@ def test_each_study_is_a_short_script():
 
 def test_no_module_is_longer_than_it_can_be_read():
     long = {
-        relative: _lines(path)
-        for path in sorted(ROOT.rglob("*.py"))
-        if (relative := path.relative_to(ROOT).as_posix()) not in LONGER_FILES
-        and _lines(path) > FILE_LINES
+        path.relative_to(ROOT).as_posix(): _lines(path)
+        for pattern in ("*.py", "*.js")
+        for path in sorted(ROOT.rglob(pattern))
+        if _lines(path) > FILE_LINES
     }
-    assert not long, f"modules over {FILE_LINES} lines: {long}"
+    assert not long, f"files over {FILE_LINES} lines: {long}"
