@@ -13,7 +13,11 @@ from __future__ import annotations
 
 import hashlib
 import json
+import tomllib
+from importlib import resources
 from typing import Any
+
+from rnnpb.errors import ConfigError
 
 FINGERPRINT_DIGITS = 16
 """Hex digits kept of the SHA-256: 64 bits, far more than the versions a file will have."""
@@ -26,4 +30,15 @@ def values_fingerprint(values: Any) -> str:
     return hashlib.sha256(text.encode("utf-8")).hexdigest()[:FINGERPRINT_DIGITS]
 
 
-__all__ = ["FINGERPRINT_DIGITS", "values_fingerprint"]
+def read_registry(package: str, name: str, where: str) -> dict[str, Any]:
+    """The versions' record ``name`` shipped in ``package`` (a TOML file), read as a table;
+    a :class:`ConfigError` beginning with ``where`` when it cannot be read or parsed."""
+    try:
+        return tomllib.loads(resources.files(package).joinpath(name).read_text("utf-8"))
+    except (OSError, UnicodeDecodeError) as error:
+        raise ConfigError(f"{where}: cannot read it ({error})") from None
+    except tomllib.TOMLDecodeError as error:
+        raise ConfigError(f"{where}: not TOML ({error})") from None
+
+
+__all__ = ["FINGERPRINT_DIGITS", "read_registry", "values_fingerprint"]

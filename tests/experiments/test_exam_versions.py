@@ -172,7 +172,7 @@ def test_the_dyad_exam_left_the_safety_exam_s_draws():
 def test_the_mirror_game_s_draws_are_versioned_as_the_ledger_records_them():
     """The game's judged runs carry the fingerprint its versions.toml entry records for their
     version; the draws file's version is recorded with the fingerprint of its seed lists,
-    was never judged, and excludes every judged version's seeds."""
+    was judged at most once by a run of its own, and excludes every earlier version's seeds."""
     game = _game()
     draws = {k: game[k] for k in ("player_seeds", "scribbler_seeds")}
     recorded = recorded_versions()
@@ -180,16 +180,19 @@ def test_the_mirror_game_s_draws_are_versioned_as_the_ledger_records_them():
     runs = [e for e in exam_ledger.entries("game") if e.judged]
     assert runs and all(e.fingerprint == recorded["game", e.version].fingerprint for e in runs)
     judged = exam_ledger.judged_versions("game")
-    assert game["version"] not in judged and game["version"] == max(judged) + 1
+    assert max(judged) <= game["version"] and set(range(1, game["version"])) <= judged
+    this = [e for e in runs if e.version == game["version"]]
+    assert len(this) <= 1 and all(e.recorded == "run" for e in this)
     excluded = [range(first, last + 1) for first, last, _ in game["excluded"]]
     for entry in runs:
-        assert all(any(s in r for r in excluded) for s in entry.seeds()), entry.run
+        if entry.version < game["version"]:
+            assert all(any(s in r for r in excluded) for s in entry.seeds()), entry.run
     assert not any(s in r for r in excluded for v in draws.values() for s in v)
 
 
 def test_the_mirror_game_is_an_exam_the_ledger_knows(tmp_path):
     """benchmarks/game_players.py --draws reads the file as an exam of study "game": its
-    version may run; version 1's draws, judged twice, are refused."""
+    version may run until judged, then is refused, as version 1's draws, judged twice, are."""
     import importlib.util
 
     spec = importlib.util.spec_from_file_location(
@@ -200,7 +203,11 @@ def test_the_mirror_game_is_an_exam_the_ledger_knows(tmp_path):
     spec.loader.exec_module(players)
     exam = players.game_exam(GAME_DRAWS)
     assert exam.study == "game" and exam.version == _game()["version"]
-    assert exam_ledger.check_may_run(exam, exam_ledger.ledger_paths()) == ()
+    if exam.version in exam_ledger.judged_versions("game"):
+        with pytest.raises(ConfigError, match=f"game exam's version {exam.version} was judged"):
+            exam_ledger.check_may_run(exam, exam_ledger.ledger_paths())
+    else:
+        assert exam_ledger.check_may_run(exam, exam_ledger.ledger_paths()) == ()
     first = {
         "version": 1,
         "player_seeds": list(range(1000, 1020)),

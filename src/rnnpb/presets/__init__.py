@@ -67,7 +67,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
-from rnnpb._fingerprint import values_fingerprint
+from rnnpb._fingerprint import read_registry, values_fingerprint
 from rnnpb.errors import ConfigError
 
 PRESET_NAMES: tuple[str, ...] = ("paper", "fast")
@@ -303,12 +303,7 @@ class RecordedVersion:
 def recorded_versions() -> Mapping[tuple[str, int], RecordedVersion]:
     """Every preset version ``versions.toml`` records, by (preset, version)."""
     where = f"preset {REGISTRY}"
-    try:
-        data = tomllib.loads(resources.files(__name__).joinpath(REGISTRY).read_text("utf-8"))
-    except (OSError, UnicodeDecodeError) as error:
-        raise ConfigError(f"{where}: cannot read it ({error})") from None
-    except tomllib.TOMLDecodeError as error:
-        raise ConfigError(f"{where}: not TOML ({error})") from None
+    data = read_registry(__name__, REGISTRY, where)
     recorded: dict[tuple[str, int], RecordedVersion] = {}
     for name, versions in data.items():
         if not isinstance(versions, list):

@@ -55,7 +55,7 @@ from importlib import resources
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any
 
-from rnnpb._fingerprint import values_fingerprint
+from rnnpb._fingerprint import read_registry, values_fingerprint
 from rnnpb.errors import ConfigError
 
 if TYPE_CHECKING:
@@ -232,12 +232,7 @@ class RecordedVersion:
 def recorded_versions() -> Mapping[tuple[str, int], RecordedVersion]:
     """Every exam version ``versions.toml`` records, by (study, version)."""
     where = f"exam {REGISTRY}"
-    try:
-        data = tomllib.loads(resources.files(__name__).joinpath(REGISTRY).read_text("utf-8"))
-    except (OSError, UnicodeDecodeError) as error:
-        raise ConfigError(f"{where}: cannot read it ({error})") from None
-    except tomllib.TOMLDecodeError as error:
-        raise ConfigError(f"{where}: not TOML ({error})") from None
+    data = read_registry(__name__, REGISTRY, where)
     recorded: dict[tuple[str, int], RecordedVersion] = {}
     for study, versions in data.items():
         for i, entry in enumerate(_list(versions, f"{where}: {study}")):
