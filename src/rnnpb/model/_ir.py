@@ -22,20 +22,9 @@ from typing import Any
 
 import numpy as np
 
+from rnnpb.model.equations import TANH_CLAMP, TANH_P, TANH_Q
+
 V = "<8 x float>"
-# tanh(t) ~ t * P(t^2) / Q(t^2) on [-7.9, 7.9] (Eigen's float tanh); sigmoid(x) = 0.5 +
-# 0.5 * tanh(x / 2).
-_TANH_P = (
-    -2.76076847742355e-16,
-    2.00018790482477e-13,
-    -8.60467152213735e-11,
-    5.12229709037114e-08,
-    1.48572235717979e-05,
-    6.37261928875436e-04,
-    4.89352455891786e-03,
-)
-_TANH_Q = (1.19825839466702e-06, 1.18534705686654e-04, 2.26843463243900e-03, 4.89352518554385e-03)
-_TANH_CLAMP = 7.90531110763549805
 
 
 def _padded(n: int) -> int:
@@ -128,14 +117,14 @@ class _Emitter:
         half = _vector_constant(0.5)
         t = self.fmul(x, half)
         t = self.op(
-            "c", f"call fast {V} @llvm.minnum.v8f32({V} {t}, {V} {_vector_constant(_TANH_CLAMP)})"
+            "c", f"call fast {V} @llvm.minnum.v8f32({V} {t}, {V} {_vector_constant(TANH_CLAMP)})"
         )
         t = self.op(
-            "c", f"call fast {V} @llvm.maxnum.v8f32({V} {t}, {V} {_vector_constant(-_TANH_CLAMP)})"
+            "c", f"call fast {V} @llvm.maxnum.v8f32({V} {t}, {V} {_vector_constant(-TANH_CLAMP)})"
         )
         t2 = self.fmul(t, t)
         polynomials = []
-        for coefficients in (_TANH_P, _TANH_Q):
+        for coefficients in (TANH_P, TANH_Q):
             value = _vector_constant(coefficients[0])
             for c in coefficients[1:]:
                 value = self.fma(t2, value, _vector_constant(c))

@@ -28,29 +28,22 @@ from rnnpb.model._numba import kernel
 F = np.float32
 HALF, ONE, TWO = F(0.5), F(1.0), F(2.0)
 # tanh(t) ~ t P(t²) / Q(t²) on [-7.9, 7.9] (Eigen's float tanh): within 2e-7 of the exact
-# sigmoid, and arithmetic a compiler turns into vector instructions (an exp is a call).
-_P = tuple(
-    F(c)
-    for c in (
-        -2.76076847742355e-16,
-        2.00018790482477e-13,
-        -8.60467152213735e-11,
-        5.12229709037114e-08,
-        1.48572235717979e-05,
-        6.37261928875436e-04,
-        4.89352455891786e-03,
-    )
+# sigmoid, and arithmetic a compiler turns into vector instructions (an exp is a call). The
+# native loops (_ir.py) read the same coefficients.
+TANH_P = (
+    -2.76076847742355e-16,
+    2.00018790482477e-13,
+    -8.60467152213735e-11,
+    5.12229709037114e-08,
+    1.48572235717979e-05,
+    6.37261928875436e-04,
+    4.89352455891786e-03,
 )
-_Q = tuple(
-    F(c)
-    for c in (
-        1.19825839466702e-06,
-        1.18534705686654e-04,
-        2.26843463243900e-03,
-        4.89352518554385e-03,
-    )
-)
-_CLAMP = F(7.90531110763549805)
+TANH_Q = (1.19825839466702e-06, 1.18534705686654e-04, 2.26843463243900e-03, 4.89352518554385e-03)
+TANH_CLAMP = 7.90531110763549805
+_P = tuple(F(c) for c in TANH_P)
+_Q = tuple(F(c) for c in TANH_Q)
+_CLAMP = F(TANH_CLAMP)
 
 
 @kernel
