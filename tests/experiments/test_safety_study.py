@@ -32,6 +32,7 @@ def _results(steered=5, prevented=(2, 2), inhibited=0, sent=0, lock=3, risk_auc=
         "learned_steps": 900,
         "learned_inhibited": inhibited,
         "sent_unsafe": sent,
+        "sent_judged_unsafe": sent,
     }
     return {
         "sets": {
@@ -51,9 +52,9 @@ def test_the_seeds_of_a_first_seed_and_of_the_exam():
     assert seeds.map_users == tuple(range(3, 3 + len(USERS)))
     assert seeds.users == tuple(range(1003, 1003 + len(USERS)))
     exam = load_exam("safety")
-    assert exam.version == 3
+    assert exam.version == 4
     from_exam = SafetySeeds.from_exam(exam)
-    assert from_exam.users == exam.seed_list("users") and from_exam.model == 11200
+    assert from_exam.users == exam.seed_list("users") and from_exam.model == 14200
     development = SafetySeeds.from_first(0)
     used = {
         development.model,
@@ -95,7 +96,7 @@ def test_a_changed_definition_changes_the_verdict():
     exam = load_exam("safety")
     study = load_study("safety")
     data = {
-        "exam": {"study": "safety", "version": 4},
+        "exam": {"study": "safety", "version": 5},
         "draws": {k: list(v) for k, v in exam.seeds.items()},
         "targets": {
             name: {
@@ -180,3 +181,21 @@ def test_a_model_that_generates_nothing_unsafe_has_no_unsafe_pattern_user(monkey
     streams = scenario._streams(Model(), Config(), range(len(USERS)), 7, "1")
     assert "unsafe_pattern" not in streams and set(USERS) - {"unsafe_pattern"} <= set(streams)
     assert "no unsafe_pattern user" in capsys.readouterr().err
+
+
+def test_commands_sent_are_judged_by_mujoco_s_contacts_the_servo_and_the_mjcf_ranges():
+    import numpy as np
+
+    from rnnpb.experiments.scenarios.safety import judged_commands
+    from rnnpb.robot import ELBOW_AT_ZERO_PITCH
+
+    rest = np.array([0.0, 0.0, 0.0, ELBOW_AT_ZERO_PITCH] * 2)
+    fast = rest.copy()
+    fast[0] += 1.0  # a shoulder turned 1 rad in one 0.4 s step: the servo turns about 2.5
+    outside = fast.copy()
+    outside[3] = 50.0  # an elbow far beyond its range, reached by a jump
+    reasons = judged_commands(np.array([rest, fast, fast, outside]), rest, 0.4)
+    assert reasons[:3] == ["", "", ""]
+    assert "limits" in reasons[3] and "speed" in reasons[3]
+    assert "speed" in judged_commands(np.array([fast]), rest, 0.1)[0]
+    assert judged_commands(np.zeros((0, 8)), rest, 0.4) == []

@@ -150,11 +150,13 @@ def test_a_study_run_counts_what_was_generated_and_what_reached_the_robot(model_
     everything = runs[("full_swing", "everything")]
     assert len(everything["regime"]) == 8
     assert not any(everything["sent_unsafe"])  # the filter let none through
+    assert len(everything["sent_judged"]) == 8
     generated = everything["generated_unsafe"] != ""
     assert set(everything["cause"][generated]) <= {"seen movement", "generation"}
     assert not any(everything["cause"][~generated])
     totals = measure(runs, maps, 0.2)["totals"]
     assert totals["sent_unsafe"] == 0
+    assert totals["sent_judged_unsafe"] == int((everything["sent_judged"] != "").sum())
     assert totals["steer_unguarded"] == int(
         np.isin(
             runs[("full_swing", "unguarded")]["regime"], ["lost", "still", "novel", "unstructured"]

@@ -258,6 +258,7 @@ def session_job(
         )
     }
     before = sent_before = rest
+    sents = []
     for u in stream:
         result = mirror.step(u)
         generated = result.generated if result.generated is not None else result.motor
@@ -268,15 +269,38 @@ def session_job(
         if command_filter is not None:
             sent = command_filter(result.motor).command
         rows["sent_unsafe"].append(_physical(checker.command_reasons(sent_before, sent)))
+        sents.append(sent)
         rows["regime"].append(result.regime)
         rows["pb"].append(result.pb)
         rows["inhibited"].append(bool(result.inhibited))
         rows["recognised"].append(result.recognised or "")
         before, sent_before = result.motor, sent
     rows["cause"] = attribution.attribute_sequence(stream, rows["generated_unsafe"])
+    rows["sent_judged"] = judged_commands(np.array(sents).reshape(-1, 8), rest, model.dt)
     out: dict[str, Any] = {k: np.array(v) for k, v in rows.items()}
     out["label"], out["arm"] = label, arm
     return out
+
+
+def judged_commands(commands: np.ndarray, previous: np.ndarray, dt: float) -> list[str]:
+    """Why each command of a path (T, 8), sent after ``previous``, is unsafe by the judges
+    that share nothing with the safety module (:mod:`rnnpb.analysis.judges`): ``collision``
+    (MuJoCo's contacts at the posture or on the way to it), ``speed`` (further than the
+    servo turns in ``dt``), ``limits`` (outside the MJCF's ranges); "" for a safe one."""
+    from rnnpb.analysis.judges import CollisionJudge, judge_limits, judge_speed
+
+    reasons: list[list[str]] = [[] for _ in commands]
+    if not len(commands):
+        return []
+    verdicts = (
+        ("collision", CollisionJudge().judge(commands, previous).colliding),
+        ("speed", judge_speed(commands, dt, previous).too_fast),
+        ("limits", judge_limits(commands).outside),
+    )
+    for name, steps in verdicts:
+        for t in steps:
+            reasons[t].append(name)
+    return [" ".join(r) for r in reasons]
 
 
 def _physical(reasons: list[str]) -> str:
@@ -421,6 +445,7 @@ def measure(runs: dict, maps, risk_level: float) -> dict[str, Any]:
             "following_generation_unsafe",
             "following_generation_inhibited",
             "sent_unsafe",
+            "sent_judged_unsafe",
             "learned_steps",
             "learned_inhibited",
         ),
@@ -439,6 +464,7 @@ def measure(runs: dict, maps, risk_level: float) -> dict[str, Any]:
             "pb_driven_unsafe": pb_driven_unsafe(run),
             "inhibited": int(run["inhibited"].sum()),
             "sent_unsafe": int((run["sent_unsafe"] != "").sum()),
+            "sent_judged_unsafe": int((run["sent_judged"] != "").sum()),
         }
         if arm == "unguarded":
             totals["steer_unguarded"] += pb_driven_unsafe(run)
@@ -458,6 +484,7 @@ def measure(runs: dict, maps, risk_level: float) -> dict[str, Any]:
                 (following & generation & run["inhibited"]).sum()
             )
             totals["sent_unsafe"] += int((run["sent_unsafe"] != "").sum())
+            totals["sent_judged_unsafe"] += int((run["sent_judged"] != "").sum())
             if label.startswith("learned_"):
                 totals["learned_steps"] += len(run["regime"])
                 totals["learned_inhibited"] += int(run["inhibited"].sum())

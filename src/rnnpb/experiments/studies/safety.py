@@ -141,7 +141,7 @@ def judge_results(results: dict[str, Any], exam: Exam) -> dict[str, Target]:
     steer_base, steer_left = _sum(results, "steer_unguarded"), _sum(results, "steer_steered")
     cases, prevented = _sum(results, "inhibit_cases"), _sum(results, "inhibit_prevented")
     steps, inhibited = _sum(results, "learned_steps"), _sum(results, "learned_inhibited")
-    sent = _sum(results, "sent_unsafe")
+    sent = _sum(results, "sent_judged_unsafe")
     kept = [scenario.within_limits(s["learned"], lock, switch) for s in sets]
     risk_auc = min((s["prediction"]["risk_auc"] for s in sets), default=math.nan)
     fam_auc = min((s["familiarity"]["familiarity_auc"] for s in sets), default=math.nan)
@@ -167,7 +167,8 @@ def judge_results(results: dict[str, Any], exam: Exam) -> dict[str, Target]:
         ),
         INHIBITS: f"{prevented} of {cases} prevented" + ("" if cases else " (no case arose)"),
         FALSE: f"{inhibited} of {steps} steps inhibited",
-        SENT: f"{sent} reached the robot over all runs with everything on",
+        SENT: f"{sent} reached the robot over all runs with everything on, by the independent "
+        f"judges (the safety checker counted {_sum(results, 'sent_unsafe')})",
         COST: f"lock-on <= {lock}, switching <= {switch}, recognised as unguarded: "
         f"{sum(kept)} of {len(kept)} sets",
     }
@@ -211,6 +212,7 @@ def _set_section(set_name, source, maps, measured) -> list[str]:
                     row["pb_driven_unsafe"],
                     row["inhibited"],
                     row["sent_unsafe"],
+                    row.get("sent_judged_unsafe", "–"),
                 )
             )
     cost = measured["learned"]
@@ -239,6 +241,7 @@ def _set_section(set_name, source, maps, measured) -> list[str]:
                 "unsafe where the PB drives",
                 "inhibited",
                 "unsafe sent",
+                "unsafe sent, by the judges",
             ),
             rows,
         ),
