@@ -41,10 +41,9 @@ def main() -> None:
     import jax
     import numpy as np
 
-    from rnnpb.commands.bench import processor_note
+    from rnnpb.commands.bench import learning_chunk_times, processor_note
     from rnnpb.demonstrator import learning_set
     from rnnpb.model import BatchedMirror, MirrorSystem, NetworkConfig, TrainedModel, learning
-    from rnnpb.model.learning import TrainConfig
     from rnnpb.model.network import init_params
     from rnnpb.robot import JOINT_LIMITS
 
@@ -97,22 +96,7 @@ def main() -> None:
             f"{np.percentile(values, 99):8.3f} ms p99 ({ratio:.2f}x one step, same loop)"
         )
 
-    config = TrainConfig.paper()
-    state = learning.init_state(data, network, config)
-    inputs, valid = jax.numpy.asarray(data.inputs, jax.numpy.float32), jax.numpy.asarray(data.valid)
-    every = jax.numpy.ones(data.valid.shape[0], bool)
-    chunk = 200
-    runners = {
-        "native": learning.chunk_runner(config),
-        "JAX": learning.chunk_runner(config, native=False),
-    }
-    chunk_times: dict[str, list[float]] = {name: [] for name in runners}
-    for repeat in range(8):
-        for name, run in runners.items():
-            t0 = time.perf_counter()
-            jax.block_until_ready(run(state, inputs, valid, chunk, every))
-            if repeat:
-                chunk_times[name].append((time.perf_counter() - t0) / chunk * 1e3)
+    chunk_times = learning_chunk_times(data, network)
     print(
         "the learning iteration (6 sequences x 50 steps, the paper's), medians of 7 chunks of 200:"
     )
