@@ -38,30 +38,18 @@ def main() -> None:
     _xla.compilation_cache()
     if hasattr(os, "sched_setaffinity"):
         os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
-    import jax
     import numpy as np
 
-    from rnnpb.commands.bench import learning_chunk_times, processor_note
+    from rnnpb.commands.bench import bench_model, learning_chunk_times, processor_note
     from rnnpb.demonstrator import learning_set
-    from rnnpb.model import BatchedMirror, MirrorSystem, NetworkConfig, TrainedModel, learning
-    from rnnpb.model.network import init_params
+    from rnnpb.model import BatchedMirror, MirrorSystem, NetworkConfig, learning
     from rnnpb.robot import JOINT_LIMITS
 
     print(processor_note())
     network = NetworkConfig()
     sequences = learning_set("1", seed=0)
     data = learning.prepare_data(sequences, JOINT_LIMITS)
-    rng = np.random.default_rng(0)
-    model = TrainedModel(
-        network=network,
-        params=init_params(network, jax.random.PRNGKey(0)),
-        lower=data.lower,
-        upper=data.upper,
-        sequence_pb=rng.uniform(0.2, 0.8, (len(sequences), network.pb_size)),
-        sequence_patterns=data.patterns,
-        initial_context=np.full((len(sequences), network.context_size), 0.5),
-        taught_sensory=data.inputs[..., : network.sensory_size].astype(np.float64),
-    )
+    model = bench_model(network, sequences, data)
     stream = np.concatenate([s.sensory for s in sequences])
     offsets = np.arange(SESSIONS) * 7
     runs = {

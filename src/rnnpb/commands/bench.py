@@ -124,10 +124,8 @@ def run(args: argparse.Namespace) -> int:
         MirrorSystem,
         NetworkConfig,
         OnlineConfig,
-        TrainedModel,
         learning,
     )
-    from rnnpb.model.network import init_params
     from rnnpb.robot import JOINT_LIMITS
 
     parts = ["learning", "routine level", "on-line step", "float64 reference"] + (
@@ -165,20 +163,7 @@ def run(args: argparse.Namespace) -> int:
     # It recognises no pattern, so recognition's structure test runs on every step: the step
     # timed is the one of a movement the robot does not know (following a learned pattern
     # skips that test).
-    params = init_params(network, jax.random.PRNGKey(0))
-    rng = np.random.default_rng(0)
-    model = TrainedModel(
-        network=network,
-        params=params,
-        lower=data.lower,
-        upper=data.upper,
-        sequence_pb=rng.uniform(0.2, 0.8, (len(sequences), network.pb_size)),
-        sequence_patterns=data.patterns,
-        initial_context=np.full((len(sequences), network.context_size), 0.5),
-        # The hands as taught, which recognition matches what it sees against (as a model
-        # learned today keeps them).
-        taught_sensory=data.inputs[..., : network.sensory_size].astype(np.float64),
-    )
+    model = bench_model(network, sequences, data)
     online = OnlineConfig()
     # The default step and the same step without phase restarts, timed alternately so that
     # both see the same machine: the difference is what phase restarts cost.
@@ -514,6 +499,30 @@ def run(args: argparse.Namespace) -> int:
             json.dump(document, handle, indent=2)
         print(f"wrote {args.json}")
     return 0
+
+
+def bench_model(network, sequences, data):
+    """The network the steps are timed with: the paper's sizes, fresh random weights (the
+    arithmetic costs the same for any), learning set ``sequences``' patterns and, as a model
+    learned today keeps them, their taught hands (``data``), which recognition matches what
+    it sees against."""
+    import jax
+    import numpy as np
+
+    from rnnpb.model import TrainedModel
+    from rnnpb.model.network import init_params
+
+    rng = np.random.default_rng(0)
+    return TrainedModel(
+        network=network,
+        params=init_params(network, jax.random.PRNGKey(0)),
+        lower=data.lower,
+        upper=data.upper,
+        sequence_pb=rng.uniform(0.2, 0.8, (len(sequences), network.pb_size)),
+        sequence_patterns=data.patterns,
+        initial_context=np.full((len(sequences), network.context_size), 0.5),
+        taught_sensory=data.inputs[..., : network.sensory_size].astype(np.float64),
+    )
 
 
 def learning_chunk_times(data, network, chunk: int = 200, repeats: int = 7) -> dict:
