@@ -169,9 +169,9 @@ def test_window_gradients_match_jax_and_finite_differences(motor_input, n):
     io = NET.io_size
     _close(outputs[:, :io], predictions, rtol=1e-5, atol=1e-6)
     _close(outputs[:, io:], contexts, rtol=1e-5, atol=1e-6)
-    assert error == pytest.approx(float(want), rel=1e-4)
+    assert error == pytest.approx(float(want), rel=1e-5)
     for have, expected in zip((d_rho, d_context, d_motor), grads, strict=True):
-        _close(have, expected, rtol=1e-4, atol=1e-7)
+        _close(have, expected, rtol=1e-5, atol=1e-8)
 
     eps = 1e-6
     for index in [(0, 0), (3, 2), (n - 2, 1)]:
@@ -184,7 +184,7 @@ def test_window_gradients_match_jax_and_finite_differences(motor_input, n):
                 0
             ]
         ) / (2 * eps)
-        assert numeric == pytest.approx(float(d_rho[index]), rel=1e-4, abs=1e-9)
+        assert numeric == pytest.approx(float(d_rho[index]), rel=1e-6, abs=1e-10)
 
 
 def test_hand_written_learning_gradients_equal_jax_with_noise_and_other_targets():
