@@ -212,7 +212,7 @@ def _set_section(set_name, source, maps, measured) -> list[str]:
                     row["pb_driven_unsafe"],
                     row["inhibited"],
                     row["sent_unsafe"],
-                    row.get("sent_judged_unsafe", "–"),
+                    row["sent_judged_unsafe"],
                 )
             )
     cost = measured["learned"]
